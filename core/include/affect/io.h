@@ -1,0 +1,58 @@
+/*
+ * affect/io.h — text formats in and out of the motion model: BVH, CSV and JSON.
+ *
+ * Importers check everything they read and report the line (BVH), row (CSV) or byte offset
+ * (JSON) of the first problem. Writers use the shortest decimal form that reads back as the
+ * same float32, so text round trips are exact.
+ */
+#ifndef AFFECT_IO_H
+#define AFFECT_IO_H
+
+#include "affect/motion.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct affect_bvh_options {
+    double scale;      /* multiply every position by this (default 1) */
+    const char *unit;  /* recorded unit, or NULL/"" for unknown (default) */
+} affect_bvh_options;
+
+/* BVH: HIERARCHY with ROOT (one or more), JOINT and End Site; any channel count (0–6) and any
+ * order per joint; position channels replace the OFFSET components they name; rotations in
+ * degrees composed in the order CHANNELS lists them. End Sites become joints named
+ * "<parent>_end". Every frame must be on one line with exactly the declared channel count. */
+affect_status affect_bvh_parse(const char *text, size_t len, const affect_bvh_options *opt,
+                               affect_motion **out, affect_error *err);
+
+typedef struct affect_csv_options {
+    char delimiter;    /* ',' (default), ';', '\t' or ' ' */
+    int header;        /* −1 detect (default), 0 no header row, 1 header row */
+    const char *unit;  /* recorded unit, or NULL/"" */
+} affect_csv_options;
+
+void affect_csv_options_default(affect_csv_options *opt);
+
+/* CSV: one row per frame, three columns per joint. A header names the joints as "Head.x",
+ * "Head_x", "Head X" or "Head:x" (case-insensitive axis, columns in x, y, z order); without a
+ * header joints are j0, j1, …. Blank lines are ignored; fields may be double-quoted. */
+affect_status affect_csv_parse(const char *text, size_t len, double fps,
+                               const affect_csv_options *opt, affect_motion **out,
+                               affect_error *err);
+
+/* CSV with a "name.x,name.y,name.z,…" header, one line per frame, '\n' line ends. */
+affect_status affect_csv_write(const affect_motion *m, char **out, size_t *len,
+                               affect_error *err);
+
+/* JSON: {"fps": f, "joints": [names], "parents": [ints] (optional), "unit": "cm" (optional),
+ *        "frames": [[[x, y, z], …joints], …frames]}. */
+affect_status affect_motion_from_json(const char *text, size_t len, affect_motion **out,
+                                      affect_error *err);
+affect_status affect_motion_to_json(const affect_motion *m, char **out, size_t *len,
+                                    affect_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,116 @@
+/*
+ * affect/motion.h — the motion model: T frames × J joints × (x, y, z) world positions at a
+ * fixed frame rate, with joint names, a parent index per joint (−1 for a root; all −1 when the
+ * skeleton is unknown) and the coordinate unit when it is known.
+ *
+ * Positions are a flat row-major float array, frame-major: pos[(t * J + j) * 3 + axis].
+ * Every joint name is a NUL-terminated string, unique within the motion. Parent indices form a
+ * forest (no cycles); they need not precede their children.
+ *
+ * The binary form (the "motion BLOB", docs/FORMATS.md) is produced by affect_motion_encode and
+ * checked field by field by affect_motion_decode.
+ */
+#ifndef AFFECT_MOTION_H
+#define AFFECT_MOTION_H
+
+#include "affect/base.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define AFFECT_MOTION_MAX_JOINTS 4096u
+#define AFFECT_MOTION_MAX_FRAMES 16777216u  /* 2^24 */
+#define AFFECT_MOTION_MAX_NAME 1024u        /* bytes of one joint name */
+#define AFFECT_MOTION_UNIT_MAX 15u          /* bytes of the unit string */
+#define AFFECT_MOTION_MAX_FPS 100000.0
+
+/* BLOB layout constants (docs/FORMATS.md). */
+#define AFFECT_MOTION_MAGIC "AFMO"
+#define AFFECT_MOTION_VERSION 1u
+#define AFFECT_MOTION_HEADER_SIZE 32u
+
+typedef struct affect_motion {
+    uint32_t n_frames;
+    uint32_t n_joints;
+    double fps;
+    char unit[AFFECT_MOTION_UNIT_MAX + 1]; /* "" when unknown; e.g. "cm", "m", "mm", "arm" */
+    char **names;                          /* n_joints strings */
+    int32_t *parents;                      /* n_joints entries */
+    float *pos;                            /* n_frames * n_joints * 3 */
+} affect_motion;
+
+/* Allocates a motion with zeroed positions, parents all −1 and names "j0", "j1", ….
+ * Checks the sizes against the limits above and fps > 0, finite, ≤ AFFECT_MOTION_MAX_FPS. */
+affect_status affect_motion_create(uint32_t n_frames, uint32_t n_joints, double fps,
+                                   affect_motion **out, affect_error *err);
+
+/* Frees a motion and everything it owns; NULL is allowed. */
+void affect_motion_free(affect_motion *m);
+
+/* Replaces the name of joint j with the first len bytes of name. */
+affect_status affect_motion_set_name(affect_motion *m, uint32_t j, const char *name, size_t len,
+                                     affect_error *err);
+
+/* Sets the unit string; it must be at most AFFECT_MOTION_UNIT_MAX bytes of [A-Za-z0-9_.-]. */
+affect_status affect_motion_set_unit(affect_motion *m, const char *unit, affect_error *err);
+
+/* Checks the invariants above: names non-empty, free of NUL and unique; parents in range and
+ * acyclic; every coordinate finite (the message names the frame and joint). */
+affect_status affect_motion_validate(const affect_motion *m, affect_error *err);
+
+/* Deep copy. */
+affect_status affect_motion_clone(const affect_motion *m, affect_motion **out,
+                                  affect_error *err);
+
+/* Index of the joint whose name equals name exactly, or −1. */
+int32_t affect_motion_find_joint(const affect_motion *m, const char *name);
+
+/* Pointer to frame t, joint j: three floats. */
+static inline float *affect_motion_at(const affect_motion *m, uint32_t t, uint32_t j)
+{
+    return m->pos + ((size_t)t * m->n_joints + j) * 3;
+}
+
+/* Duration in seconds: n_frames / fps (the BVH convention, Frames × Frame Time). */
+double affect_motion_duration(const affect_motion *m);
+
+/* Axis-aligned bounding box of every position of every frame. */
+void affect_motion_bbox(const affect_motion *m, float min[3], float max[3]);
+
+/* ---- the motion BLOB ---- */
+
+/* Size in bytes of the encoded form; false if it would overflow size_t. */
+bool affect_motion_encoded_size(const affect_motion *m, size_t *size);
+
+/* Encodes into a new buffer of *size bytes (free with affect_free). */
+affect_status affect_motion_encode(const affect_motion *m, unsigned char **out, size_t *size,
+                                   affect_error *err);
+
+/* Encodes into buf, which must hold affect_motion_encoded_size() bytes. */
+void affect_motion_encode_into(const affect_motion *m, unsigned char *buf);
+
+/* Decodes and validates a BLOB. Never reads outside [data, data + size). */
+affect_status affect_motion_decode(const unsigned char *data, size_t size, affect_motion **out,
+                                   affect_error *err);
+
+/* ---- editing; each returns a new motion ---- */
+
+/* Frames first..last inclusive, 0-based; negative values count from the end (−1 = last). */
+affect_status affect_motion_slice(const affect_motion *m, int64_t first, int64_t last,
+                                  affect_motion **out, affect_error *err);
+
+/* Linear interpolation to a new frame rate. The result keeps the time span: it has
+ * floor((T − 1) · fps / m->fps + 1e-9) + 1 frames, frame k at time k / fps. */
+affect_status affect_motion_resample(const affect_motion *m, double fps, affect_motion **out,
+                                     affect_error *err);
+
+/* The joints named, in the order given (duplicates and unknown names are errors). A joint's
+ * parent becomes its nearest selected ancestor, or −1. */
+affect_status affect_motion_select(const affect_motion *m, const char *const *names,
+                                   uint32_t n_names, affect_motion **out, affect_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,56 @@
+/*
+ * affect/normalize.h — pose normalization used by the methods (SCIENCE.md §2, §6): remove the
+ * first frame's root translation and heading, and optionally scale by the arm length.
+ *
+ * Root: the pelvis role (joint 0 when unresolved). Heading: the horizontal direction of the
+ * lateral vector left_hip − right_hip (or left_shoulder − right_shoulder when the hips are not
+ * resolved) in the first frame. After normalization the lateral vector points along +x, the
+ * up axis stays up, and the body faces lateral × up (+z for y-up data). Arm length: the right
+ * shoulder → elbow → hand bone lengths summed in the first frame (shoulder → hand when the
+ * elbow is not resolved); the unit becomes "arm".
+ */
+#ifndef AFFECT_NORMALIZE_H
+#define AFFECT_NORMALIZE_H
+
+#include "affect/roles.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct affect_normalize_options {
+    int up_axis;         /* 0 = x, 1 = y (default), 2 = z */
+    bool translation;    /* remove the first frame's horizontal root position (default true) */
+    bool vertical;       /* also remove the root's height (default false) */
+    bool heading;        /* remove the first frame's heading (default true) */
+    bool scale_arm;      /* divide by the right arm length (default false) */
+} affect_normalize_options;
+
+void affect_normalize_options_default(affect_normalize_options *opt);
+
+/* The rigid transform that normalization applies: p' = (R (p − origin)) / scale. */
+typedef struct affect_normalize_transform {
+    double origin[3];
+    double rot[9]; /* row-major 3×3 rotation about the up axis */
+    double scale;
+} affect_normalize_transform;
+
+/* Computes the transform for m under roles and options (no change to m). */
+affect_status affect_normalize_transform_compute(const affect_motion *m, const affect_roles *roles,
+                                                 const affect_normalize_options *opt,
+                                                 affect_normalize_transform *tf,
+                                                 affect_error *err);
+
+/* Applies tf to every position of m in place (out = in allowed) and sets the unit to "arm"
+ * when tf->scale != 1 came from the arm length. */
+void affect_normalize_apply(affect_motion *m, const affect_normalize_transform *tf);
+
+/* Returns a normalized copy of m. */
+affect_status affect_motion_normalize(const affect_motion *m, const affect_roles *roles,
+                                      const affect_normalize_options *opt, affect_motion **out,
+                                      affect_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,653 @@
+/*
+ * motion.c — the motion model, its BLOB encoding and the editing operations
+ * (see affect/motion.h and docs/FORMATS.md).
+ *
+ * BLOB layout, version 1 (all integers and floats little-endian):
+ *   0  4  magic "AFMO"
+ *   4  2  format version (1)
+ *   6  2  flags (0; reserved)
+ *   8  4  frame count T (1 .. 2^24)
+ *  12  4  joint count J (1 .. 4096)
+ *  16  8  frames per second (float64, finite, 0 < fps ≤ 100000)
+ *  24  1  unit length U (0 .. 15)
+ *  25  7  reserved, zero
+ *  32  U  unit (ASCII [A-Za-z0-9_.-])
+ *      then J × { 2-byte name length L (1 .. 1024), L bytes of UTF-8 name }
+ *      then J × int32 parent index (−1 or 0 .. J−1, acyclic)
+ *      then T × J × 3 float32 positions, frame-major
+ * The decoder checks these in order: length ≥ header, magic, version, flags, sizes, each
+ * name's length against the remaining bytes, the exact total length, parents, finiteness.
+ */
+#include "affect/motion.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+/* ---- little-endian helpers (byte by byte: no struct copies, no alignment assumptions) ---- */
+
+static void put_u16(unsigned char *p, uint16_t v)
+{
+    p[0] = (unsigned char)v;
+    p[1] = (unsigned char)(v >> 8);
+}
+
+static void put_u32(unsigned char *p, uint32_t v)
+{
+    for (int i = 0; i < 4; i++)
+        p[i] = (unsigned char)(v >> (8 * i));
+}
+
+static void put_u64(unsigned char *p, uint64_t v)
+{
+    for (int i = 0; i < 8; i++)
+        p[i] = (unsigned char)(v >> (8 * i));
+}
+
+static uint16_t get_u16(const unsigned char *p)
+{
+    return (uint16_t)(p[0] | (p[1] << 8));
+}
+
+static uint32_t get_u32(const unsigned char *p)
+{
+    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) |
+           ((uint32_t)p[3] << 24);
+}
+
+static uint64_t get_u64(const unsigned char *p)
+{
+    uint64_t v = 0;
+    for (int i = 7; i >= 0; i--)
+        v = (v << 8) | p[i];
+    return v;
+}
+
+static double u64_to_double(uint64_t u)
+{
+    double d;
+    memcpy(&d, &u, sizeof d);
+    return d;
+}
+
+static uint64_t double_to_u64(double d)
+{
+    uint64_t u;
+    memcpy(&u, &d, sizeof u);
+    return u;
+}
+
+static bool host_is_little_endian(void)
+{
+    const uint16_t one = 1;
+    unsigned char b;
+    memcpy(&b, &one, 1);
+    return b == 1;
+}
+
+/* ---- construction ---- */
+
+static affect_status check_sizes(uint32_t n_frames, uint32_t n_joints, double fps,
+                                 affect_error *err)
+{
+    if (n_frames < 1 || n_frames > AFFECT_MOTION_MAX_FRAMES)
+        return affect_fail(err, AFFECT_ERR_RANGE, "frame count %u out of range (1 .. %u)",
+                           n_frames, AFFECT_MOTION_MAX_FRAMES);
+    if (n_joints < 1 || n_joints > AFFECT_MOTION_MAX_JOINTS)
+        return affect_fail(err, AFFECT_ERR_RANGE, "joint count %u out of range (1 .. %u)",
+                           n_joints, AFFECT_MOTION_MAX_JOINTS);
+    if (!(fps > 0.0) || !(fps <= AFFECT_MOTION_MAX_FPS))
+        return affect_fail(err, AFFECT_ERR_RANGE, "frames per second %g out of range (0 .. %g]",
+                           fps, AFFECT_MOTION_MAX_FPS);
+    return AFFECT_OK;
+}
+
+affect_status affect_motion_create(uint32_t n_frames, uint32_t n_joints, double fps,
+                                   affect_motion **out, affect_error *err)
+{
+    affect_status st = check_sizes(n_frames, n_joints, fps, err);
+    if (st)
+        return st;
+    size_t n_pos;
+    if (!affect_mul_size((size_t)n_frames * n_joints, 3, &n_pos))
+        return affect_fail(err, AFFECT_ERR_RANGE, "motion too large");
+    affect_motion *m = affect_calloc(1, sizeof *m);
+    if (!m)
+        return affect_nomem(err);
+    m->n_frames = n_frames;
+    m->n_joints = n_joints;
+    m->fps = fps;
+    m->names = affect_calloc(n_joints, sizeof *m->names);
+    m->parents = affect_malloc_array(n_joints, sizeof *m->parents);
+    m->pos = affect_calloc(n_pos, sizeof *m->pos);
+    if (!m->names || !m->parents || !m->pos)
+        goto nomem;
+    for (uint32_t j = 0; j < n_joints; j++) {
+        char name[16];
+        int len = snprintf(name, sizeof name, "j%u", j);
+        m->parents[j] = -1;
+        m->names[j] = affect_strndup(name, (size_t)len);
+        if (!m->names[j])
+            goto nomem;
+    }
+    *out = m;
+    return AFFECT_OK;
+nomem:
+    affect_motion_free(m);
+    return affect_nomem(err);
+}
+
+void affect_motion_free(affect_motion *m)
+{
+    if (!m)
+        return;
+    if (m->names)
+        for (uint32_t j = 0; j < m->n_joints; j++)
+            affect_free(m->names[j]);
+    affect_free(m->names);
+    affect_free(m->parents);
+    affect_free(m->pos);
+    affect_free(m);
+}
+
+affect_status affect_motion_set_name(affect_motion *m, uint32_t j, const char *name, size_t len,
+                                     affect_error *err)
+{
+    if (j >= m->n_joints)
+        return affect_fail(err, AFFECT_ERR_RANGE, "joint %u out of range", j);
+    if (len == 0 || len > AFFECT_MOTION_MAX_NAME)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u: name length %zu out of range (1 .. %u)",
+                           j, len, AFFECT_MOTION_MAX_NAME);
+    if (memchr(name, '\0', len))
+        return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u: name contains a NUL byte", j);
+    char *copy = affect_strndup(name, len);
+    if (!copy)
+        return affect_nomem(err);
+    affect_free(m->names[j]);
+    m->names[j] = copy;
+    return AFFECT_OK;
+}
+
+static bool unit_char_ok(char c)
+{
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+           c == '_' || c == '.' || c == '-';
+}
+
+static affect_status check_unit(const char *unit, size_t len, affect_error *err)
+{
+    if (len > AFFECT_MOTION_UNIT_MAX)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "unit is %zu bytes long (at most %u)", len,
+                           AFFECT_MOTION_UNIT_MAX);
+    for (size_t i = 0; i < len; i++)
+        if (!unit_char_ok(unit[i]))
+            return affect_fail(err, AFFECT_ERR_FORMAT,
+                               "unit has a character other than letters, digits, '_', '.', '-' "
+                               "(byte %zu)",
+                               i);
+    return AFFECT_OK;
+}
+
+affect_status affect_motion_set_unit(affect_motion *m, const char *unit, affect_error *err)
+{
+    size_t len = unit ? strlen(unit) : 0;
+    affect_status st = check_unit(unit, len, err);
+    if (st)
+        return st;
+    if (len)
+        memcpy(m->unit, unit, len);
+    m->unit[len] = '\0';
+    return AFFECT_OK;
+}
+
+/* FNV-1a over a name, for the duplicate check. */
+static uint32_t name_hash(const char *s)
+{
+    uint32_t h = 2166136261u;
+    for (; *s; s++)
+        h = (h ^ (unsigned char)*s) * 16777619u;
+    return h;
+}
+
+static affect_status check_names_unique(const affect_motion *m, affect_error *err)
+{
+    uint32_t n = m->n_joints, cap = 16;
+    while (cap < 2 * n)
+        cap *= 2;
+    int32_t *slots = affect_malloc_array(cap, sizeof *slots);
+    if (!slots)
+        return affect_nomem(err);
+    for (uint32_t i = 0; i < cap; i++)
+        slots[i] = -1;
+    affect_status st = AFFECT_OK;
+    for (uint32_t j = 0; j < n && !st; j++) {
+        uint32_t h = name_hash(m->names[j]) & (cap - 1);
+        while (slots[h] >= 0) {
+            if (strcmp(m->names[slots[h]], m->names[j]) == 0) {
+                st = affect_fail(err, AFFECT_ERR_FORMAT, "joints %d and %u have the same name \"%.64s\"",
+                                 slots[h], j, m->names[j]);
+                break;
+            }
+            h = (h + 1) & (cap - 1);
+        }
+        if (!st)
+            slots[h] = (int32_t)j;
+    }
+    affect_free(slots);
+    return st;
+}
+
+static affect_status check_parents(const affect_motion *m, affect_error *err)
+{
+    uint32_t n = m->n_joints;
+    for (uint32_t j = 0; j < n; j++) {
+        int32_t p = m->parents[j];
+        if (p < -1 || p >= (int32_t)n)
+            return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u: parent index %d out of range (-1 .. %u)",
+                               j, p, n - 1);
+        if (p == (int32_t)j)
+            return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u: is its own parent", j);
+    }
+    /* acyclic: walking up from any joint reaches a root within n steps */
+    for (uint32_t j = 0; j < n; j++) {
+        int32_t p = m->parents[j];
+        uint32_t steps = 0;
+        while (p >= 0 && steps <= n) {
+            p = m->parents[p];
+            steps++;
+        }
+        if (p >= 0)
+            return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u: parent indices form a cycle", j);
+    }
+    return AFFECT_OK;
+}
+
+static affect_status check_finite(const affect_motion *m, affect_error *err)
+{
+    size_t n = (size_t)m->n_frames * m->n_joints * 3;
+    for (size_t i = 0; i < n; i++) {
+        if (!isfinite(m->pos[i])) {
+            size_t fj = i / 3;
+            static const char axes[] = "xyz";
+            return affect_fail(err, AFFECT_ERR_FORMAT,
+                               "non-finite coordinate at frame %zu, joint %zu (%.64s), %c",
+                               fj / m->n_joints, fj % m->n_joints, m->names[fj % m->n_joints],
+                               axes[i % 3]);
+        }
+    }
+    return AFFECT_OK;
+}
+
+affect_status affect_motion_validate(const affect_motion *m, affect_error *err)
+{
+    affect_status st = check_sizes(m->n_frames, m->n_joints, m->fps, err);
+    if (st)
+        return st;
+    st = check_unit(m->unit, strlen(m->unit), err);
+    if (st)
+        return st;
+    for (uint32_t j = 0; j < m->n_joints; j++) {
+        size_t len = m->names[j] ? strlen(m->names[j]) : 0;
+        if (len == 0 || len > AFFECT_MOTION_MAX_NAME)
+            return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u: name length %zu out of range (1 .. %u)",
+                               j, len, AFFECT_MOTION_MAX_NAME);
+    }
+    st = check_names_unique(m, err);
+    if (st)
+        return st;
+    st = check_parents(m, err);
+    if (st)
+        return st;
+    return check_finite(m, err);
+}
+
+affect_status affect_motion_clone(const affect_motion *m, affect_motion **out, affect_error *err)
+{
+    affect_motion *c = NULL;
+    affect_status st = affect_motion_create(m->n_frames, m->n_joints, m->fps, &c, err);
+    if (st)
+        return st;
+    memcpy(c->unit, m->unit, sizeof c->unit);
+    for (uint32_t j = 0; j < m->n_joints; j++) {
+        st = affect_motion_set_name(c, j, m->names[j], strlen(m->names[j]), err);
+        if (st) {
+            affect_motion_free(c);
+            return st;
+        }
+    }
+    memcpy(c->parents, m->parents, (size_t)m->n_joints * sizeof *c->parents);
+    memcpy(c->pos, m->pos, (size_t)m->n_frames * m->n_joints * 3 * sizeof *c->pos);
+    *out = c;
+    return AFFECT_OK;
+}
+
+int32_t affect_motion_find_joint(const affect_motion *m, const char *name)
+{
+    for (uint32_t j = 0; j < m->n_joints; j++)
+        if (strcmp(m->names[j], name) == 0)
+            return (int32_t)j;
+    return -1;
+}
+
+double affect_motion_duration(const affect_motion *m)
+{
+    return (double)m->n_frames / m->fps;
+}
+
+void affect_motion_bbox(const affect_motion *m, float min[3], float max[3])
+{
+    for (int a = 0; a < 3; a++) {
+        min[a] = m->pos[a];
+        max[a] = m->pos[a];
+    }
+    size_t n = (size_t)m->n_frames * m->n_joints;
+    for (size_t i = 0; i < n; i++)
+        for (int a = 0; a < 3; a++) {
+            float v = m->pos[i * 3 + a];
+            if (v < min[a])
+                min[a] = v;
+            if (v > max[a])
+                max[a] = v;
+        }
+}
+
+/* ---- BLOB ---- */
+
+bool affect_motion_encoded_size(const affect_motion *m, size_t *size)
+{
+    size_t total = AFFECT_MOTION_HEADER_SIZE + strlen(m->unit), n;
+    for (uint32_t j = 0; j < m->n_joints; j++)
+        if (!affect_add_size(total, 2 + strlen(m->names[j]), &total))
+            return false;
+    if (!affect_add_size(total, (size_t)m->n_joints * 4, &total))
+        return false;
+    if (!affect_mul_size((size_t)m->n_frames * m->n_joints, 12, &n) ||
+        !affect_add_size(total, n, &total))
+        return false;
+    *size = total;
+    return true;
+}
+
+void affect_motion_encode_into(const affect_motion *m, unsigned char *buf)
+{
+    unsigned char *p = buf;
+    size_t unit_len = strlen(m->unit);
+    memcpy(p, AFFECT_MOTION_MAGIC, 4);
+    put_u16(p + 4, AFFECT_MOTION_VERSION);
+    put_u16(p + 6, 0);
+    put_u32(p + 8, m->n_frames);
+    put_u32(p + 12, m->n_joints);
+    put_u64(p + 16, double_to_u64(m->fps));
+    p[24] = (unsigned char)unit_len;
+    memset(p + 25, 0, 7);
+    p += AFFECT_MOTION_HEADER_SIZE;
+    memcpy(p, m->unit, unit_len);
+    p += unit_len;
+    for (uint32_t j = 0; j < m->n_joints; j++) {
+        size_t len = strlen(m->names[j]);
+        put_u16(p, (uint16_t)len);
+        memcpy(p + 2, m->names[j], len);
+        p += 2 + len;
+    }
+    for (uint32_t j = 0; j < m->n_joints; j++, p += 4)
+        put_u32(p, (uint32_t)m->parents[j]);
+    size_t n = (size_t)m->n_frames * m->n_joints * 3;
+    if (host_is_little_endian()) {
+        memcpy(p, m->pos, n * 4);
+    } else {
+        for (size_t i = 0; i < n; i++, p += 4) {
+            uint32_t u;
+            memcpy(&u, &m->pos[i], 4);
+            put_u32(p, u);
+        }
+    }
+}
+
+affect_status affect_motion_encode(const affect_motion *m, unsigned char **out, size_t *size,
+                                   affect_error *err)
+{
+    size_t n;
+    if (!affect_motion_encoded_size(m, &n))
+        return affect_fail(err, AFFECT_ERR_RANGE, "motion too large to encode");
+    unsigned char *buf = affect_malloc(n);
+    if (!buf)
+        return affect_nomem(err);
+    affect_motion_encode_into(m, buf);
+    *out = buf;
+    *size = n;
+    return AFFECT_OK;
+}
+
+affect_status affect_motion_decode(const unsigned char *data, size_t size, affect_motion **out,
+                                   affect_error *err)
+{
+    if (size < AFFECT_MOTION_HEADER_SIZE)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "truncated: %zu bytes is shorter than the %u-byte header",
+                           size, AFFECT_MOTION_HEADER_SIZE);
+    if (memcmp(data, AFFECT_MOTION_MAGIC, 4) != 0)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "not a motion (bad magic bytes at offset 0)");
+    uint16_t version = get_u16(data + 4);
+    if (version < 1 || version > AFFECT_MOTION_VERSION)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "unknown format version %u (this build reads 1 .. %u)",
+                           version, AFFECT_MOTION_VERSION);
+    uint16_t flags = get_u16(data + 6);
+    if (flags != 0)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "unknown flags 0x%04x (offset 6)", flags);
+    uint32_t n_frames = get_u32(data + 8), n_joints = get_u32(data + 12);
+    double fps = u64_to_double(get_u64(data + 16));
+    affect_error size_err;
+    if (check_sizes(n_frames, n_joints, fps, &size_err))
+        return affect_fail(err, AFFECT_ERR_FORMAT, "%s (header)", size_err.msg);
+    affect_status st;
+    size_t unit_len = data[24];
+    for (int i = 25; i < 32; i++)
+        if (data[i] != 0)
+            return affect_fail(err, AFFECT_ERR_FORMAT, "reserved header byte %d is not zero", i);
+    size_t off = AFFECT_MOTION_HEADER_SIZE;
+    if (unit_len > AFFECT_MOTION_UNIT_MAX || size - off < unit_len)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "truncated or bad unit (length %zu at offset 24)",
+                           unit_len);
+    st = check_unit((const char *)data + off, unit_len, err);
+    if (st)
+        return st;
+    size_t unit_off = off;
+    off += unit_len;
+
+    /* walk the name table to find where the parents start, checking each length */
+    size_t names_off = off;
+    for (uint32_t j = 0; j < n_joints; j++) {
+        if (size - off < 2)
+            return affect_fail(err, AFFECT_ERR_FORMAT, "truncated in the name of joint %u (offset %zu)",
+                               j, off);
+        size_t len = get_u16(data + off);
+        if (len == 0 || len > AFFECT_MOTION_MAX_NAME)
+            return affect_fail(err, AFFECT_ERR_FORMAT,
+                               "joint %u: name length %zu out of range (1 .. %u) at offset %zu", j,
+                               len, AFFECT_MOTION_MAX_NAME, off);
+        if (size - off - 2 < len)
+            return affect_fail(err, AFFECT_ERR_FORMAT, "truncated in the name of joint %u (offset %zu)",
+                               j, off);
+        off += 2 + len;
+    }
+    size_t n_vals = (size_t)n_frames * n_joints * 3; /* ≤ 2^24 · 2^12 · 3: no overflow */
+    size_t expect = off + (size_t)n_joints * 4 + n_vals * 4;
+    if (size != expect)
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "%s: %zu bytes, expected %zu for %u frames x %u joints",
+                           size < expect ? "truncated" : "trailing bytes", size, expect, n_frames,
+                           n_joints);
+
+    affect_motion *m = NULL;
+    st = affect_motion_create(n_frames, n_joints, fps, &m, err);
+    if (st)
+        return st;
+    memcpy(m->unit, data + unit_off, unit_len);
+    m->unit[unit_len] = '\0';
+    off = names_off;
+    for (uint32_t j = 0; j < n_joints; j++) {
+        size_t len = get_u16(data + off);
+        st = affect_motion_set_name(m, j, (const char *)data + off + 2, len, err);
+        if (st)
+            goto fail;
+        off += 2 + len;
+    }
+    for (uint32_t j = 0; j < n_joints; j++, off += 4)
+        m->parents[j] = (int32_t)get_u32(data + off);
+    if (host_is_little_endian()) {
+        memcpy(m->pos, data + off, n_vals * 4);
+    } else {
+        for (size_t i = 0; i < n_vals; i++, off += 4) {
+            uint32_t u = get_u32(data + off);
+            memcpy(&m->pos[i], &u, 4);
+        }
+    }
+    st = check_names_unique(m, err);
+    if (!st)
+        st = check_parents(m, err);
+    if (!st)
+        st = check_finite(m, err);
+    if (st)
+        goto fail;
+    *out = m;
+    return AFFECT_OK;
+fail:
+    affect_motion_free(m);
+    return st;
+}
+
+/* ---- editing ---- */
+
+/* New motion with m's joints (names, parents, unit) and n_frames frames at fps. */
+static affect_status like(const affect_motion *m, uint32_t n_frames, double fps,
+                          affect_motion **out, affect_error *err)
+{
+    affect_motion *c = NULL;
+    affect_status st = affect_motion_create(n_frames, m->n_joints, fps, &c, err);
+    if (st)
+        return st;
+    memcpy(c->unit, m->unit, sizeof c->unit);
+    memcpy(c->parents, m->parents, (size_t)m->n_joints * sizeof *c->parents);
+    for (uint32_t j = 0; j < m->n_joints && !st; j++)
+        st = affect_motion_set_name(c, j, m->names[j], strlen(m->names[j]), err);
+    if (st) {
+        affect_motion_free(c);
+        return st;
+    }
+    *out = c;
+    return AFFECT_OK;
+}
+
+affect_status affect_motion_slice(const affect_motion *m, int64_t first, int64_t last,
+                                  affect_motion **out, affect_error *err)
+{
+    int64_t n = m->n_frames;
+    int64_t f = first < 0 ? n + first : first;
+    int64_t l = last < 0 ? n + last : last;
+    if (f < 0 || f >= n)
+        return affect_fail(err, AFFECT_ERR_RANGE, "first frame %lld out of range (the motion has %lld frames)",
+                           (long long)first, (long long)n);
+    if (l < 0 || l >= n)
+        return affect_fail(err, AFFECT_ERR_RANGE, "last frame %lld out of range (the motion has %lld frames)",
+                           (long long)last, (long long)n);
+    if (l < f)
+        return affect_fail(err, AFFECT_ERR_RANGE, "last frame %lld is before first frame %lld",
+                           (long long)last, (long long)first);
+    affect_motion *c = NULL;
+    affect_status st = like(m, (uint32_t)(l - f + 1), m->fps, &c, err);
+    if (st)
+        return st;
+    size_t per = (size_t)m->n_joints * 3;
+    memcpy(c->pos, m->pos + (size_t)f * per, (size_t)(l - f + 1) * per * sizeof *c->pos);
+    *out = c;
+    return AFFECT_OK;
+}
+
+affect_status affect_motion_resample(const affect_motion *m, double fps, affect_motion **out,
+                                     affect_error *err)
+{
+    if (!(fps > 0.0) || !(fps <= AFFECT_MOTION_MAX_FPS))
+        return affect_fail(err, AFFECT_ERR_RANGE, "frames per second %g out of range (0 .. %g]", fps,
+                           AFFECT_MOTION_MAX_FPS);
+    double span = (double)(m->n_frames - 1) / m->fps; /* seconds from first to last frame */
+    double frames = floor(span * fps + 1e-9) + 1.0;
+    if (frames > AFFECT_MOTION_MAX_FRAMES)
+        return affect_fail(err, AFFECT_ERR_RANGE, "resampling to %g fps gives %.0f frames (at most %u)",
+                           fps, frames, AFFECT_MOTION_MAX_FRAMES);
+    affect_motion *c = NULL;
+    affect_status st = like(m, (uint32_t)frames, fps, &c, err);
+    if (st)
+        return st;
+    size_t per = (size_t)m->n_joints * 3;
+    for (uint32_t k = 0; k < c->n_frames; k++) {
+        double src = (double)k * m->fps / fps; /* position in source frames */
+        uint32_t i0 = (uint32_t)floor(src);
+        if (i0 >= m->n_frames - 1)
+            i0 = m->n_frames - 1;
+        double w = src - i0;
+        uint32_t i1 = i0 + 1 < m->n_frames ? i0 + 1 : i0;
+        if (i1 == i0)
+            w = 0.0;
+        const float *a = m->pos + (size_t)i0 * per, *b = m->pos + (size_t)i1 * per;
+        float *o = c->pos + (size_t)k * per;
+        for (size_t i = 0; i < per; i++)
+            o[i] = (float)((1.0 - w) * a[i] + w * b[i]);
+    }
+    *out = c;
+    return AFFECT_OK;
+}
+
+affect_status affect_motion_select(const affect_motion *m, const char *const *names,
+                                   uint32_t n_names, affect_motion **out, affect_error *err)
+{
+    if (n_names == 0)
+        return affect_fail(err, AFFECT_ERR_INVALID, "no joints selected");
+    int32_t *src = affect_malloc_array(n_names, sizeof *src);
+    int32_t *map = affect_malloc_array(m->n_joints, sizeof *map); /* source joint → new index */
+    affect_motion *c = NULL;
+    affect_status st = AFFECT_OK;
+    if (!src || !map) {
+        st = affect_nomem(err);
+        goto done;
+    }
+    for (uint32_t j = 0; j < m->n_joints; j++)
+        map[j] = -1;
+    for (uint32_t i = 0; i < n_names; i++) {
+        src[i] = affect_motion_find_joint(m, names[i]);
+        if (src[i] < 0) {
+            st = affect_fail(err, AFFECT_ERR_MISSING, "no joint named \"%.64s\" (selection item %u)",
+                             names[i], i);
+            goto done;
+        }
+        if (map[src[i]] >= 0) {
+            st = affect_fail(err, AFFECT_ERR_INVALID, "joint \"%.64s\" selected twice (items %d and %u)",
+                             names[i], map[src[i]], i);
+            goto done;
+        }
+        map[src[i]] = (int32_t)i;
+    }
+    st = affect_motion_create(m->n_frames, n_names, m->fps, &c, err);
+    if (st)
+        goto done;
+    memcpy(c->unit, m->unit, sizeof c->unit);
+    for (uint32_t i = 0; i < n_names; i++) {
+        st = affect_motion_set_name(c, i, m->names[src[i]], strlen(m->names[src[i]]), err);
+        if (st)
+            goto done;
+        int32_t p = m->parents[src[i]];
+        uint32_t guard = 0;
+        while (p >= 0 && map[p] < 0 && guard++ <= m->n_joints)
+            p = m->parents[p];
+        c->parents[i] = p >= 0 ? map[p] : -1;
+    }
+    for (uint32_t t = 0; t < m->n_frames; t++)
+        for (uint32_t i = 0; i < n_names; i++)
+            memcpy(affect_motion_at(c, t, i), affect_motion_at(m, t, (uint32_t)src[i]),
+                   3 * sizeof(float));
+    *out = c;
+    c = NULL;
+done:
+    affect_motion_free(c);
+    affect_free(src);
+    affect_free(map);
+    return st;
+}

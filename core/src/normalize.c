@@ -1,0 +1,140 @@
+/*
+ * normalize.c — remove the first frame's root translation and heading, optionally scale by
+ * the right arm length (see affect/normalize.h for the definitions).
+ *
+ * The heading rotation is about the up axis u. With h the horizontal part of the first
+ * frame's lateral vector (left − right) and e the unit axis that should carry it (x for y-up
+ * and z-up data, y for x-up data), the rotation turns h onto e; both lie in the plane
+ * perpendicular to u, so it is a rotation by the signed angle between them about u.
+ */
+#include "affect/normalize.h"
+
+#include <math.h>
+#include <string.h>
+
+void affect_normalize_options_default(affect_normalize_options *opt)
+{
+    opt->up_axis = 1;
+    opt->translation = true;
+    opt->vertical = false;
+    opt->heading = true;
+    opt->scale_arm = false;
+}
+
+static double dist3(const float *a, const float *b)
+{
+    double dx = (double)a[0] - b[0], dy = (double)a[1] - b[1], dz = (double)a[2] - b[2];
+    return sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+/* Rotation by angle (radians) about axis u (0, 1, 2), right-handed, row-major. */
+static void axis_rotation(int u, double angle, double r[9])
+{
+    double c = cos(angle), s = sin(angle);
+    int a = (u + 1) % 3, b = (u + 2) % 3; /* (a, b, u) is a right-handed frame */
+    memset(r, 0, 9 * sizeof *r);
+    r[u * 3 + u] = 1;
+    r[a * 3 + a] = c;
+    r[a * 3 + b] = -s;
+    r[b * 3 + a] = s;
+    r[b * 3 + b] = c;
+}
+
+affect_status affect_normalize_transform_compute(const affect_motion *m, const affect_roles *roles,
+                                                 const affect_normalize_options *opt,
+                                                 affect_normalize_transform *tf,
+                                                 affect_error *err)
+{
+    int u = opt->up_axis;
+    if (u < 0 || u > 2)
+        return affect_fail(err, AFFECT_ERR_INVALID, "up axis must be x, y or z");
+    memset(tf, 0, sizeof *tf);
+    tf->rot[0] = tf->rot[4] = tf->rot[8] = 1;
+    tf->scale = 1;
+
+    int32_t root = roles->joint[AFFECT_ROLE_PELVIS];
+    if (root < 0 || (uint32_t)root >= m->n_joints)
+        root = 0;
+    const float *rp = affect_motion_at(m, 0, (uint32_t)root);
+    if (opt->translation)
+        for (int a = 0; a < 3; a++)
+            if (a != u || opt->vertical)
+                tf->origin[a] = rp[a];
+
+    if (opt->heading) {
+        int32_t l = roles->joint[AFFECT_ROLE_LEFT_HIP], r = roles->joint[AFFECT_ROLE_RIGHT_HIP];
+        if (l < 0 || r < 0) {
+            l = roles->joint[AFFECT_ROLE_LEFT_SHOULDER];
+            r = roles->joint[AFFECT_ROLE_RIGHT_SHOULDER];
+        }
+        if (l < 0 || r < 0)
+            return affect_fail(err, AFFECT_ERR_MISSING,
+                               "cannot find the heading: the left/right hip and shoulder roles are "
+                               "not resolved (set them with \"roles\", or \"heading\": false)");
+        const float *pl = affect_motion_at(m, 0, (uint32_t)l), *pr = affect_motion_at(m, 0, (uint32_t)r);
+        int a = (u + 1) % 3, b = (u + 2) % 3;
+        double ha = (double)pl[a] - pr[a], hb = (double)pl[b] - pr[b];
+        if (hypot(ha, hb) < 1e-9)
+            return affect_fail(err, AFFECT_ERR_INVALID,
+                               "cannot find the heading: left and right joints coincide "
+                               "horizontally in the first frame");
+        /* target axis e: x for y-up or z-up data, y for x-up data */
+        int e = u == 0 ? 1 : 0;
+        double ea = e == a ? 1 : 0, eb = e == b ? 1 : 0;
+        /* turn h onto e: by angle(e) − angle(h), angles measured in the (a, b) plane */
+        double angle = atan2(eb, ea) - atan2(hb, ha);
+        axis_rotation(u, angle, tf->rot);
+    }
+
+    if (opt->scale_arm) {
+        int32_t s = roles->joint[AFFECT_ROLE_RIGHT_SHOULDER], el = roles->joint[AFFECT_ROLE_RIGHT_ELBOW],
+                h = roles->joint[AFFECT_ROLE_RIGHT_HAND];
+        if (s < 0 || h < 0)
+            return affect_fail(err, AFFECT_ERR_MISSING,
+                               "cannot scale by the arm: the right_shoulder and right_hand roles "
+                               "are not both resolved");
+        const float *ps = affect_motion_at(m, 0, (uint32_t)s), *ph = affect_motion_at(m, 0, (uint32_t)h);
+        double len = el >= 0 ? dist3(ps, affect_motion_at(m, 0, (uint32_t)el)) +
+                                   dist3(affect_motion_at(m, 0, (uint32_t)el), ph)
+                             : dist3(ps, ph);
+        if (!(len > 1e-9))
+            return affect_fail(err, AFFECT_ERR_INVALID,
+                               "cannot scale by the arm: its length is zero in the first frame");
+        tf->scale = len;
+    }
+    return AFFECT_OK;
+}
+
+void affect_normalize_apply(affect_motion *m, const affect_normalize_transform *tf)
+{
+    size_t n = (size_t)m->n_frames * m->n_joints;
+    const double *r = tf->rot;
+    double inv = 1.0 / tf->scale;
+    for (size_t i = 0; i < n; i++) {
+        float *p = m->pos + i * 3;
+        double x = (double)p[0] - tf->origin[0], y = (double)p[1] - tf->origin[1],
+               z = (double)p[2] - tf->origin[2];
+        p[0] = (float)((r[0] * x + r[1] * y + r[2] * z) * inv);
+        p[1] = (float)((r[3] * x + r[4] * y + r[5] * z) * inv);
+        p[2] = (float)((r[6] * x + r[7] * y + r[8] * z) * inv);
+    }
+    if (tf->scale != 1.0)
+        memcpy(m->unit, "arm", 4);
+}
+
+affect_status affect_motion_normalize(const affect_motion *m, const affect_roles *roles,
+                                      const affect_normalize_options *opt, affect_motion **out,
+                                      affect_error *err)
+{
+    affect_normalize_transform tf;
+    affect_status st = affect_normalize_transform_compute(m, roles, opt, &tf, err);
+    if (st)
+        return st;
+    affect_motion *c = NULL;
+    st = affect_motion_clone(m, &c, err);
+    if (st)
+        return st;
+    affect_normalize_apply(c, &tf);
+    *out = c;
+    return AFFECT_OK;
+}

@@ -1,0 +1,161 @@
+/*
+ * affect.c — entry point of the sqlite-affect loadable extension.
+ *
+ *   sqlite3 shell:  .load ./build/affect
+ *   Python:         conn.enable_load_extension(True); conn.load_extension("./build/affect")
+ *
+ * sqlite3_affect_init checks the host SQLite's version, routes the core library's allocations
+ * to sqlite3_malloc64 (so SQLite's memory accounting and fault injection cover them), and
+ * registers every SQL function from one table, reporting a failure with the function's name.
+ * Every function here is pure (deterministic, no file or table access), so each is
+ * SQLITE_DETERMINISTIC | SQLITE_INNOCUOUS.
+ */
+#include <string.h>
+
+#include "common.h"
+#include "fn_motion.h"
+#include "affect/strbuf.h"
+
+#include <svm.h>
+
+SQLITE_EXTENSION_INIT1
+
+#ifndef AFFECT_VERSION
+#define AFFECT_VERSION "0.0.0"
+#endif
+#ifndef AFFECT_COMPILE_FLAGS
+#define AFFECT_COMPILE_FLAGS ""
+#endif
+#ifndef AFFECT_BUILD_TYPE
+#define AFFECT_BUILD_TYPE ""
+#endif
+
+/* SQLITE_INNOCUOUS and SQLITE_DIRECTONLY arrived in 3.31.0. */
+#define AFFECT_MIN_SQLITE 3031000
+#define AFFECT_MIN_SQLITE_TEXT "3.31.0"
+
+/* From OpenBLAS (cblas.h declares it, but its location varies between Debian flavours). */
+char *openblas_get_config(void);
+int openblas_get_num_threads(void);
+
+static void *ax_malloc(size_t n)
+{
+    return sqlite3_malloc64(n);
+}
+
+static void *ax_realloc(void *p, size_t n)
+{
+    return sqlite3_realloc64(p, n);
+}
+
+static void ax_free(void *p)
+{
+    sqlite3_free(p);
+}
+
+static void fn_version(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    sqlite3_result_text(ctx, AFFECT_VERSION, -1, SQLITE_STATIC);
+}
+
+static void fn_build_info(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    affect_strbuf sb;
+    affect_strbuf_init(&sb);
+    affect_strbuf_puts(&sb, "{\"version\":");
+    affect_strbuf_json_string(&sb, AFFECT_VERSION);
+    affect_strbuf_puts(&sb, ",\"sqlite_compiled\":");
+    affect_strbuf_json_string(&sb, SQLITE_VERSION);
+    affect_strbuf_puts(&sb, ",\"sqlite_runtime\":");
+    affect_strbuf_json_string(&sb, sqlite3_libversion());
+    affect_strbuf_puts(&sb, ",\"blas\":");
+    affect_strbuf_json_string(&sb, openblas_get_config());
+    affect_strbuf_printf(&sb, ",\"blas_threads\":%d", openblas_get_num_threads());
+    affect_strbuf_printf(&sb, ",\"libsvm\":%d", libsvm_version);
+    affect_strbuf_puts(&sb, ",\"build_type\":");
+    affect_strbuf_json_string(&sb, AFFECT_BUILD_TYPE);
+    affect_strbuf_puts(&sb, ",\"compile_flags\":");
+    affect_strbuf_json_string(&sb, AFFECT_COMPILE_FLAGS);
+    affect_strbuf_putc(&sb, '}');
+    char *text = NULL;
+    size_t len = 0;
+    affect_error err;
+    if (affect_strbuf_finish(&sb, &text, &len, &err))
+        sqlite3_result_error_nomem(ctx);
+    else
+        ax_result_json(ctx, text, len);
+}
+
+typedef struct ax_function {
+    const char *name;
+    int n_arg;
+    bool json; /* returns JSON text (subtype 'J') */
+    void (*fn)(sqlite3_context *, int, sqlite3_value **);
+} ax_function;
+
+/* Every scalar function, one row per accepted argument count. */
+static const ax_function functions[] = {
+    {"affect_version", 0, false, fn_version},
+    {"affect_build_info", 0, true, fn_build_info},
+    {"motion_from_bvh", 1, false, ax_motion_from_bvh},
+    {"motion_from_bvh", 2, false, ax_motion_from_bvh},
+    {"motion_from_csv", 2, false, ax_motion_from_csv},
+    {"motion_from_csv", 3, false, ax_motion_from_csv},
+    {"motion_from_json", 1, false, ax_motion_from_json},
+    {"motion_to_json", 1, true, ax_motion_to_json},
+    {"motion_to_csv", 1, false, ax_motion_to_csv},
+    {"motion_info", 1, true, ax_motion_info},
+    {"motion_frames", 1, false, ax_motion_frames},
+    {"motion_joints", 1, false, ax_motion_joints},
+    {"motion_fps", 1, false, ax_motion_fps},
+    {"motion_duration", 1, false, ax_motion_duration},
+    {"motion_slice", 3, false, ax_motion_slice},
+    {"motion_resample", 2, false, ax_motion_resample},
+    {"motion_select", 2, false, ax_motion_select},
+    {"motion_roles", 1, true, ax_motion_roles},
+    {"motion_roles", 2, true, ax_motion_roles},
+    {"motion_normalize", 1, false, ax_motion_normalize},
+    {"motion_normalize", 2, false, ax_motion_normalize},
+    {"motion_svg", 1, false, ax_motion_svg},
+    {"motion_svg", 2, false, ax_motion_svg},
+    {"motion_synth", 3, false, ax_motion_synth},
+    {"motion_synth", 4, false, ax_motion_synth},
+};
+
+#ifdef _WIN32
+__declspec(dllexport)
+#endif
+__attribute__((visibility("default"))) int sqlite3_affect_init(sqlite3 *db, char **err,
+                                                               const sqlite3_api_routines *api);
+
+int sqlite3_affect_init(sqlite3 *db, char **err, const sqlite3_api_routines *api)
+{
+    SQLITE_EXTENSION_INIT2(api);
+    if (sqlite3_libversion_number() < AFFECT_MIN_SQLITE) {
+        *err = sqlite3_mprintf("affect: SQLite " AFFECT_MIN_SQLITE_TEXT
+                               " or later is required (this host runs %s)",
+                               sqlite3_libversion());
+        return SQLITE_ERROR;
+    }
+    static const affect_allocator allocator = {ax_malloc, ax_realloc, ax_free};
+    affect_set_allocator(&allocator);
+
+    int subtype_flag = sqlite3_libversion_number() >= 3045000 ? SQLITE_RESULT_SUBTYPE : 0;
+    for (size_t i = 0; i < sizeof functions / sizeof functions[0]; i++) {
+        const ax_function *f = &functions[i];
+        int flags = AX_PURE | (f->json ? subtype_flag : 0);
+        int rc = sqlite3_create_function_v2(db, f->name, f->n_arg, flags, (void *)f->name, f->fn,
+                                            NULL, NULL, NULL);
+        if (rc != SQLITE_OK) {
+            *err = sqlite3_mprintf("affect: cannot register %s/%d: %s", f->name, f->n_arg,
+                                   sqlite3_errmsg(db));
+            return rc;
+        }
+    }
+    int rc = ax_register_points(db);
+    if (rc != SQLITE_OK) {
+        *err = sqlite3_mprintf("affect: cannot register motion_points: %s", sqlite3_errmsg(db));
+        return rc;
+    }
+    return SQLITE_OK;
+}

@@ -1,0 +1,334 @@
+/*
+ * common.c — argument checking, BLOB/JSON in and out, and error mapping for the SQL
+ * functions (see common.h).
+ */
+#include "common.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "affect/strbuf.h"
+
+void ax_error(sqlite3_context *ctx, const affect_error *err)
+{
+    if (err->status == AFFECT_ERR_NOMEM) {
+        sqlite3_result_error_nomem(ctx);
+        return;
+    }
+    ax_errorf(ctx, "%s", err->msg);
+}
+
+void ax_errorf(sqlite3_context *ctx, const char *fmt, ...)
+{
+    char msg[AFFECT_ERROR_MSG_MAX + 64];
+    int n = snprintf(msg, sizeof msg, "%s: ", AX_NAME(ctx));
+    if (n < 0)
+        n = 0;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg + n, sizeof msg - (size_t)n, fmt, ap);
+    va_end(ap);
+    sqlite3_result_error(ctx, msg, -1);
+}
+
+const char *ax_type_name(sqlite3_value *v)
+{
+    switch (sqlite3_value_type(v)) {
+    case SQLITE_INTEGER: return "integer";
+    case SQLITE_FLOAT: return "real";
+    case SQLITE_TEXT: return "text";
+    case SQLITE_BLOB: return "blob";
+    default: return "null";
+    }
+}
+
+ax_arg ax_arg_motion(sqlite3_context *ctx, sqlite3_value **argv, int i, affect_motion **out)
+{
+    sqlite3_value *v = argv[i];
+    int type = sqlite3_value_type(v);
+    if (type == SQLITE_NULL)
+        return AX_NULL;
+    if (type != SQLITE_BLOB) {
+        ax_errorf(ctx, "argument %d must be a motion BLOB, got %s", i + 1, ax_type_name(v));
+        return AX_ERROR;
+    }
+    const unsigned char *data = sqlite3_value_blob(v);
+    int n = sqlite3_value_bytes(v);
+    if (!data && n > 0) {
+        sqlite3_result_error_nomem(ctx);
+        return AX_ERROR;
+    }
+    affect_error err;
+    if (affect_motion_decode(data, (size_t)n, out, &err)) {
+        if (err.status == AFFECT_ERR_NOMEM)
+            sqlite3_result_error_nomem(ctx);
+        else
+            ax_errorf(ctx, "argument %d is not a valid motion: %s", i + 1, err.msg);
+        return AX_ERROR;
+    }
+    return AX_OK;
+}
+
+ax_arg ax_arg_text(sqlite3_context *ctx, sqlite3_value **argv, int i, const char **text,
+                   size_t *len)
+{
+    sqlite3_value *v = argv[i];
+    int type = sqlite3_value_type(v);
+    if (type == SQLITE_NULL)
+        return AX_NULL;
+    if (type == SQLITE_BLOB) {
+        ax_errorf(ctx, "argument %d must be text, got blob", i + 1);
+        return AX_ERROR;
+    }
+    const unsigned char *t = sqlite3_value_text(v);
+    if (!t) {
+        sqlite3_result_error_nomem(ctx);
+        return AX_ERROR;
+    }
+    *text = (const char *)t;
+    *len = (size_t)sqlite3_value_bytes(v);
+    return AX_OK;
+}
+
+ax_arg ax_arg_int(sqlite3_context *ctx, sqlite3_value **argv, int i, int64_t *out)
+{
+    sqlite3_value *v = argv[i];
+    switch (sqlite3_value_type(v)) {
+    case SQLITE_NULL:
+        return AX_NULL;
+    case SQLITE_INTEGER:
+        *out = sqlite3_value_int64(v);
+        return AX_OK;
+    case SQLITE_FLOAT: {
+        double d = sqlite3_value_double(v);
+        if (d == floor(d) && fabs(d) < 9e15) {
+            *out = (int64_t)d;
+            return AX_OK;
+        }
+        break;
+    }
+    default:
+        break;
+    }
+    ax_errorf(ctx, "argument %d must be an integer, got %s", i + 1, ax_type_name(v));
+    return AX_ERROR;
+}
+
+ax_arg ax_arg_double(sqlite3_context *ctx, sqlite3_value **argv, int i, double *out)
+{
+    sqlite3_value *v = argv[i];
+    int type = sqlite3_value_type(v);
+    if (type == SQLITE_NULL)
+        return AX_NULL;
+    if (type == SQLITE_INTEGER || type == SQLITE_FLOAT) {
+        *out = sqlite3_value_double(v);
+        if (isfinite(*out))
+            return AX_OK;
+    }
+    ax_errorf(ctx, "argument %d must be a finite number, got %s", i + 1, ax_type_name(v));
+    return AX_ERROR;
+}
+
+void ax_result_motion(sqlite3_context *ctx, const affect_motion *m)
+{
+    size_t n;
+    if (!affect_motion_encoded_size(m, &n) || n > 0x7fffffff) {
+        sqlite3_result_error_toobig(ctx);
+        return;
+    }
+    unsigned char *buf = sqlite3_malloc64(n);
+    if (!buf) {
+        sqlite3_result_error_nomem(ctx);
+        return;
+    }
+    affect_motion_encode_into(m, buf);
+    sqlite3_result_blob64(ctx, buf, n, sqlite3_free);
+}
+
+void ax_result_text(sqlite3_context *ctx, char *text, size_t len)
+{
+    sqlite3_result_text64(ctx, text, len, sqlite3_free, SQLITE_UTF8);
+}
+
+void ax_result_json(sqlite3_context *ctx, char *text, size_t len)
+{
+    sqlite3_result_text64(ctx, text, len, sqlite3_free, SQLITE_UTF8);
+    sqlite3_result_subtype(ctx, AX_JSON_SUBTYPE);
+}
+
+/* ---- options ---- */
+
+ax_arg ax_opts_parse(sqlite3_context *ctx, int argc, sqlite3_value **argv, int i,
+                     const char *const *allowed, ax_opts *opts)
+{
+    opts->doc = NULL;
+    opts->obj = NULL;
+    if (i >= argc || sqlite3_value_type(argv[i]) == SQLITE_NULL)
+        return AX_OK;
+    if (sqlite3_value_type(argv[i]) != SQLITE_TEXT) {
+        ax_errorf(ctx, "options (argument %d) must be a JSON object as text, got %s", i + 1,
+                  ax_type_name(argv[i]));
+        return AX_ERROR;
+    }
+    const char *text = (const char *)sqlite3_value_text(argv[i]);
+    if (!text) {
+        sqlite3_result_error_nomem(ctx);
+        return AX_ERROR;
+    }
+    affect_error err;
+    if (affect_json_parse(text, (size_t)sqlite3_value_bytes(argv[i]), &opts->doc, &err)) {
+        if (err.status == AFFECT_ERR_NOMEM)
+            sqlite3_result_error_nomem(ctx);
+        else
+            ax_errorf(ctx, "options (argument %d) are not valid JSON: %s", i + 1, err.msg);
+        return AX_ERROR;
+    }
+    const affect_json_node *root = affect_json_root(opts->doc);
+    if (root->type != AFFECT_JSON_OBJECT) {
+        ax_errorf(ctx, "options (argument %d) must be a JSON object, got %s", i + 1,
+                  affect_json_type_name(root->type));
+        ax_opts_free(opts);
+        return AX_ERROR;
+    }
+    for (const affect_json_node *m = affect_json_first(opts->doc, root); m;
+         m = affect_json_next_sibling(opts->doc, m)) {
+        bool known = false;
+        for (int k = 0; allowed[k] && !known; k++)
+            known = strcmp(allowed[k], m->key) == 0;
+        if (!known) {
+            char list[256] = "";
+            size_t used = 0;
+            for (int k = 0; allowed[k]; k++) {
+                int w = snprintf(list + used, sizeof list - used, "%s%s", k ? ", " : "",
+                                 allowed[k]);
+                if (w < 0 || (size_t)w >= sizeof list - used)
+                    break;
+                used += (size_t)w;
+            }
+            ax_errorf(ctx, "unknown option \"%.64s\" (expected %s)", m->key,
+                      allowed[0] ? list : "no options");
+            ax_opts_free(opts);
+            return AX_ERROR;
+        }
+    }
+    opts->obj = root;
+    return AX_OK;
+}
+
+void ax_opts_free(ax_opts *opts)
+{
+    affect_json_free(opts->doc);
+    opts->doc = NULL;
+    opts->obj = NULL;
+}
+
+const affect_json_node *ax_opt(const ax_opts *opts, const char *key)
+{
+    return opts->obj ? affect_json_get(opts->doc, opts->obj, key) : NULL;
+}
+
+static ax_arg wrong_type(sqlite3_context *ctx, const char *key, const char *want,
+                         const affect_json_node *n)
+{
+    ax_errorf(ctx, "option \"%s\" must be %s, got %s", key, want, affect_json_type_name(n->type));
+    return AX_ERROR;
+}
+
+ax_arg ax_opt_bool(sqlite3_context *ctx, const ax_opts *opts, const char *key, bool *out)
+{
+    const affect_json_node *n = ax_opt(opts, key);
+    if (!n)
+        return AX_OK;
+    if (n->type != AFFECT_JSON_TRUE && n->type != AFFECT_JSON_FALSE)
+        return wrong_type(ctx, key, "true or false", n);
+    *out = n->type == AFFECT_JSON_TRUE;
+    return AX_OK;
+}
+
+ax_arg ax_opt_number(sqlite3_context *ctx, const ax_opts *opts, const char *key, double *out)
+{
+    const affect_json_node *n = ax_opt(opts, key);
+    if (!n)
+        return AX_OK;
+    if (n->type != AFFECT_JSON_NUMBER)
+        return wrong_type(ctx, key, "a number", n);
+    *out = n->num;
+    return AX_OK;
+}
+
+ax_arg ax_opt_string(sqlite3_context *ctx, const ax_opts *opts, const char *key,
+                     const char **out)
+{
+    const affect_json_node *n = ax_opt(opts, key);
+    if (!n)
+        return AX_OK;
+    if (n->type != AFFECT_JSON_STRING)
+        return wrong_type(ctx, key, "a string", n);
+    *out = n->str;
+    return AX_OK;
+}
+
+ax_arg ax_opt_enum(sqlite3_context *ctx, const ax_opts *opts, const char *key,
+                   const char *const *choices, int *out)
+{
+    const affect_json_node *n = ax_opt(opts, key);
+    if (!n)
+        return AX_OK;
+    if (n->type == AFFECT_JSON_STRING)
+        for (int k = 0; choices[k]; k++)
+            if (strcmp(choices[k], n->str) == 0) {
+                *out = k;
+                return AX_OK;
+            }
+    affect_strbuf sb;
+    affect_strbuf_init(&sb);
+    for (int k = 0; choices[k]; k++) {
+        affect_strbuf_puts(&sb, k ? ", " : "");
+        affect_strbuf_json_string(&sb, choices[k]);
+    }
+    if (sb.failed) {
+        affect_strbuf_free(&sb);
+        sqlite3_result_error_nomem(ctx);
+        return AX_ERROR;
+    }
+    if (n->type == AFFECT_JSON_STRING)
+        ax_errorf(ctx, "option \"%s\" must be one of %s, got \"%.64s\"", key, sb.data, n->str);
+    else
+        ax_errorf(ctx, "option \"%s\" must be one of %s, got %s", key, sb.data,
+                  affect_json_type_name(n->type));
+    affect_strbuf_free(&sb);
+    return AX_ERROR;
+}
+
+ax_arg ax_opt_up(sqlite3_context *ctx, const ax_opts *opts, int *up)
+{
+    static const char *const axes[] = {"x", "y", "z", NULL};
+    return ax_opt_enum(ctx, opts, "up", axes, up);
+}
+
+ax_arg ax_opt_roles(sqlite3_context *ctx, const ax_opts *opts, const affect_motion *m,
+                    affect_roles *roles)
+{
+    affect_roles_resolve(m, roles);
+    const affect_json_node *n = ax_opt(opts, "roles");
+    if (!n)
+        return AX_OK;
+    if (n->type != AFFECT_JSON_OBJECT)
+        return wrong_type(ctx, "roles", "an object of role names to joint names", n);
+    for (const affect_json_node *r = affect_json_first(opts->doc, n); r;
+         r = affect_json_next_sibling(opts->doc, r)) {
+        if (r->type != AFFECT_JSON_STRING && r->type != AFFECT_JSON_NULL) {
+            ax_errorf(ctx, "option \"roles\": \"%.64s\" must map to a joint name or null, got %s",
+                      r->key, affect_json_type_name(r->type));
+            return AX_ERROR;
+        }
+        affect_error err;
+        if (affect_roles_set(m, roles, r->key, r->type == AFFECT_JSON_STRING ? r->str : NULL,
+                             &err)) {
+            ax_errorf(ctx, "option \"roles\": %s", err.msg);
+            return AX_ERROR;
+        }
+    }
+    return AX_OK;
+}

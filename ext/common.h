@@ -1,0 +1,91 @@
+/*
+ * common.h — helpers shared by the SQL function wrappers and virtual tables: argument
+ * checking, motion BLOBs in and out, JSON options, error mapping.
+ *
+ * Conventions every wrapper follows:
+ *   - NULL in gives NULL out (helpers return AX_NULL so the wrapper can stop);
+ *   - a wrong type or malformed value gives "function_name: what is wrong (where)";
+ *   - allocation failure gives SQLITE_NOMEM through sqlite3_result_error_nomem;
+ *   - results allocated by the core (which allocates with sqlite3_malloc64 once the
+ *     extension is loaded) are handed to SQLite with sqlite3_free as destructor, no copy.
+ */
+#ifndef AFFECT_EXT_COMMON_H
+#define AFFECT_EXT_COMMON_H
+
+#include <sqlite3ext.h>
+SQLITE_EXTENSION_INIT3
+
+#include "affect/base.h"
+#include "affect/json.h"
+#include "affect/motion.h"
+#include "affect/roles.h"
+
+/* Flags for pure functions; JSON-returning ones add the result-subtype flag when the host
+ * SQLite knows it (3.45+). */
+#define AX_PURE (SQLITE_UTF8 | SQLITE_DETERMINISTIC | SQLITE_INNOCUOUS)
+#ifndef SQLITE_RESULT_SUBTYPE
+#define SQLITE_RESULT_SUBTYPE 0x001000000
+#endif
+#define AX_JSON_SUBTYPE 74 /* 'J', the subtype of SQLite's own JSON functions */
+
+/* Outcome of an argument helper. */
+typedef enum ax_arg { AX_OK = 0, AX_NULL = 1, AX_ERROR = 2 } ax_arg;
+
+/* The function's name, as registered (sqlite3_user_data points at it). */
+#define AX_NAME(ctx) ((const char *)sqlite3_user_data(ctx))
+
+/* "fn: message" as the result error; AFFECT_ERR_NOMEM becomes SQLITE_NOMEM. */
+void ax_error(sqlite3_context *ctx, const affect_error *err);
+void ax_errorf(sqlite3_context *ctx, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+/* Name of a value's type for messages: "integer", "real", "text", "blob", "null". */
+const char *ax_type_name(sqlite3_value *v);
+
+/* Decodes argument i (0-based) as a motion BLOB. */
+ax_arg ax_arg_motion(sqlite3_context *ctx, sqlite3_value **argv, int i, affect_motion **out);
+/* Argument i as text (its bytes and length); a BLOB is refused. */
+ax_arg ax_arg_text(sqlite3_context *ctx, sqlite3_value **argv, int i, const char **text,
+                   size_t *len);
+/* Argument i as an integer (an integral REAL is accepted). */
+ax_arg ax_arg_int(sqlite3_context *ctx, sqlite3_value **argv, int i, int64_t *out);
+/* Argument i as a finite number. */
+ax_arg ax_arg_double(sqlite3_context *ctx, sqlite3_value **argv, int i, double *out);
+
+/* Sets a motion BLOB as the result (the motion is not freed). */
+void ax_result_motion(sqlite3_context *ctx, const affect_motion *m);
+/* Sets text allocated by the core as the result, taking ownership. */
+void ax_result_text(sqlite3_context *ctx, char *text, size_t len);
+/* The same, marked as JSON (subtype 'J'), so json_object() nests it. */
+void ax_result_json(sqlite3_context *ctx, char *text, size_t len);
+
+/* ---- JSON options ---- */
+typedef struct ax_opts {
+    affect_json_doc *doc;
+    const affect_json_node *obj; /* NULL when no options were given */
+} ax_opts;
+
+/* Parses argument i as a JSON object of options whose keys must be in allowed (NULL-terminated).
+ * A NULL argument or a missing argument (i >= argc) means no options. */
+ax_arg ax_opts_parse(sqlite3_context *ctx, int argc, sqlite3_value **argv, int i,
+                     const char *const *allowed, ax_opts *opts);
+void ax_opts_free(ax_opts *opts);
+const affect_json_node *ax_opt(const ax_opts *opts, const char *key);
+/* Typed getters: leave *out unchanged when the key is absent; error on a wrong type. */
+ax_arg ax_opt_bool(sqlite3_context *ctx, const ax_opts *opts, const char *key, bool *out);
+ax_arg ax_opt_number(sqlite3_context *ctx, const ax_opts *opts, const char *key, double *out);
+ax_arg ax_opt_string(sqlite3_context *ctx, const ax_opts *opts, const char *key,
+                     const char **out);
+/* A string that must be one of choices (NULL-terminated); *out gets its index. */
+ax_arg ax_opt_enum(sqlite3_context *ctx, const ax_opts *opts, const char *key,
+                   const char *const *choices, int *out);
+/* "up": "x" | "y" | "z" → 0..2. */
+ax_arg ax_opt_up(sqlite3_context *ctx, const ax_opts *opts, int *up);
+/* Resolves the motion's roles, then applies the "roles" option: {"left_hand": "MyHand", …}
+ * (null unassigns a role). */
+ax_arg ax_opt_roles(sqlite3_context *ctx, const ax_opts *opts, const affect_motion *m,
+                    affect_roles *roles);
+
+#endif

@@ -1,0 +1,430 @@
+/*
+ * fn_motion.c — SQL wrappers of the motion_* functions: import (BVH, CSV, JSON), export,
+ * inspection, editing, roles, normalization, previews and the synthetic generator.
+ * Each wrapper only converts values and calls the core; see docs/reference.md for the SQL
+ * signatures, results and errors.
+ */
+#include "fn_motion.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "affect/io.h"
+#include "affect/normalize.h"
+#include "affect/strbuf.h"
+#include "affect/svg.h"
+#include "affect/synth.h"
+
+/* Sets the result from a core status: the motion on success, the error otherwise; frees it. */
+static void finish_motion(sqlite3_context *ctx, affect_status st, affect_motion *m,
+                          const affect_error *err)
+{
+    if (st)
+        ax_error(ctx, err);
+    else
+        ax_result_motion(ctx, m);
+    affect_motion_free(m);
+}
+
+/* Sets a text result produced by the core (or its error). */
+static void finish_text(sqlite3_context *ctx, affect_status st, char *text, size_t len,
+                        const affect_error *err, bool json)
+{
+    if (st)
+        ax_error(ctx, err);
+    else if (json)
+        ax_result_json(ctx, text, len);
+    else
+        ax_result_text(ctx, text, len);
+}
+
+/* ---- import ---- */
+
+static const char *const bvh_keys[] = {"unit", "scale", NULL};
+
+void ax_motion_from_bvh(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    const char *text;
+    size_t len;
+    if (ax_arg_text(ctx, argv, 0, &text, &len) != AX_OK)
+        return;
+    ax_opts opts;
+    if (ax_opts_parse(ctx, argc, argv, 1, bvh_keys, &opts))
+        return;
+    affect_bvh_options bo = {1.0, NULL};
+    affect_motion *m = NULL;
+    affect_error err;
+    if (ax_opt_string(ctx, &opts, "unit", &bo.unit) || ax_opt_number(ctx, &opts, "scale", &bo.scale))
+        goto done;
+    finish_motion(ctx, affect_bvh_parse(text, len, &bo, &m, &err), m, &err);
+done:
+    ax_opts_free(&opts);
+}
+
+static const char *const csv_keys[] = {"header", "delimiter", "unit", NULL};
+
+void ax_motion_from_csv(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    const char *text;
+    size_t len;
+    double fps;
+    if (ax_arg_text(ctx, argv, 0, &text, &len) != AX_OK || ax_arg_double(ctx, argv, 1, &fps) != AX_OK)
+        return;
+    ax_opts opts;
+    if (ax_opts_parse(ctx, argc, argv, 2, csv_keys, &opts))
+        return;
+    affect_csv_options co;
+    affect_csv_options_default(&co);
+    const char *delim = NULL;
+    const affect_json_node *h = ax_opt(&opts, "header");
+    affect_motion *m = NULL;
+    affect_error err;
+    if (h && h->type == AFFECT_JSON_TRUE)
+        co.header = 1;
+    else if (h && h->type == AFFECT_JSON_FALSE)
+        co.header = 0;
+    else if (h && !(h->type == AFFECT_JSON_STRING && strcmp(h->str, "auto") == 0)) {
+        ax_errorf(ctx, "option \"header\" must be true, false or \"auto\"");
+        goto done;
+    }
+    if (ax_opt_string(ctx, &opts, "delimiter", &delim) || ax_opt_string(ctx, &opts, "unit", &co.unit))
+        goto done;
+    if (delim) {
+        if (strlen(delim) != 1) {
+            ax_errorf(ctx, "option \"delimiter\" must be one character: \",\", \";\", \"\\t\" or \" \"");
+            goto done;
+        }
+        co.delimiter = delim[0];
+    }
+    finish_motion(ctx, affect_csv_parse(text, len, fps, &co, &m, &err), m, &err);
+done:
+    ax_opts_free(&opts);
+}
+
+void ax_motion_from_json(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    const char *text;
+    size_t len;
+    if (ax_arg_text(ctx, argv, 0, &text, &len) != AX_OK)
+        return;
+    affect_motion *m = NULL;
+    affect_error err;
+    finish_motion(ctx, affect_motion_from_json(text, len, &m, &err), m, &err);
+}
+
+/* ---- export and inspection ---- */
+
+void ax_motion_to_json(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    affect_motion *m;
+    if (ax_arg_motion(ctx, argv, 0, &m) != AX_OK)
+        return;
+    char *text = NULL;
+    size_t len = 0;
+    affect_error err;
+    finish_text(ctx, affect_motion_to_json(m, &text, &len, &err), text, len, &err, true);
+    affect_motion_free(m);
+}
+
+void ax_motion_to_csv(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    affect_motion *m;
+    if (ax_arg_motion(ctx, argv, 0, &m) != AX_OK)
+        return;
+    char *text = NULL;
+    size_t len = 0;
+    affect_error err;
+    finish_text(ctx, affect_csv_write(m, &text, &len, &err), text, len, &err, false);
+    affect_motion_free(m);
+}
+
+static void put_floats(affect_strbuf *sb, const float *v, int n)
+{
+    affect_strbuf_putc(sb, '[');
+    for (int i = 0; i < n; i++) {
+        if (i)
+            affect_strbuf_putc(sb, ',');
+        affect_strbuf_float(sb, v[i]);
+    }
+    affect_strbuf_putc(sb, ']');
+}
+
+void ax_motion_info(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    affect_motion *m;
+    if (ax_arg_motion(ctx, argv, 0, &m) != AX_OK)
+        return;
+    affect_strbuf sb;
+    affect_strbuf_init(&sb);
+    affect_strbuf_printf(&sb, "{\"frames\":%u,\"joints\":%u,\"fps\":", m->n_frames, m->n_joints);
+    affect_strbuf_double(&sb, m->fps);
+    affect_strbuf_puts(&sb, ",\"duration\":");
+    affect_strbuf_double(&sb, affect_motion_duration(m));
+    affect_strbuf_puts(&sb, ",\"unit\":");
+    if (m->unit[0])
+        affect_strbuf_json_string(&sb, m->unit);
+    else
+        affect_strbuf_puts(&sb, "null");
+    affect_strbuf_puts(&sb, ",\"names\":[");
+    for (uint32_t j = 0; j < m->n_joints; j++) {
+        if (j)
+            affect_strbuf_putc(&sb, ',');
+        affect_strbuf_json_string(&sb, m->names[j]);
+    }
+    affect_strbuf_puts(&sb, "],\"parents\":[");
+    for (uint32_t j = 0; j < m->n_joints; j++)
+        affect_strbuf_printf(&sb, "%s%d", j ? "," : "", m->parents[j]);
+    float lo[3], hi[3];
+    affect_motion_bbox(m, lo, hi);
+    affect_strbuf_puts(&sb, "],\"bbox\":{\"min\":");
+    put_floats(&sb, lo, 3);
+    affect_strbuf_puts(&sb, ",\"max\":");
+    put_floats(&sb, hi, 3);
+    affect_strbuf_puts(&sb, "}}");
+    char *text = NULL;
+    size_t len = 0;
+    affect_error err;
+    finish_text(ctx, affect_strbuf_finish(&sb, &text, &len, &err), text, len, &err, true);
+    affect_motion_free(m);
+}
+
+void ax_motion_frames(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    affect_motion *m;
+    if (ax_arg_motion(ctx, argv, 0, &m) != AX_OK)
+        return;
+    sqlite3_result_int64(ctx, m->n_frames);
+    affect_motion_free(m);
+}
+
+void ax_motion_joints(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    affect_motion *m;
+    if (ax_arg_motion(ctx, argv, 0, &m) != AX_OK)
+        return;
+    sqlite3_result_int64(ctx, m->n_joints);
+    affect_motion_free(m);
+}
+
+void ax_motion_fps(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    affect_motion *m;
+    if (ax_arg_motion(ctx, argv, 0, &m) != AX_OK)
+        return;
+    sqlite3_result_double(ctx, m->fps);
+    affect_motion_free(m);
+}
+
+void ax_motion_duration(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    affect_motion *m;
+    if (ax_arg_motion(ctx, argv, 0, &m) != AX_OK)
+        return;
+    sqlite3_result_double(ctx, affect_motion_duration(m));
+    affect_motion_free(m);
+}
+
+/* ---- editing ---- */
+
+void ax_motion_slice(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    int64_t first, last;
+    affect_motion *m, *out = NULL;
+    if (ax_arg_int(ctx, argv, 1, &first) != AX_OK || ax_arg_int(ctx, argv, 2, &last) != AX_OK ||
+        ax_arg_motion(ctx, argv, 0, &m) != AX_OK)
+        return;
+    affect_error err;
+    finish_motion(ctx, affect_motion_slice(m, first, last, &out, &err), out, &err);
+    affect_motion_free(m);
+}
+
+void ax_motion_resample(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    double fps;
+    affect_motion *m, *out = NULL;
+    if (ax_arg_double(ctx, argv, 1, &fps) != AX_OK || ax_arg_motion(ctx, argv, 0, &m) != AX_OK)
+        return;
+    affect_error err;
+    finish_motion(ctx, affect_motion_resample(m, fps, &out, &err), out, &err);
+    affect_motion_free(m);
+}
+
+void ax_motion_select(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    const char *text;
+    size_t len;
+    affect_motion *m = NULL, *out = NULL;
+    affect_json_doc *doc = NULL;
+    const char **names = NULL;
+    affect_error err;
+    if (ax_arg_text(ctx, argv, 1, &text, &len) != AX_OK || ax_arg_motion(ctx, argv, 0, &m) != AX_OK)
+        return;
+    if (affect_json_parse(text, len, &doc, &err)) {
+        if (err.status == AFFECT_ERR_NOMEM)
+            sqlite3_result_error_nomem(ctx);
+        else
+            ax_errorf(ctx, "argument 2 is not valid JSON: %s", err.msg);
+        goto done;
+    }
+    const affect_json_node *root = affect_json_root(doc);
+    if (root->type != AFFECT_JSON_ARRAY || root->count == 0) {
+        ax_errorf(ctx, "argument 2 must be a non-empty JSON array of joint names");
+        goto done;
+    }
+    names = sqlite3_malloc64((sqlite3_uint64)root->count * sizeof *names);
+    if (!names) {
+        sqlite3_result_error_nomem(ctx);
+        goto done;
+    }
+    uint32_t i = 0;
+    for (const affect_json_node *n = affect_json_first(doc, root); n;
+         n = affect_json_next_sibling(doc, n), i++) {
+        if (n->type != AFFECT_JSON_STRING) {
+            ax_errorf(ctx, "argument 2: item %u must be a joint name, got %s", i,
+                      affect_json_type_name(n->type));
+            goto done;
+        }
+        names[i] = n->str;
+    }
+    finish_motion(ctx, affect_motion_select(m, names, root->count, &out, &err), out, &err);
+done:
+    sqlite3_free(names);
+    affect_json_free(doc);
+    affect_motion_free(m);
+}
+
+/* ---- roles and normalization ---- */
+
+static const char *const roles_keys[] = {"roles", NULL};
+
+void ax_motion_roles(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    affect_motion *m;
+    if (ax_arg_motion(ctx, argv, 0, &m) != AX_OK)
+        return;
+    ax_opts opts;
+    affect_roles roles;
+    if (ax_opts_parse(ctx, argc, argv, 1, roles_keys, &opts) == AX_OK &&
+        ax_opt_roles(ctx, &opts, m, &roles) == AX_OK) {
+        affect_strbuf sb;
+        affect_strbuf_init(&sb);
+        affect_strbuf_putc(&sb, '{');
+        for (int r = 0; r < AFFECT_ROLE_COUNT; r++) {
+            affect_strbuf_puts(&sb, r ? "," : "");
+            affect_strbuf_json_string(&sb, affect_role_name((affect_role)r));
+            affect_strbuf_putc(&sb, ':');
+            if (roles.joint[r] >= 0)
+                affect_strbuf_json_string(&sb, m->names[roles.joint[r]]);
+            else
+                affect_strbuf_puts(&sb, "null");
+        }
+        affect_strbuf_putc(&sb, '}');
+        char *text = NULL;
+        size_t len = 0;
+        affect_error err;
+        finish_text(ctx, affect_strbuf_finish(&sb, &text, &len, &err), text, len, &err, true);
+    }
+    ax_opts_free(&opts);
+    affect_motion_free(m);
+}
+
+static const char *const normalize_keys[] = {"up", "translation", "vertical", "heading",
+                                             "scale", "roles", NULL};
+
+void ax_motion_normalize(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    static const char *const scales[] = {"none", "arm", NULL};
+    affect_motion *m, *out = NULL;
+    if (ax_arg_motion(ctx, argv, 0, &m) != AX_OK)
+        return;
+    ax_opts opts;
+    affect_roles roles;
+    affect_normalize_options no;
+    affect_normalize_options_default(&no);
+    int scale = 0;
+    if (ax_opts_parse(ctx, argc, argv, 1, normalize_keys, &opts) == AX_OK &&
+        ax_opt_up(ctx, &opts, &no.up_axis) == AX_OK &&
+        ax_opt_bool(ctx, &opts, "translation", &no.translation) == AX_OK &&
+        ax_opt_bool(ctx, &opts, "vertical", &no.vertical) == AX_OK &&
+        ax_opt_bool(ctx, &opts, "heading", &no.heading) == AX_OK &&
+        ax_opt_enum(ctx, &opts, "scale", scales, &scale) == AX_OK &&
+        ax_opt_roles(ctx, &opts, m, &roles) == AX_OK) {
+        no.scale_arm = scale == 1;
+        affect_error err;
+        finish_motion(ctx, affect_motion_normalize(m, &roles, &no, &out, &err), out, &err);
+    }
+    ax_opts_free(&opts);
+    affect_motion_free(m);
+}
+
+/* ---- previews ---- */
+
+static const char *const svg_keys[] = {"view", "frames", "size", "up", "trajectories",
+                                       "labels", "title", "roles", NULL};
+
+void ax_motion_svg(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    static const char *const views[] = {"front", "side", "top", NULL};
+    affect_motion *m;
+    if (ax_arg_motion(ctx, argv, 0, &m) != AX_OK)
+        return;
+    ax_opts opts;
+    affect_roles roles;
+    affect_svg_options so;
+    affect_svg_options_default(&so);
+    int view = (int)so.view;
+    double frames = so.frames, size = so.panel_size;
+    if (ax_opts_parse(ctx, argc, argv, 1, svg_keys, &opts) == AX_OK &&
+        ax_opt_enum(ctx, &opts, "view", views, &view) == AX_OK &&
+        ax_opt_number(ctx, &opts, "frames", &frames) == AX_OK &&
+        ax_opt_number(ctx, &opts, "size", &size) == AX_OK &&
+        ax_opt_up(ctx, &opts, &so.up_axis) == AX_OK &&
+        ax_opt_bool(ctx, &opts, "trajectories", &so.trajectories) == AX_OK &&
+        ax_opt_bool(ctx, &opts, "labels", &so.labels) == AX_OK &&
+        ax_opt_string(ctx, &opts, "title", &so.title) == AX_OK &&
+        ax_opt_roles(ctx, &opts, m, &roles) == AX_OK) {
+        if (frames != floor(frames) || size != floor(size) || frames < 0 || size < 0 ||
+            frames > 1e6 || size > 1e6) {
+            ax_errorf(ctx, "options \"frames\" and \"size\" must be whole numbers");
+        } else {
+            so.view = (affect_svg_view)view;
+            so.frames = (uint32_t)frames;
+            so.panel_size = (uint32_t)size;
+            char *text = NULL;
+            size_t len = 0;
+            affect_error err;
+            finish_text(ctx, affect_motion_svg(m, &roles, &so, &text, &len, &err), text, len,
+                        &err, false);
+        }
+    }
+    ax_opts_free(&opts);
+    affect_motion_free(m);
+}
+
+/* ---- synthetic movements ---- */
+
+static const char *const synth_keys[] = {"fps", "intensity", "noise", NULL};
+
+void ax_motion_synth(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    const char *action, *emotion;
+    size_t alen, elen;
+    int64_t seed;
+    if (ax_arg_text(ctx, argv, 0, &action, &alen) != AX_OK ||
+        ax_arg_text(ctx, argv, 1, &emotion, &elen) != AX_OK ||
+        ax_arg_int(ctx, argv, 2, &seed) != AX_OK)
+        return;
+    ax_opts opts;
+    affect_synth_options so;
+    affect_synth_options_default(&so);
+    if (ax_opts_parse(ctx, argc, argv, 3, synth_keys, &opts) == AX_OK &&
+        ax_opt_number(ctx, &opts, "fps", &so.fps) == AX_OK &&
+        ax_opt_number(ctx, &opts, "intensity", &so.intensity) == AX_OK &&
+        ax_opt_number(ctx, &opts, "noise", &so.noise) == AX_OK) {
+        affect_motion *m = NULL;
+        affect_error err;
+        finish_motion(ctx, affect_motion_synth(action, emotion, (uint64_t)seed, &so, &m, &err), m,
+                      &err);
+    }
+    ax_opts_free(&opts);
+}
