@@ -15,27 +15,31 @@
 #include "affect/svg.h"
 #include "affect/synth.h"
 
-/* Sets the result from a core status: the motion on success, the error otherwise; frees it. */
-static void finish_motion(sqlite3_context *ctx, affect_status st, affect_motion *m,
+/* Sets the result from a core status: the motion on success, the error otherwise; frees it.
+ * Pointers, not values, are passed so that a call such as finish_motion(ctx, f(&m), &m, …)
+ * reads m after f has set it (argument evaluation order is unspecified in C). */
+static void finish_motion(sqlite3_context *ctx, affect_status st, affect_motion **m,
                           const affect_error *err)
 {
     if (st)
         ax_error(ctx, err);
     else
-        ax_result_motion(ctx, m);
-    affect_motion_free(m);
+        ax_result_motion(ctx, *m);
+    affect_motion_free(*m);
+    *m = NULL;
 }
 
 /* Sets a text result produced by the core (or its error). */
-static void finish_text(sqlite3_context *ctx, affect_status st, char *text, size_t len,
+static void finish_text(sqlite3_context *ctx, affect_status st, char **text, size_t *len,
                         const affect_error *err, bool json)
 {
     if (st)
         ax_error(ctx, err);
     else if (json)
-        ax_result_json(ctx, text, len);
+        ax_result_json(ctx, *text, *len);
     else
-        ax_result_text(ctx, text, len);
+        ax_result_text(ctx, *text, *len);
+    *text = NULL;
 }
 
 /* ---- import ---- */
@@ -56,7 +60,7 @@ void ax_motion_from_bvh(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     affect_error err;
     if (ax_opt_string(ctx, &opts, "unit", &bo.unit) || ax_opt_number(ctx, &opts, "scale", &bo.scale))
         goto done;
-    finish_motion(ctx, affect_bvh_parse(text, len, &bo, &m, &err), m, &err);
+    finish_motion(ctx, affect_bvh_parse(text, len, &bo, &m, &err), &m, &err);
 done:
     ax_opts_free(&opts);
 }
@@ -96,7 +100,7 @@ void ax_motion_from_csv(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         }
         co.delimiter = delim[0];
     }
-    finish_motion(ctx, affect_csv_parse(text, len, fps, &co, &m, &err), m, &err);
+    finish_motion(ctx, affect_csv_parse(text, len, fps, &co, &m, &err), &m, &err);
 done:
     ax_opts_free(&opts);
 }
@@ -109,7 +113,7 @@ void ax_motion_from_json(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         return;
     affect_motion *m = NULL;
     affect_error err;
-    finish_motion(ctx, affect_motion_from_json(text, len, &m, &err), m, &err);
+    finish_motion(ctx, affect_motion_from_json(text, len, &m, &err), &m, &err);
 }
 
 /* ---- export and inspection ---- */
@@ -122,7 +126,7 @@ void ax_motion_to_json(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     char *text = NULL;
     size_t len = 0;
     affect_error err;
-    finish_text(ctx, affect_motion_to_json(m, &text, &len, &err), text, len, &err, true);
+    finish_text(ctx, affect_motion_to_json(m, &text, &len, &err), &text, &len, &err, true);
     affect_motion_free(m);
 }
 
@@ -134,7 +138,7 @@ void ax_motion_to_csv(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     char *text = NULL;
     size_t len = 0;
     affect_error err;
-    finish_text(ctx, affect_csv_write(m, &text, &len, &err), text, len, &err, false);
+    finish_text(ctx, affect_csv_write(m, &text, &len, &err), &text, &len, &err, false);
     affect_motion_free(m);
 }
 
@@ -184,7 +188,7 @@ void ax_motion_info(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     char *text = NULL;
     size_t len = 0;
     affect_error err;
-    finish_text(ctx, affect_strbuf_finish(&sb, &text, &len, &err), text, len, &err, true);
+    finish_text(ctx, affect_strbuf_finish(&sb, &text, &len, &err), &text, &len, &err, true);
     affect_motion_free(m);
 }
 
@@ -234,7 +238,7 @@ void ax_motion_slice(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         ax_arg_motion(ctx, argv, 0, &m) != AX_OK)
         return;
     affect_error err;
-    finish_motion(ctx, affect_motion_slice(m, first, last, &out, &err), out, &err);
+    finish_motion(ctx, affect_motion_slice(m, first, last, &out, &err), &out, &err);
     affect_motion_free(m);
 }
 
@@ -245,7 +249,7 @@ void ax_motion_resample(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     if (ax_arg_double(ctx, argv, 1, &fps) != AX_OK || ax_arg_motion(ctx, argv, 0, &m) != AX_OK)
         return;
     affect_error err;
-    finish_motion(ctx, affect_motion_resample(m, fps, &out, &err), out, &err);
+    finish_motion(ctx, affect_motion_resample(m, fps, &out, &err), &out, &err);
     affect_motion_free(m);
 }
 
@@ -286,7 +290,7 @@ void ax_motion_select(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         }
         names[i] = n->str;
     }
-    finish_motion(ctx, affect_motion_select(m, names, root->count, &out, &err), out, &err);
+    finish_motion(ctx, affect_motion_select(m, names, root->count, &out, &err), &out, &err);
 done:
     sqlite3_free(names);
     affect_json_free(doc);
@@ -322,7 +326,7 @@ void ax_motion_roles(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         char *text = NULL;
         size_t len = 0;
         affect_error err;
-        finish_text(ctx, affect_strbuf_finish(&sb, &text, &len, &err), text, len, &err, true);
+        finish_text(ctx, affect_strbuf_finish(&sb, &text, &len, &err), &text, &len, &err, true);
     }
     ax_opts_free(&opts);
     affect_motion_free(m);
@@ -351,7 +355,7 @@ void ax_motion_normalize(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         ax_opt_roles(ctx, &opts, m, &roles) == AX_OK) {
         no.scale_arm = scale == 1;
         affect_error err;
-        finish_motion(ctx, affect_motion_normalize(m, &roles, &no, &out, &err), out, &err);
+        finish_motion(ctx, affect_motion_normalize(m, &roles, &no, &out, &err), &out, &err);
     }
     ax_opts_free(&opts);
     affect_motion_free(m);
@@ -393,7 +397,7 @@ void ax_motion_svg(sqlite3_context *ctx, int argc, sqlite3_value **argv)
             char *text = NULL;
             size_t len = 0;
             affect_error err;
-            finish_text(ctx, affect_motion_svg(m, &roles, &so, &text, &len, &err), text, len,
+            finish_text(ctx, affect_motion_svg(m, &roles, &so, &text, &len, &err), &text, &len,
                         &err, false);
         }
     }
@@ -423,7 +427,7 @@ void ax_motion_synth(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         ax_opt_number(ctx, &opts, "noise", &so.noise) == AX_OK) {
         affect_motion *m = NULL;
         affect_error err;
-        finish_motion(ctx, affect_motion_synth(action, emotion, (uint64_t)seed, &so, &m, &err), m,
+        finish_motion(ctx, affect_motion_synth(action, emotion, (uint64_t)seed, &so, &m, &err), &m,
                       &err);
     }
     ax_opts_free(&opts);

@@ -54,7 +54,7 @@ const affect_json_node *affect_json_child(const affect_json_doc *doc, const affe
 const affect_json_node *affect_json_first(const affect_json_doc *doc, const affect_json_node *n);
 const affect_json_node *affect_json_next_sibling(const affect_json_doc *doc,
                                                  const affect_json_node *n);
-/* Member of an object by key, or NULL. */
+/* Member of an object whose key is exactly the C string key (key_len bytes), or NULL. */
 const affect_json_node *affect_json_get(const affect_json_doc *doc, const affect_json_node *obj,
                                         const char *key);
 /* "null", "boolean", "number", "string", "array", "object". */

@@ -1,0 +1,246 @@
+-- motion.sql — SQL-level specification of the motion_* functions, affect_version and
+-- affect_build_info. Run by tests/sql/test_sql.c (see its header for the annotation format);
+-- each SELECT without an annotation must give 1 in its second column.
+
+CREATE TABLE t(name TEXT PRIMARY KEY, m BLOB);
+
+INSERT INTO t VALUES('small', motion_from_bvh('HIERARCHY
+ROOT Hips
+{
+  OFFSET 0 0 0
+  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
+  JOINT Chest
+  {
+    OFFSET 0 10 0
+    CHANNELS 3 Xrotation Yrotation Zrotation
+    JOINT Head
+    {
+      OFFSET 0 5 0
+      CHANNELS 6 Xposition Yposition Zposition Yrotation Zrotation Xrotation
+      End Site
+      {
+        OFFSET 0 2 0
+      }
+    }
+    JOINT Arm
+    {
+      OFFSET 3 0 0
+      CHANNELS 0
+    }
+  }
+}
+MOTION
+Frames: 3
+Frame Time: 0.04
+1 2 3 0 0 0 0 0 0 0 5 0 0 0 0
+1 2 3 90 0 0 90 0 0 0 7 0 0 0 90
+0 0 0 0 0 0 90 90 0 0 5 0 0 0 0
+', '{"unit":"cm"}'));
+
+-- ---- the registered functions, exactly ----
+SELECT group_concat(name || '/' || narg, ' ') FROM (
+  SELECT DISTINCT name, narg FROM pragma_function_list
+   WHERE name LIKE 'motion\_%' ESCAPE '\' OR name LIKE 'affect\_%' ESCAPE '\'
+   ORDER BY name, narg);
+-- expect: affect_build_info/0 affect_version/0 motion_duration/1 motion_fps/1 motion_frames/1 motion_from_bvh/1 motion_from_bvh/2 motion_from_csv/2 motion_from_csv/3 motion_from_json/1 motion_info/1 motion_joints/1 motion_normalize/1 motion_normalize/2 motion_resample/2 motion_roles/1 motion_roles/2 motion_select/2 motion_slice/3 motion_svg/1 motion_svg/2 motion_synth/3 motion_synth/4 motion_to_csv/1 motion_to_json/1
+
+SELECT 'pure functions are deterministic and innocuous', count(*) = 0 FROM pragma_function_list
+ WHERE (name LIKE 'motion\_%' ESCAPE '\' OR name LIKE 'affect\_%' ESCAPE '\')
+   AND (flags & 0x000000800) = 0;
+
+SELECT affect_version();
+-- expect: 0.1.0
+
+SELECT 'build info', json_extract(affect_build_info(), '$.version') = affect_version()
+   AND json_extract(affect_build_info(), '$.libsvm') >= 300
+   AND json_extract(affect_build_info(), '$.blas') LIKE '%OpenBLAS%'
+   AND json_extract(affect_build_info(), '$.compile_flags') LIKE '%-ffp-contract=off%';
+
+-- ---- motion_from_bvh and the scalars ----
+SELECT motion_frames(m) || ' ' || motion_joints(m) || ' ' || motion_fps(m) || ' ' ||
+       motion_duration(m) FROM t WHERE name = 'small';
+-- expect: 3 5 25.0 0.12
+
+SELECT motion_info(m) FROM t WHERE name = 'small';
+-- expect: {"frames":3,"joints":5,"fps":25,"duration":0.12,"unit":"cm","names":["Hips","Chest","Head","Head_end","Arm"],"parents":[-1,0,1,2,1],"bbox":{"min":[-9,0,-1.8369701e-16],"max":[4,19,10]}}
+
+SELECT 'JSON results carry the JSON subtype',
+       json_object('info', motion_info(m)) LIKE '{"info":{"frames":3,%' FROM t WHERE name = 'small';
+
+SELECT 'forward kinematics by hand (frame 1, Head_end)',
+       group_concat(x || ',' || y || ',' || z) = '-7.0,2.0,10.0'
+  FROM motion_points((SELECT m FROM t WHERE name = 'small')) WHERE frame = 1 AND joint = 3;
+
+SELECT 'motion_points has one row per frame and joint', count(*) = 15,
+       sum(name = 'Arm') = 3 FROM motion_points((SELECT m FROM t WHERE name = 'small'));
+
+SELECT 'motion_points of NULL is empty', count(*) = 0 FROM motion_points(NULL);
+
+SELECT * FROM motion_points;
+-- error: motion_points: a motion argument is required, as in SELECT * FROM motion_points(:motion)
+
+SELECT * FROM motion_points('abc');
+-- error: motion_points: the argument must be a motion BLOB, got text
+
+SELECT * FROM motion_points(x'41464d4f');
+-- error: motion_points: the argument is not a valid motion: truncated: 4 bytes is shorter than the 32-byte header
+
+SELECT motion_from_bvh('HIERARCHY
+ROOT a
+{
+  OFFSET 0 0 0
+  CHANELS 1 Xrotation
+}');
+-- error: motion_from_bvh: line 5: expected CHANNELS, found CHANELS
+
+SELECT motion_from_bvh(x'00');
+-- error: motion_from_bvh: argument 1 must be text, got blob
+
+SELECT motion_from_bvh('HIERARCHY', '{"units":"cm"}');
+-- error: motion_from_bvh: unknown option "units" (expected unit, scale)
+
+SELECT motion_from_bvh('HIERARCHY', '{"unit":');
+-- error: motion_from_bvh: options (argument 2) are not valid JSON: at byte 8: unexpected end of text
+
+SELECT motion_from_bvh('HIERARCHY', '[1]');
+-- error: motion_from_bvh: options (argument 2) must be a JSON object, got array
+
+SELECT motion_from_bvh('HIERARCHY', '{"scale":"big"}');
+-- error: motion_from_bvh: option "scale" must be a number, got string
+
+SELECT motion_from_bvh('HIERARCHY', '{"scale":-1}');
+-- error: motion_from_bvh: scale must be a positive number, got -1
+
+SELECT motion_from_bvh(NULL) IS NULL;
+-- expect: 1
+
+SELECT motion_from_bvh();
+-- error: wrong number of arguments to function motion_from_bvh()
+
+-- ---- NULL in, NULL out; wrong types ----
+SELECT 'NULL in gives NULL out',
+       motion_info(NULL) IS NULL AND motion_frames(NULL) IS NULL AND motion_to_json(NULL) IS NULL
+   AND motion_to_csv(NULL) IS NULL AND motion_slice(NULL, 0, 1) IS NULL
+   AND motion_slice((SELECT m FROM t), NULL, 1) IS NULL AND motion_resample(NULL, 30) IS NULL
+   AND motion_select(NULL, '["a"]') IS NULL AND motion_roles(NULL) IS NULL
+   AND motion_normalize(NULL) IS NULL AND motion_svg(NULL) IS NULL
+   AND motion_from_json(NULL) IS NULL AND motion_from_csv(NULL, 30) IS NULL
+   AND motion_synth(NULL, 'sad', 1) IS NULL AND motion_duration(NULL) IS NULL;
+
+SELECT motion_info('not a blob');
+-- error: motion_info: argument 1 must be a motion BLOB, got text
+
+SELECT motion_frames(42);
+-- error: motion_frames: argument 1 must be a motion BLOB, got integer
+
+SELECT motion_fps(x'414d464f');
+-- error: motion_fps: argument 1 is not a valid motion: truncated: 4 bytes is shorter than the 32-byte header
+
+SELECT motion_joints(zeroblob(40));
+-- error: motion_joints: argument 1 is not a valid motion: not a motion (bad magic bytes at offset 0)
+
+SELECT motion_duration(substr(m, 1, length(m) - 1)) FROM t WHERE name = 'small';
+-- error: motion_duration: argument 1 is not a valid motion: truncated: 267 bytes, expected 268 for 3 frames x 5 joints
+
+-- ---- JSON and CSV round trips ----
+SELECT 'JSON round trip is exact', motion_from_json(motion_to_json(m)) = m FROM t;
+
+SELECT motion_to_json(motion_slice(m, 0, 0)) FROM t WHERE name = 'small';
+-- expect: {"fps":25,"unit":"cm","joints":["Hips","Chest","Head","Head_end","Arm"],"parents":[-1,0,1,2,1],"frames":[[[1,2,3],[1,12,3],[1,17,3],[1,19,3],[4,12,3]]]}
+
+SELECT motion_from_json('{"fps":30,"joints":["a"],"frames":[[[1,2]]]}');
+-- error: motion_from_json: frames[0][0]: expected an array of 3 numbers
+
+SELECT motion_from_json('{"fps":30,"joints":["a"],"frames":[[[1,2,3]]]} x');
+-- error: motion_from_json: at byte 47: unexpected text after the value
+
+SELECT 'motion_to_csv writes a header and one line per frame', motion_to_csv(motion_slice(m, 1, 1)) =
+       'Hips.x,Hips.y,Hips.z,Chest.x,Chest.y,Chest.z,Head.x,Head.y,Head.z,Head_end.x,Head_end.y,' ||
+       'Head_end.z,Arm.x,Arm.y,Arm.z' || char(10) || '1,2,3,-9,2,3,-9,2,10,-7,2,10,-9,5,3' || char(10)
+  FROM t WHERE name = 'small';
+
+SELECT 'CSV round trip keeps names and positions',
+       motion_to_json(motion_from_csv(motion_to_csv(m), 25, '{"unit":"cm"}')) =
+       replace(motion_to_json(m), '"parents":[-1,0,1,2,1]', '"parents":[-1,-1,-1,-1,-1]')
+  FROM t WHERE name = 'small';
+
+SELECT motion_joints(motion_from_csv('1,2,3,4,5,6
+7,8,9,10,11,12', 30)) || ' ' || json_extract(motion_info(motion_from_csv('1,2,3,4,5,6', 30)), '$.names');
+-- expect: 2 ["j0","j1"]
+
+SELECT motion_from_csv('a.x,a.y,a.z
+1,2,3
+4,5', 30);
+-- error: motion_from_csv: row 3: expected 3 values, found 2
+
+SELECT motion_from_csv('1,2,3
+4,5,x', 30);
+-- error: motion_from_csv: row 2, column 3: "x" is not a number
+
+SELECT motion_from_csv('1,2,3', 'fast');
+-- error: motion_from_csv: argument 2 must be a finite number, got text
+
+SELECT motion_from_csv('1,2,3', 30, '{"header":"yes"}');
+-- error: motion_from_csv: option "header" must be true, false or "auto"
+
+SELECT motion_from_csv('1;2;3', 30, '{"delimiter":";"}') IS NOT NULL;
+-- expect: 1
+
+-- ---- editing ----
+SELECT motion_frames(motion_slice(m, 1, -1)) || ' ' || motion_frames(motion_resample(m, 50)) ||
+       ' ' || motion_joints(motion_select(m, '["Arm","Hips"]'))
+  FROM t WHERE name = 'small';
+-- expect: 2 5 2
+
+SELECT json_extract(motion_info(motion_select(m, '["Arm","Hips"]')), '$.parents') FROM t WHERE name = 'small';
+-- expect: [1,-1]
+
+SELECT motion_slice(m, 2, 1) FROM t WHERE name = 'small';
+-- error: motion_slice: last frame 1 is before first frame 2
+
+SELECT motion_slice(m, 'a', 1) FROM t WHERE name = 'small';
+-- error: motion_slice: argument 2 must be an integer, got text
+
+SELECT motion_resample(m, 0) FROM t WHERE name = 'small';
+-- error: motion_resample: frames per second 0 out of range (0 .. 100000]
+
+SELECT motion_select(m, '["Arm","Tail"]') FROM t WHERE name = 'small';
+-- error: motion_select: no joint named "Tail" (selection item 1)
+
+SELECT motion_select(m, '[]') FROM t WHERE name = 'small';
+-- error: motion_select: argument 2 must be a non-empty JSON array of joint names
+
+SELECT motion_select(m, '["Arm", 3]') FROM t WHERE name = 'small';
+-- error: motion_select: argument 2: item 1 must be a joint name, got number
+
+-- ---- roles and normalization ----
+SELECT json_extract(motion_roles(m), '$.pelvis') || ' ' ||
+       json_extract(motion_roles(m), '$.chest') || ' ' ||
+       ifnull(json_extract(motion_roles(m), '$.left_hand'), 'none') || ' ' ||
+       json_extract(motion_roles(m, '{"roles":{"left_hand":"Arm"}}'), '$.left_hand')
+  FROM t WHERE name = 'small';
+-- expect: Hips Chest none Arm
+
+SELECT motion_roles(m, '{"roles":{"left_hand":"Tail"}}') FROM t WHERE name = 'small';
+-- error: motion_roles: option "roles": role left_hand: no joint named "Tail"
+
+SELECT motion_roles(m, '{"roles":{"hand":"Arm"}}') FROM t WHERE name = 'small';
+-- error: motion_roles: option "roles": unknown role "hand" (expected pelvis, spine, chest, neck, head, left_/right_ shoulder, elbow, hand, hip, knee, foot, toe)
+
+SELECT motion_roles(m, '{"roles":["Arm"]}') FROM t WHERE name = 'small';
+-- error: motion_roles: option "roles" must be an object of role names to joint names, got array
+
+SELECT motion_normalize(m) FROM t WHERE name = 'small';
+-- error: motion_normalize: cannot find the heading: the left/right hip and shoulder roles are not resolved (set them with "roles", or "heading": false)
+
+SELECT motion_normalize(m, '{"up":"w"}') FROM t WHERE name = 'small';
+-- error: motion_normalize: option "up" must be one of "x", "y", "z", got "w"
+
+SELECT 'normalize without heading moves the pelvis to x = z = 0 and keeps its height',
+       json_extract(motion_to_json(motion_normalize(m, '{"heading":false}')), '$.frames[0][0]') = '[0,2,0]'
+  FROM t WHERE name = 'small';
+
+SELECT 'normalize with an explicit heading from the hips role pair',
+       json_extract(motion_to_json(motion_normalize(m,
+         '{"roles":{"left_hip":"Arm","right_hip":"Hips"},"vertical":true}')), '$.frames[0][0]') = '[0,0,0]'
+  FROM t WHERE name = 'small';
