@@ -91,6 +91,22 @@ ax_arg ax_arg_text(sqlite3_context *ctx, sqlite3_value **argv, int i, const char
     return AX_OK;
 }
 
+ax_arg ax_arg_document(sqlite3_context *ctx, sqlite3_value **argv, int i, const char **text,
+                       size_t *len)
+{
+    if (sqlite3_value_type(argv[i]) != SQLITE_BLOB)
+        return ax_arg_text(ctx, argv, i, text, len);
+    int n = sqlite3_value_bytes(argv[i]);
+    const void *b = sqlite3_value_blob(argv[i]);
+    if (!b && n > 0) {
+        sqlite3_result_error_nomem(ctx);
+        return AX_ERROR;
+    }
+    *text = b ? (const char *)b : "";
+    *len = (size_t)n;
+    return AX_OK;
+}
+
 ax_arg ax_arg_int(sqlite3_context *ctx, sqlite3_value **argv, int i, int64_t *out)
 {
     sqlite3_value *v = argv[i];

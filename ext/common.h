@@ -49,6 +49,10 @@ ax_arg ax_arg_motion(sqlite3_context *ctx, sqlite3_value **argv, int i, affect_m
 /* Argument i as text (its bytes and length); a BLOB is refused. */
 ax_arg ax_arg_text(sqlite3_context *ctx, sqlite3_value **argv, int i, const char **text,
                    size_t *len);
+/* Argument i as a text document: text, or a BLOB holding text (as the shell's readfile()
+ * returns). */
+ax_arg ax_arg_document(sqlite3_context *ctx, sqlite3_value **argv, int i, const char **text,
+                       size_t *len);
 /* Argument i as an integer (an integral REAL is accepted). */
 ax_arg ax_arg_int(sqlite3_context *ctx, sqlite3_value **argv, int i, int64_t *out);
 /* Argument i as a finite number. */

@@ -50,7 +50,7 @@ void ax_motion_from_bvh(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 {
     const char *text;
     size_t len;
-    if (ax_arg_text(ctx, argv, 0, &text, &len) != AX_OK)
+    if (ax_arg_document(ctx, argv, 0, &text, &len) != AX_OK)
         return;
     ax_opts opts;
     if (ax_opts_parse(ctx, argc, argv, 1, bvh_keys, &opts))
@@ -72,7 +72,7 @@ void ax_motion_from_csv(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     const char *text;
     size_t len;
     double fps;
-    if (ax_arg_text(ctx, argv, 0, &text, &len) != AX_OK || ax_arg_double(ctx, argv, 1, &fps) != AX_OK)
+    if (ax_arg_document(ctx, argv, 0, &text, &len) != AX_OK || ax_arg_double(ctx, argv, 1, &fps) != AX_OK)
         return;
     ax_opts opts;
     if (ax_opts_parse(ctx, argc, argv, 2, csv_keys, &opts))
@@ -109,7 +109,7 @@ void ax_motion_from_json(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 {
     const char *text;
     size_t len;
-    if (ax_arg_text(ctx, argv, 0, &text, &len) != AX_OK)
+    if (ax_arg_document(ctx, argv, 0, &text, &len) != AX_OK)
         return;
     affect_motion *m = NULL;
     affect_error err;

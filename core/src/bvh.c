@@ -11,7 +11,8 @@
  *      stack). Several ROOTs are allowed. Keywords are matched case-insensitively; a joint's
  *      name is the rest of its line. End Sites become joints named "<parent>_end"; a name that
  *      repeats an earlier one gets "_2", "_3", … appended.
- *   2. MOTION: "Frames: N", "Frame Time: t" (fps = 1/t), then N lines of exactly as many
+ *   2. MOTION: "Frames: N", "Frame Time: t" (fps = 1/t, snapped to a whole number when
+ *      within 1e-4 relative of one: 0.0333333 s means 30 fps), then N lines of exactly as many
  *      numbers as the channels declared (blank lines are skipped).
  *   3. Per frame, each joint's local translation is its OFFSET with each position channel
  *      replacing the component it names (the real corpus writes the OFFSET into the position
@@ -92,14 +93,35 @@ static bool token_is(const char *tok, size_t len, const char *word)
     return true;
 }
 
-/* "found X" text for messages: the token clipped to 40 bytes, or "end of text". */
+/* A token for a message: at most 40 bytes, control bytes written as \xNN. */
+static void excerpt(const char *tok, size_t len, char out[168])
+{
+    static const char hex[] = "0123456789abcdef";
+    size_t o = 0;
+    for (size_t i = 0; i < len && i < 40; i++) {
+        unsigned char c = (unsigned char)tok[i];
+        if (c < 0x20 || c == 0x7f) {
+            out[o++] = '\\';
+            out[o++] = 'x';
+            out[o++] = hex[c >> 4];
+            out[o++] = hex[c & 15];
+        } else {
+            out[o++] = (char)c;
+        }
+    }
+    out[o] = '\0';
+}
+
+/* "line N: expected WHAT, found TOKEN" (or "found end of text"). */
 static affect_status expected(parser *ps, const char *what, const char *tok, size_t len)
 {
     if (len == 0)
         return affect_fail(ps->err, AFFECT_ERR_FORMAT, "line %u: expected %s, found end of text",
                            ps->line, what);
-    return affect_fail(ps->err, AFFECT_ERR_FORMAT, "line %u: expected %s, found %.*s", ps->line,
-                       what, (int)(len > 40 ? 40 : len), tok);
+    char shown[168];
+    excerpt(tok, len, shown);
+    return affect_fail(ps->err, AFFECT_ERR_FORMAT, "line %u: expected %s, found %s", ps->line,
+                       what, shown);
 }
 
 static affect_status expect_word(parser *ps, const char *word)
@@ -457,9 +479,11 @@ static affect_status parse_frames(parser *ps, affect_motion *m, double scale)
                     const char *e = s;
                     while (e < ps->end && !is_space(*e) && *e != '\n')
                         e++;
+                    char shown[168];
+                    excerpt(s, (size_t)(e - s), shown);
                     st = affect_fail(ps->err, AFFECT_ERR_FORMAT,
-                                     "line %u: value %u of frame %u is not a number: %.*s",
-                                     ps->line, k + 1, f, (int)(e - s > 40 ? 40 : e - s), s);
+                                     "line %u: value %u of frame %u is not a number: %s",
+                                     ps->line, k + 1, f, shown);
                     goto done;
                 }
                 if (k < nv)
@@ -495,6 +519,14 @@ done:
     affect_free(scratch);
     affect_free(parents);
     return st;
+}
+
+/* Frame Time is usually written with six or seven digits (0.0333333 for 30 fps): a rate within
+ * 1e-4 relative of a whole number is taken to be that number. */
+static double snap_fps(double fps)
+{
+    double whole = floor(fps + 0.5);
+    return whole >= 1 && fabs(fps - whole) <= 1e-4 * fps ? whole : fps;
 }
 
 affect_status affect_bvh_parse(const char *text, size_t len, const affect_bvh_options *opt,
@@ -546,7 +578,7 @@ affect_status affect_bvh_parse(const char *text, size_t len, const affect_bvh_op
                          n_frames);
         goto done;
     }
-    st = affect_motion_create(n_frames, ps.n_joints, 1.0 / frame_time, &m, err);
+    st = affect_motion_create(n_frames, ps.n_joints, snap_fps(1.0 / frame_time), &m, err);
     if (st)
         goto done;
     for (uint32_t i = 0; i < ps.n_joints; i++)

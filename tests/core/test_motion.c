@@ -262,13 +262,35 @@ static void test_bbox_duration(void **state)
     affect_motion_free(m);
 }
 
+/* A BLOB of each format version stays readable (tests/fixtures/README.md). */
+static void test_fixture_v1(void **state)
+{
+    size_t len;
+    char *data = tu_read_file(AFFECT_FIXTURES_DIR "/motion-v1.bin", &len);
+    assert_non_null(data);
+    affect_motion *m = NULL;
+    affect_error err;
+    if (affect_motion_decode((const unsigned char *)data, len, &m, &err))
+        fail_msg("%s", err.msg);
+    assert_int_equal(m->n_frames, 3);
+    assert_int_equal(m->n_joints, 5);
+    assert_string_equal(m->unit, "cm");
+    assert_string_equal(m->names[3], "Head_end");
+    assert_int_equal(m->parents[4], 1);
+    tu_assert_near(m->fps, 25.0, 0);
+    tu_assert_near(affect_motion_at(m, 1, 3)[0], -7.0, 1e-5);
+    tu_assert_near(affect_motion_at(m, 1, 3)[2], 10.0, 1e-5);
+    affect_motion_free(m);
+    free(data);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_round_trip),   cmocka_unit_test(test_corruptions),
         cmocka_unit_test(test_validate),     cmocka_unit_test(test_slice),
         cmocka_unit_test(test_resample),     cmocka_unit_test(test_select),
-        cmocka_unit_test(test_bbox_duration),
+        cmocka_unit_test(test_bbox_duration), cmocka_unit_test(test_fixture_v1),
     };
     return cmocka_run_group_tests_name("motion", tests, NULL, NULL);
 }

@@ -94,7 +94,7 @@ ROOT a
 -- error: motion_from_bvh: line 5: expected CHANNELS, found CHANELS
 
 SELECT motion_from_bvh(x'00');
--- error: motion_from_bvh: argument 1 must be text, got blob
+-- error: motion_from_bvh: line 1: expected HIERARCHY, found \x00
 
 SELECT motion_from_bvh('HIERARCHY', '{"units":"cm"}');
 -- error: motion_from_bvh: unknown option "units" (expected unit, scale)

@@ -1,0 +1,74 @@
+#!/usr/bin/env bash
+# run.sh — the two commands of the README.
+#
+#   ./run.sh demo [BVH_DIR]   install what is missing, build, and run the demo: demo.db with the
+#                             synthetic corpus (and the real one when ../shared/corpora/
+#                             bandai-namco-1/data or BVH_DIR exists), a summary, and demo.html
+#   ./run.sh test             install what is missing, build, and run the whole test suite:
+#                             unit, SQL and out-of-memory tests, examples and scripts, the real
+#                             corpus (skipped when absent), a sanitizer build, and the fuzzers
+#
+# Works on a fresh Debian 12 machine as root (or with sudo). Set AFFECT_FUZZ_SECONDS to change
+# the time each fuzz target runs (default 20).
+set -euo pipefail
+cd "$(dirname "$0")"
+ROOT=$(pwd)
+
+PACKAGES=(build-essential cmake pkg-config sqlite3 libsqlite3-dev libopenblas-dev liblapacke-dev
+          libsvm-dev libcmocka-dev clang python3)
+
+install_missing() {
+    local missing=()
+    for p in "${PACKAGES[@]}"; do
+        dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+    done
+    [ ${#missing[@]} -eq 0 ] && return 0
+    echo "== installing: ${missing[*]}"
+    local sudo=""
+    [ "$(id -u)" -ne 0 ] && sudo="sudo"
+    $sudo apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+}
+
+build() {
+    echo "== building (build/)"
+    cmake -S . -B build -DCMAKE_BUILD_TYPE=RelWithDebInfo -DAFFECT_WERROR=ON >/dev/null
+    cmake --build build -j"$(nproc)" >/dev/null
+}
+
+demo() {
+    local dir="${1:-$ROOT/../shared/corpora/bandai-namco-1/data}"
+    local shell=(sqlite3 demo.db -cmd ".load $ROOT/build/affect")
+    echo "== building demo.db"
+    rm -f demo.db demo.html
+    sqlite3 demo.db < sql/schema.sql
+    "${shell[@]}" < sql/synth_corpus.sql
+    if [ -d "$dir" ]; then
+        echo "== importing the BVH files of $dir"
+        "${shell[@]}" -cmd ".parameter set :dir '$dir'" -cmd ".parameter set :unit cm" \
+            -cmd ".parameter set :source '$(basename "$(dirname "$dir")")'" \
+            < sql/import_bvh.sql
+    else
+        echo "== no BVH folder at $dir: the demo uses the synthetic corpus only"
+    fi
+    "${shell[@]}" < sql/demo.sql
+    echo "== open demo.html in a browser; query demo.db with: sqlite3 demo.db -cmd '.load ./build/affect'"
+}
+
+tests() {
+    echo "== tests (build/)"
+    ctest --test-dir build --output-on-failure -j"$(nproc)" -E '^fuzz/'
+    echo "== sanitizer build (build-asan/): unit and SQL tests under ASan + UBSan"
+    cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DAFFECT_WERROR=ON -DAFFECT_SANITIZE=ON >/dev/null
+    cmake --build build-asan -j"$(nproc)" >/dev/null
+    ASAN_OPTIONS=detect_leaks=1 ctest --test-dir build-asan --output-on-failure -j"$(nproc)" \
+        -E '^fuzz/|^examples/|^sql/scripts'
+    echo "== fuzzers (build-fuzz/, clang + libFuzzer)"
+    bash tests/fuzz/run.sh "${AFFECT_FUZZ_SECONDS:-20}"
+}
+
+case "${1:-}" in
+    demo) install_missing; build; shift; demo "$@" ;;
+    test) install_missing; build; tests ;;
+    *) echo "usage: ./run.sh demo [BVH_DIR] | ./run.sh test" >&2; exit 2 ;;
+esac
