@@ -244,3 +244,54 @@ SELECT 'normalize with an explicit heading from the hips role pair',
        json_extract(motion_to_json(motion_normalize(m,
          '{"roles":{"left_hip":"Arm","right_hip":"Hips"},"vertical":true}')), '$.frames[0][0]') = '[0,0,0]'
   FROM t WHERE name = 'small';
+
+-- ---- previews ----
+SELECT 'motion_svg gives a standalone SVG document',
+       motion_svg(m) LIKE '<svg xmlns="http://www.w3.org/2000/svg"%</svg>' || char(10)
+  FROM t WHERE name = 'small';
+
+SELECT 'motion_svg options change the drawing and are deterministic',
+       motion_svg(m, '{"view":"top","frames":2,"size":64,"title":"a <b>"}') <> motion_svg(m)
+   AND motion_svg(m, '{"view":"side"}') = motion_svg(m, '{"view":"side"}')
+   AND instr(motion_svg(m, '{"title":"a <b>"}'), 'a &lt;b&gt;') > 0
+  FROM t WHERE name = 'small';
+
+SELECT motion_svg(m, '{"frames":0}') FROM t WHERE name = 'small';
+-- error: motion_svg: frames must be between 1 and 64, got 0
+
+SELECT motion_svg(m, '{"frames":2.5}') FROM t WHERE name = 'small';
+-- error: motion_svg: options "frames" and "size" must be whole numbers
+
+SELECT motion_svg(m, '{"view":"back"}') FROM t WHERE name = 'small';
+-- error: motion_svg: option "view" must be one of "front", "side", "top", got "back"
+
+SELECT motion_svg(m, '{"labels":1}') FROM t WHERE name = 'small';
+-- error: motion_svg: option "labels" must be true or false, got number
+
+-- ---- synthetic movements ----
+SELECT 'motion_synth is deterministic for a seed, and seeds are performers',
+       motion_synth('wave', 'sad', 3) = motion_synth('wave', 'sad', 3)
+   AND motion_synth('wave', 'sad', 3) <> motion_synth('wave', 'sad', 4);
+
+SELECT 'motion_synth: sad lasts longer than neutral, neutral longer than angry',
+       motion_duration(motion_synth('knock', 'sad', 1)) > motion_duration(motion_synth('knock', 'neutral', 1))
+   AND motion_duration(motion_synth('knock', 'neutral', 1)) > motion_duration(motion_synth('knock', 'angry', 1));
+
+SELECT 'motion_synth honours fps and resolves every role',
+       motion_fps(motion_synth('walk', 'happy', 1, '{"fps":60}')) = 60.0
+   AND (SELECT count(*) FROM json_each(motion_roles(motion_synth('walk', 'happy', 1))) WHERE value IS NULL) = 0;
+
+SELECT motion_synth('jump', 'sad', 1);
+-- error: motion_synth: unknown action "jump" (expected knock, wave, walk, bow)
+
+SELECT motion_synth('wave', 'fear', 1);
+-- error: motion_synth: unknown emotion "fear" (expected neutral, happy, sad, angry)
+
+SELECT motion_synth('wave', 'sad', 'x');
+-- error: motion_synth: argument 3 must be an integer, got text
+
+SELECT motion_synth('wave', 'sad', 1, '{"intensity":3}');
+-- error: motion_synth: intensity must be between 0 and 2, got 3
+
+SELECT motion_synth('wave', 'sad', 1, '{"tempo":2}');
+-- error: motion_synth: unknown option "tempo" (expected fps, intensity, noise)

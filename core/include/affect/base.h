@@ -8,7 +8,8 @@
  *
  * All memory is obtained through affect_malloc/affect_realloc/affect_free. By default they
  * call the C library; affect_set_allocator() reroutes them (the SQLite extension routes them
- * to sqlite3_malloc64 so that SQLite's memory accounting and fault injection see everything).
+ * to the database engine's allocator, so that its memory accounting and fault injection see
+ * every allocation).
  * The allocator is the one process-wide setting of the library: set it once, before use.
  */
 #ifndef AFFECT_BASE_H
