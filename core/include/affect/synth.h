@@ -23,9 +23,10 @@ extern "C" {
 #endif
 
 typedef struct affect_synth_options {
-    double fps;        /* frame rate (default 30) */
+    double fps;        /* frame rate, 0 < fps <= 1000 (default 30) */
     double intensity;  /* 0..2, scales how strongly the emotion shows (default 1) */
-    double noise;      /* standard deviation of the measurement noise in metres (default 0.002) */
+    double noise;      /* standard deviation of the measurement noise in metres, 0..0.1
+                        * (default 0.0003) */
 } affect_synth_options;
 
 void affect_synth_options_default(affect_synth_options *opt);
@@ -34,6 +35,7 @@ void affect_synth_options_default(affect_synth_options *opt);
 extern const char *const affect_synth_actions[];
 extern const char *const affect_synth_emotions[];
 
+/* Generates a motion (joint names, parents, unit "m"); opt NULL means the defaults. */
 affect_status affect_motion_synth(const char *action, const char *emotion, uint64_t seed,
                                   const affect_synth_options *opt, affect_motion **out,
                                   affect_error *err);
