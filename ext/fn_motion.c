@@ -118,7 +118,11 @@ void ax_motion_from_json(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 
 /* ---- export and inspection ---- */
 
-void ax_motion_to_json(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+typedef affect_status (*motion_writer)(const affect_motion *, char **, size_t *, affect_error *);
+
+/* Writes the motion argument as text with a core writer. */
+static void write_motion(sqlite3_context *ctx, sqlite3_value **argv, motion_writer writer,
+                         bool json)
 {
     affect_motion *m;
     if (ax_arg_motion(ctx, argv, 0, &m) != AX_OK)
@@ -126,20 +130,18 @@ void ax_motion_to_json(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     char *text = NULL;
     size_t len = 0;
     affect_error err;
-    finish_text(ctx, affect_motion_to_json(m, &text, &len, &err), &text, &len, &err, true);
+    finish_text(ctx, writer(m, &text, &len, &err), &text, &len, &err, json);
     affect_motion_free(m);
+}
+
+void ax_motion_to_json(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    write_motion(ctx, argv, affect_motion_to_json, true);
 }
 
 void ax_motion_to_csv(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 {
-    affect_motion *m;
-    if (ax_arg_motion(ctx, argv, 0, &m) != AX_OK)
-        return;
-    char *text = NULL;
-    size_t len = 0;
-    affect_error err;
-    finish_text(ctx, affect_csv_write(m, &text, &len, &err), &text, &len, &err, false);
-    affect_motion_free(m);
+    write_motion(ctx, argv, affect_csv_write, false);
 }
 
 static void put_floats(affect_strbuf *sb, const float *v, int n)
@@ -192,39 +194,22 @@ void ax_motion_info(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     affect_motion_free(m);
 }
 
-void ax_motion_frames(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+/* motion_frames, motion_joints, motion_fps and motion_duration share this wrapper; the
+ * registered name says which field to return. */
+void ax_motion_scalar(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 {
     affect_motion *m;
     if (ax_arg_motion(ctx, argv, 0, &m) != AX_OK)
         return;
-    sqlite3_result_int64(ctx, m->n_frames);
-    affect_motion_free(m);
-}
-
-void ax_motion_joints(sqlite3_context *ctx, int argc, sqlite3_value **argv)
-{
-    affect_motion *m;
-    if (ax_arg_motion(ctx, argv, 0, &m) != AX_OK)
-        return;
-    sqlite3_result_int64(ctx, m->n_joints);
-    affect_motion_free(m);
-}
-
-void ax_motion_fps(sqlite3_context *ctx, int argc, sqlite3_value **argv)
-{
-    affect_motion *m;
-    if (ax_arg_motion(ctx, argv, 0, &m) != AX_OK)
-        return;
-    sqlite3_result_double(ctx, m->fps);
-    affect_motion_free(m);
-}
-
-void ax_motion_duration(sqlite3_context *ctx, int argc, sqlite3_value **argv)
-{
-    affect_motion *m;
-    if (ax_arg_motion(ctx, argv, 0, &m) != AX_OK)
-        return;
-    sqlite3_result_double(ctx, affect_motion_duration(m));
+    const char *name = AX_NAME(ctx);
+    if (strcmp(name, "motion_frames") == 0)
+        sqlite3_result_int64(ctx, m->n_frames);
+    else if (strcmp(name, "motion_joints") == 0)
+        sqlite3_result_int64(ctx, m->n_joints);
+    else if (strcmp(name, "motion_fps") == 0)
+        sqlite3_result_double(ctx, m->fps);
+    else
+        sqlite3_result_double(ctx, affect_motion_duration(m));
     affect_motion_free(m);
 }
 

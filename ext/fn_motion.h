@@ -13,10 +13,7 @@ AX_FN(ax_motion_from_json);
 AX_FN(ax_motion_to_json);
 AX_FN(ax_motion_to_csv);
 AX_FN(ax_motion_info);
-AX_FN(ax_motion_frames);
-AX_FN(ax_motion_joints);
-AX_FN(ax_motion_fps);
-AX_FN(ax_motion_duration);
+AX_FN(ax_motion_scalar); /* motion_frames, motion_joints, motion_fps, motion_duration */
 AX_FN(ax_motion_slice);
 AX_FN(ax_motion_resample);
 AX_FN(ax_motion_select);

@@ -24,6 +24,7 @@
 #include "affect/fk.h"
 #include "affect/io.h"
 #include "affect/numparse.h"
+#include "internal.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -237,22 +238,30 @@ static affect_status read_channels(parser *ps, uint32_t index)
     return AFFECT_OK;
 }
 
+/* A ROOT or JOINT block's head: name, "{", OFFSET and CHANNELS. */
+static affect_status read_joint_head(parser *ps, int32_t parent, uint32_t *index)
+{
+    const char *name = NULL;
+    size_t name_len = 0;
+    affect_status st = read_name(ps, &name, &name_len);
+    if (!st)
+        st = add_joint(ps, name, name_len, parent, index);
+    if (!st)
+        st = expect_word(ps, "{");
+    if (!st)
+        st = read_offset(ps, &ps->joints[*index]);
+    if (!st)
+        st = read_channels(ps, *index);
+    return st;
+}
+
 /* ROOT … up to and including its closing brace. */
 static affect_status parse_root(parser *ps)
 {
     int32_t stack[AFFECT_MOTION_MAX_JOINTS];
     uint32_t depth = 0, index;
-    const char *name;
-    size_t name_len, len;
-    affect_status st = read_name(ps, &name, &name_len);
-    if (!st)
-        st = add_joint(ps, name, name_len, -1, &index);
-    if (!st)
-        st = expect_word(ps, "{");
-    if (!st)
-        st = read_offset(ps, &ps->joints[index]);
-    if (!st)
-        st = read_channels(ps, index);
+    size_t len;
+    affect_status st = read_joint_head(ps, -1, &index);
     if (st)
         return st;
     stack[depth++] = (int32_t)index;
@@ -260,15 +269,7 @@ static affect_status parse_root(parser *ps)
         const char *tok = next_token(ps, &len);
         int32_t parent = stack[depth - 1];
         if (token_is(tok, len, "JOINT")) {
-            st = read_name(ps, &name, &name_len);
-            if (!st)
-                st = add_joint(ps, name, name_len, parent, &index);
-            if (!st)
-                st = expect_word(ps, "{");
-            if (!st)
-                st = read_offset(ps, &ps->joints[index]);
-            if (!st)
-                st = read_channels(ps, index);
+            st = read_joint_head(ps, parent, &index);
             if (st)
                 return st;
             stack[depth++] = (int32_t)index; /* depth ≤ joints ≤ the stack's size */
@@ -293,19 +294,12 @@ static affect_status parse_root(parser *ps)
     return AFFECT_OK;
 }
 
-static uint32_t hash_name(const char *s)
-{
-    uint32_t h = 2166136261u;
-    for (; *s; s++)
-        h = (h ^ (unsigned char)*s) * 16777619u;
-    return h;
-}
 
 /* Open-addressing set of the names given so far (indices into m->names). */
 static bool name_taken(const affect_motion *m, const int32_t *slots, uint32_t mask,
                        const char *name, uint32_t *slot)
 {
-    uint32_t h = hash_name(name) & mask;
+    uint32_t h = affect_hash_name(name) & mask;
     while (slots[h] >= 0) {
         if (strcmp(m->names[slots[h]], name) == 0)
             return true;

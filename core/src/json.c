@@ -440,7 +440,7 @@ static uint32_t key_hash(const char *s, size_t n)
 }
 
 /* Writes key as a quoted, escaped, possibly shortened string for an error message. */
-static void quote_key(char *buf, size_t size, const char *key, size_t len)
+void affect_json_quote(char *buf, size_t size, const char *key, size_t len)
 {
     static const char hex[] = "0123456789ABCDEF";
     size_t o = 0, limit = size - 6; /* room for "...\"" and the NUL */
@@ -572,7 +572,7 @@ static affect_status parse_object(parser *p, int depth, int32_t self)
         size_t slot = 0;
         if (table_find(p, &kt, key, key_len, hash, &slot) >= 0) {
             char quoted[72];
-            quote_key(quoted, sizeof quoted, key, key_len);
+            affect_json_quote(quoted, sizeof quoted, key, key_len);
             st = affect_fail(p->err, AFFECT_ERR_FORMAT, "at byte %zu: duplicate key %s", key_pos,
                              quoted);
             goto done;

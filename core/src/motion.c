@@ -19,6 +19,7 @@
  * name's length against the remaining bytes, the exact total length, parents, finiteness.
  */
 #include "affect/motion.h"
+#include "internal.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -200,14 +201,6 @@ affect_status affect_motion_set_unit(affect_motion *m, const char *unit, affect_
     return AFFECT_OK;
 }
 
-/* FNV-1a over a name, for the duplicate check. */
-static uint32_t name_hash(const char *s)
-{
-    uint32_t h = 2166136261u;
-    for (; *s; s++)
-        h = (h ^ (unsigned char)*s) * 16777619u;
-    return h;
-}
 
 static affect_status check_names_unique(const affect_motion *m, affect_error *err)
 {
@@ -221,7 +214,7 @@ static affect_status check_names_unique(const affect_motion *m, affect_error *er
         slots[i] = -1;
     affect_status st = AFFECT_OK;
     for (uint32_t j = 0; j < n && !st; j++) {
-        uint32_t h = name_hash(m->names[j]) & (cap - 1);
+        uint32_t h = affect_hash_name(m->names[j]) & (cap - 1);
         while (slots[h] >= 0) {
             if (strcmp(m->names[slots[h]], m->names[j]) == 0) {
                 st = affect_fail(err, AFFECT_ERR_FORMAT, "joints %d and %u have the same name \"%.64s\"",

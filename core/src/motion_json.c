@@ -54,38 +54,6 @@ static void format_number(char *buf, size_t size, double v)
     }
 }
 
-/* A key, quoted and escaped for a one-line message and shortened to about 40 bytes. */
-static void quote_key(char *buf, size_t size, const char *key, size_t len)
-{
-    static const char hex[] = "0123456789ABCDEF";
-    size_t o = 0, limit = size - 6; /* room for ...", the closing quote and the NUL */
-    buf[o++] = '"';
-    for (size_t i = 0; i < len; i++) {
-        unsigned char c = (unsigned char)key[i];
-        size_t need = c < 0x20 ? 6 : (c == '"' || c == '\\') ? 2 : 1;
-        if (o + need > limit) {
-            while (o > 1 && ((unsigned char)buf[o - 1] & 0xC0) == 0x80)
-                o--; /* never end in the middle of a UTF-8 sequence */
-            if (o > 1 && (unsigned char)buf[o - 1] >= 0xC0)
-                o--;
-            memcpy(buf + o, "...", 3);
-            o += 3;
-            break;
-        }
-        if (c < 0x20) {
-            char e[6] = {'\\', 'u', '0', '0', hex[c >> 4], hex[c & 15]};
-            memcpy(buf + o, e, 6);
-        } else if (need == 2) {
-            buf[o] = '\\';
-            buf[o + 1] = (char)c;
-        } else {
-            buf[o] = (char)c;
-        }
-        o += need;
-    }
-    buf[o++] = '"';
-    buf[o] = '\0';
-}
 
 /* "array", "number", … for messages. */
 static const char *type_name(const affect_json_node *n)
@@ -112,7 +80,7 @@ static affect_status read_members(const affect_json_doc *doc, const affect_json_
             k++;
         if (k == 5) {
             char quoted[48];
-            quote_key(quoted, sizeof quoted, c->key, c->key_len);
+            affect_json_quote(quoted, sizeof quoted, c->key, c->key_len);
             return affect_fail(err, AFFECT_ERR_FORMAT,
                                "%s: unknown key (expected " KEYS_ACCEPTED ")", quoted);
         }

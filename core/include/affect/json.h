@@ -57,6 +57,9 @@ const affect_json_node *affect_json_next_sibling(const affect_json_doc *doc,
 /* Member of an object whose key is exactly the C string key (key_len bytes), or NULL. */
 const affect_json_node *affect_json_get(const affect_json_doc *doc, const affect_json_node *obj,
                                         const char *key);
+/* Writes s[0..len) into buf (size ≥ 16) as a JSON string literal for a one-line message:
+ * quoted, escaped, and shortened with "..." (never inside a UTF-8 sequence) to fit. */
+void affect_json_quote(char *buf, size_t size, const char *s, size_t len);
 /* "null", "boolean", "number", "string", "array", "object". */
 const char *affect_json_type_name(affect_json_type t);
 
