@@ -680,37 +680,60 @@ static void test_round_trip_large(void **state)
 
 /* ---- out of memory ---- */
 
-static long alloc_calls, fail_at, outstanding;
+/* a header with escapes and enough frames to grow the position array several times */
+typedef struct csv_oom {
+    const char *text;
+    size_t len;
+    affect_csv_options opts;
+    affect_motion *m;   /* parse output, or the motion to write */
+    char *out;          /* write output */
+    size_t out_len;
+} csv_oom;
 
-static void *failing_malloc(size_t n)
+static affect_status oom_parse(void *ctx, affect_error *err)
 {
-    if (++alloc_calls == fail_at)
-        return NULL;
-    void *p = malloc(n);
-    if (p)
-        outstanding++;
-    return p;
+    csv_oom *c = ctx;
+    c->m = NULL;
+    return affect_csv_parse(c->text, c->len, 30.0, &c->opts, &c->m, err);
 }
 
-static void *failing_realloc(void *p, size_t n)
+static void oom_parse_finish(void *ctx, affect_status st)
 {
-    if (++alloc_calls == fail_at)
-        return NULL;
-    return realloc(p, n); /* p is never NULL: affect_realloc routes that to malloc */
+    csv_oom *c = ctx;
+    if (st != AFFECT_OK) {
+        assert_null(c->m);
+        return;
+    }
+    assert_int_equal(c->m->n_frames, 240);
+    assert_string_equal(c->m->names[0], "q\"t");
+    assert_true(affect_motion_at(c->m, 239, 0)[0] == 239.0f);
+    assert_true(affect_motion_at(c->m, 239, 1)[2] == 6.123456f);
+    assert_true(affect_motion_at(c->m, 0, 0)[1] == 2.123456f);
+    affect_motion_free(c->m);
+    c->m = NULL;
 }
 
-static void failing_free(void *p)
+static affect_status oom_write(void *ctx, affect_error *err)
 {
-    outstanding--;
-    free(p);
+    csv_oom *c = ctx;
+    c->out = NULL;
+    return affect_csv_write(c->m, &c->out, &c->out_len, err);
 }
 
-static const affect_allocator failing_allocator = {failing_malloc, failing_realloc, failing_free};
+static void oom_write_finish(void *ctx, affect_status st)
+{
+    csv_oom *c = ctx;
+    if (st != AFFECT_OK) {
+        assert_null(c->out);
+        return;
+    }
+    assert_int_equal(c->out_len, strlen(c->out));
+    affect_free(c->out); /* through the counting allocator, which counts it */
+}
 
 static void test_out_of_memory(void **state)
 {
     (void)state;
-    /* a header with escapes and enough frames to grow the position array several times */
     affect_strbuf sb;
     affect_strbuf_init(&sb);
     affect_strbuf_puts(&sb, "\"q\"\"t.x\",\"q\"\"t.y\",\"q\"\"t.z\",b.x,b.y,b.z\n");
@@ -724,63 +747,20 @@ static void test_out_of_memory(void **state)
     size_t len;
     assert_int_equal(affect_strbuf_finish(&sb, &text, &len, NULL), AFFECT_OK);
 
-    affect_csv_options o = opts(',', -1);
-    o.unit = "cm";
-    long n;
-    affect_set_allocator(&failing_allocator);
-    for (n = 1;; n++) {
-        alloc_calls = 0;
-        fail_at = n;
-        outstanding = 0;
-        affect_motion *m = NULL;
-        affect_error err;
-        affect_error_clear(&err);
-        affect_status st = affect_csv_parse(text, len, 30.0, &o, &m, &err);
-        if (st == AFFECT_OK) {
-            assert_int_equal(m->n_frames, 240);
-            assert_string_equal(m->names[0], "q\"t");
-            assert_true(affect_motion_at(m, 239, 0)[0] == 239.0f);
-            assert_true(affect_motion_at(m, 239, 1)[2] == 6.123456f);
-            assert_true(affect_motion_at(m, 0, 0)[1] == 2.123456f);
-            affect_motion_free(m);
-            assert_int_equal(outstanding, 0);
-            break;
-        }
-        assert_int_equal(st, AFFECT_ERR_NOMEM);
-        assert_string_equal(err.msg, "out of memory");
-        assert_null(m);
-        assert_int_equal(outstanding, 0);
-        assert_true(n < 1000);
-    }
-    assert_true(n > 5); /* fields, motion parts, names, positions were all failed in turn */
+    csv_oom c = {.text = text, .len = len, .opts = opts(',', -1)};
+    c.opts.unit = "cm";
+    long absorbed;
+    long failures = tu_oom_sweep(oom_parse, &c, oom_parse_finish, &absorbed);
+    /* fields, motion parts, names, positions were all failed in turn */
+    assert_true(failures >= 5 && failures < 1000);
+    /* only the final trim may fail harmlessly (the motion keeps its larger block) */
+    assert_int_equal(absorbed, 1);
 
     /* the writer too */
-    affect_set_allocator(NULL);
-    affect_motion *m = parse_ok_len(text, len, NULL);
-    affect_set_allocator(&failing_allocator);
-    for (n = 1;; n++) {
-        alloc_calls = 0;
-        fail_at = n;
-        outstanding = 0;
-        char *out = NULL;
-        size_t out_len;
-        affect_error err;
-        affect_error_clear(&err);
-        affect_status st = affect_csv_write(m, &out, &out_len, &err);
-        if (st == AFFECT_OK) {
-            assert_int_equal(out_len, strlen(out));
-            affect_free(out); /* through the failing allocator, which counts it */
-            assert_int_equal(outstanding, 0);
-            break;
-        }
-        assert_int_equal(st, AFFECT_ERR_NOMEM);
-        assert_string_equal(err.msg, "out of memory");
-        assert_null(out);
-        assert_int_equal(outstanding, 0);
-        assert_true(n < 1000);
-    }
-    affect_set_allocator(NULL);
-    affect_motion_free(m);
+    c.m = parse_ok_len(text, len, NULL);
+    failures = tu_oom_sweep(oom_write, &c, oom_write_finish, NULL);
+    assert_true(failures < 1000);
+    affect_motion_free(c.m);
     affect_free(text);
 }
 

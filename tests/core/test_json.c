@@ -828,45 +828,9 @@ static void test_motion_errors_large(void **state)
     affect_free(text);
 }
 
-/* ---- out of memory ---- */
-
-static long alloc_calls, fail_call, outstanding;
-
-static void *oom_malloc(size_t n)
-{
-    if (++alloc_calls == fail_call)
-        return NULL;
-    void *p = malloc(n);
-    if (p)
-        outstanding++;
-    return p;
-}
-
-static void *oom_realloc(void *p, size_t n)
-{
-    if (++alloc_calls == fail_call)
-        return NULL;
-    if (!p)
-        return oom_malloc(n);
-    return realloc(p, n);
-}
-
-static void oom_free(void *p)
-{
-    if (p)
-        outstanding--;
-    free(p);
-}
-
-static const affect_allocator oom_allocator = {oom_malloc, oom_realloc, oom_free};
-
-static void start_oom(long n)
-{
-    alloc_calls = 0;
-    fail_call = n;
-    outstanding = 0;
-    affect_set_allocator(&oom_allocator);
-}
+/* ---- out of memory ----
+ * Every allocation fails in turn (tu_oom_sweep): each failure must report "out of memory",
+ * produce nothing and leak nothing. */
 
 static const char oom_motion[] =
     "{\"fps\":30,\"unit\":\"cm\",\"joints\":[\"Hips\",\"Spine\",\"Head\",\"LeftHand\"],"
@@ -875,34 +839,54 @@ static const char oom_motion[] =
     "[[0.5,90.25,0],[0.5,100.25,0],[0.5,160.25,0],[-39.5,121,5]],"
     "[[1,90.5,0],[1,100.5,0],[1,160.5,1e-3],[-39,122,5]]]}";
 
+static affect_status oom_from_json(void *ctx, affect_error *err)
+{
+    affect_motion **m = ctx;
+    *m = NULL;
+    return affect_motion_from_json(oom_motion, strlen(oom_motion), m, err);
+}
+
+static void oom_from_json_finish(void *ctx, affect_status st)
+{
+    affect_motion **m = ctx;
+    if (st != AFFECT_OK) {
+        assert_null(*m);
+        return;
+    }
+    assert_int_equal((*m)->n_frames, 3);
+    affect_motion_free(*m);
+}
+
 static void test_oom_motion_from_json(void **state)
 {
     (void)state;
-    long n;
-    for (n = 1;; n++) {
-        affect_motion *m = NULL;
-        affect_error err;
-        affect_error_clear(&err);
-        start_oom(n);
-        affect_status st = affect_motion_from_json(oom_motion, strlen(oom_motion), &m, &err);
-        if (st == AFFECT_OK) {
-            assert_int_equal(m->n_frames, 3);
-            assert_true(alloc_calls < n); /* no allocation left to fail */
-            affect_motion_free(m);
-            assert_int_equal(outstanding, 0);
-            affect_set_allocator(NULL);
-            break;
-        }
-        long leaked = outstanding;
-        affect_set_allocator(NULL);
-        if (st != AFFECT_ERR_NOMEM)
-            fail_msg("allocation %ld failing gave status %d: %s", n, st, err.msg);
-        assert_string_equal(err.msg, "out of memory");
-        assert_null(m);
-        if (leaked)
-            fail_msg("allocation %ld failing leaked %ld blocks", n, leaked);
+    affect_motion *m;
+    /* the parse really allocates: doc, nodes, arena, motion, names */
+    assert_true(tu_oom_sweep(oom_from_json, &m, oom_from_json_finish, NULL) >= 5);
+}
+
+typedef struct json_oom {
+    const char *text;
+    size_t len;
+    affect_json_doc *doc;
+} json_oom;
+
+static affect_status oom_parse(void *ctx, affect_error *err)
+{
+    json_oom *j = ctx;
+    j->doc = NULL;
+    return affect_json_parse(j->text, j->len, &j->doc, err);
+}
+
+static void oom_parse_finish(void *ctx, affect_status st)
+{
+    json_oom *j = ctx;
+    if (st != AFFECT_OK) {
+        assert_null(j->doc);
+        return;
     }
-    assert_true(n > 5); /* the parse really allocates: doc, nodes, arena, motion, names */
+    assert_int_equal(affect_json_child(j->doc, affect_json_root(j->doc), 1)->count, 40);
+    affect_json_free(j->doc);
 }
 
 static void test_oom_json_parse(void **state)
@@ -915,56 +899,40 @@ static void test_oom_json_parse(void **state)
     for (int i = 0; i < 40; i++)
         affect_strbuf_printf(&sb, "%s\"key%d\":{\"x\":[%d,\"s\\u00e9\"]}", i ? "," : "", i, i);
     affect_strbuf_puts(&sb, "}]");
+    json_oom j = {0};
     char *text;
-    size_t len;
-    assert_int_equal(affect_strbuf_finish(&sb, &text, &len, NULL), AFFECT_OK);
-    long n;
-    for (n = 1;; n++) {
-        affect_json_doc *doc = NULL;
-        affect_error err;
-        start_oom(n);
-        affect_status st = affect_json_parse(text, len, &doc, &err);
-        if (st == AFFECT_OK) {
-            assert_int_equal(affect_json_child(doc, affect_json_root(doc), 1)->count, 40);
-            affect_json_free(doc);
-            assert_int_equal(outstanding, 0);
-            affect_set_allocator(NULL);
-            break;
-        }
-        long leaked = outstanding;
-        affect_set_allocator(NULL);
-        assert_int_equal(st, AFFECT_ERR_NOMEM);
-        assert_null(doc);
-        if (leaked)
-            fail_msg("allocation %ld failing leaked %ld blocks", n, leaked);
-    }
-    assert_true(n > 4);
+    assert_int_equal(affect_strbuf_finish(&sb, &text, &j.len, NULL), AFFECT_OK);
+    j.text = text;
+    assert_true(tu_oom_sweep(oom_parse, &j, oom_parse_finish, NULL) >= 4);
     affect_free(text);
+}
+
+typedef struct json_write_oom {
+    const affect_motion *m;
+    char *text;
+} json_write_oom;
+
+static affect_status oom_to_json(void *ctx, affect_error *err)
+{
+    json_write_oom *w = ctx;
+    w->text = NULL;
+    return affect_motion_to_json(w->m, &w->text, NULL, err);
+}
+
+static void oom_to_json_finish(void *ctx, affect_status st)
+{
+    json_write_oom *w = ctx;
+    if (st != AFFECT_OK)
+        assert_null(w->text);
+    affect_free(w->text);
 }
 
 static void test_oom_motion_to_json(void **state)
 {
     (void)state;
     affect_motion *m = from_json_ok(oom_motion);
-    long n;
-    for (n = 1;; n++) {
-        char *text = NULL;
-        affect_error err;
-        start_oom(n);
-        affect_status st = affect_motion_to_json(m, &text, NULL, &err);
-        if (st == AFFECT_OK) {
-            affect_free(text);
-            assert_int_equal(outstanding, 0);
-            affect_set_allocator(NULL);
-            break;
-        }
-        long leaked = outstanding;
-        affect_set_allocator(NULL);
-        assert_int_equal(st, AFFECT_ERR_NOMEM);
-        if (leaked)
-            fail_msg("allocation %ld failing leaked %ld blocks", n, leaked);
-    }
-    assert_true(n > 1);
+    json_write_oom w = {m, NULL};
+    assert_true(tu_oom_sweep(oom_to_json, &w, oom_to_json_finish, NULL) >= 1);
     affect_motion_free(m);
 }
 

@@ -720,33 +720,28 @@ static void test_deterministic(void **state)
     affect_motion_free(m);
 }
 
-static int fail_at = 0, n_allocs = 0, outstanding = 0;
+/* ---- out of memory: every allocation of a render fails in turn (tu_oom_sweep) ---- */
 
-static void *counting_malloc(size_t n)
+typedef struct svg_oom {
+    const affect_motion *m;
+    const affect_roles *roles;
+    const affect_svg_options *opt;
+    char *svg;
+} svg_oom;
+
+static affect_status oom_render(void *ctx, affect_error *err)
 {
-    if (++n_allocs == fail_at)
-        return NULL;
-    void *p = malloc(n);
-    if (p)
-        outstanding++;
-    return p;
+    svg_oom *c = ctx;
+    c->svg = NULL;
+    return affect_motion_svg(c->m, c->roles, c->opt, &c->svg, NULL, err);
 }
 
-static void *counting_realloc(void *p, size_t n)
+static void oom_render_finish(void *ctx, affect_status st)
 {
-    if (++n_allocs == fail_at)
-        return NULL;
-    void *q = realloc(p, n);
-    if (q && !p)
-        outstanding++;
-    return q;
-}
-
-static void counting_free(void *p)
-{
-    if (p)
-        outstanding--;
-    free(p);
+    svg_oom *c = ctx;
+    if (st != AFFECT_OK)
+        assert_null(c->svg);
+    affect_free(c->svg);
 }
 
 static void test_out_of_memory(void **state)
@@ -757,29 +752,8 @@ static void test_out_of_memory(void **state)
     affect_svg_options opt;
     affect_svg_options_default(&opt);
     opt.title = "oom";
-    static const affect_allocator counting = {counting_malloc, counting_realloc, counting_free};
-    affect_set_allocator(&counting);
-    for (fail_at = 1;; fail_at++) {
-        n_allocs = 0;
-        outstanding = 0;
-        char *svg = NULL;
-        affect_error err;
-        affect_status st = affect_motion_svg(m, &roles, &opt, &svg, NULL, &err);
-        affect_free(svg);
-        if (outstanding != 0) {
-            affect_set_allocator(NULL);
-            fail_msg("allocation %d failed: %d blocks leaked", fail_at, outstanding);
-        }
-        if (st == AFFECT_OK)
-            break;
-        if (st != AFFECT_ERR_NOMEM || strcmp(err.msg, "out of memory") != 0) {
-            affect_set_allocator(NULL);
-            fail_msg("allocation %d failed: status %d, %s", fail_at, (int)st, err.msg);
-        }
-        assert_null(svg);
-    }
-    affect_set_allocator(NULL);
-    assert_true(fail_at > 5);
+    svg_oom c = {m, &roles, &opt, NULL};
+    assert_true(tu_oom_sweep(oom_render, &c, oom_render_finish, NULL) >= 5);
     affect_motion_free(m);
 }
 

@@ -654,75 +654,44 @@ static void test_errors(void **state)
     affect_motion_free(m);
 }
 
-/* ---- out of memory: an allocator that fails the n-th allocation ---- */
+/* ---- out of memory: every allocation of a synthesis fails in turn (tu_oom_sweep) ---- */
 
-static long oom_countdown; /* allocations left before failing; < 0: never fail */
-static long oom_outstanding;
+typedef struct synth_oom {
+    const char *action;
+    const affect_synth_options *opt;
+    affect_motion *m;
+} synth_oom;
 
-static void *oom_malloc(size_t n)
+static affect_status oom_synth(void *ctx, affect_error *err)
 {
-    if (oom_countdown == 0)
-        return NULL;
-    if (oom_countdown > 0)
-        oom_countdown--;
-    void *p = malloc(n);
-    if (p)
-        oom_outstanding++;
-    return p;
+    synth_oom *c = ctx;
+    c->m = NULL;
+    return affect_motion_synth(c->action, "happy", 3, c->opt, &c->m, err);
 }
 
-static void *oom_realloc(void *p, size_t n)
+static void oom_synth_finish(void *ctx, affect_status st)
 {
-    if (oom_countdown == 0)
-        return NULL;
-    if (oom_countdown > 0)
-        oom_countdown--;
-    return realloc(p, n);
-}
-
-static void oom_free(void *p)
-{
-    if (p)
-        oom_outstanding--;
-    free(p);
+    synth_oom *c = ctx;
+    if (st != AFFECT_OK) {
+        assert_null(c->m);
+        return;
+    }
+    assert_non_null(c->m);
+    assert_true(tu_oom_outstanding() > 0);
+    affect_motion_free(c->m);
 }
 
 static void test_out_of_memory(void **state)
 {
     (void)state;
-    static const affect_allocator failing = {oom_malloc, oom_realloc, oom_free};
     affect_synth_options opt;
     affect_synth_options_default(&opt);
     for (int a = 0; a < N_ACTIONS; a++) {
-        long failures = 0;
-        for (long n = 0;; n++) {
-            oom_countdown = n;
-            oom_outstanding = 0;
-            affect_set_allocator(&failing);
-            affect_motion *m = NULL;
-            affect_error err;
-            affect_error_clear(&err);
-            affect_status st =
-                affect_motion_synth(affect_synth_actions[a], "happy", 3, &opt, &m, &err);
-            if (st == AFFECT_OK) {
-                assert_non_null(m);
-                assert_true(oom_outstanding > 0);
-                affect_motion_free(m);
-                affect_set_allocator(NULL);
-                assert_int_equal(oom_outstanding, 0);
-                break;
-            }
-            affect_set_allocator(NULL);
-            assert_int_equal(st, AFFECT_ERR_NOMEM);
-            assert_string_equal(err.msg, "out of memory");
-            assert_null(m);
-            if (oom_outstanding != 0)
-                fail_msg("%s: %ld allocations leaked when allocation %ld failed",
-                         affect_synth_actions[a], oom_outstanding, n + 1);
-            failures++;
-            assert_true(n < 10000);
-        }
-        assert_true(failures > 20); /* every allocation of the motion was exercised */
+        synth_oom c = {affect_synth_actions[a], &opt, NULL};
+        long failures = tu_oom_sweep(oom_synth, &c, oom_synth_finish, NULL);
+        /* every allocation of the motion was exercised */
+        if (failures <= 20 || failures > 10000)
+            fail_msg("%s: %ld allocations failed in turn", c.action, failures);
     }
 }
 
