@@ -88,10 +88,28 @@ char *affect_strndup(const char *s, size_t n)
 affect_status affect_fail(affect_error *err, affect_status status, const char *fmt, ...)
 {
     if (err) {
+        char raw[AFFECT_ERROR_MSG_MAX];
         va_list ap;
         va_start(ap, fmt);
-        vsnprintf(err->msg, sizeof err->msg, fmt, ap);
+        vsnprintf(raw, sizeof raw, fmt, ap);
         va_end(ap);
+        /* one line whatever the message quotes: control bytes become \xNN */
+        static const char hex[] = "0123456789abcdef";
+        size_t o = 0;
+        for (const char *p = raw; *p && o + 1 < sizeof err->msg; p++) {
+            unsigned char c = (unsigned char)*p;
+            if (c >= 0x20 && c != 0x7f) {
+                err->msg[o++] = (char)c;
+            } else if (o + 5 < sizeof err->msg) {
+                err->msg[o++] = '\\';
+                err->msg[o++] = 'x';
+                err->msg[o++] = hex[c >> 4];
+                err->msg[o++] = hex[c & 15];
+            } else {
+                break;
+            }
+        }
+        err->msg[o] = '\0';
         err->status = status;
     }
     return status;

@@ -190,6 +190,11 @@ static affect_status read_name(parser *ps, const char **name, size_t *len)
     if ((size_t)(e - s) > AFFECT_MOTION_MAX_NAME - 8)
         return affect_fail(ps->err, AFFECT_ERR_FORMAT, "line %u: joint name longer than %u bytes",
                            ps->line, AFFECT_MOTION_MAX_NAME - 8);
+    /* refused here: name_joints compares names as C strings, so an embedded NUL would make
+     * "A\0x" and "A" collide for every "_N" suffix it tries (an endless loop) */
+    if (memchr(s, '\0', (size_t)(e - s)))
+        return affect_fail(ps->err, AFFECT_ERR_FORMAT, "line %u: joint name contains a NUL byte",
+                           ps->line);
     *name = s;
     *len = (size_t)(e - s);
     return AFFECT_OK;
@@ -406,21 +411,24 @@ static void local_transforms(const parser *ps, const double *values, double scal
         t[0] = j->offset[0] * scale;
         t[1] = j->offset[1] * scale;
         t[2] = j->offset[2] * scale;
-        memcpy(r, identity, sizeof identity);
+        /* the rotation channels in CHANNELS order, composed by one Euler-matrix build
+         * (missing ones are zero-angle rotations, which are exact identities) */
+        int order[3] = {0, 0, 0}, n_rot = 0;
+        double deg[3] = {0, 0, 0};
         const double *v = values + j->first_value;
         for (int c = 0; c < j->n_channels; c++) {
             int type = j->channel[c];
             if (type <= CH_ZPOS) {
                 t[type] = v[c] * scale;
             } else {
-                const int order[3] = {type - CH_XROT, 0, 0};
-                const double deg[3] = {v[c], 0, 0};
-                double a[9], tmp[9];
-                affect_euler_deg_to_matrix(order, deg, a);
-                affect_mat3_mul(r, a, tmp);
-                memcpy(r, tmp, sizeof tmp);
+                order[n_rot] = type - CH_XROT;
+                deg[n_rot++] = v[c];
             }
         }
+        if (n_rot == 0)
+            memcpy(r, identity, sizeof identity);
+        else
+            affect_euler_deg_to_matrix(order, deg, r);
     }
 }
 

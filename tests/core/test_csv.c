@@ -296,7 +296,7 @@ static void test_quoted_fields(void **state)
     expect_error("\"a\nb.x\",\"a\nb.y\",\"a\nb.z\"\n1,2,3\n1,2\n", NULL, AFFECT_ERR_FORMAT,
                  "row 6: expected 3 values, found 2");
     expect_error("\"a\nb.x\",\"a\nb.y\",\"a\nb.w\"\n1,2,3\n", NULL, AFFECT_ERR_FORMAT,
-                 "row 1, column 3: \"a\nb.w\" does not end in .x, .y or .z");
+                 "row 1, column 3: \"a\\x0ab.w\" does not end in .x, .y or .z");
     /* quoted with the space delimiter: "Head X" as one field */
     affect_csv_options o = opts(' ', -1);
     m = parse_ok("\"Head X\" \"Head Y\" \"Head Z\"\n1 2 3\n", &o);

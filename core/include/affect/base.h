@@ -40,7 +40,8 @@ typedef struct affect_error {
     char msg[AFFECT_ERROR_MSG_MAX];
 } affect_error;
 
-/* Records a printf-style message (when err is not NULL) and returns status. */
+/* Records a printf-style message (when err is not NULL) and returns status. The message is
+ * kept on one line: control bytes (a newline in a quoted joint name, say) become \xNN. */
 affect_status affect_fail(affect_error *err, affect_status status, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 3, 4)))

@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# tests/bench/run.sh — build the benchmarks in Release and run them on one core.
+#
+# Usage: bash tests/bench/run.sh [extra arguments for bench_import, e.g. a corpus directory]
+#
+# Configures build-bench (-DCMAKE_BUILD_TYPE=Release -DAFFECT_WERROR=ON), builds the bench
+# targets, prints the machine (CPU, memory, OS, compiler, flags) and runs each benchmark pinned
+# to CPU 0 with taskset when it is available. Record the output in docs/BENCHMARKS.md.
+set -euo pipefail
+
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+build="$root/build-bench"
+
+cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DAFFECT_WERROR=ON >/dev/null
+cmake --build "$build" -j"$(nproc)" --target affect_benches
+
+pin=()
+if command -v taskset >/dev/null 2>&1 && taskset -c 0 true 2>/dev/null; then
+    pin=(taskset -c 0)
+fi
+
+cc="$(sed -n 's/^CMAKE_C_COMPILER:[A-Z]*=//p' "$build/CMakeCache.txt")"
+echo "== machine"
+echo "cpu:      $(lscpu 2>/dev/null | sed -n 's/^Model name:[[:space:]]*//p' | head -1)" \
+     "($(nproc --all) logical CPUs)"
+echo "memory:   $(free -h 2>/dev/null | awk '/^Mem:/ {print $2}') total"
+echo "os:       $( (. /etc/os-release 2>/dev/null && echo "$PRETTY_NAME") || uname -s)," \
+     "kernel $(uname -r)"
+echo "compiler: $("$cc" --version | head -1)"
+echo "flags:    Release: $(sed -n 's/^CMAKE_C_FLAGS_RELEASE:[A-Z]*=//p' "$build/CMakeCache.txt")" \
+     "-std=c11 -ffp-contract=off -fno-fast-math"
+echo "pinned:   ${pin[*]:-no (taskset not available)}"
+echo
+
+for bench in bench_import; do
+    echo "== $bench"
+    "${pin[@]}" "$build/tests/bench/$bench" "$@"
+    echo
+done
