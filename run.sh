@@ -55,16 +55,39 @@ demo() {
     echo "== open demo.html in a browser; query demo.db with: sqlite3 demo.db -cmd '.load ./build/affect'"
 }
 
+# Runs a command, echoing its output, and adds the counts of ctest's closing line to the totals.
+passed=0 failed=0
+counted() {
+    local log rc=0 line
+    log=$(mktemp)
+    "$@" 2>&1 | tee "$log" || rc=$?
+    line=$(grep -E '[0-9]+% tests passed, [0-9]+ tests? failed out of [0-9]+' "$log" | tail -1 || true)
+    rm -f "$log"
+    if [ -z "$line" ]; then
+        return 1
+    fi
+    local total bad
+    total=$(echo "$line" | sed -E 's/.* out of ([0-9]+).*/\1/')
+    bad=$(echo "$line" | sed -E 's/.* ([0-9]+) tests? failed.*/\1/')
+    passed=$((passed + total - bad))
+    failed=$((failed + bad))
+    return "$rc"
+}
+
 tests() {
+    local status=0
     echo "== tests (build/)"
-    ctest --test-dir build --output-on-failure -j"$(nproc)" -E '^fuzz/'
+    counted ctest --test-dir build --output-on-failure -j"$(nproc)" -E '^fuzz/' || status=1
     echo "== sanitizer build (build-asan/): unit and SQL tests under ASan + UBSan"
     cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DAFFECT_WERROR=ON -DAFFECT_SANITIZE=ON >/dev/null
     cmake --build build-asan -j"$(nproc)" >/dev/null
-    ASAN_OPTIONS=detect_leaks=1 ctest --test-dir build-asan --output-on-failure -j"$(nproc)" \
-        -E '^fuzz/|^examples/|^sql/scripts'
+    ASAN_OPTIONS=detect_leaks=1 counted ctest --test-dir build-asan --output-on-failure -j"$(nproc)" \
+        -E '^fuzz/|^examples/|^sql/scripts' || status=1
     echo "== fuzzers (build-fuzz/, clang + libFuzzer)"
-    bash tests/fuzz/run.sh "${AFFECT_FUZZ_SECONDS:-20}"
+    counted bash tests/fuzz/run.sh "${AFFECT_FUZZ_SECONDS:-20}" || status=1
+    echo
+    echo "all suites: $passed passed, $failed failed"
+    return "$status"
 }
 
 case "${1:-}" in
