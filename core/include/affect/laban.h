@@ -1,0 +1,158 @@
+/*
+ * affect/laban.h — Laban Effort and Shape descriptors (SCIENCE.md §1; thesis §5.1–§5.2.1).
+ *
+ * Kinematics. For a body part with position p(t) (a joint, or the centroid of several), the
+ * velocity, acceleration and jerk are central differences at the motion's fps (one-sided at the
+ * two ends), each low-pass filtered by a zero-lag 2nd-order Butterworth filter (cut-off 6 Hz by
+ * default) run forward and backward; see affect_lowpass for the edge handling. With a cut-off at
+ * or above the Nyquist frequency (fps / 2) nothing is filtered.
+ *
+ * Parts. torso = centroid of the resolved pelvis, spine and chest roles; head, left_hand,
+ * right_hand, left_foot, right_foot = those roles; "all" = torso + the five end-effectors; or
+ * any joint by name. Mass coefficients are all 1.
+ *
+ * Components (units follow the motion's: u = its length unit, s = seconds):
+ *   Weight  Q1  max_t Σ_k ‖v_k(t)‖²                               u²/s²   (peak kinetic energy)
+ *           Q2  max_t Σ_k max(0, −d‖v_k‖/dt)                        u/s²    (peak deceleration)
+ *   Time    Q1  max_t Σ_k ‖a_k(t)‖                                  u/s²    (peak acceleration)
+ *           Q2  Σ_k Σ_{t≥1} ‖v_k(t) − v_k(t−1)‖ / Δt                u/s²    (÷ duration: u/s³)
+ *   Flow    Q2  Σ_k Σ_{t≥1} ‖a_k(t) − a_k(t−1)‖ / Δt                u/s³    (aggregated jerk)
+ *   Space   Q2  mean_k  path_k / max(‖p_k(T) − p_k(1)‖, path_k / max_ratio)   (1 .. max_ratio)
+ *           Q1  peaks of v_hand(t)·v_torso(t) (with hysteresis: rise and fall by 10 % of its
+ *               range), binned: 0–1 → 1, 2–3 → 2, 4–5 → 3, 6–7 → 4, ≥8 → 5
+ *   Shape Directional  mean over moving frames of |ẍẏ − ÿẋ| / (ẋ² + ẏ²)^{3/2} in the plane of the
+ *           hand path's two principal axes (PCA); frames slower than speed_floor × the peak
+ *           speed are left out (curvature of a still hand is noise)                   1/u
+ *   Shape Shaping  vertical: max_t |torso_up(t) − torso_up(0)|; sagittal: the same along the
+ *           body's forward direction in the first frame; horizontal: max_t area of the convex
+ *           hull of all joints projected on the horizontal plane                      u, u, u²
+ *   Shape Flow  max_t volume of the convex hull (or bounding box) of all joints        u³
+ */
+#ifndef AFFECT_LABAN_H
+#define AFFECT_LABAN_H
+
+#include "affect/roles.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define AFFECT_LABAN_N 27
+
+/* Component names in vector order: WeightAll, WeightTorso, WeightHead, WeightLHand,
+ * WeightRHand, WeightLFoot, WeightRFoot, the same seven for Time and Flow, ShapeVertical,
+ * ShapeSagittal, ShapeHorizontal, ShapeFlow, ShapeDirLHand, ShapeDirRHand. */
+extern const char *const affect_laban_names[AFFECT_LABAN_N];
+
+/* Index of a component name, or −1. */
+int affect_laban_index(const char *name);
+
+typedef struct affect_laban_options {
+    double cutoff_hz;    /* low-pass cut-off (default 6) */
+    int up_axis;         /* 0 = x, 1 = y (default), 2 = z */
+    bool missing_null;   /* a component that cannot be computed becomes NaN instead of an error */
+    bool hull_box;       /* Shape Flow from the bounding box instead of the convex hull */
+    bool time_per_second;/* Time Q2 divided by the duration */
+    double speed_floor;  /* Shape Directional: ignore frames slower than this × peak (0.05) */
+    double max_ratio;    /* Space Q2 cap when the net displacement is near zero (100) */
+} affect_laban_options;
+
+void affect_laban_options_default(affect_laban_options *opt);
+
+/* ---- filtering and derivatives ---- */
+
+/* Zero-lag low-pass: 2nd-order Butterworth (bilinear transform, pre-warped) run forward then
+ * backward over x[0], x[stride], … (n values), into out (same layout; out == x allowed).
+ * Edges: the series is extended at each end by min(9, n − 1) samples of its odd reflection
+ * (2·x[0] − x[k]), and each pass starts from the filter's steady state for the straight line
+ * through its first two inputs, so constants and straight lines pass unchanged. No filtering when cutoff_hz ≥ fps / 2 or
+ * n < 2. scratch holds at least n + 18 doubles. */
+void affect_lowpass(const double *x, size_t n, size_t stride, double fps, double cutoff_hz,
+                    double *scratch, double *out);
+
+/* A body part: the centroid of up to 4 joints. */
+typedef struct affect_part {
+    uint32_t n_joints;
+    int32_t joints[4];
+    const char *name; /* for messages: "torso", "left_hand", a joint name */
+} affect_part;
+
+/* Resolves a part name ("torso", "head", "left_hand", "right_hand", "left_foot",
+ * "right_foot", or a joint name) with the roles; "all" is not a single part. */
+affect_status affect_part_resolve(const affect_motion *m, const affect_roles *roles,
+                                  const char *name, affect_part *part, affect_error *err);
+
+/* The six parts of "all": torso, head, left_hand, right_hand, left_foot, right_foot. */
+affect_status affect_parts_all(const affect_motion *m, const affect_roles *roles,
+                               affect_part parts[6], affect_error *err);
+
+/* Filtered kinematics of one part: T × 3 doubles each (row-major). */
+typedef struct affect_kinematics {
+    uint32_t n_frames;
+    double fps;
+    double *pos, *vel, *acc, *jerk;
+} affect_kinematics;
+
+affect_status affect_kinematics_compute(const affect_motion *m, const affect_part *part,
+                                        const affect_laban_options *opt, affect_kinematics *k,
+                                        affect_error *err);
+void affect_kinematics_free(affect_kinematics *k);
+
+/* ---- Effort components over a set of parts ---- */
+
+typedef enum affect_laban_method {
+    AFFECT_LABAN_Q1 = 1,
+    AFFECT_LABAN_Q2 = 2
+} affect_laban_method;
+
+/* Each takes n parts (1 for a single part, 6 for "all") and writes one value. */
+affect_status affect_laban_weight(const affect_motion *m, const affect_part *parts, uint32_t n,
+                                  affect_laban_method method, const affect_laban_options *opt,
+                                  double *out, affect_error *err);
+affect_status affect_laban_time(const affect_motion *m, const affect_part *parts, uint32_t n,
+                                affect_laban_method method, const affect_laban_options *opt,
+                                double *out, affect_error *err);
+affect_status affect_laban_flow(const affect_motion *m, const affect_part *parts, uint32_t n,
+                                const affect_laban_options *opt, double *out, affect_error *err);
+/* Space Q2 (mean over parts) or Q1 (hand = parts[0], torso = parts[1]; n must be 2). */
+affect_status affect_laban_space(const affect_motion *m, const affect_part *parts, uint32_t n,
+                                 affect_laban_method method, const affect_laban_options *opt,
+                                 double *out, affect_error *err);
+
+/* ---- Shape components ---- */
+
+affect_status affect_laban_shape_directional(const affect_motion *m, const affect_part *hand,
+                                             const affect_laban_options *opt, double *out,
+                                             affect_error *err);
+/* out = {vertical, sagittal, horizontal}. */
+affect_status affect_laban_shape_shaping(const affect_motion *m, const affect_roles *roles,
+                                         const affect_laban_options *opt, double out[3],
+                                         affect_error *err);
+affect_status affect_laban_shape_flow(const affect_motion *m, const affect_laban_options *opt,
+                                      double *out, affect_error *err);
+
+/* ---- all 27 ---- */
+
+/* Every component in affect_laban_names order. With opt->missing_null a component that needs
+ * an unresolved role (or more frames) is NaN; otherwise that is an error naming the role. */
+affect_status affect_laban_vector(const affect_motion *m, const affect_roles *roles,
+                                  const affect_laban_options *opt, double out[AFFECT_LABAN_N],
+                                  affect_error *err);
+
+/* ---- geometry (exposed for tests) ---- */
+
+/* Area of the convex hull of n 2-D points (xy interleaved); 0 for fewer than 3 or collinear.
+ * scratch holds 4·n doubles. */
+double affect_hull_area_2d(const double *xy, uint32_t n, double *scratch);
+
+/* Volume of the convex hull of n 3-D points (xyz interleaved) with a reusable workspace sized
+ * for up to max_points points; 0 when they are coplanar or fewer than 4. */
+typedef struct affect_hull3d affect_hull3d;
+affect_hull3d *affect_hull3d_new(uint32_t max_points); /* NULL if an allocation fails */
+void affect_hull3d_free(affect_hull3d *h);
+double affect_hull3d_volume(affect_hull3d *h, const double *xyz, uint32_t n); /* n ≤ max */
+
+#ifdef __cplusplus
+}
+#endif
+#endif

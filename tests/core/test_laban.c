@@ -1,0 +1,292 @@
+/*
+ * test_laban.c — Laban Effort and Shape descriptors against analytic answers: the filter keeps
+ * constants, lines and slow sinusoids and removes fast ones; constant velocity has no
+ * acceleration; a known speed gives a known kinetic energy; a straight path is direct (Space 1,
+ * Directional 0); a circle of radius r has curvature 1/r; the shaping and flow components of a
+ * rigid box; missing roles and short motions; and on motion_synth, WeightAll and TimeAll order
+ * angry > neutral > sad for every action.
+ */
+#include <math.h>
+#include <string.h>
+
+#include "testutil.h"
+#include "affect/laban.h"
+#include "affect/synth.h"
+
+#define PI 3.14159265358979323846
+
+/* The six parts' joints plus two hips for the heading: every role that "all" needs. */
+static const char *const body_names[] = {"Hips",   "Spine",  "Chest",  "Head",      "Hand_L",
+                                         "Hand_R", "Foot_L", "Foot_R", "UpperLeg_L", "UpperLeg_R"};
+enum { N_BODY = 10 };
+
+/* A rigid body: joint j at base[j] + f(t), with f given per frame by the callback. */
+typedef void (*path_fn)(double t, double out[3], void *ctx);
+
+static affect_motion *rigid_body(uint32_t frames, double fps, path_fn f, void *ctx)
+{
+    static const double base[N_BODY][3] = {{0, 1, 0},      {0, 1.2, 0},    {0, 1.4, 0},
+                                           {0, 1.7, 0},    {0.3, 1.0, 0},  {-0.3, 1.0, 0},
+                                           {0.1, 0.05, 0}, {-0.1, 0.05, 0}, {0.1, 0.95, 0},
+                                           {-0.1, 0.95, 0}};
+    affect_motion *m = NULL;
+    affect_error err;
+    assert_int_equal(affect_motion_create(frames, N_BODY, fps, &m, &err), AFFECT_OK);
+    for (uint32_t j = 0; j < N_BODY; j++)
+        assert_int_equal(affect_motion_set_name(m, j, body_names[j], strlen(body_names[j]), &err),
+                         AFFECT_OK);
+    for (uint32_t t = 0; t < frames; t++) {
+        double d[3];
+        f(t / fps, d, ctx);
+        for (uint32_t j = 0; j < N_BODY; j++)
+            for (int a = 0; a < 3; a++)
+                affect_motion_at(m, t, j)[a] = (float)(base[j][a] + d[a]);
+    }
+    return m;
+}
+
+static void still(double t, double out[3], void *ctx)
+{
+    out[0] = out[1] = out[2] = 0;
+}
+
+static void uniform(double t, double out[3], void *ctx)
+{
+    const double *v = ctx; /* velocity */
+    for (int a = 0; a < 3; a++)
+        out[a] = v[a] * t;
+}
+
+static void circle(double t, double out[3], void *ctx)
+{
+    const double *rw = ctx; /* radius, angular speed: a circle in the x–z plane */
+    out[0] = rw[0] * cos(rw[1] * t);
+    out[1] = 0;
+    out[2] = rw[0] * sin(rw[1] * t);
+}
+
+static void test_lowpass(void **state)
+{
+    enum { N = 300 };
+    double x[N], y[N], scratch[N + 18];
+    const double fps = 30;
+    /* constant, straight line */
+    for (int i = 0; i < N; i++)
+        x[i] = 2.5;
+    affect_lowpass(x, N, 1, fps, 6, scratch, y);
+    for (int i = 0; i < N; i++)
+        tu_assert_near(y[i], 2.5, 1e-12);
+    /* a line: the padding continues it and each pass starts in its steady state */
+    for (int i = 0; i < N; i++)
+        x[i] = 0.1 * i - 3;
+    affect_lowpass(x, N, 1, fps, 6, scratch, y);
+    for (int i = 0; i < N; i++)
+        tu_assert_near(y[i], x[i], 1e-10);
+    /* a slow sinusoid (0.5 Hz) passes; a fast one (12 Hz) is removed away from the edges */
+    for (int i = 0; i < N; i++)
+        x[i] = sin(2 * PI * 0.5 * i / fps);
+    affect_lowpass(x, N, 1, fps, 6, scratch, y);
+    for (int i = 0; i < N; i++)
+        tu_assert_near(y[i], x[i], 2e-3);
+    for (int i = 0; i < N; i++)
+        x[i] = sin(2 * PI * 12 * i / fps);
+    affect_lowpass(x, N, 1, fps, 6, scratch, y);
+    for (int i = 30; i < N - 30; i++)
+        tu_assert_near(y[i], 0, 0.02);
+    /* at or above Nyquist: unchanged; strided layout */
+    affect_lowpass(x, N, 1, fps, 15, scratch, y);
+    assert_memory_equal(x, y, sizeof x);
+    double xyz[3 * 50], out[3 * 50];
+    for (int i = 0; i < 150; i++)
+        xyz[i] = i % 3 == 1 ? 7.0 : (double)i;
+    affect_lowpass(xyz + 1, 50, 3, fps, 6, scratch, out + 1);
+    for (int i = 0; i < 50; i++)
+        tu_assert_near(out[3 * i + 1], 7.0, 1e-12);
+}
+
+static void test_constant_velocity(void **state)
+{
+    double v[3] = {0.5, 0, 1.2}; /* |v|² = 1.69 per part */
+    affect_motion *m = rigid_body(120, 30, uniform, v);
+    affect_roles roles;
+    affect_roles_resolve(m, &roles);
+    double out[AFFECT_LABAN_N];
+    affect_error err;
+    assert_int_equal(affect_laban_vector(m, &roles, NULL, out, &err), AFFECT_OK);
+    /* six parts each with kinetic energy 1.69 (u²/s²); positions are float32, so differences
+     * of metres-sized coordinates carry ~1e-5 relative error */
+    tu_assert_near(out[affect_laban_index("WeightAll")], 6 * 1.69, 1e-3);
+    tu_assert_near(out[affect_laban_index("WeightLHand")], 1.69, 2e-4);
+    /* no acceleration, no jerk: Time and Flow vanish everywhere, edges included, but for the
+     * float32 rounding of the positions (~5e-7 m, ×30 per derivative, summed over six parts) */
+    tu_assert_near(out[affect_laban_index("TimeAll")], 0, 5e-3);
+    tu_assert_near(out[affect_laban_index("FlowAll")], 0, 0.5); /* a sum over 119 frames × 6 */
+    /* straight path: spoke-like, perfectly direct */
+    tu_assert_near(out[affect_laban_index("ShapeDirLHand")], 0, 1e-4); /* 1/m; a 1 m circle: 1 */
+    affect_part part;
+    assert_int_equal(affect_part_resolve(m, &roles, "right_hand", &part, &err), AFFECT_OK);
+    double space;
+    assert_int_equal(affect_laban_space(m, &part, 1, AFFECT_LABAN_Q2, NULL, &space, &err), AFFECT_OK);
+    tu_assert_near(space, 1.0, 1e-9);
+    /* the torso moved 0.5·4 = 2 sideways-ish, 1.2·4 = 4.8 forward over 4 s (forward is +z:
+     * the left hip is at +x) */
+    tu_assert_near(out[affect_laban_index("ShapeVertical")], 0, 1e-6);
+    tu_assert_near(out[affect_laban_index("ShapeSagittal")], 1.2 * 119 / 30.0, 1e-5);
+    affect_motion_free(m);
+}
+
+static void test_circle_curvature(void **state)
+{
+    /* radius 0.25 m, one turn per 2 s, 8 s at 60 fps: curvature 4 per metre */
+    double rw[2] = {0.25, PI};
+    affect_motion *m = rigid_body(480, 60, circle, rw);
+    affect_roles roles;
+    affect_roles_resolve(m, &roles);
+    affect_part hand;
+    affect_error err;
+    double k;
+    assert_int_equal(affect_part_resolve(m, &roles, "left_hand", &hand, &err), AFFECT_OK);
+    assert_int_equal(affect_laban_shape_directional(m, &hand, NULL, &k, &err), AFFECT_OK);
+    tu_assert_near(k, 4.0, 0.02);
+    /* circular motion: speed ω r = 0.785 m/s, centripetal acceleration ω² r = 2.47 m/s² */
+    double w, acc;
+    assert_int_equal(affect_laban_weight(m, &hand, 1, AFFECT_LABAN_Q1, NULL, &w, &err), AFFECT_OK);
+    tu_assert_near(w, pow(PI * 0.25, 2), 1e-3);
+    assert_int_equal(affect_laban_time(m, &hand, 1, AFFECT_LABAN_Q1, NULL, &acc, &err), AFFECT_OK);
+    /* the peak is reached at the ends, where the odd-reflection padding (which continues
+     * position and velocity but mirrors curvature) adds a small transient: within 1.5 % */
+    tu_assert_near(acc, PI * PI * 0.25, 0.037);
+    /* the path returns to its start: Space Q2 hits its documented cap */
+    double space;
+    affect_laban_options opt;
+    affect_laban_options_default(&opt);
+    assert_int_equal(affect_laban_space(m, &hand, 1, AFFECT_LABAN_Q2, &opt, &space, &err), AFFECT_OK);
+    tu_assert_near(space, opt.max_ratio, 1e-9);
+    affect_motion_free(m);
+}
+
+static void test_shape_of_a_still_body(void **state)
+{
+    affect_motion *m = rigid_body(10, 30, still, NULL);
+    affect_roles roles;
+    affect_roles_resolve(m, &roles);
+    double out[AFFECT_LABAN_N];
+    affect_error err;
+    assert_int_equal(affect_laban_vector(m, &roles, NULL, out, &err), AFFECT_OK);
+    for (int i = 0; i < 21; i++)
+        tu_assert_near(out[i], 0, 1e-12);
+    tu_assert_near(out[affect_laban_index("ShapeVertical")], 0, 0);
+    /* all joints lie in the plane z = 0: the horizontal hull (x–z) is a segment, the volume 0 */
+    tu_assert_near(out[affect_laban_index("ShapeHorizontal")], 0, 1e-12);
+    tu_assert_near(out[affect_laban_index("ShapeFlow")], 0, 1e-12);
+    /* the bounding box of a flat body is flat too */
+    affect_laban_options opt;
+    affect_laban_options_default(&opt);
+    opt.hull_box = true;
+    double flow;
+    assert_int_equal(affect_laban_shape_flow(m, &opt, &flow, &err), AFFECT_OK);
+    tu_assert_near(flow, 0, 1e-12);
+    affect_motion_free(m);
+}
+
+static void test_hull_components(void **state)
+{
+    /* move Hand_L forward by 0.2 in frame 5: the horizontal hull gains a triangle */
+    affect_motion *m = rigid_body(10, 30, still, NULL);
+    affect_motion_at(m, 5, 4)[2] = 0.2f; /* Hand_L at (0.3, 1.0, 0.2) */
+    affect_roles roles;
+    affect_roles_resolve(m, &roles);
+    double out[AFFECT_LABAN_N];
+    affect_error err;
+    assert_int_equal(affect_laban_vector(m, &roles, NULL, out, &err), AFFECT_OK);
+    /* x–z points: a segment from x = −0.3 (Hand_R) to 0.1 (left foot and hip) plus the moved
+     * hand at (0.3, 0.2): the triangle (−0.3, 0), (0.1, 0), (0.3, 0.2) of area 0.4·0.2/2 */
+    tu_assert_near(out[affect_laban_index("ShapeHorizontal")], 0.04, 1e-6);
+    affect_motion_free(m);
+}
+
+static void test_missing_roles_and_short_motions(void **state)
+{
+    affect_motion *m = rigid_body(3, 30, still, NULL);
+    affect_roles roles;
+    affect_roles_resolve(m, &roles);
+    double out[AFFECT_LABAN_N];
+    affect_error err;
+    assert_int_equal(affect_laban_vector(m, &roles, NULL, out, &err), AFFECT_ERR_RANGE);
+    assert_string_equal(err.msg, "the motion has 3 frames; Weight, Time and Flow need at least 4");
+    affect_laban_options opt;
+    affect_laban_options_default(&opt);
+    opt.missing_null = true;
+    assert_int_equal(affect_laban_vector(m, &roles, &opt, out, &err), AFFECT_OK);
+    assert_true(isnan(out[0]) && isnan(out[20]) && isnan(out[25]));
+    assert_false(isnan(out[affect_laban_index("ShapeVertical")]));
+    affect_motion_free(m);
+
+    m = rigid_body(10, 30, still, NULL);
+    affect_roles_resolve(m, &roles);
+    roles.joint[AFFECT_ROLE_LEFT_HAND] = -1;
+    assert_int_equal(affect_laban_vector(m, &roles, NULL, out, &err), AFFECT_ERR_MISSING);
+    assert_string_equal(err.msg, "no joint has the left_hand role");
+    assert_int_equal(affect_laban_vector(m, &roles, &opt, out, &err), AFFECT_OK);
+    assert_true(isnan(out[affect_laban_index("WeightAll")]));
+    assert_true(isnan(out[affect_laban_index("WeightLHand")]));
+    assert_true(isnan(out[affect_laban_index("ShapeDirLHand")]));
+    assert_false(isnan(out[affect_laban_index("WeightRHand")]));
+    affect_part part;
+    assert_int_equal(affect_part_resolve(m, &roles, "Tail", &part, &err), AFFECT_ERR_INVALID);
+    assert_string_equal(err.msg, "\"Tail\" is neither a part (all, torso, head, left_hand, "
+                                 "right_hand, left_foot, right_foot) nor a joint of the motion");
+    assert_int_equal(affect_part_resolve(m, &roles, "Spine", &part, &err), AFFECT_OK);
+    assert_int_equal(part.joints[0], 1);
+    opt.cutoff_hz = -1;
+    assert_int_equal(affect_laban_vector(m, &roles, &opt, out, &err), AFFECT_ERR_INVALID);
+    assert_string_equal(err.msg, "cutoff_hz must be a positive number, got -1");
+    affect_motion_free(m);
+    for (int i = 0; i < AFFECT_LABAN_N; i++)
+        assert_int_equal(affect_laban_index(affect_laban_names[i]), i);
+    assert_int_equal(affect_laban_index("WeightBoth"), -1);
+}
+
+/* The thesis's expectation on our synthetic corpus: angry is Strong and Sudden, sad Light and
+ * Sustained, for every action and performer. */
+static void test_synth_ordering(void **state)
+{
+    for (int a = 0; affect_synth_actions[a]; a++)
+        for (uint64_t seed = 1; seed <= 3; seed++) {
+            double w[3], t[3];
+            static const char *const emotions[3] = {"angry", "neutral", "sad"};
+            for (int e = 0; e < 3; e++) {
+                affect_motion *m = NULL;
+                affect_error err;
+                assert_int_equal(affect_motion_synth(affect_synth_actions[a], emotions[e], seed,
+                                                     NULL, &m, &err),
+                                 AFFECT_OK);
+                affect_roles roles;
+                affect_roles_resolve(m, &roles);
+                double out[AFFECT_LABAN_N];
+                if (affect_laban_vector(m, &roles, NULL, out, &err))
+                    fail_msg("%s", err.msg);
+                w[e] = out[affect_laban_index("WeightAll")];
+                t[e] = out[affect_laban_index("TimeAll")];
+                affect_motion_free(m);
+            }
+            if (!(w[0] > w[1] && w[1] > w[2] && t[0] > t[1] && t[1] > t[2]))
+                fail_msg("%s seed %u: Weight %g %g %g, Time %g %g %g (angry, neutral, sad)",
+                         affect_synth_actions[a], (unsigned)seed, w[0], w[1], w[2], t[0], t[1],
+                         t[2]);
+        }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_lowpass),
+        cmocka_unit_test(test_constant_velocity),
+        cmocka_unit_test(test_circle_curvature),
+        cmocka_unit_test(test_shape_of_a_still_body),
+        cmocka_unit_test(test_hull_components),
+        cmocka_unit_test(test_missing_roles_and_short_motions),
+        cmocka_unit_test(test_synth_ordering),
+    };
+    return cmocka_run_group_tests_name("laban", tests, NULL, NULL);
+}
