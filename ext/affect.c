@@ -6,14 +6,18 @@
  *
  * sqlite3_affect_init checks the host SQLite's version, routes the core library's allocations
  * to sqlite3_malloc64 (so SQLite's memory accounting and fault injection cover them), and
- * registers every SQL function from one table, reporting a failure with the function's name.
+ * registers every SQL function from one table per kind (scalar functions, aggregates),
+ * reporting a failure with the function's name.
  * Every function here is pure (deterministic, no file or table access), so each is
  * SQLITE_DETERMINISTIC | SQLITE_INNOCUOUS.
  */
 #include <string.h>
 
 #include "common.h"
+#include "fn_laban.h"
 #include "fn_motion.h"
+#include "vt_laban.h"
+#include "fn_plot.h"
 #include "affect/strbuf.h"
 
 #include <svm.h>
@@ -120,6 +124,42 @@ static const ax_function functions[] = {
     {"motion_svg", 2, false, ax_motion_svg},
     {"motion_synth", 3, false, ax_motion_synth},
     {"motion_synth", 4, false, ax_motion_synth},
+    {"laban_weight", 1, false, ax_laban_weight},
+    {"laban_weight", 2, false, ax_laban_weight},
+    {"laban_weight", 3, false, ax_laban_weight},
+    {"laban_time", 1, false, ax_laban_time},
+    {"laban_time", 2, false, ax_laban_time},
+    {"laban_time", 3, false, ax_laban_time},
+    {"laban_flow", 1, false, ax_laban_flow},
+    {"laban_flow", 2, false, ax_laban_flow},
+    {"laban_flow", 3, false, ax_laban_flow},
+    {"laban_space", 1, false, ax_laban_space},
+    {"laban_space", 2, false, ax_laban_space},
+    {"laban_space", 3, false, ax_laban_space},
+    {"laban_shape_directional", 2, false, ax_laban_shape_directional},
+    {"laban_shape_directional", 3, false, ax_laban_shape_directional},
+    {"laban_shape_shaping", 1, true, ax_laban_shape_shaping},
+    {"laban_shape_shaping", 2, true, ax_laban_shape_shaping},
+    {"laban_shape_flow", 1, false, ax_laban_shape_flow},
+    {"laban_shape_flow", 2, false, ax_laban_shape_flow},
+    {"laban", 1, true, ax_laban},
+    {"laban", 2, true, ax_laban},
+    {"laban_vector", 1, false, ax_laban_vector},
+    {"laban_vector", 2, false, ax_laban_vector},
+    {"laban_names", 0, true, ax_laban_names},
+};
+
+typedef struct ax_aggregate {
+    const char *name;
+    int n_arg;
+    void (*step)(sqlite3_context *, int, sqlite3_value **);
+    void (*final)(sqlite3_context *);
+} ax_aggregate;
+
+/* Every aggregate function, one row per accepted argument count. */
+static const ax_aggregate aggregates[] = {
+    {"laban_plot", 3, ax_laban_plot_step, ax_laban_plot_final},
+    {"laban_plot", 4, ax_laban_plot_step, ax_laban_plot_final},
 };
 
 #ifdef _WIN32
@@ -152,9 +192,24 @@ int sqlite3_affect_init(sqlite3 *db, char **err, const sqlite3_api_routines *api
             return rc;
         }
     }
+    for (size_t i = 0; i < sizeof aggregates / sizeof aggregates[0]; i++) {
+        const ax_aggregate *a = &aggregates[i];
+        int rc = sqlite3_create_function_v2(db, a->name, a->n_arg, AX_PURE, (void *)a->name, NULL,
+                                            a->step, a->final, NULL);
+        if (rc != SQLITE_OK) {
+            *err = sqlite3_mprintf("affect: cannot register %s/%d: %s", a->name, a->n_arg,
+                                   sqlite3_errmsg(db));
+            return rc;
+        }
+    }
     int rc = ax_register_points(db);
     if (rc != SQLITE_OK) {
         *err = sqlite3_mprintf("affect: cannot register motion_points: %s", sqlite3_errmsg(db));
+        return rc;
+    }
+    rc = ax_register_laban(db);
+    if (rc != SQLITE_OK) {
+        *err = sqlite3_mprintf("affect: cannot register laban: %s", sqlite3_errmsg(db));
         return rc;
     }
     return SQLITE_OK;

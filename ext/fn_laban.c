@@ -1,0 +1,360 @@
+/*
+ * fn_laban.c — SQL wrappers of the Laban Effort and Shape descriptors (core/src/laban.c):
+ * laban_weight, laban_time, laban_flow, laban_space, laban_shape_directional,
+ * laban_shape_shaping, laban_shape_flow, laban, laban_names, laban_vector.
+ *
+ * Options shared by all (a JSON object, last argument): cutoff_hz (low-pass cut-off, 6),
+ * up ("y"), roles ({"left_hand": "LWrist", …}), missing ("error" | "null": a component that
+ * needs an unresolved role or more frames gives NULL instead of an error). Each function adds
+ * its own: method, per_second, hull, speed_floor, max_ratio. See docs/reference.md.
+ */
+#include <math.h>
+#include <string.h>
+
+#include "fn_laban.h"
+
+#include "affect/laban.h"
+#include "affect/strbuf.h"
+
+/* Parsed arguments common to every laban_* function. */
+typedef struct laban_call {
+    affect_motion *m;
+    ax_opts opts;
+    affect_roles roles;
+    affect_laban_options lo;
+} laban_call;
+
+static void call_free(laban_call *c)
+{
+    ax_opts_free(&c->opts);
+    affect_motion_free(c->m);
+}
+
+/* Decodes the motion (argument 0) and the options (argument opt_index, if present), checks the
+ * keys against allowed, and fills the common options. AX_NULL: the result is NULL. */
+static ax_arg call_begin(sqlite3_context *ctx, int argc, sqlite3_value **argv, int opt_index,
+                         const char *const *allowed, laban_call *c)
+{
+    static const char *const missing[] = {"error", "null", NULL};
+    static const char *const hulls[] = {"convex", "box", NULL};
+    memset(c, 0, sizeof *c);
+    affect_laban_options_default(&c->lo);
+    ax_arg r = ax_arg_motion(ctx, argv, 0, &c->m);
+    if (r != AX_OK)
+        return r;
+    int miss = 0, hull = 0;
+    if (ax_opts_parse(ctx, argc, argv, opt_index, allowed, &c->opts) ||
+        ax_opt_number(ctx, &c->opts, "cutoff_hz", &c->lo.cutoff_hz) ||
+        ax_opt_up(ctx, &c->opts, &c->lo.up_axis) ||
+        ax_opt_enum(ctx, &c->opts, "missing", missing, &miss) ||
+        ax_opt_enum(ctx, &c->opts, "hull", hulls, &hull) ||
+        ax_opt_bool(ctx, &c->opts, "per_second", &c->lo.time_per_second) ||
+        ax_opt_number(ctx, &c->opts, "speed_floor", &c->lo.speed_floor) ||
+        ax_opt_number(ctx, &c->opts, "max_ratio", &c->lo.max_ratio) ||
+        ax_opt_roles(ctx, &c->opts, c->m, &c->roles)) {
+        call_free(c);
+        return AX_ERROR;
+    }
+    c->lo.missing_null = miss == 1;
+    c->lo.hull_box = hull == 1;
+    return AX_OK;
+}
+
+/* Sets the error of a failed computation; a missing role or a short motion gives NULL when
+ * the caller asked for {"missing": "null"}. */
+static void laban_error(sqlite3_context *ctx, const laban_call *c, const affect_error *err)
+{
+    if (c->lo.missing_null && (err->status == AFFECT_ERR_MISSING || err->status == AFFECT_ERR_RANGE)) {
+        sqlite3_result_null(ctx);
+        return;
+    }
+    if (err->status == AFFECT_ERR_MISSING) {
+        ax_errorf(ctx, "%s (assign it with {\"roles\": {…}}, or use {\"missing\": \"null\"})",
+                  err->msg);
+        return;
+    }
+    ax_error(ctx, err);
+}
+
+static void result_value(sqlite3_context *ctx, const laban_call *c, affect_status st, double v,
+                         const affect_error *err)
+{
+    if (st)
+        laban_error(ctx, c, err);
+    else if (isnan(v))
+        sqlite3_result_null(ctx);
+    else
+        sqlite3_result_double(ctx, v);
+}
+
+/* The part argument (index i, default "all"): all six parts, or one. */
+static ax_arg parts_arg(sqlite3_context *ctx, int argc, sqlite3_value **argv, int i,
+                        const laban_call *c, affect_part parts[6], uint32_t *n,
+                        affect_error *err, affect_status *st)
+{
+    const char *name = "all";
+    size_t len;
+    if (i < argc) {
+        ax_arg r = ax_arg_text(ctx, argv, i, &name, &len);
+        if (r != AX_OK)
+            return r;
+    }
+    if (strcmp(name, "all") == 0) {
+        *n = 6;
+        *st = affect_parts_all(c->m, &c->roles, parts, err);
+    } else {
+        *n = 1;
+        *st = affect_part_resolve(c->m, &c->roles, name, &parts[0], err);
+    }
+    return AX_OK;
+}
+
+static const char *const weight_keys[] = {"method", "cutoff_hz", "up", "roles", "missing", NULL};
+static const char *const time_keys[] = {"method", "per_second", "cutoff_hz", "up", "roles",
+                                        "missing", NULL};
+static const char *const flow_keys[] = {"cutoff_hz", "up", "roles", "missing", NULL};
+static const char *const space_keys[] = {"method", "max_ratio", "cutoff_hz", "up", "roles",
+                                         "missing", NULL};
+
+typedef enum effort { EFFORT_WEIGHT, EFFORT_TIME, EFFORT_FLOW, EFFORT_SPACE } effort;
+
+/* laban_weight / laban_time / laban_flow / laban_space (motion [, part [, options]]). */
+static void effort_fn(sqlite3_context *ctx, int argc, sqlite3_value **argv, effort which)
+{
+    static const char *const const_keys_none[] = {NULL};
+    static const char *const weight_methods[] = {"peak", "deceleration", NULL};
+    static const char *const time_methods[] = {"peak", "accumulated", NULL};
+    static const char *const space_methods[] = {"ratio", "peaks", NULL};
+    const char *const *keys = which == EFFORT_WEIGHT ? weight_keys
+                              : which == EFFORT_TIME ? time_keys
+                              : which == EFFORT_FLOW ? flow_keys
+                              : which == EFFORT_SPACE ? space_keys
+                                                      : const_keys_none;
+    laban_call c;
+    if (call_begin(ctx, argc, argv, 2, keys, &c) != AX_OK)
+        return;
+    int method = 0;
+    const char *const *methods = which == EFFORT_WEIGHT ? weight_methods
+                                 : which == EFFORT_TIME ? time_methods
+                                                        : space_methods;
+    affect_part parts[6];
+    uint32_t n = 0;
+    affect_error err;
+    affect_status st = AFFECT_OK;
+    double v = NAN;
+    if ((which != EFFORT_FLOW && ax_opt_enum(ctx, &c.opts, "method", methods, &method)) ||
+        parts_arg(ctx, argc, argv, 1, &c, parts, &n, &err, &st) != AX_OK)
+        goto done;
+    affect_laban_method q = method == 1 ? AFFECT_LABAN_Q2 : AFFECT_LABAN_Q1;
+    if (!st) {
+        switch (which) {
+        case EFFORT_WEIGHT:
+            st = affect_laban_weight(c.m, parts, n, q, &c.lo, &v, &err);
+            break;
+        case EFFORT_TIME:
+            st = affect_laban_time(c.m, parts, n, q, &c.lo, &v, &err);
+            break;
+        case EFFORT_FLOW:
+            st = affect_laban_flow(c.m, parts, n, &c.lo, &v, &err);
+            break;
+        case EFFORT_SPACE:
+            if (method == 1) { /* peaks of v_hand · v_torso: the part is the hand */
+                if (n != 1) {
+                    ax_errorf(ctx, "method \"peaks\" needs one hand part (left_hand, right_hand "
+                                   "or a joint), not \"all\"");
+                    goto done;
+                }
+                st = affect_part_resolve(c.m, &c.roles, "torso", &parts[1], &err);
+                if (!st)
+                    st = affect_laban_space(c.m, parts, 2, AFFECT_LABAN_Q1, &c.lo, &v, &err);
+            } else {
+                st = affect_laban_space(c.m, parts, n, AFFECT_LABAN_Q2, &c.lo, &v, &err);
+            }
+            break;
+        }
+    }
+    result_value(ctx, &c, st, v, &err);
+done:
+    call_free(&c);
+}
+
+void ax_laban_weight(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    effort_fn(ctx, argc, argv, EFFORT_WEIGHT);
+}
+
+void ax_laban_time(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    effort_fn(ctx, argc, argv, EFFORT_TIME);
+}
+
+void ax_laban_flow(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    effort_fn(ctx, argc, argv, EFFORT_FLOW);
+}
+
+void ax_laban_space(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    effort_fn(ctx, argc, argv, EFFORT_SPACE);
+}
+
+static const char *const directional_keys[] = {"speed_floor", "cutoff_hz", "up", "roles",
+                                               "missing", NULL};
+
+/* laban_shape_directional(motion, hand [, options]): hand is 'left', 'right' or a joint. */
+void ax_laban_shape_directional(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    laban_call c;
+    const char *hand;
+    size_t len;
+    if (ax_arg_text(ctx, argv, 1, &hand, &len) != AX_OK ||
+        call_begin(ctx, argc, argv, 2, directional_keys, &c) != AX_OK)
+        return;
+    const char *part_name = strcmp(hand, "left") == 0    ? "left_hand"
+                            : strcmp(hand, "right") == 0 ? "right_hand"
+                                                         : hand;
+    affect_part part;
+    affect_error err;
+    double v = NAN;
+    affect_status st = affect_part_resolve(c.m, &c.roles, part_name, &part, &err);
+    if (!st)
+        st = affect_laban_shape_directional(c.m, &part, &c.lo, &v, &err);
+    result_value(ctx, &c, st, v, &err);
+    call_free(&c);
+}
+
+static const char *const shaping_keys[] = {"up", "roles", "missing", NULL};
+
+void ax_laban_shape_shaping(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    laban_call c;
+    if (call_begin(ctx, argc, argv, 1, shaping_keys, &c) != AX_OK)
+        return;
+    double v[3];
+    affect_error err;
+    affect_status st = affect_laban_shape_shaping(c.m, &c.roles, &c.lo, v, &err);
+    if (st) {
+        laban_error(ctx, &c, &err);
+    } else {
+        affect_strbuf sb;
+        affect_strbuf_init(&sb);
+        affect_strbuf_puts(&sb, "{\"vertical\":");
+        affect_strbuf_double(&sb, v[0]);
+        affect_strbuf_puts(&sb, ",\"sagittal\":");
+        affect_strbuf_double(&sb, v[1]);
+        affect_strbuf_puts(&sb, ",\"horizontal\":");
+        affect_strbuf_double(&sb, v[2]);
+        affect_strbuf_putc(&sb, '}');
+        char *text;
+        size_t len;
+        if (affect_strbuf_finish(&sb, &text, &len, &err))
+            sqlite3_result_error_nomem(ctx);
+        else
+            ax_result_json(ctx, text, len);
+    }
+    call_free(&c);
+}
+
+static const char *const shape_flow_keys[] = {"hull", "roles", NULL};
+
+void ax_laban_shape_flow(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    laban_call c;
+    if (call_begin(ctx, argc, argv, 1, shape_flow_keys, &c) != AX_OK)
+        return;
+    double v = NAN;
+    affect_error err;
+    affect_status st = affect_laban_shape_flow(c.m, &c.lo, &v, &err);
+    result_value(ctx, &c, st, v, &err);
+    call_free(&c);
+}
+
+static const char *const vector_keys[] = {"cutoff_hz", "up", "roles", "missing", "hull",
+                                          "per_second", "speed_floor", "max_ratio", NULL};
+
+/* The 27 components of a motion, or an error already set on ctx (returns false). */
+static bool all_components(sqlite3_context *ctx, int argc, sqlite3_value **argv, laban_call *c,
+                           double out[AFFECT_LABAN_N])
+{
+    if (call_begin(ctx, argc, argv, 1, vector_keys, c) != AX_OK)
+        return false;
+    affect_error err;
+    if (affect_laban_vector(c->m, &c->roles, &c->lo, out, &err)) {
+        if (err.status == AFFECT_ERR_MISSING)
+            ax_errorf(ctx, "%s (assign it with {\"roles\": {…}}, or use {\"missing\": \"null\"})",
+                      err.msg);
+        else
+            ax_error(ctx, &err);
+        call_free(c);
+        return false;
+    }
+    return true;
+}
+
+/* laban(motion [, options]) → JSON object of the 27 components (null where missing). */
+void ax_laban(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    laban_call c;
+    double v[AFFECT_LABAN_N];
+    if (!all_components(ctx, argc, argv, &c, v))
+        return;
+    affect_strbuf sb;
+    affect_strbuf_init(&sb);
+    for (int i = 0; i < AFFECT_LABAN_N; i++) {
+        affect_strbuf_putc(&sb, i ? ',' : '{');
+        affect_strbuf_json_string(&sb, affect_laban_names[i]);
+        affect_strbuf_putc(&sb, ':');
+        affect_strbuf_double(&sb, v[i]); /* NaN is written as null */
+    }
+    affect_strbuf_putc(&sb, '}');
+    char *text;
+    size_t len;
+    affect_error err;
+    if (affect_strbuf_finish(&sb, &text, &len, &err))
+        sqlite3_result_error_nomem(ctx);
+    else
+        ax_result_json(ctx, text, len);
+    call_free(&c);
+}
+
+/* laban_vector(motion [, options]) → 27 little-endian float32 (the sqlite-vec convention);
+ * a missing component is NaN. */
+void ax_laban_vector(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    laban_call c;
+    double v[AFFECT_LABAN_N];
+    if (!all_components(ctx, argc, argv, &c, v))
+        return;
+    unsigned char *blob = sqlite3_malloc(AFFECT_LABAN_N * 4);
+    if (!blob) {
+        sqlite3_result_error_nomem(ctx);
+    } else {
+        for (int i = 0; i < AFFECT_LABAN_N; i++) {
+            float f = (float)v[i];
+            uint32_t u;
+            memcpy(&u, &f, 4);
+            for (int b = 0; b < 4; b++)
+                blob[i * 4 + b] = (unsigned char)(u >> (8 * b));
+        }
+        sqlite3_result_blob(ctx, blob, AFFECT_LABAN_N * 4, sqlite3_free);
+    }
+    call_free(&c);
+}
+
+void ax_laban_names(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    affect_strbuf sb;
+    affect_strbuf_init(&sb);
+    for (int i = 0; i < AFFECT_LABAN_N; i++) {
+        affect_strbuf_putc(&sb, i ? ',' : '[');
+        affect_strbuf_json_string(&sb, affect_laban_names[i]);
+    }
+    affect_strbuf_putc(&sb, ']');
+    char *text;
+    size_t len;
+    affect_error err;
+    if (affect_strbuf_finish(&sb, &text, &len, &err))
+        sqlite3_result_error_nomem(ctx);
+    else
+        ax_result_json(ctx, text, len);
+}
