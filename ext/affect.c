@@ -81,13 +81,7 @@ static void fn_build_info(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     affect_strbuf_puts(&sb, ",\"compile_flags\":");
     affect_strbuf_json_string(&sb, AFFECT_COMPILE_FLAGS);
     affect_strbuf_putc(&sb, '}');
-    char *text = NULL;
-    size_t len = 0;
-    affect_error err;
-    if (affect_strbuf_finish(&sb, &text, &len, &err))
-        sqlite3_result_error_nomem(ctx);
-    else
-        ax_result_json(ctx, text, len);
+    ax_result_json_buffer(ctx, &sb);
 }
 
 typedef struct ax_function {

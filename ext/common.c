@@ -173,6 +173,17 @@ void ax_result_json(sqlite3_context *ctx, char *text, size_t len)
     sqlite3_result_subtype(ctx, AX_JSON_SUBTYPE);
 }
 
+void ax_result_json_buffer(sqlite3_context *ctx, affect_strbuf *sb)
+{
+    char *text;
+    size_t len;
+    affect_error err;
+    if (affect_strbuf_finish(sb, &text, &len, &err))
+        sqlite3_result_error_nomem(ctx);
+    else
+        ax_result_json(ctx, text, len);
+}
+
 /* ---- options ---- */
 
 ax_arg ax_opts_parse(sqlite3_context *ctx, int argc, sqlite3_value **argv, int i,

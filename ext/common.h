@@ -65,6 +65,11 @@ void ax_result_text(sqlite3_context *ctx, char *text, size_t len);
 /* The same, marked as JSON (subtype 'J'), so json_object() nests it. */
 void ax_result_json(sqlite3_context *ctx, char *text, size_t len);
 
+/* Finishes a text buffer built by the core and sets it as a JSON result (SQLITE_NOMEM if any
+ * append failed). */
+struct affect_strbuf;
+void ax_result_json_buffer(sqlite3_context *ctx, struct affect_strbuf *sb);
+
 /* ---- JSON options ---- */
 typedef struct ax_opts {
     affect_json_doc *doc;

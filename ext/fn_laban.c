@@ -121,15 +121,13 @@ typedef enum effort { EFFORT_WEIGHT, EFFORT_TIME, EFFORT_FLOW, EFFORT_SPACE } ef
 /* laban_weight / laban_time / laban_flow / laban_space (motion [, part [, options]]). */
 static void effort_fn(sqlite3_context *ctx, int argc, sqlite3_value **argv, effort which)
 {
-    static const char *const const_keys_none[] = {NULL};
     static const char *const weight_methods[] = {"peak", "deceleration", NULL};
     static const char *const time_methods[] = {"peak", "accumulated", NULL};
     static const char *const space_methods[] = {"ratio", "peaks", NULL};
     const char *const *keys = which == EFFORT_WEIGHT ? weight_keys
                               : which == EFFORT_TIME ? time_keys
                               : which == EFFORT_FLOW ? flow_keys
-                              : which == EFFORT_SPACE ? space_keys
-                                                      : const_keys_none;
+                                                     : space_keys;
     laban_call c;
     if (call_begin(ctx, argc, argv, 2, keys, &c) != AX_OK)
         return;
@@ -245,12 +243,7 @@ void ax_laban_shape_shaping(sqlite3_context *ctx, int argc, sqlite3_value **argv
         affect_strbuf_puts(&sb, ",\"horizontal\":");
         affect_strbuf_double(&sb, v[2]);
         affect_strbuf_putc(&sb, '}');
-        char *text;
-        size_t len;
-        if (affect_strbuf_finish(&sb, &text, &len, &err))
-            sqlite3_result_error_nomem(ctx);
-        else
-            ax_result_json(ctx, text, len);
+        ax_result_json_buffer(ctx, &sb);
     }
     call_free(&c);
 }
@@ -307,13 +300,7 @@ void ax_laban(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         affect_strbuf_double(&sb, v[i]); /* NaN is written as null */
     }
     affect_strbuf_putc(&sb, '}');
-    char *text;
-    size_t len;
-    affect_error err;
-    if (affect_strbuf_finish(&sb, &text, &len, &err))
-        sqlite3_result_error_nomem(ctx);
-    else
-        ax_result_json(ctx, text, len);
+    ax_result_json_buffer(ctx, &sb);
     call_free(&c);
 }
 
@@ -350,11 +337,5 @@ void ax_laban_names(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         affect_strbuf_json_string(&sb, affect_laban_names[i]);
     }
     affect_strbuf_putc(&sb, ']');
-    char *text;
-    size_t len;
-    affect_error err;
-    if (affect_strbuf_finish(&sb, &text, &len, &err))
-        sqlite3_result_error_nomem(ctx);
-    else
-        ax_result_json(ctx, text, len);
+    ax_result_json_buffer(ctx, &sb);
 }

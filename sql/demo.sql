@@ -42,6 +42,44 @@ SELECT m.emotion, printf('%.3f', max(p.y)) AS max_right_hand_y
  WHERE m.source = 'synth' AND m.content = 'knock' AND m.performer = 'synth-1' AND p.name = 'Hand_R'
  GROUP BY m.emotion ORDER BY m.emotion;
 
+.print
+.print '== Laban Effort by emotion (means; synthetic corpus in m and s) =='
+SELECT emotion, printf('%.2f', avg(laban_weight(motion))) AS WeightAll,
+       printf('%.1f', avg(laban_time(motion))) AS TimeAll,
+       printf('%.0f', avg(laban_flow(motion))) AS FlowAll
+  FROM motions WHERE source = 'synth'
+ GROUP BY emotion ORDER BY avg(laban_weight(motion)) DESC;
+
+-- A Laban index over one source (the real corpus when imported; units must not be mixed in
+-- one index, since distances are standardized over it: the corpus is in cm, motion_synth in m).
+CREATE TABLE indexed(id INTEGER PRIMARY KEY, name TEXT, content TEXT, emotion TEXT, motion BLOB);
+INSERT INTO indexed
+SELECT id, name, content, emotion, motion FROM motions
+ WHERE source = coalesce((SELECT source FROM motions WHERE source <> 'synth'
+                            AND emotion IN ('angry', 'happy', 'sad', 'normal', 'neutral')
+                           GROUP BY source ORDER BY count(*) DESC LIMIT 1), 'synth')
+   AND emotion IN ('angry', 'happy', 'sad', 'normal', 'neutral');
+CREATE VIRTUAL TABLE motion_laban USING laban(content=indexed, motion=motion, label=emotion);
+
+.print
+.print '== Laban nearest neighbours: the 3 angry and the 3 sad motions nearest to a neutral wave =='
+SELECT (SELECT name FROM indexed WHERE content IN ('bye', 'wave')
+          AND emotion IN ('normal', 'neutral') ORDER BY name LIMIT 1) AS query;
+SELECT i.name, l.label, printf('%.3f', l.distance) AS distance
+  FROM motion_laban AS l JOIN indexed AS i ON i.id = l.rowid
+ WHERE l.query = (SELECT id FROM indexed WHERE content IN ('bye', 'wave')
+                    AND emotion IN ('normal', 'neutral') ORDER BY name LIMIT 1)
+   AND l.label IN ('angry', 'sad') AND l.k = 3
+ ORDER BY l.label, l.distance;
+
+.print
+.print "== the thesis's ε-neighbourhood (radius 0.1 on Time and Flow), sad motions =="
+SELECT i.name, printf('%.3f', l.distance) AS distance
+  FROM motion_laban AS l JOIN indexed AS i ON i.id = l.rowid
+ WHERE l.query = (SELECT id FROM indexed WHERE content IN ('bye', 'wave')
+                    AND emotion IN ('normal', 'neutral') ORDER BY name LIMIT 1)
+   AND l.label = 'sad' AND l.radius = 0.1 AND l.components = '["TimeAll","FlowAll"]';
+
 -- ---- the HTML page ----
 .headers off
 .mode list
@@ -79,6 +117,13 @@ SELECT '<h3>' || content || '</h3>' || group_concat(
          ORDER BY content, CASE emotion WHEN 'normal' THEN 0 WHEN 'happy' THEN 1
                                         WHEN 'sad' THEN 2 ELSE 3 END)
  GROUP BY content ORDER BY content;
+SELECT '<h2>Laban Weight and Time by emotion (thesis Fig. 5.1)</h2><p>Each point is a motion of the '
+    || 'indexed source; crosses show each emotion''s mean ± 1 sd (log axes). Drawn by '
+    || '<code>laban_plot(laban_weight(motion), laban_time(motion), emotion, …)</code>.</p>'
+    || laban_plot(WeightAll, TimeAll, label,
+                  '{"title":"Laban Weight vs Time","x_label":"WeightAll (peak kinetic energy)",'
+                  || '"y_label":"TimeAll (peak acceleration)","log_x":true,"log_y":true,"means":true}')
+  FROM motion_laban;
 SELECT '</body></html>';
 .output stdout
 SELECT 'wrote demo.html';

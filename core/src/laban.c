@@ -269,19 +269,27 @@ static double dist3(const double *a, const double *b)
     return norm3(d);
 }
 
-static double weight_q1(const affect_kinematics *ks, uint32_t n)
+/* max over frames of Σ_k f(x_k(t)), x = vel with f = ‖·‖² (Weight Q1) or acc with f = ‖·‖
+ * (Time Q1). */
+static double peak_sum(const affect_kinematics *ks, uint32_t n, bool of_acc)
 {
     double best = 0;
     for (uint32_t t = 0; t < ks[0].n_frames; t++) {
-        double e = 0;
+        double sum = 0;
         for (uint32_t k = 0; k < n; k++) {
-            const double *v = ks[k].vel + (size_t)t * 3;
-            e += v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+            const double *x = (of_acc ? ks[k].acc : ks[k].vel) + (size_t)t * 3;
+            double sq = x[0] * x[0] + x[1] * x[1] + x[2] * x[2];
+            sum += of_acc ? sqrt(sq) : sq;
         }
-        if (e > best)
-            best = e;
+        if (sum > best)
+            best = sum;
     }
     return best;
+}
+
+static double weight_q1(const affect_kinematics *ks, uint32_t n)
+{
+    return peak_sum(ks, n, false);
 }
 
 static double weight_q2(const affect_kinematics *ks, uint32_t n)
@@ -303,15 +311,7 @@ static double weight_q2(const affect_kinematics *ks, uint32_t n)
 
 static double time_q1(const affect_kinematics *ks, uint32_t n)
 {
-    double best = 0;
-    for (uint32_t t = 0; t < ks[0].n_frames; t++) {
-        double s = 0;
-        for (uint32_t k = 0; k < n; k++)
-            s += norm3(ks[k].acc + (size_t)t * 3);
-        if (s > best)
-            best = s;
-    }
-    return best;
+    return peak_sum(ks, n, true);
 }
 
 /* Σ_k Σ_{t≥1} ‖x_k(t) − x_k(t−1)‖ · fps for x = vel (Time Q2) or acc (Flow). */
@@ -600,17 +600,11 @@ affect_status affect_laban_shape_shaping(const affect_motion *m, const affect_ro
     int u = opt->up_axis, a = (u + 1) % 3, b = (u + 2) % 3;
 
     /* forward = lateral × up in the first frame, horizontal and unit length */
-    int32_t l = roles->joint[AFFECT_ROLE_LEFT_HIP], r = roles->joint[AFFECT_ROLE_RIGHT_HIP];
-    if (l < 0 || r < 0) {
-        l = roles->joint[AFFECT_ROLE_LEFT_SHOULDER];
-        r = roles->joint[AFFECT_ROLE_RIGHT_SHOULDER];
-    }
-    if (l < 0 || r < 0)
+    double lat[3];
+    if (!affect_roles_lateral(m, roles, 0, lat))
         return affect_fail(err, AFFECT_ERR_MISSING,
                            "no joints have the left_hip/right_hip (or left_shoulder/"
                            "right_shoulder) roles (the sagittal direction)");
-    const float *pl = affect_motion_at(m, 0, (uint32_t)l), *pr = affect_motion_at(m, 0, (uint32_t)r);
-    double lat[3] = {(double)pl[0] - pr[0], (double)pl[1] - pr[1], (double)pl[2] - pr[2]};
     double up[3] = {0, 0, 0}, fwd[3];
     up[u] = 1;
     fwd[0] = lat[1] * up[2] - lat[2] * up[1];

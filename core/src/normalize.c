@@ -62,18 +62,13 @@ affect_status affect_normalize_transform_compute(const affect_motion *m, const a
                 tf->origin[a] = rp[a];
 
     if (opt->heading) {
-        int32_t l = roles->joint[AFFECT_ROLE_LEFT_HIP], r = roles->joint[AFFECT_ROLE_RIGHT_HIP];
-        if (l < 0 || r < 0) {
-            l = roles->joint[AFFECT_ROLE_LEFT_SHOULDER];
-            r = roles->joint[AFFECT_ROLE_RIGHT_SHOULDER];
-        }
-        if (l < 0 || r < 0)
+        double lat[3];
+        if (!affect_roles_lateral(m, roles, 0, lat))
             return affect_fail(err, AFFECT_ERR_MISSING,
                                "cannot find the heading: the left/right hip and shoulder roles are "
                                "not resolved (set them with \"roles\", or \"heading\": false)");
-        const float *pl = affect_motion_at(m, 0, (uint32_t)l), *pr = affect_motion_at(m, 0, (uint32_t)r);
         int a = (u + 1) % 3, b = (u + 2) % 3;
-        double ha = (double)pl[a] - pr[a], hb = (double)pl[b] - pr[b];
+        double ha = lat[a], hb = lat[b];
         if (hypot(ha, hb) < 1e-9)
             return affect_fail(err, AFFECT_ERR_INVALID,
                                "cannot find the heading: left and right joints coincide "

@@ -282,3 +282,20 @@ affect_status affect_roles_set(const affect_motion *m, affect_roles *roles, cons
     roles->joint[r] = j;
     return AFFECT_OK;
 }
+
+bool affect_roles_lateral(const affect_motion *m, const affect_roles *roles, uint32_t frame,
+                          double out[3])
+{
+    int32_t l = roles->joint[AFFECT_ROLE_LEFT_HIP], r = roles->joint[AFFECT_ROLE_RIGHT_HIP];
+    if (l < 0 || r < 0) {
+        l = roles->joint[AFFECT_ROLE_LEFT_SHOULDER];
+        r = roles->joint[AFFECT_ROLE_RIGHT_SHOULDER];
+    }
+    if (l < 0 || r < 0)
+        return false;
+    const float *pl = affect_motion_at(m, frame, (uint32_t)l);
+    const float *pr = affect_motion_at(m, frame, (uint32_t)r);
+    for (int a = 0; a < 3; a++)
+        out[a] = (double)pl[a] - pr[a];
+    return true;
+}

@@ -39,9 +39,29 @@ else
     echo "SKIP: the real corpus is absent: its import is not checked"
 fi
 
+# the trigger template keeps an index over motions current
+q "CREATE VIRTUAL TABLE motion_laban USING laban(content=motions, motion=motion, label=emotion)"
+q < "$src/sql/laban_triggers.sql"
+before=$(q "SELECT count(*) FROM motion_laban")
+q "INSERT INTO motions(name, content, emotion, motion, source) VALUES('extra', 'wave', 'sad', motion_synth('wave', 'sad', 99), 'synth')"
+q "UPDATE motions SET emotion = 'angry' WHERE name = 'extra'"
+[ "$(q "SELECT count(*) || '|' || label FROM motion_laban WHERE rowid = (SELECT id FROM motions WHERE name = 'extra')")" = "1|angry" ] ||
+    fail "the triggers of sql/laban_triggers.sql keep the index current"
+q "DELETE FROM motions WHERE name = 'extra'"
+[ "$(q "SELECT count(*) FROM motion_laban")" = "$before" ] || fail "a deleted row leaves the index"
+q "INSERT INTO motion_laban(motion_laban) VALUES('check')" || fail "the index is stale after trigger updates"
+q "DROP TABLE motion_laban; DROP TRIGGER motions_laban_insert; DROP TRIGGER motions_laban_update; DROP TRIGGER motions_laban_delete"
+
 q < "$src/sql/demo.sql" > summary.txt
 grep -q "what demo.db holds" summary.txt || fail "demo summary"
 grep -q "wrote demo.html" summary.txt || fail "demo page"
 [ "$(grep -o '<svg' demo.html | wc -l)" -ge 16 ] || fail "demo.html has too few SVG previews"
 grep -q '</html>' demo.html || fail "demo.html is incomplete"
+grep -q "Laban nearest neighbours" summary.txt || fail "demo: nearest neighbours"
+grep -q "Laban Weight vs Time" demo.html || fail "demo: the Weight vs Time figure"
+if [ -n "$corpus" ] && [ -d "$corpus" ]; then
+    q < "$src/sql/laban_corpus.sql" > laban.md
+    [ "$(grep -c '^| ' laban.md)" = 13 ] || fail "sql/laban_corpus.sql: the table has $(grep -c '^| ' laban.md) lines"
+    grep -q "angry > sad on WeightAll in 11 of 11 contents" laban.md || fail "sql/laban_corpus.sql: ordering line"
+fi
 echo "scripts: 1 passed, 0 failed"

@@ -62,6 +62,12 @@ void affect_roles_resolve(const affect_motion *m, affect_roles *roles);
 affect_status affect_roles_set(const affect_motion *m, affect_roles *roles, const char *role_name,
                                const char *joint_name, affect_error *err);
 
+/* The body's lateral vector left − right at a frame: from the left_hip/right_hip roles, or the
+ * shoulders when a hip is unresolved (the heading used by normalization and Shape Shaping).
+ * Returns false when neither pair is resolved. */
+bool affect_roles_lateral(const affect_motion *m, const affect_roles *roles, uint32_t frame,
+                          double out[3]);
+
 #ifdef __cplusplus
 }
 #endif
