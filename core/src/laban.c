@@ -667,18 +667,27 @@ static affect_status shape_flow(const affect_motion *m, int32_t pelvis,
     uint32_t nb = body_joints(m, pelvis, joints);
     double best = 0;
     for (uint32_t t = 0; t < m->n_frames; t++) {
-        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
         for (uint32_t i = 0; i < nb; i++) {
             const float *p = affect_motion_at(m, t, (uint32_t)joints[i]);
-            for (int a = 0; a < 3; a++) {
-                xyz[3 * i + a] = p[a];
-                lo[a] = fmin(lo[a], p[a]);
-                hi[a] = fmax(hi[a], p[a]);
-            }
+            xyz[3 * i] = p[0], xyz[3 * i + 1] = p[1], xyz[3 * i + 2] = p[2];
         }
-        double v = opt->hull_box ? (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2])
-                                 : affect_hull3d_volume(hull, xyz, nb);
-        best = fmax(best, v);
+        double v;
+        if (opt->hull_box) {
+            /* positions are validated finite: plain comparisons (gcc does not inline fmin and
+             * fmax without fast math) */
+            double lo[3] = {xyz[0], xyz[1], xyz[2]}, hi[3] = {xyz[0], xyz[1], xyz[2]};
+            for (uint32_t i = 1; i < nb; i++)
+                for (int a = 0; a < 3; a++) {
+                    double c = xyz[3 * i + a];
+                    lo[a] = c < lo[a] ? c : lo[a];
+                    hi[a] = c > hi[a] ? c : hi[a];
+                }
+            v = (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
+        } else {
+            v = affect_hull3d_volume(hull, xyz, nb);
+        }
+        if (v > best)
+            best = v;
     }
     *out = best;
 done:

@@ -1,15 +1,18 @@
 #!/usr/bin/env bash
 # tests/bench/run.sh — build the benchmarks in Release and run them on one core.
 #
-# Usage: bash tests/bench/run.sh [extra arguments for bench_import, e.g. a corpus directory]
+# Usage: bash tests/bench/run.sh [extra arguments for the corpus benchmarks, bench_import and
+#                                   bench_laban, e.g. a corpus directory]
 #
-# Configures build-bench (-DCMAKE_BUILD_TYPE=Release -DAFFECT_WERROR=ON), builds the bench
-# targets, prints the machine (CPU, memory, OS, compiler, flags) and runs each benchmark pinned
-# to CPU 0 with taskset when it is available. Record the output in docs/BENCHMARKS.md.
+# Configures build-bench (-DCMAKE_BUILD_TYPE=Release -DAFFECT_WERROR=ON; AFFECT_BENCH_BUILD names
+# another build directory), builds the bench targets, prints the machine (CPU, memory, OS,
+# compiler, flags) and runs each benchmark pinned to CPU 0 with taskset when it is available:
+# bench_import and bench_laban (corpus), then bench_knn (the built module, no arguments).
+# Record the output in docs/BENCHMARKS.md.
 set -euo pipefail
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
-build="$root/build-bench"
+build="${AFFECT_BENCH_BUILD:-$root/build-bench}"
 
 cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DAFFECT_WERROR=ON >/dev/null
 cmake --build "$build" -j"$(nproc)" --target affect_benches
@@ -32,8 +35,14 @@ echo "flags:    Release: $(sed -n 's/^CMAKE_C_FLAGS_RELEASE:[A-Z]*=//p' "$build/
 echo "pinned:   ${pin[*]:-no (taskset not available)}"
 echo
 
-for bench in bench_import; do
+for bench in bench_import bench_laban; do
     echo "== $bench"
     "${pin[@]}" "$build/tests/bench/$bench" "$@"
+    echo
+done
+
+for bench in bench_knn; do
+    echo "== $bench"
+    "${pin[@]}" "$build/tests/bench/$bench"
     echo
 done

@@ -1,0 +1,676 @@
+/*
+ * bench_laban.c — throughput of the 27 Laban descriptors (affect_laban_vector) in frames per
+ * second on one core, next to the bound it cannot beat (reading every position once), with a
+ * breakdown of where the time goes.
+ *
+ * Usage:
+ *     bench_laban [corpus directory] [--repeat N]
+ *     bash tests/bench/run.sh            # Release build, pinned to one core, prints the results
+ * The directory defaults to AFFECT_BENCH_CORPUS (${AFFECT_SHARED_DIR}/corpora/bandai-namco-1/
+ * data, set by tests/bench/CMakeLists.txt); every *.bvh file in it is used. When it is absent
+ * the program says so and measures only the synthetic data set (exit status 0).
+ *
+ * Two data sets, both built in memory before any timing:
+ *     corpus     every *.bvh parsed once with affect_bvh_parse (27 joints: joint_Root, 21 body
+ *                joints and 5 end sites; the hulls use the 26 that are not the pelvis's
+ *                ancestors, as laban.c does);
+ *     synthetic  one motion of at least SYNTH_MIN_FRAMES frames: affect_motion_synth clips
+ *                (every action × emotion, seeds 1, 2, …, 30 fps) of the same 26-joint skeleton
+ *                copied one after another into a motion made with affect_motion_create. The
+ *                joins are jumps, which changes nothing for the cost.
+ * Kernels, each a pass over a data set (every motion once):
+ *     read bound      sum every float of every position (16 independent accumulators, so gcc
+ *                     vectorises it without reassociation): the cost of merely reading the
+ *                     input, the bound for any per-frame descriptor;
+ *     laban vector    affect_laban_vector with the default options (3-D convex hull);
+ *     vector (box)    the same with opt.hull_box = true (bounding box, no 3-D hull);
+ * and the pieces of the vector, timed separately with the same inputs:
+ *     kinematics x6   affect_kinematics_compute for the six parts (torso, head, hands, feet:
+ *                     centroid, three filtered derivatives) and affect_kinematics_free;
+ *     hull3d volume   per frame: gather the body joints into doubles, affect_hull3d_volume;
+ *     flow (box)      affect_laban_shape_flow with hull_box: the per-frame gather and bounding
+ *                     box that Shape Flow computes in both modes (with the hull it also keeps
+ *                     the box, so the default pays for this and the hull; the gather, a few
+ *                     per cent of it, is then counted twice);
+ *     hull2d area     per frame: gather their horizontal coordinates, affect_hull_area_2d;
+ *     directional x2  affect_laban_shape_directional for the left and right hand.
+ * "other" is the vector's time minus the pieces it runs (the default: all five; box: all but
+ * hull3d): the Effort reductions, the rest of Shape Shaping, role look-ups, allocation.
+ *
+ * How it measures: as bench_import — one untimed warm-up pass, then N passes per run (N chosen
+ * so that a run takes about a second, or --repeat), 5 runs, the median run reported with the
+ * fastest and slowest; clock_gettime(CLOCK_MONOTONIC). Output: a table per data set, then one
+ * line per metric for scripts:
+ *     BENCH <metric> <value> <unit>
+ * e.g. "BENCH laban_vector_corpus 412345 frames/s". Exit status 1 if a computation fails.
+ */
+#define _POSIX_C_SOURCE 200809L
+
+#include "affect/io.h"
+#include "affect/laban.h"
+#include "affect/motion.h"
+#include "affect/roles.h"
+#include "affect/synth.h"
+
+#include <dirent.h>
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#ifndef AFFECT_BENCH_CORPUS
+#define AFFECT_BENCH_CORPUS "../shared/corpora/bandai-namco-1/data"
+#endif
+
+#define RUNS 5
+#define TARGET_RUN_SECONDS 1.0
+#define CALIBRATE_SECONDS 0.1
+#define MAX_REPEAT 100000
+#define SYNTH_MIN_FRAMES 100000u
+#define SYNTH_FPS 30.0
+#define TARGET_FRAMES_PER_SECOND 1e6
+
+/* One motion and what the kernels need of it, resolved before timing. */
+typedef struct entry {
+    affect_motion *m;
+    affect_roles roles;
+    affect_part parts[6]; /* torso, head, left_hand, right_hand, left_foot, right_foot */
+    int32_t *body;        /* the joints the hulls use */
+    uint32_t n_body;
+} entry;
+
+typedef struct dataset {
+    const char *name;
+    entry *e;
+    size_t n, cap;
+    uint64_t frames;
+    size_t pos_bytes;
+    uint32_t max_joints;
+    /* workspaces of the per-frame hull kernels */
+    affect_hull3d *hull;
+    double *xyz, *xy, *scratch;
+} dataset;
+
+typedef struct result {
+    double median, min, max; /* seconds per run */
+    unsigned repeat;         /* passes over the data set per run */
+} result;
+
+/* Values the timed loops write so the compiler cannot drop their work. */
+static volatile double g_sink;
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static int cmp_str(const void *a, const void *b)
+{
+    return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+static char *read_file(const char *path, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    char *buf = NULL;
+    long size = -1;
+    if (fseek(f, 0, SEEK_END) == 0)
+        size = ftell(f);
+    if (size >= 0 && fseek(f, 0, SEEK_SET) == 0) {
+        buf = malloc((size_t)size + 1);
+        if (buf && fread(buf, 1, (size_t)size, f) != (size_t)size) {
+            free(buf);
+            buf = NULL;
+        }
+    }
+    fclose(f);
+    if (buf) {
+        buf[size] = '\0';
+        *len = (size_t)size;
+    }
+    return buf;
+}
+
+static bool has_suffix(const char *s, const char *suffix)
+{
+    size_t n = strlen(s), k = strlen(suffix);
+    return n >= k && strcmp(s + n - k, suffix) == 0;
+}
+
+static void free_dataset(dataset *d)
+{
+    for (size_t i = 0; i < d->n; i++) {
+        affect_motion_free(d->e[i].m);
+        free(d->e[i].body);
+    }
+    free(d->e);
+    affect_hull3d_free(d->hull);
+    free(d->xyz);
+    free(d->xy);
+    free(d->scratch);
+    memset(d, 0, sizeof *d);
+}
+
+/* Adds a motion (taking ownership): resolves roles and parts, lists the body joints (every
+ * joint but the pelvis's ancestors, as laban.c's hulls use). 0 or 1 (message printed). */
+static int add_motion(dataset *d, affect_motion *m, const char *what)
+{
+    if (d->n == d->cap) {
+        size_t cap = d->cap ? 2 * d->cap : 256;
+        entry *grown = realloc(d->e, cap * sizeof *grown);
+        if (!grown) {
+            affect_motion_free(m);
+            fprintf(stderr, "%s: out of memory\n", what);
+            return 1;
+        }
+        d->e = grown;
+        d->cap = cap;
+    }
+    entry *e = &d->e[d->n];
+    memset(e, 0, sizeof *e);
+    e->m = m;
+    affect_roles_resolve(m, &e->roles);
+    affect_error err;
+    if (affect_parts_all(m, &e->roles, e->parts, &err)) {
+        fprintf(stderr, "%s: %s\n", what, err.msg);
+        affect_motion_free(m);
+        return 1;
+    }
+    e->body = malloc(m->n_joints * sizeof *e->body);
+    if (!e->body) {
+        fprintf(stderr, "%s: out of memory\n", what);
+        affect_motion_free(m);
+        return 1;
+    }
+    int32_t pelvis = e->roles.joint[AFFECT_ROLE_PELVIS];
+    for (uint32_t j = 0; j < m->n_joints; j++) {
+        bool ancestor = false;
+        for (int32_t p = pelvis >= 0 ? m->parents[pelvis] : -1, guard = 0;
+             p >= 0 && guard <= (int32_t)m->n_joints; p = m->parents[p], guard++)
+            if (p == (int32_t)j)
+                ancestor = true;
+        if (!ancestor)
+            e->body[e->n_body++] = (int32_t)j;
+    }
+    d->n++;
+    d->frames += m->n_frames;
+    d->pos_bytes += (size_t)m->n_frames * m->n_joints * 3 * sizeof(float);
+    if (m->n_joints > d->max_joints)
+        d->max_joints = m->n_joints;
+    return 0;
+}
+
+/* The per-frame hull workspaces, sized for the largest skeleton. */
+static int alloc_workspace(dataset *d)
+{
+    uint32_t j = d->max_joints;
+    d->hull = affect_hull3d_new(j);
+    d->xyz = malloc((size_t)j * 3 * sizeof *d->xyz);
+    d->xy = malloc((size_t)j * 2 * sizeof *d->xy);
+    d->scratch = malloc((size_t)j * 4 * sizeof *d->scratch);
+    if (!d->hull || !d->xyz || !d->xy || !d->scratch) {
+        fprintf(stderr, "out of memory\n");
+        return 1;
+    }
+    return 0;
+}
+
+/* Every *.bvh of dir, parsed; 1 when dir cannot be opened, 2 on any other error. */
+static int load_corpus(const char *dir, dataset *d)
+{
+    DIR *dh = opendir(dir);
+    if (!dh)
+        return 1;
+    char **names = NULL;
+    size_t n = 0, cap = 0;
+    int rc = 0;
+    struct dirent *de;
+    while (!rc && (de = readdir(dh)) != NULL) {
+        if (!has_suffix(de->d_name, ".bvh"))
+            continue;
+        if (n == cap) {
+            cap = cap ? 2 * cap : 256;
+            char **grown = realloc(names, cap * sizeof *grown);
+            if (!grown) {
+                rc = 2;
+                break;
+            }
+            names = grown;
+        }
+        if (!(names[n] = malloc(strlen(de->d_name) + 1))) {
+            rc = 2;
+            break;
+        }
+        strcpy(names[n++], de->d_name);
+    }
+    closedir(dh);
+    if (!rc)
+        qsort(names, n, sizeof *names, cmp_str);
+    char path[4096];
+    for (size_t i = 0; i < n && !rc; i++) {
+        snprintf(path, sizeof path, "%s/%s", dir, names[i]);
+        size_t len = 0;
+        char *text = read_file(path, &len);
+        if (!text) {
+            fprintf(stderr, "cannot read %s: %s\n", path, strerror(errno));
+            rc = 2;
+            break;
+        }
+        affect_motion *m = NULL;
+        affect_error err;
+        if (affect_bvh_parse(text, len, NULL, &m, &err)) {
+            fprintf(stderr, "%s: %s\n", names[i], err.msg);
+            rc = 2;
+        } else if (add_motion(d, m, names[i])) {
+            rc = 2;
+        }
+        free(text);
+    }
+    for (size_t i = 0; i < n; i++)
+        free(names[i]);
+    free(names);
+    return rc;
+}
+
+/* One long motion: synthetic clips of every action × emotion with seeds 1, 2, …, copied one
+ * after another until there are at least SYNTH_MIN_FRAMES frames. */
+static int build_synthetic(dataset *d, uint32_t *n_clips)
+{
+    affect_synth_options so;
+    affect_synth_options_default(&so);
+    so.fps = SYNTH_FPS;
+    affect_motion **clips = NULL, *big = NULL;
+    size_t n = 0, cap = 0;
+    uint64_t total = 0;
+    int rc = 1;
+    affect_error err;
+    for (uint64_t seed = 1; total < SYNTH_MIN_FRAMES; seed++) {
+        for (int a = 0; affect_synth_actions[a] && total < SYNTH_MIN_FRAMES; a++) {
+            for (int e = 0; affect_synth_emotions[e] && total < SYNTH_MIN_FRAMES; e++) {
+                if (n == cap) {
+                    cap = cap ? 2 * cap : 64;
+                    affect_motion **grown = realloc(clips, cap * sizeof *grown);
+                    if (!grown)
+                        goto done;
+                    clips = grown;
+                }
+                if (affect_motion_synth(affect_synth_actions[a], affect_synth_emotions[e], seed,
+                                        &so, &clips[n], &err)) {
+                    fprintf(stderr, "synth %s %s %llu: %s\n", affect_synth_actions[a],
+                            affect_synth_emotions[e], (unsigned long long)seed, err.msg);
+                    goto done;
+                }
+                total += clips[n++]->n_frames;
+            }
+        }
+    }
+    const affect_motion *first = clips[0];
+    if (affect_motion_create((uint32_t)total, first->n_joints, first->fps, &big, &err) ||
+        affect_motion_set_unit(big, first->unit, &err)) {
+        fprintf(stderr, "synthetic motion: %s\n", err.msg);
+        goto done;
+    }
+    for (uint32_t j = 0; j < first->n_joints; j++) {
+        if (affect_motion_set_name(big, j, first->names[j], strlen(first->names[j]), &err)) {
+            fprintf(stderr, "synthetic motion: %s\n", err.msg);
+            goto done;
+        }
+        big->parents[j] = first->parents[j];
+    }
+    size_t at = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (clips[i]->n_joints != first->n_joints) {
+            fprintf(stderr, "synthetic clip %zu has %u joints, expected %u\n", i,
+                    clips[i]->n_joints, first->n_joints);
+            goto done;
+        }
+        size_t count = (size_t)clips[i]->n_frames * first->n_joints * 3;
+        memcpy(big->pos + at, clips[i]->pos, count * sizeof *big->pos);
+        at += count;
+    }
+    if (affect_motion_validate(big, &err)) {
+        fprintf(stderr, "synthetic motion: %s\n", err.msg);
+        goto done;
+    }
+    rc = add_motion(d, big, "synthetic motion");
+    big = NULL;
+    *n_clips = (uint32_t)n;
+done:
+    affect_motion_free(big);
+    for (size_t i = 0; i < n; i++)
+        affect_motion_free(clips[i]);
+    free(clips);
+    return rc;
+}
+
+/* ---- the kernels: one pass over the data set; non-zero return = failure ---- */
+
+typedef int (*kernel_fn)(const dataset *d, void *ctx);
+
+static int k_read(const dataset *d, void *ctx)
+{
+    (void)ctx;
+    float acc[16] = {0};
+    for (size_t i = 0; i < d->n; i++) {
+        const affect_motion *m = d->e[i].m;
+        const float *p = m->pos;
+        size_t n = (size_t)m->n_frames * m->n_joints * 3, k = 0;
+        for (; k + 16 <= n; k += 16)
+            for (int a = 0; a < 16; a++)
+                acc[a] += p[k + a];
+        for (; k < n; k++)
+            acc[0] += p[k];
+    }
+    double s = 0;
+    for (int a = 0; a < 16; a++)
+        s += acc[a];
+    g_sink += s;
+    return 0;
+}
+
+/* ctx: the affect_laban_options */
+static int k_vector(const dataset *d, void *ctx)
+{
+    const affect_laban_options *opt = ctx;
+    double out[AFFECT_LABAN_N];
+    for (size_t i = 0; i < d->n; i++) {
+        affect_error err;
+        if (affect_laban_vector(d->e[i].m, &d->e[i].roles, opt, out, &err)) {
+            fprintf(stderr, "laban vector of motion %zu: %s\n", i, err.msg);
+            return 1;
+        }
+        g_sink += out[0] + out[AFFECT_LABAN_N - 1];
+    }
+    return 0;
+}
+
+static int k_kinematics(const dataset *d, void *ctx)
+{
+    const affect_laban_options *opt = ctx;
+    for (size_t i = 0; i < d->n; i++) {
+        for (int p = 0; p < 6; p++) {
+            affect_kinematics k;
+            affect_error err;
+            if (affect_kinematics_compute(d->e[i].m, &d->e[i].parts[p], opt, &k, &err)) {
+                fprintf(stderr, "kinematics of motion %zu: %s\n", i, err.msg);
+                return 1;
+            }
+            g_sink += k.jerk[0];
+            affect_kinematics_free(&k);
+        }
+    }
+    return 0;
+}
+
+static int k_hull3d(const dataset *d, void *ctx)
+{
+    (void)ctx;
+    double best = 0;
+    for (size_t i = 0; i < d->n; i++) {
+        const entry *e = &d->e[i];
+        for (uint32_t t = 0; t < e->m->n_frames; t++) {
+            for (uint32_t b = 0; b < e->n_body; b++) {
+                const float *p = affect_motion_at(e->m, t, (uint32_t)e->body[b]);
+                d->xyz[3 * b] = p[0];
+                d->xyz[3 * b + 1] = p[1];
+                d->xyz[3 * b + 2] = p[2];
+            }
+            best = fmax(best, affect_hull3d_volume(d->hull, d->xyz, e->n_body));
+        }
+    }
+    g_sink += best;
+    return 0;
+}
+
+/* The horizontal plane of a y-up motion: x and z, as Shape Shaping uses (up_axis 1). */
+/* ctx: the affect_laban_options (hull_box set) */
+static int k_flow_box(const dataset *d, void *ctx)
+{
+    const affect_laban_options *opt = ctx;
+    for (size_t i = 0; i < d->n; i++) {
+        double v;
+        affect_error err;
+        if (affect_laban_shape_flow(d->e[i].m, opt, &v, &err)) {
+            fprintf(stderr, "shape flow of motion %zu: %s\n", i, err.msg);
+            return 1;
+        }
+        g_sink += v;
+    }
+    return 0;
+}
+
+static int k_hull2d(const dataset *d, void *ctx)
+{
+    (void)ctx;
+    double best = 0;
+    for (size_t i = 0; i < d->n; i++) {
+        const entry *e = &d->e[i];
+        for (uint32_t t = 0; t < e->m->n_frames; t++) {
+            for (uint32_t b = 0; b < e->n_body; b++) {
+                const float *p = affect_motion_at(e->m, t, (uint32_t)e->body[b]);
+                d->xy[2 * b] = p[2];
+                d->xy[2 * b + 1] = p[0];
+            }
+            best = fmax(best, affect_hull_area_2d(d->xy, e->n_body, d->scratch));
+        }
+    }
+    g_sink += best;
+    return 0;
+}
+
+static int k_directional(const dataset *d, void *ctx)
+{
+    const affect_laban_options *opt = ctx;
+    for (size_t i = 0; i < d->n; i++) {
+        for (int h = 2; h <= 3; h++) {
+            double v;
+            affect_error err;
+            if (affect_laban_shape_directional(d->e[i].m, &d->e[i].parts[h], opt, &v, &err)) {
+                fprintf(stderr, "shape directional of motion %zu: %s\n", i, err.msg);
+                return 1;
+            }
+            g_sink += v;
+        }
+    }
+    return 0;
+}
+
+/* RUNS timed runs of `repeat` passes, after one untimed pass that warms caches and the
+ * allocator. repeat 0: calibrate, doubling the passes until they take CALIBRATE_SECONDS, then
+ * scaling to TARGET_RUN_SECONDS per run. */
+static int measure(const dataset *d, kernel_fn fn, void *ctx, unsigned repeat, result *r)
+{
+    if (fn(d, ctx))
+        return 1;
+    if (repeat == 0) {
+        unsigned k = 1;
+        double t;
+        for (;;) {
+            double t0 = now();
+            for (unsigned i = 0; i < k; i++)
+                if (fn(d, ctx))
+                    return 1;
+            t = now() - t0;
+            if (t >= CALIBRATE_SECONDS || k >= MAX_REPEAT)
+                break;
+            k *= 2;
+        }
+        double want = t > 0 ? k * TARGET_RUN_SECONDS / t : MAX_REPEAT;
+        repeat = want < 1 ? 1 : want > MAX_REPEAT ? MAX_REPEAT : (unsigned)(want + 0.5);
+    }
+    double t[RUNS];
+    for (int run = 0; run < RUNS; run++) {
+        double t0 = now();
+        for (unsigned k = 0; k < repeat; k++)
+            if (fn(d, ctx))
+                return 1;
+        t[run] = now() - t0;
+    }
+    qsort(t, RUNS, sizeof t[0], cmp_double);
+    r->median = t[RUNS / 2];
+    r->min = t[0];
+    r->max = t[RUNS - 1];
+    r->repeat = repeat;
+    return 0;
+}
+
+enum { K_READ, K_VECTOR, K_BOX, K_KIN, K_HULL3D, K_FLOWBOX, K_HULL2D, K_DIR, K_COUNT };
+
+static const char *const kernel_names[K_COUNT] = {
+    "read bound",      "laban vector",    "vector (box)",  "  kinematics x6",
+    "  hull3d volume", "  flow (box)",    "  hull2d area", "  directional x2"};
+static const char *const kernel_keys[K_COUNT] = {
+    "read_bound",    "laban_vector",      "laban_vector_box", "kinematics6",
+    "hull3d_volume", "shape_flow_box",    "hull2d_area",      "directional2"};
+
+/* Seconds per pass over the data set. */
+static double per_pass(const result *r)
+{
+    return r->median / r->repeat;
+}
+
+static void row(const char *name, const result *r, double frames, double vector_s)
+{
+    double s = per_pass(r);
+    printf("%-17s %7u %9.4f %9.4f %9.4f %13.0f %10.1f %8.1f%%\n", name, r->repeat, r->median,
+           r->min, r->max, frames / s, s / frames * 1e9, 100.0 * s / vector_s);
+}
+
+/* Measures and reports one data set; key names it in the BENCH lines. */
+static int run_dataset(const dataset *d, const char *key, unsigned repeat)
+{
+    affect_laban_options def, box;
+    affect_laban_options_default(&def);
+    box = def;
+    box.hull_box = true;
+    struct {
+        kernel_fn fn;
+        void *ctx;
+    } k[K_COUNT] = {{k_read, NULL},       {k_vector, &def},   {k_vector, &box},
+                    {k_kinematics, &def}, {k_hull3d, NULL},   {k_flow_box, &box},
+                    {k_hull2d, NULL},     {k_directional, &def}};
+    result r[K_COUNT];
+    for (int i = 0; i < K_COUNT; i++)
+        if (measure(d, k[i].fn, k[i].ctx, repeat, &r[i]))
+            return 1;
+
+    double frames = (double)d->frames;
+    double vec_s = per_pass(&r[K_VECTOR]), read_s = per_pass(&r[K_READ]);
+    double parts_s = 0;
+    for (int i = K_KIN; i <= K_DIR; i++)
+        parts_s += per_pass(&r[i]);
+    double other_s = vec_s - parts_s;
+    double other_box_s = per_pass(&r[K_BOX]) - (parts_s - per_pass(&r[K_HULL3D]));
+
+    printf("%-17s %7s %9s %9s %9s %13s %10s %9s\n", "kernel", "passes", "median", "fastest",
+           "slowest", "frames/s", "ns/frame", "% vector");
+    for (int i = 0; i < K_COUNT; i++)
+        row(kernel_names[i], &r[i], frames, vec_s);
+    printf("%-17s %7s %9s %9s %9s %13s %10.1f %8.1f%%\n", "  other (default)", "", "", "", "",
+           "", other_s / frames * 1e9, 100.0 * other_s / vec_s);
+    printf("%-17s %7s %9s %9s %9s %13s %10.1f %8.1f%%\n", "  other (box)", "", "", "", "", "",
+           other_box_s / frames * 1e9, 100.0 * other_box_s / vec_s);
+    printf("\nread bound: %.1f MB/s; laban vector runs at %.2f%% of its speed (%.0fx slower), "
+           "vector (box) at %.2f%% (%.0fx slower)\n",
+           (double)d->pos_bytes / read_s / 1e6, 100.0 * read_s / vec_s, vec_s / read_s,
+           100.0 * read_s / per_pass(&r[K_BOX]), per_pass(&r[K_BOX]) / read_s);
+    double fps = frames / vec_s, fps_box = frames / per_pass(&r[K_BOX]);
+    printf("target: >= 1,000,000 frames/s on one core: default %s (%.0f frames/s, %.2fx %s); "
+           "box %s (%.0f frames/s, %.2fx %s)\n\n",
+           fps >= TARGET_FRAMES_PER_SECOND ? "met" : "NOT met", fps,
+           fps >= TARGET_FRAMES_PER_SECOND ? fps / TARGET_FRAMES_PER_SECOND
+                                           : TARGET_FRAMES_PER_SECOND / fps,
+           fps >= TARGET_FRAMES_PER_SECOND ? "above" : "short",
+           fps_box >= TARGET_FRAMES_PER_SECOND ? "met" : "NOT met", fps_box,
+           fps_box >= TARGET_FRAMES_PER_SECOND ? fps_box / TARGET_FRAMES_PER_SECOND
+                                               : TARGET_FRAMES_PER_SECOND / fps_box,
+           fps_box >= TARGET_FRAMES_PER_SECOND ? "above" : "short");
+
+    for (int i = 0; i < K_COUNT; i++)
+        printf("BENCH %s_%s %.0f frames/s\n", kernel_keys[i], key, frames / per_pass(&r[i]));
+    for (int i = K_VECTOR; i < K_COUNT; i++)
+        printf("BENCH %s_%s_time %.1f ns/frame\n", kernel_keys[i], key,
+               per_pass(&r[i]) / frames * 1e9);
+    printf("BENCH other_%s_time %.1f ns/frame\n", key, other_s / frames * 1e9);
+    printf("BENCH other_box_%s_time %.1f ns/frame\n", key, other_box_s / frames * 1e9);
+    printf("BENCH read_bound_%s_throughput %.1f MB/s\n", key, (double)d->pos_bytes / read_s / 1e6);
+    printf("BENCH laban_vector_%s_vs_read_bound %.6f ratio\n", key, read_s / vec_s);
+    printf("BENCH laban_vector_box_%s_vs_read_bound %.6f ratio\n", key,
+           read_s / per_pass(&r[K_BOX]));
+    printf("\n");
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    const char *dir = AFFECT_BENCH_CORPUS;
+    unsigned repeat = 0;
+    for (int i = 1; i < argc; i++) {
+        if (strcmp(argv[i], "--repeat") == 0 && i + 1 < argc) {
+            long v = strtol(argv[++i], NULL, 10);
+            if (v < 1 || v > MAX_REPEAT) {
+                fprintf(stderr, "--repeat must be from 1 to %d\n", MAX_REPEAT);
+                return 2;
+            }
+            repeat = (unsigned)v;
+        } else if (argv[i][0] == '-') {
+            fprintf(stderr, "usage: %s [corpus directory] [--repeat N]\n", argv[0]);
+            return 2;
+        } else {
+            dir = argv[i];
+        }
+    }
+
+    printf("%d runs per kernel, each of 'passes' passes over the data set; times in seconds "
+           "per run;\nframes/s and ns/frame per pass; %% vector = share of the default laban "
+           "vector's time\n\n",
+           RUNS);
+    int rc = 0;
+    dataset corpus = {.name = "corpus"}, synth = {.name = "synthetic"};
+    int lc = load_corpus(dir, &corpus);
+    if (lc == 1) {
+        printf("bench_laban: corpus directory %s not found: measuring the synthetic motion "
+               "only\n\n",
+               dir);
+    } else if (lc == 0 && corpus.n == 0) {
+        printf("bench_laban: no .bvh files in %s: measuring the synthetic motion only\n\n", dir);
+    } else if (lc || alloc_workspace(&corpus)) {
+        rc = 1;
+    } else {
+        const entry *e0 = &corpus.e[0];
+        printf("== data set: corpus %s\n", dir);
+        printf("  %zu motions, %llu frames, %u joints (hulls over %u body joints), positions "
+               "%.2f MB\n\n",
+               corpus.n, (unsigned long long)corpus.frames, e0->m->n_joints, e0->n_body,
+               (double)corpus.pos_bytes / 1e6);
+        rc = run_dataset(&corpus, "corpus", repeat);
+    }
+    free_dataset(&corpus);
+
+    uint32_t clips = 0;
+    if (!rc && (build_synthetic(&synth, &clips) || alloc_workspace(&synth)))
+        rc = 1;
+    if (!rc) {
+        const entry *e0 = &synth.e[0];
+        printf("== data set: synthetic\n");
+        printf("  1 motion of %llu frames (%u motion_synth clips at %.0f fps), %u joints (hulls "
+               "over %u body joints), positions %.2f MB\n\n",
+               (unsigned long long)synth.frames, clips, SYNTH_FPS, e0->m->n_joints, e0->n_body,
+               (double)synth.pos_bytes / 1e6);
+        rc = run_dataset(&synth, "synthetic", repeat);
+    }
+    free_dataset(&synth);
+    return rc;
+}
