@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include "common.h"
+#include "fn_hmm.h"
 #include "fn_laban.h"
 #include "fn_motion.h"
 #include "vt_laban.h"
@@ -141,6 +142,12 @@ static const ax_function functions[] = {
     {"laban_vector", 1, false, ax_laban_vector},
     {"laban_vector", 2, false, ax_laban_vector},
     {"laban_names", 0, true, ax_laban_names},
+    {"hmm_loglik", 2, false, ax_hmm_loglik},
+    {"hmm_loglik", 3, false, ax_hmm_loglik},
+    {"hmm_viterbi", 2, true, ax_hmm_viterbi},
+    {"hmm_viterbi_loglik", 2, false, ax_hmm_viterbi_loglik},
+    {"hmm_info", 1, true, ax_hmm_info},
+    {"hmm_postures", 1, false, ax_hmm_postures},
 };
 
 typedef struct ax_aggregate {
@@ -154,6 +161,8 @@ typedef struct ax_aggregate {
 static const ax_aggregate aggregates[] = {
     {"laban_plot", 3, ax_laban_plot_step, ax_laban_plot_final},
     {"laban_plot", 4, ax_laban_plot_step, ax_laban_plot_final},
+    {"hmm_train", 1, ax_hmm_train_step, ax_hmm_train_final},
+    {"hmm_train", 2, ax_hmm_train_step, ax_hmm_train_final},
 };
 
 #ifdef _WIN32

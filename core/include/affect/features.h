@@ -1,0 +1,109 @@
+/*
+ * affect/features.h — the observation definition of a model: which joints, how the motion is
+ * normalized, whether velocities are appended. Every model stores its definition, so scoring
+ * a motion applies exactly the transform the model was trained on.
+ *
+ * Joints: a list of entries, each a role name ("left_hand", resolved per motion with
+ * affect_roles_resolve) or a joint name (matched exactly); an entry that is a role name is
+ * always read as the role. The default is every joint of the first training motion, by name.
+ * The definition also keeps, for each entry, the joint it resolved to in the first training
+ * motion (its "skeleton" name) and that joint's nearest listed ancestor, so that model
+ * parameters can be shown as postures on the training skeleton.
+ *
+ * Per frame the observation is [p_0, p_1, …, p_{J−1}] (3 values per joint: x, y, z) followed,
+ * with velocity, by [v_0, …, v_{J−1}]: dim = 3 J, or 6 J with velocity. Positions are
+ * normalized when asked (affect/normalize.h): the first frame's horizontal root position and
+ * heading are removed, and with scale_arm they are divided by the right arm's length in the
+ * first frame. Velocities are central differences × fps (one-sided at the two ends, zero for
+ * a single frame), in the positions' unit per second.
+ */
+#ifndef AFFECT_FEATURES_H
+#define AFFECT_FEATURES_H
+
+#include "affect/roles.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct affect_features {
+    uint32_t n_joints;
+    char **joints;     /* n_joints entries as requested: role names or joint names */
+    char **skeleton;   /* n_joints: the joint each entry resolved to in the first motion */
+    int32_t *parents;  /* n_joints: index of the nearest listed ancestor in the first motion,
+                          or −1 */
+    int up_axis;       /* 0 = x, 1 = y, 2 = z */
+    bool normalize;    /* remove the first frame's root translation and heading */
+    bool scale_arm;    /* divide by the right arm length */
+    bool velocity;     /* append velocities */
+    double fps;        /* frame rate of the training motions */
+    char unit[AFFECT_MOTION_UNIT_MAX + 1]; /* unit of the positions ("arm" when scaled) */
+} affect_features;
+
+typedef enum affect_features_scale {
+    AFFECT_FEATURES_SCALE_AUTO = 0, /* arm when right_shoulder and right_hand resolve */
+    AFFECT_FEATURES_SCALE_NONE = 1,
+    AFFECT_FEATURES_SCALE_ARM = 2
+} affect_features_scale;
+
+typedef struct affect_features_options {
+    const char *const *joints;   /* entries (role or joint names); NULL = every joint */
+    uint32_t n_joints;
+    bool normalize;              /* default true */
+    affect_features_scale scale; /* default auto (decided on the first motion, then fixed) */
+    int up_axis;                 /* default 1 (y) */
+    bool velocity;               /* default false */
+} affect_features_options;
+
+void affect_features_options_default(affect_features_options *opt);
+
+/* Builds the definition from the options and the first training motion: resolves every entry
+ * in it (an entry missing there is an error, as are two entries naming the same joint),
+ * records the skeleton names, parents, fps and unit, and decides the automatic scale. */
+affect_status affect_features_create(const affect_features_options *opt,
+                                     const affect_motion *first, affect_features **out,
+                                     affect_error *err);
+void affect_features_free(affect_features *f);
+
+/* Observation dimension: 3 × joints, × 2 with velocity. */
+uint32_t affect_features_dim(const affect_features *f);
+
+/* The observations of m: *x receives n_frames × dim doubles, row-major (free with
+ * affect_free), *n_frames the motion's frame count. Errors (AFFECT_ERR_MISSING):
+ * 'joint "Hand_L" of the model is not in the motion', 'no joint of the motion has the
+ * left_hand role (used by the model)', and the normalization's missing roles. */
+affect_status affect_features_extract(const affect_features *f, const affect_motion *m,
+                                      double **x, uint32_t *n_frames, affect_error *err);
+
+/* A motion on the definition's skeleton (skeleton names, parents, unit, fps) whose frame k is
+ * the first 3 × joints values of row k of x (n_frames × dim, e.g. one mean per HMM state). */
+affect_status affect_features_posture_motion(const affect_features *f, const double *x,
+                                             uint32_t n_frames, affect_motion **out,
+                                             affect_error *err);
+
+/* ---- binary form (embedded in the model BLOB, docs/FORMATS.md) ----
+ *   0  1  up axis (0 .. 2)
+ *   1  1  flag bits: 1 normalize, 2 scale by the arm, 4 velocity (others zero)
+ *   2  1  unit length U (0 .. 15)
+ *   3  1  reserved, zero
+ *   4  4  joint count J (1 .. 4096)
+ *   8  8  fps (float64, finite, 0 < fps ≤ 100000)
+ *  16  U  unit
+ *      J × { uint16 length L (1 .. 1024), L bytes }  entries
+ *      J × { uint16 length L (1 .. 1024), L bytes }  skeleton names
+ *      J × int32 parents (−1 or 0 .. J−1, acyclic)
+ * little-endian, written byte by byte. */
+#define AFFECT_FEATURES_HEADER_SIZE 16u
+
+/* Size of the binary form; false on overflow. */
+bool affect_features_encoded_size(const affect_features *f, size_t *size);
+/* Writes the binary form into buf (affect_features_encoded_size bytes). */
+void affect_features_encode_into(const affect_features *f, unsigned char *buf);
+/* Decodes exactly size bytes; never reads outside them. */
+affect_status affect_features_decode(const unsigned char *data, size_t size,
+                                     affect_features **out, affect_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

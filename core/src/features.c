@@ -1,0 +1,508 @@
+/*
+ * features.c — the observation definition stored in every model (see affect/features.h): which
+ * joints, normalization, velocities; extraction of the T × dim observations of a motion; the
+ * posture motion of model means; the definition's binary form.
+ *
+ * How it works: every call resolves the definition's entries on the motion at hand (roles by
+ * affect_roles_resolve, names exactly), computes the normalization transform of
+ * affect/normalize.h from that motion's first frame and applies it, in double precision, to
+ * the listed joints only. Velocities are the central differences of the normalized positions
+ * times fps. The first training motion also fixes the automatic scale choice, the fps, the
+ * unit and the skeleton (names and nearest listed ancestors) shown by posture motions.
+ */
+#include "affect/features.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "affect/json.h"
+#include "affect/normalize.h"
+
+void affect_features_options_default(affect_features_options *opt)
+{
+    opt->joints = NULL;
+    opt->n_joints = 0;
+    opt->normalize = true;
+    opt->scale = AFFECT_FEATURES_SCALE_AUTO;
+    opt->up_axis = 1;
+    opt->velocity = false;
+}
+
+void affect_features_free(affect_features *f)
+{
+    if (!f)
+        return;
+    for (uint32_t j = 0; j < f->n_joints; j++) {
+        if (f->joints)
+            affect_free(f->joints[j]);
+        if (f->skeleton)
+            affect_free(f->skeleton[j]);
+    }
+    affect_free(f->joints);
+    affect_free(f->skeleton);
+    affect_free(f->parents);
+    affect_free(f);
+}
+
+uint32_t affect_features_dim(const affect_features *f)
+{
+    return f->n_joints * 3u * (f->velocity ? 2u : 1u);
+}
+
+/* An empty definition with room for n entries (names NULL, parents −1). */
+static affect_features *features_alloc(uint32_t n)
+{
+    affect_features *f = affect_calloc(1, sizeof *f);
+    if (!f)
+        return NULL;
+    f->n_joints = n;
+    f->joints = affect_calloc(n, sizeof *f->joints);
+    f->skeleton = affect_calloc(n, sizeof *f->skeleton);
+    f->parents = affect_malloc_array(n, sizeof *f->parents);
+    if (!f->joints || !f->skeleton || !f->parents) {
+        affect_features_free(f);
+        return NULL;
+    }
+    for (uint32_t j = 0; j < n; j++)
+        f->parents[j] = -1;
+    return f;
+}
+
+/* The joint of m that entry names, or a MISSING error. */
+static affect_status resolve_entry(const char *entry, const affect_motion *m,
+                                   const affect_roles *roles, uint32_t *joint, affect_error *err)
+{
+    int r = affect_role_from_name(entry);
+    int32_t j = r >= 0 ? roles->joint[r] : affect_motion_find_joint(m, entry);
+    if (j >= 0 && (uint32_t)j < m->n_joints) {
+        *joint = (uint32_t)j;
+        return AFFECT_OK;
+    }
+    if (r >= 0)
+        return affect_fail(err, AFFECT_ERR_MISSING,
+                           "no joint of the motion has the %s role (used by the model)",
+                           affect_role_name((affect_role)r));
+    char q[80];
+    affect_json_quote(q, sizeof q, entry, strlen(entry));
+    return affect_fail(err, AFFECT_ERR_MISSING, "joint %s of the model is not in the motion", q);
+}
+
+static bool arm_resolves(const affect_roles *roles)
+{
+    return roles->joint[AFFECT_ROLE_RIGHT_SHOULDER] >= 0 &&
+           roles->joint[AFFECT_ROLE_RIGHT_HAND] >= 0;
+}
+
+affect_status affect_features_create(const affect_features_options *opt,
+                                     const affect_motion *first, affect_features **out,
+                                     affect_error *err)
+{
+    if (opt->up_axis < 0 || opt->up_axis > 2)
+        return affect_fail(err, AFFECT_ERR_INVALID, "up axis must be x, y or z");
+    if (opt->joints && opt->n_joints == 0)
+        return affect_fail(err, AFFECT_ERR_INVALID, "the joint list is empty");
+    uint32_t n = opt->joints ? opt->n_joints : first->n_joints;
+    if (n > AFFECT_MOTION_MAX_JOINTS)
+        return affect_fail(err, AFFECT_ERR_RANGE, "%u joints listed; at most %u", n,
+                           AFFECT_MOTION_MAX_JOINTS);
+    char q[80], q2[80];
+    for (uint32_t j = 0; opt->joints && j < n; j++) {
+        const char *e = opt->joints[j];
+        size_t len = strlen(e);
+        if (len == 0 || len > AFFECT_MOTION_MAX_NAME)
+            return affect_fail(err, AFFECT_ERR_INVALID,
+                               "joint entry %u: a name must have 1 to %u bytes", j + 1,
+                               AFFECT_MOTION_MAX_NAME);
+        for (uint32_t k = 0; k < j; k++)
+            if (strcmp(opt->joints[k], e) == 0) {
+                affect_json_quote(q, sizeof q, e, len);
+                return affect_fail(err, AFFECT_ERR_INVALID, "joint %s is listed twice", q);
+            }
+    }
+    affect_roles roles;
+    affect_roles_resolve(first, &roles);
+    affect_status st = AFFECT_OK;
+    int32_t *entry_of = NULL; /* joint of first → entry index, or −1 */
+    uint32_t *joint_of = NULL;
+    affect_features *f = features_alloc(n);
+    entry_of = affect_malloc_array(first->n_joints, sizeof *entry_of);
+    joint_of = affect_malloc_array(n, sizeof *joint_of);
+    if (!f || !entry_of || !joint_of) {
+        st = affect_nomem(err);
+        goto done;
+    }
+    for (uint32_t j = 0; j < first->n_joints; j++)
+        entry_of[j] = -1;
+    for (uint32_t e = 0; e < n; e++) {
+        const char *name = opt->joints ? opt->joints[e] : first->names[e];
+        uint32_t j = e;
+        if (opt->joints && (st = resolve_entry(name, first, &roles, &j, err)) != AFFECT_OK)
+            goto done;
+        if (entry_of[j] >= 0) {
+            const char *other = opt->joints[entry_of[j]];
+            affect_json_quote(q, sizeof q, other, strlen(other));
+            affect_json_quote(q2, sizeof q2, name, strlen(name));
+            char q3[80];
+            affect_json_quote(q3, sizeof q3, first->names[j], strlen(first->names[j]));
+            st = affect_fail(err, AFFECT_ERR_INVALID, "joints %s and %s are the same joint %s",
+                             q, q2, q3);
+            goto done;
+        }
+        entry_of[j] = (int32_t)e;
+        joint_of[e] = j;
+        f->joints[e] = affect_strndup(name, strlen(name));
+        f->skeleton[e] = affect_strndup(first->names[j], strlen(first->names[j]));
+        if (!f->joints[e] || !f->skeleton[e]) {
+            st = affect_nomem(err);
+            goto done;
+        }
+    }
+    /* nearest listed ancestor (the motion's parents are acyclic) */
+    for (uint32_t e = 0; e < n; e++) {
+        int32_t p = first->parents[joint_of[e]];
+        for (uint32_t steps = 0; p >= 0 && entry_of[p] < 0 && steps < first->n_joints; steps++)
+            p = first->parents[p];
+        f->parents[e] = p >= 0 ? entry_of[p] : -1;
+    }
+    f->up_axis = opt->up_axis;
+    f->normalize = opt->normalize;
+    f->scale_arm = opt->scale == AFFECT_FEATURES_SCALE_ARM ||
+                   (opt->scale == AFFECT_FEATURES_SCALE_AUTO && arm_resolves(&roles));
+    f->velocity = opt->velocity;
+    f->fps = first->fps;
+    const char *unit = f->scale_arm ? "arm" : first->unit;
+    size_t unit_len = strlen(unit);
+    memcpy(f->unit, unit, unit_len + 1); /* ≤ AFFECT_MOTION_UNIT_MAX: a motion's unit */
+    *out = f;
+    f = NULL;
+done:
+    affect_features_free(f);
+    affect_free(entry_of);
+    affect_free(joint_of);
+    return st;
+}
+
+affect_status affect_features_extract(const affect_features *f, const affect_motion *m,
+                                      double **x, uint32_t *n_frames, affect_error *err)
+{
+    uint32_t J = f->n_joints, T = m->n_frames, dim = affect_features_dim(f);
+    size_t n_vals;
+    if (!affect_mul_size(T, dim, &n_vals))
+        return affect_fail(err, AFFECT_ERR_RANGE, "too many observations");
+    affect_roles roles;
+    affect_roles_resolve(m, &roles);
+    uint32_t *idx = affect_malloc_array(J, sizeof *idx);
+    double *obs = NULL;
+    affect_status st = AFFECT_OK;
+    if (!idx) {
+        st = affect_nomem(err);
+        goto fail;
+    }
+    for (uint32_t e = 0; e < J; e++)
+        if ((st = resolve_entry(f->joints[e], m, &roles, &idx[e], err)) != AFFECT_OK)
+            goto fail;
+    affect_normalize_transform tf;
+    memset(&tf, 0, sizeof tf);
+    tf.rot[0] = tf.rot[4] = tf.rot[8] = 1;
+    tf.scale = 1;
+    if (f->normalize || f->scale_arm) {
+        double lat[3];
+        if (f->normalize && !affect_roles_lateral(m, &roles, 0, lat)) {
+            st = affect_fail(err, AFFECT_ERR_MISSING,
+                             "cannot remove the heading: no left/right hip or shoulder roles "
+                             "resolve in the motion (train with {\"normalize\": false})");
+            goto fail;
+        }
+        if (f->scale_arm && !arm_resolves(&roles)) {
+            st = affect_fail(err, AFFECT_ERR_MISSING,
+                             "cannot scale by the arm: the right_shoulder and right_hand roles "
+                             "do not both resolve in the motion (train with {\"scale\": "
+                             "\"none\"})");
+            goto fail;
+        }
+        affect_normalize_options no;
+        affect_normalize_options_default(&no);
+        no.up_axis = f->up_axis;
+        no.translation = no.heading = f->normalize;
+        no.scale_arm = f->scale_arm;
+        if ((st = affect_normalize_transform_compute(m, &roles, &no, &tf, err)) != AFFECT_OK)
+            goto fail;
+    }
+    obs = affect_malloc_array(n_vals, sizeof *obs);
+    if (!obs) {
+        st = affect_nomem(err);
+        goto fail;
+    }
+    const double *r = tf.rot;
+    double inv = 1.0 / tf.scale;
+    for (uint32_t t = 0; t < T; t++) {
+        double *row = obs + (size_t)t * dim;
+        for (uint32_t e = 0; e < J; e++) {
+            const float *p = affect_motion_at(m, t, idx[e]);
+            double a = (double)p[0] - tf.origin[0], b = (double)p[1] - tf.origin[1],
+                   c = (double)p[2] - tf.origin[2];
+            row[e * 3 + 0] = (r[0] * a + r[1] * b + r[2] * c) * inv;
+            row[e * 3 + 1] = (r[3] * a + r[4] * b + r[5] * c) * inv;
+            row[e * 3 + 2] = (r[6] * a + r[7] * b + r[8] * c) * inv;
+        }
+    }
+    if (f->velocity) {
+        size_t np = (size_t)J * 3;
+        for (uint32_t t = 0; t < T; t++) {
+            double *v = obs + (size_t)t * dim + np;
+            if (T == 1) {
+                memset(v, 0, np * sizeof *v);
+                continue;
+            }
+            uint32_t a = t > 0 ? t - 1 : 0, b = t + 1 < T ? t + 1 : T - 1;
+            const double *pa = obs + (size_t)a * dim, *pb = obs + (size_t)b * dim;
+            double k = m->fps / (double)(b - a);
+            for (size_t i = 0; i < np; i++)
+                v[i] = (pb[i] - pa[i]) * k;
+        }
+    }
+    affect_free(idx);
+    *x = obs;
+    *n_frames = T;
+    return AFFECT_OK;
+fail:
+    affect_free(idx);
+    affect_free(obs);
+    return st;
+}
+
+affect_status affect_features_posture_motion(const affect_features *f, const double *x,
+                                             uint32_t n_frames, affect_motion **out,
+                                             affect_error *err)
+{
+    affect_motion *m = NULL;
+    affect_status st = affect_motion_create(n_frames, f->n_joints, f->fps, &m, err);
+    if (st)
+        return st;
+    uint32_t dim = affect_features_dim(f);
+    for (uint32_t j = 0; j < f->n_joints; j++) {
+        st = affect_motion_set_name(m, j, f->skeleton[j], strlen(f->skeleton[j]), err);
+        if (st)
+            goto fail;
+        m->parents[j] = f->parents[j];
+    }
+    if ((st = affect_motion_set_unit(m, f->unit, err)) != AFFECT_OK)
+        goto fail;
+    for (uint32_t t = 0; t < n_frames; t++)
+        for (uint32_t i = 0; i < f->n_joints * 3; i++)
+            m->pos[(size_t)t * f->n_joints * 3 + i] = (float)x[(size_t)t * dim + i];
+    if ((st = affect_motion_validate(m, err)) != AFFECT_OK)
+        goto fail;
+    *out = m;
+    return AFFECT_OK;
+fail:
+    affect_motion_free(m);
+    return st;
+}
+
+/* ---- binary form ---- */
+
+static void put_u16(unsigned char *p, uint16_t v)
+{
+    p[0] = (unsigned char)v;
+    p[1] = (unsigned char)(v >> 8);
+}
+
+static void put_u32(unsigned char *p, uint32_t v)
+{
+    for (int i = 0; i < 4; i++)
+        p[i] = (unsigned char)(v >> (8 * i));
+}
+
+static uint16_t get_u16(const unsigned char *p)
+{
+    return (uint16_t)(p[0] | (p[1] << 8));
+}
+
+static uint32_t get_u32(const unsigned char *p)
+{
+    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) |
+           ((uint32_t)p[3] << 24);
+}
+
+static double get_f64(const unsigned char *p)
+{
+    uint64_t u = 0;
+    for (int i = 7; i >= 0; i--)
+        u = (u << 8) | p[i];
+    double d;
+    memcpy(&d, &u, sizeof d);
+    return d;
+}
+
+static void put_f64(unsigned char *p, double d)
+{
+    uint64_t u;
+    memcpy(&u, &d, sizeof u);
+    for (int i = 0; i < 8; i++)
+        p[i] = (unsigned char)(u >> (8 * i));
+}
+
+enum { FLAG_NORMALIZE = 1, FLAG_SCALE_ARM = 2, FLAG_VELOCITY = 4 };
+
+bool affect_features_encoded_size(const affect_features *f, size_t *size)
+{
+    size_t total = AFFECT_FEATURES_HEADER_SIZE + strlen(f->unit);
+    for (uint32_t j = 0; j < f->n_joints; j++)
+        if (!affect_add_size(total, 4 + strlen(f->joints[j]) + strlen(f->skeleton[j]), &total))
+            return false;
+    if (!affect_add_size(total, (size_t)f->n_joints * 4, &total))
+        return false;
+    *size = total;
+    return true;
+}
+
+static unsigned char *put_name(unsigned char *p, const char *s)
+{
+    size_t len = strlen(s);
+    put_u16(p, (uint16_t)len);
+    memcpy(p + 2, s, len);
+    return p + 2 + len;
+}
+
+void affect_features_encode_into(const affect_features *f, unsigned char *buf)
+{
+    size_t unit_len = strlen(f->unit);
+    buf[0] = (unsigned char)f->up_axis;
+    buf[1] = (unsigned char)((f->normalize ? FLAG_NORMALIZE : 0) |
+                             (f->scale_arm ? FLAG_SCALE_ARM : 0) |
+                             (f->velocity ? FLAG_VELOCITY : 0));
+    buf[2] = (unsigned char)unit_len;
+    buf[3] = 0;
+    put_u32(buf + 4, f->n_joints);
+    put_f64(buf + 8, f->fps);
+    unsigned char *p = buf + AFFECT_FEATURES_HEADER_SIZE;
+    memcpy(p, f->unit, unit_len);
+    p += unit_len;
+    for (uint32_t j = 0; j < f->n_joints; j++)
+        p = put_name(p, f->joints[j]);
+    for (uint32_t j = 0; j < f->n_joints; j++)
+        p = put_name(p, f->skeleton[j]);
+    for (uint32_t j = 0; j < f->n_joints; j++, p += 4)
+        put_u32(p, (uint32_t)f->parents[j]);
+}
+
+/* Reads one length-prefixed name at *off into a new string *out. */
+static affect_status get_name(const unsigned char *data, size_t size, size_t *off,
+                              const char *what, uint32_t j, char **out, affect_error *err)
+{
+    if (size - *off < 2)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "truncated in %s %u (offset %zu)", what, j,
+                           *off);
+    size_t len = get_u16(data + *off);
+    if (len == 0 || len > AFFECT_MOTION_MAX_NAME)
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "%s %u: length %zu out of range (1 .. %u) at offset %zu", what, j, len,
+                           AFFECT_MOTION_MAX_NAME, *off);
+    if (size - *off - 2 < len)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "truncated in %s %u (offset %zu)", what, j,
+                           *off);
+    if (memchr(data + *off + 2, '\0', len))
+        return affect_fail(err, AFFECT_ERR_FORMAT, "%s %u contains a NUL byte (offset %zu)", what,
+                           j, *off);
+    *out = affect_strndup((const char *)data + *off + 2, len);
+    if (!*out)
+        return affect_nomem(err);
+    *off += 2 + len;
+    return AFFECT_OK;
+}
+
+static bool unit_char_ok(unsigned char c)
+{
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+           c == '_' || c == '.' || c == '-';
+}
+
+affect_status affect_features_decode(const unsigned char *data, size_t size,
+                                     affect_features **out, affect_error *err)
+{
+    if (size < AFFECT_FEATURES_HEADER_SIZE)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "truncated: %zu bytes is shorter than the "
+                           "%u-byte header", size, AFFECT_FEATURES_HEADER_SIZE);
+    int up = data[0];
+    unsigned flags = data[1];
+    size_t unit_len = data[2];
+    uint32_t n = get_u32(data + 4);
+    double fps = get_f64(data + 8);
+    if (up > 2)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "up axis %d out of range (0 .. 2)", up);
+    if (flags & ~(unsigned)(FLAG_NORMALIZE | FLAG_SCALE_ARM | FLAG_VELOCITY))
+        return affect_fail(err, AFFECT_ERR_FORMAT, "unknown flags 0x%02x (offset 1)", flags);
+    if (data[3] != 0)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "reserved byte 3 is not zero");
+    if (n < 1 || n > AFFECT_MOTION_MAX_JOINTS)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "joint count %u out of range (1 .. %u)", n,
+                           AFFECT_MOTION_MAX_JOINTS);
+    if (!(fps > 0.0) || !(fps <= AFFECT_MOTION_MAX_FPS))
+        return affect_fail(err, AFFECT_ERR_FORMAT, "frames per second %g out of range (0 .. %g]",
+                           fps, AFFECT_MOTION_MAX_FPS);
+    size_t off = AFFECT_FEATURES_HEADER_SIZE;
+    if (unit_len > AFFECT_MOTION_UNIT_MAX || size - off < unit_len)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "truncated or bad unit (length %zu at "
+                           "offset 2)", unit_len);
+    for (size_t i = 0; i < unit_len; i++)
+        if (!unit_char_ok(data[off + i]))
+            return affect_fail(err, AFFECT_ERR_FORMAT, "bad unit character at offset %zu",
+                               off + i);
+    affect_features *f = features_alloc(n);
+    if (!f)
+        return affect_nomem(err);
+    memcpy(f->unit, data + off, unit_len);
+    f->unit[unit_len] = '\0';
+    off += unit_len;
+    f->up_axis = up;
+    f->normalize = (flags & FLAG_NORMALIZE) != 0;
+    f->scale_arm = (flags & FLAG_SCALE_ARM) != 0;
+    f->velocity = (flags & FLAG_VELOCITY) != 0;
+    f->fps = fps;
+    affect_status st = AFFECT_OK;
+    for (uint32_t j = 0; j < n && !st; j++)
+        st = get_name(data, size, &off, "joint entry", j, &f->joints[j], err);
+    for (uint32_t j = 0; j < n && !st; j++)
+        st = get_name(data, size, &off, "skeleton name", j, &f->skeleton[j], err);
+    if (st)
+        goto fail;
+    if (size - off != (size_t)n * 4) {
+        st = affect_fail(err, AFFECT_ERR_FORMAT, "%s: %zu bytes, expected %zu for %u joints",
+                         size - off < (size_t)n * 4 ? "truncated" : "trailing bytes", size,
+                         off + (size_t)n * 4, n);
+        goto fail;
+    }
+    for (uint32_t j = 0; j < n; j++, off += 4) {
+        int32_t p = (int32_t)get_u32(data + off);
+        if (p < -1 || p >= (int32_t)n) {
+            st = affect_fail(err, AFFECT_ERR_FORMAT, "parent %d of joint %u out of range",
+                             (int)p, j);
+            goto fail;
+        }
+        f->parents[j] = p;
+    }
+    for (uint32_t j = 0; j < n; j++) { /* acyclic: every chain ends within n steps */
+        int32_t p = f->parents[j];
+        uint32_t steps = 0;
+        while (p >= 0 && steps++ <= n)
+            p = f->parents[p];
+        if (p >= 0) {
+            st = affect_fail(err, AFFECT_ERR_FORMAT, "joint %u is its own ancestor", j);
+            goto fail;
+        }
+    }
+    for (uint32_t j = 0; j < n; j++)
+        for (uint32_t k = 0; k < j; k++)
+            if (strcmp(f->skeleton[j], f->skeleton[k]) == 0 ||
+                strcmp(f->joints[j], f->joints[k]) == 0) {
+                st = affect_fail(err, AFFECT_ERR_FORMAT, "joints %u and %u have the same name",
+                                 k, j);
+                goto fail;
+            }
+    *out = f;
+    return AFFECT_OK;
+fail:
+    affect_features_free(f);
+    return st;
+}

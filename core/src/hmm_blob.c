@@ -1,0 +1,319 @@
+/*
+ * hmm_blob.c — the model BLOB: encode a trained HMM with its feature definition and training
+ * report; decode and check one (layout in affect/hmm_blob.h and docs/FORMATS.md).
+ *
+ * How it works: the encoder writes every field byte by byte, little-endian, and ends with the
+ * FNV-1a 64-bit hash of everything before it. The decoder checks the fixed header and the sizes
+ * it announces before touching the payload (every size product is overflow-checked), then the
+ * exact length, then the hash — so a damaged BLOB is refused before any of its values is
+ * trusted — then the contents, and finally rebuilds the model through affect_hmm_from_params
+ * and affect_hmm_set_report. encode(decode(x)) gives back x byte for byte.
+ */
+#include "affect/hmm_blob.h"
+
+#include <math.h>
+#include <string.h>
+
+uint64_t affect_fnv1a64(const unsigned char *data, size_t size)
+{
+    uint64_t h = 0xcbf29ce484222325ull;
+    for (size_t i = 0; i < size; i++)
+        h = (h ^ data[i]) * 0x100000001b3ull;
+    return h;
+}
+
+static void put_u16(unsigned char *p, uint16_t v)
+{
+    p[0] = (unsigned char)v;
+    p[1] = (unsigned char)(v >> 8);
+}
+
+static void put_u32(unsigned char *p, uint32_t v)
+{
+    for (int i = 0; i < 4; i++)
+        p[i] = (unsigned char)(v >> (8 * i));
+}
+
+static void put_u64(unsigned char *p, uint64_t v)
+{
+    for (int i = 0; i < 8; i++)
+        p[i] = (unsigned char)(v >> (8 * i));
+}
+
+static void put_f64(unsigned char *p, double d)
+{
+    uint64_t u;
+    memcpy(&u, &d, sizeof u);
+    put_u64(p, u);
+}
+
+static uint16_t get_u16(const unsigned char *p)
+{
+    return (uint16_t)(p[0] | (p[1] << 8));
+}
+
+static uint32_t get_u32(const unsigned char *p)
+{
+    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) |
+           ((uint32_t)p[3] << 24);
+}
+
+static uint64_t get_u64(const unsigned char *p)
+{
+    uint64_t v = 0;
+    for (int i = 7; i >= 0; i--)
+        v = (v << 8) | p[i];
+    return v;
+}
+
+static double get_f64(const unsigned char *p)
+{
+    uint64_t u = get_u64(p);
+    double d;
+    memcpy(&d, &u, sizeof d);
+    return d;
+}
+
+/* Counts of doubles in each parameter section. */
+typedef struct sections {
+    size_t start, trans, weights, means, covs, total;
+} sections;
+
+/* The section sizes of an N × M × m model; false on overflow. */
+static bool section_sizes(uint32_t n, uint32_t m_mix, uint32_t dim, bool full, sections *s)
+{
+    size_t nm, nmd, cov;
+    s->start = n;
+    s->trans = (size_t)n * n;
+    if (!affect_mul_size(n, m_mix, &nm) || !affect_mul_size(nm, dim, &nmd))
+        return false;
+    s->weights = nm;
+    s->means = nmd;
+    if (full) {
+        if (!affect_mul_size(nmd, dim, &cov))
+            return false;
+    } else {
+        cov = nmd;
+    }
+    s->covs = cov;
+    return affect_add_size(s->start, s->trans, &s->total) &&
+           affect_add_size(s->total, s->weights, &s->total) &&
+           affect_add_size(s->total, s->means, &s->total) &&
+           affect_add_size(s->total, s->covs, &s->total);
+}
+
+/* Total BLOB size for a feature definition of f_len bytes and n_ll log-likelihoods. */
+static bool blob_size(size_t f_len, size_t n_ll, const sections *s, size_t *size)
+{
+    size_t doubles, bytes;
+    return affect_add_size(n_ll, s->total, &doubles) && affect_mul_size(doubles, 8, &bytes) &&
+           affect_add_size(bytes, AFFECT_HMM_BLOB_HEADER_SIZE + 8, &bytes) &&
+           affect_add_size(bytes, f_len, size);
+}
+
+static unsigned char *put_doubles(unsigned char *p, const double *v, size_t n)
+{
+    for (size_t i = 0; i < n; i++, p += 8)
+        put_f64(p, v[i]);
+    return p;
+}
+
+affect_status affect_hmm_blob_encode(const affect_hmm *h, const affect_features *f,
+                                     unsigned char **out, size_t *size, affect_error *err)
+{
+    const affect_hmm_config *cfg = affect_hmm_get_config(h);
+    if (affect_features_dim(f) != cfg->dim)
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "the feature definition has %u dimensions, the model %u",
+                           affect_features_dim(f), cfg->dim);
+    affect_hmm_report rep;
+    affect_hmm_get_report(h, &rep);
+    sections s;
+    size_t f_len, total;
+    if (!section_sizes(cfg->n_states, cfg->n_mix, cfg->dim, cfg->cov == AFFECT_HMM_FULL, &s) ||
+        !affect_features_encoded_size(f, &f_len) || f_len > UINT32_MAX ||
+        !blob_size(f_len, (size_t)rep.iterations + 1, &s, &total))
+        return affect_fail(err, AFFECT_ERR_RANGE, "model too large to encode");
+    unsigned char *buf = affect_malloc(total);
+    if (!buf)
+        return affect_nomem(err);
+    unsigned char *p = buf;
+    memcpy(p, AFFECT_HMM_MAGIC, 4);
+    put_u16(p + 4, AFFECT_HMM_BLOB_VERSION);
+    put_u16(p + 6, 0);
+    put_u32(p + 8, cfg->n_states);
+    put_u32(p + 12, cfg->n_mix);
+    put_u32(p + 16, cfg->dim);
+    p[20] = (unsigned char)cfg->cov;
+    p[21] = (unsigned char)cfg->topology;
+    p[22] = cfg->learn_start ? 1 : 0;
+    p[23] = rep.converged ? 1 : 0;
+    put_u32(p + 24, cfg->max_jump);
+    put_u32(p + 28, cfg->max_iter);
+    put_f64(p + 32, cfg->tol);
+    put_f64(p + 40, cfg->reg);
+    put_u64(p + 48, cfg->seed);
+    put_u32(p + 56, rep.iterations);
+    put_u32(p + 60, rep.reseeded);
+    put_u32(p + 64, rep.n_sequences);
+    put_u32(p + 68, (uint32_t)f_len);
+    put_u64(p + 72, rep.n_frames);
+    p += AFFECT_HMM_BLOB_HEADER_SIZE;
+    affect_features_encode_into(f, p);
+    p += f_len;
+    p = put_doubles(p, rep.loglik, (size_t)rep.iterations + 1);
+    p = put_doubles(p, affect_hmm_start(h), s.start);
+    p = put_doubles(p, affect_hmm_transitions(h), s.trans);
+    p = put_doubles(p, affect_hmm_weights(h), s.weights);
+    p = put_doubles(p, affect_hmm_means(h), s.means);
+    p = put_doubles(p, affect_hmm_covariances(h), s.covs);
+    put_u64(p, affect_fnv1a64(buf, (size_t)(p - buf)));
+    *out = buf;
+    *size = total;
+    return AFFECT_OK;
+}
+
+/* Reads n doubles at *off into v, refusing non-finite ones (named by section and offset). */
+static affect_status get_doubles(const unsigned char *data, size_t *off, double *v, size_t n,
+                                 const char *section, affect_error *err)
+{
+    for (size_t i = 0; i < n; i++, *off += 8) {
+        v[i] = get_f64(data + *off);
+        if (!isfinite(v[i]))
+            return affect_fail(err, AFFECT_ERR_FORMAT, "non-finite value in the %s (offset %zu)",
+                               section, *off);
+    }
+    return AFFECT_OK;
+}
+
+affect_status affect_hmm_blob_decode(const unsigned char *data, size_t size, affect_hmm **h,
+                                     affect_features **f, affect_error *err)
+{
+    if (size < AFFECT_HMM_BLOB_HEADER_SIZE)
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "truncated: %zu bytes is shorter than the %u-byte header", size,
+                           AFFECT_HMM_BLOB_HEADER_SIZE);
+    if (memcmp(data, AFFECT_HMM_MAGIC, 4) != 0)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "not a model (bad magic bytes at offset 0)");
+    uint16_t version = get_u16(data + 4);
+    if (version < 1 || version > AFFECT_HMM_BLOB_VERSION)
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "unknown format version %u (this build reads 1 .. %u)", version,
+                           AFFECT_HMM_BLOB_VERSION);
+    uint16_t flags = get_u16(data + 6);
+    if (flags != 0)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "unknown flags 0x%04x (offset 6)", flags);
+
+    affect_hmm_config cfg;
+    affect_hmm_config_default(&cfg);
+    cfg.n_states = get_u32(data + 8);
+    cfg.n_mix = get_u32(data + 12);
+    cfg.dim = get_u32(data + 16);
+    if (cfg.n_states < 1 || cfg.n_states > AFFECT_HMM_MAX_STATES)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "state count %u out of range (1 .. %u)",
+                           cfg.n_states, AFFECT_HMM_MAX_STATES);
+    if (cfg.n_mix < 1 || cfg.n_mix > AFFECT_HMM_MAX_MIX)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "mixture count %u out of range (1 .. %u)",
+                           cfg.n_mix, AFFECT_HMM_MAX_MIX);
+    if (cfg.dim < 1 || cfg.dim > AFFECT_HMM_MAX_DIM)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "dimension %u out of range (1 .. %u)",
+                           cfg.dim, AFFECT_HMM_MAX_DIM);
+    for (int i = 20; i < 24; i++)
+        if (data[i] > 1)
+            return affect_fail(err, AFFECT_ERR_FORMAT, "byte %d must be 0 or 1, got %u", i,
+                               data[i]);
+    cfg.cov = data[20] ? AFFECT_HMM_DIAG : AFFECT_HMM_FULL;
+    cfg.topology = data[21] ? AFFECT_HMM_LEFT_RIGHT : AFFECT_HMM_ERGODIC;
+    cfg.learn_start = data[22] != 0;
+    cfg.max_jump = get_u32(data + 24);
+    cfg.max_iter = get_u32(data + 28);
+    cfg.tol = get_f64(data + 32);
+    cfg.reg = get_f64(data + 40);
+    cfg.seed = get_u64(data + 48);
+    affect_hmm_report rep;
+    memset(&rep, 0, sizeof rep);
+    rep.converged = data[23] != 0;
+    rep.iterations = get_u32(data + 56);
+    rep.reseeded = get_u32(data + 60);
+    rep.n_sequences = get_u32(data + 64);
+    size_t f_len = get_u32(data + 68);
+    rep.n_frames = get_u64(data + 72);
+    if (rep.iterations > cfg.max_iter)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "%u iterations exceed max_iter %u (offset 56)",
+                           rep.iterations, cfg.max_iter);
+    sections s;
+    size_t total;
+    if (!section_sizes(cfg.n_states, cfg.n_mix, cfg.dim, cfg.cov == AFFECT_HMM_FULL, &s) ||
+        !blob_size(f_len, (size_t)rep.iterations + 1, &s, &total))
+        return affect_fail(err, AFFECT_ERR_FORMAT, "sizes in the header overflow");
+    if (size != total)
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "%s: %zu bytes, expected %zu for %u states x %u mixtures x %u "
+                           "dimensions", size < total ? "truncated" : "trailing bytes", size,
+                           total, cfg.n_states, cfg.n_mix, cfg.dim);
+    if (get_u64(data + size - 8) != affect_fnv1a64(data, size - 8))
+        return affect_fail(err, AFFECT_ERR_FORMAT, "model checksum mismatch: the BLOB is corrupt");
+
+    /* contents: the hash matched, so these fail only for a BLOB written wrongly */
+    const char *msg = affect_hmm_config_check(&cfg);
+    if (msg)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "bad configuration: %s", msg);
+    affect_features *feat = NULL;
+    affect_hmm *model = NULL;
+    double *ll = NULL, *par = NULL;
+    size_t off = AFFECT_HMM_BLOB_HEADER_SIZE;
+    affect_error ferr;
+    affect_status st = affect_features_decode(data + off, f_len, &feat, &ferr);
+    if (st) {
+        if (st == AFFECT_ERR_NOMEM)
+            st = affect_nomem(err);
+        else
+            st = affect_fail(err, AFFECT_ERR_FORMAT, "feature definition at offset %zu: %s", off,
+                             ferr.msg);
+        goto fail;
+    }
+    if (affect_features_dim(feat) != cfg.dim) {
+        st = affect_fail(err, AFFECT_ERR_FORMAT,
+                         "the feature definition gives %u dimensions, the header %u",
+                         affect_features_dim(feat), cfg.dim);
+        goto fail;
+    }
+    off += f_len;
+    ll = affect_malloc_array((size_t)rep.iterations + 1, sizeof *ll);
+    par = affect_malloc_array(s.total, sizeof *par);
+    if (!ll || !par) {
+        st = affect_nomem(err);
+        goto fail;
+    }
+    double *start = par, *trans = start + s.start, *w = trans + s.trans, *mu = w + s.weights,
+           *cov = mu + s.means;
+    if ((st = get_doubles(data, &off, ll, (size_t)rep.iterations + 1, "log-likelihoods", err)) ||
+        (st = get_doubles(data, &off, start, s.start, "start probabilities", err)) ||
+        (st = get_doubles(data, &off, trans, s.trans, "transitions", err)) ||
+        (st = get_doubles(data, &off, w, s.weights, "mixture weights", err)) ||
+        (st = get_doubles(data, &off, mu, s.means, "means", err)) ||
+        (st = get_doubles(data, &off, cov, s.covs, "covariances", err)))
+        goto fail;
+    st = affect_hmm_from_params(&cfg, start, trans, w, mu, cov, &model, &ferr);
+    if (st) {
+        if (st == AFFECT_ERR_NOMEM)
+            st = affect_nomem(err);
+        else
+            st = affect_fail(err, AFFECT_ERR_FORMAT, "bad parameters: %s", ferr.msg);
+        goto fail;
+    }
+    rep.loglik = ll;
+    if ((st = affect_hmm_set_report(model, &rep, err)) != AFFECT_OK)
+        goto fail;
+    affect_free(ll);
+    affect_free(par);
+    *h = model;
+    *f = feat;
+    return AFFECT_OK;
+fail:
+    affect_hmm_free(model);
+    affect_features_free(feat);
+    affect_free(ll);
+    affect_free(par);
+    return st;
+}
