@@ -16,86 +16,6 @@
 
 /* ---- helpers ---- */
 
-static size_t count(const char *s, const char *needle)
-{
-    size_t n = 0, k = strlen(needle);
-    for (const char *p = strstr(s, needle); p; p = strstr(p + k, needle))
-        n++;
-    return n;
-}
-
-static bool has_ci(const char *s, const char *needle)
-{
-    size_t k = strlen(needle);
-    for (; *s; s++) {
-        size_t i = 0;
-        while (i < k && s[i] && (s[i] | 0x20) == needle[i])
-            i++;
-        if (i == k)
-            return true;
-    }
-    return false;
-}
-
-/* A small XML checker for what the writer emits: balanced, properly nested tags with quoted
- * attributes, one root <svg> ending the document, and only the five predefined entities. */
-static void assert_well_formed(const char *s, size_t len)
-{
-    assert_int_equal(strlen(s), len);
-    assert_true(strncmp(s, "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"", 47) == 0);
-    assert_true(len > 7 && strcmp(s + len - 7, "</svg>\n") == 0);
-    assert_false(has_ci(s, "nan"));
-    assert_false(has_ci(s, "inf"));
-    char stack[64][16];
-    int depth = 0;
-    bool root_closed = false;
-    for (const char *p = s; *p; p++) {
-        if (*p == '&') {
-            static const char *const ents[] = {"&amp;", "&lt;", "&gt;", "&quot;", "&#39;"};
-            bool ok = false;
-            for (int i = 0; i < 5; i++)
-                ok = ok || strncmp(p, ents[i], strlen(ents[i])) == 0;
-            if (!ok)
-                fail_msg("bad entity at byte %zu", (size_t)(p - s));
-            continue;
-        }
-        if (*p == '>')
-            fail_msg("stray '>' at byte %zu", (size_t)(p - s));
-        if (*p != '<')
-            continue;
-        assert_false(root_closed);
-        bool closing = p[1] == '/';
-        const char *name = p + (closing ? 2 : 1);
-        size_t n = strspn(name, "abcdefghijklmnopqrstuvwxyz");
-        assert_true(n > 0 && n < 16);
-        const char *q = name + n;
-        bool in_quote = false;
-        for (; *q && (in_quote || *q != '>'); q++) {
-            if (*q == '"')
-                in_quote = !in_quote;
-            if (in_quote && (*q == '<' || *q == '>'))
-                fail_msg("unescaped %c inside an attribute at byte %zu", *q, (size_t)(q - s));
-        }
-        assert_int_equal(*q, '>');
-        if (closing) {
-            assert_true(depth > 0);
-            depth--;
-            if (strlen(stack[depth]) != n || strncmp(stack[depth], name, n) != 0)
-                fail_msg("</%.*s> closes <%s>", (int)n, name, stack[depth]);
-            if (depth == 0)
-                root_closed = true;
-        } else if (q[-1] != '/') {
-            assert_true(depth < 64);
-            memcpy(stack[depth], name, n);
-            stack[depth][n] = '\0';
-            depth++;
-        }
-        p = q;
-    }
-    assert_int_equal(depth, 0);
-    assert_true(root_closed);
-}
-
 /* Text of panel k (the nested <svg x=…> element), copied into a malloc'd string. */
 static char *panel_text(const char *s, size_t k)
 {
@@ -138,7 +58,7 @@ __attribute__((noinline)) static char *render(const affect_motion *m, const affe
     affect_status st = affect_motion_svg(m, roles, opt, &svg, &len, &err);
     if (st != AFFECT_OK)
         fail_msg("affect_motion_svg: %s", err.msg);
-    assert_well_formed(svg, len);
+    tu_assert_svg_well_formed(svg, len);
     if (len_out)
         *len_out = len;
     return svg;
@@ -292,8 +212,8 @@ static void test_human_strip(void **state)
                                 "font-family=\"sans-serif\">\n"
                                 "<rect width=\"100%\" height=\"100%\" fill=\"#fff\"/>\n"));
     /* 8 panels, 8 labels, evenly spaced frames 0 … 59 */
-    assert_int_equal(count(svg, "<svg x="), 8);
-    assert_int_equal(count(svg, ">frame "), 8);
+    assert_int_equal(tu_count(svg, "<svg x="), 8);
+    assert_int_equal(tu_count(svg, ">frame "), 8);
     static const char *const labels[] = {
         ">frame 0 \xc2\xb7 0.00 s<",  ">frame 8 \xc2\xb7 0.27 s<",  ">frame 17 \xc2\xb7 0.57 s<",
         ">frame 25 \xc2\xb7 0.83 s<", ">frame 34 \xc2\xb7 1.13 s<", ">frame 42 \xc2\xb7 1.40 s<",
@@ -312,12 +232,12 @@ static void test_human_strip(void **state)
     assert_int_equal(bones_of(panel, RED), 10);
     assert_int_equal(bones_of(panel, GREY), 5);
     /* a head circle with a white fill, a ground line, five trajectories */
-    assert_int_equal(count(panel, "fill=\"#fff\" stroke=\"" GREY "\""), 1);
-    assert_int_equal(count(panel, "<path stroke=\"#b9bec6\""), 1);
-    assert_int_equal(count(panel, "<use href=\"#afm"), 5);
+    assert_int_equal(tu_count(panel, "fill=\"#fff\" stroke=\"" GREY "\""), 1);
+    assert_int_equal(tu_count(panel, "<path stroke=\"#b9bec6\""), 1);
+    assert_int_equal(tu_count(panel, "<use href=\"#afm"), 5);
     /* every dot of the panel lies inside it (the reference root at the origin, 0–2 m away
      * from the walker, neither shows nor shrinks the figure) */
-    size_t dots = count(panel, "<circle cx=");
+    size_t dots = tu_count(panel, "<circle cx=");
     assert_true(dots >= 20);
     double ymin = 1e9, ymax = -1e9;
     for (size_t i = 0; i < dots; i++) {
@@ -333,7 +253,7 @@ static void test_human_strip(void **state)
     assert_null(strstr(svg, "<tspan"));
     opt.title = "walk";
     char *titled = render(m, &roles, &opt, NULL);
-    assert_int_equal(count(titled, "<tspan fill=\"" BLUE "\">"), 1);
+    assert_int_equal(tu_count(titled, "<tspan fill=\"" BLUE "\">"), 1);
     affect_free(titled);
     /* without roles: one colour, no head, no trajectories, no legend */
     char *plain = render(m, NULL, &opt, NULL);
@@ -356,7 +276,7 @@ static void test_labels_and_frame_choice(void **state)
     affect_svg_options_default(&opt);
     opt.frames = 4;
     char *svg = render(m, NULL, &opt, NULL);
-    assert_int_equal(count(svg, "<svg x="), 4);
+    assert_int_equal(tu_count(svg, "<svg x="), 4);
     assert_non_null(strstr(svg, ">frame 0 \xc2\xb7 0.00 s</text>"));
     assert_non_null(strstr(svg, ">frame 3 \xc2\xb7 0.10 s</text>"));
     assert_non_null(strstr(svg, ">frame 6 \xc2\xb7 0.20 s</text>"));
@@ -368,17 +288,17 @@ static void test_labels_and_frame_choice(void **state)
     assert_int_equal(affect_motion_slice(m, 0, 2, &s, NULL), AFFECT_OK);
     opt.frames = 8;
     svg = render(s, NULL, &opt, NULL);
-    assert_int_equal(count(svg, "<svg x="), 3);
-    assert_int_equal(count(svg, ">frame "), 3);
+    assert_int_equal(tu_count(svg, "<svg x="), 3);
+    assert_int_equal(tu_count(svg, ">frame "), 3);
     assert_non_null(strstr(svg, ">frame 2 \xc2\xb7 0.07 s</text>"));
     affect_free(svg);
     /* one panel shows frame 0; no labels means no label row */
     opt.frames = 1;
     opt.labels = false;
     svg = render(m, NULL, &opt, NULL);
-    assert_int_equal(count(svg, "<svg x="), 1);
-    assert_int_equal(count(svg, "frame"), 0);
-    assert_int_equal(count(svg, "<text"), 0);
+    assert_int_equal(tu_count(svg, "<svg x="), 1);
+    assert_int_equal(tu_count(svg, "frame"), 0);
+    assert_int_equal(tu_count(svg, "<text"), 0);
     assert_non_null(strstr(svg, "width=\"160\" height=\"160\""));
     affect_free(svg);
     affect_motion_free(s);
@@ -395,7 +315,7 @@ static void dot_direction(const affect_motion *m, affect_svg_view view, int up, 
     opt.frames = 1;
     char *svg = render(m, NULL, &opt, NULL);
     char *panel = panel_text(svg, 0);
-    assert_int_equal(count(panel, "<circle"), 2);
+    assert_int_equal(tu_count(panel, "<circle"), 2);
     double x0, y0, x1, y1;
     circle_at(panel, 0, &x0, &y0);
     circle_at(panel, 1, &x1, &y1);
@@ -456,8 +376,8 @@ static void test_views_and_up_axes(void **state)
             if (strcmp(docs[i], docs[k]) == 0)
                 fail_msg("documents %d and %d are equal", i, k);
     /* the top view has no ground line */
-    assert_int_equal(count(docs[2], "#b9bec6"), 0);
-    assert_int_equal(count(docs[0], "#b9bec6"), 8);
+    assert_int_equal(tu_count(docs[2], "#b9bec6"), 0);
+    assert_int_equal(tu_count(docs[0], "#b9bec6"), 8);
     for (int i = 0; i < 5; i++)
         affect_free(docs[i]);
     affect_motion_free(m);
@@ -505,15 +425,15 @@ static void test_dots_only_without_skeleton(void **state)
     affect_svg_options_default(&opt);
     opt.frames = 2;
     char *with = render(m, &roles, &opt, NULL);
-    assert_int_equal(count(with, "stroke-linecap"), 2);
-    assert_true(count(with, "<path stroke=\"") >= 6);
+    assert_int_equal(tu_count(with, "stroke-linecap"), 2);
+    assert_true(tu_count(with, "<path stroke=\"") >= 6);
     for (uint32_t j = 0; j < H_COUNT; j++)
         m->parents[j] = -1;
     char *without = render(m, &roles, &opt, NULL);
-    assert_int_equal(count(without, "stroke-linecap"), 0);
+    assert_int_equal(tu_count(without, "stroke-linecap"), 0);
     /* only the ground lines remain as paths; every joint is a dot, plus the head circle */
-    assert_int_equal(count(without, "<path stroke=\""), 2);
-    assert_int_equal(count(without, "<circle"), 2 * (H_COUNT + 1));
+    assert_int_equal(tu_count(without, "<path stroke=\""), 2);
+    assert_int_equal(tu_count(without, "<circle"), 2 * (H_COUNT + 1));
     /* sides still colour the dots */
     assert_non_null(strstr(without, "<g fill=\"" BLUE "\"><circle"));
     assert_non_null(strstr(without, "<g fill=\"" RED "\"><circle"));
@@ -531,9 +451,9 @@ static void test_trajectories(void **state)
     affect_svg_options_default(&opt);
     size_t len;
     char *svg = render(m, &roles, &opt, &len);
-    assert_int_equal(count(svg, "<defs>"), 1);
-    assert_int_equal(count(svg, "<polyline id=\"afm"), 5);
-    assert_int_equal(count(svg, "<use href=\"#afm"), 5 * 8);
+    assert_int_equal(tu_count(svg, "<defs>"), 1);
+    assert_int_equal(tu_count(svg, "<polyline id=\"afm"), 5);
+    assert_int_equal(tu_count(svg, "<use href=\"#afm"), 5 * 8);
     /* every <use> names a polyline of the <defs> */
     const char *def = strstr(svg, "<polyline id=\"");
     char id[32];
@@ -542,7 +462,7 @@ static void test_trajectories(void **state)
     assert_int_equal(id[19], '-');
     char href[48];
     snprintf(href, sizeof href, "<use href=\"#%.19s-", id);
-    assert_int_equal(count(svg, href), 5 * 8);
+    assert_int_equal(tu_count(svg, href), 5 * 8);
     /* at most 200 points per polyline */
     for (const char *p = strstr(svg, "points=\""); p; p = strstr(p + 1, "points=\"")) {
         size_t pts = 1;
@@ -591,8 +511,8 @@ static void test_degenerate(void **state)
     affect_motion *m = make_motion(1, 1, 30);
     set_pos(m, 0, 0, 3, 4, 5);
     char *svg = render(m, NULL, &opt, NULL);
-    assert_int_equal(count(svg, "<svg x="), 1);
-    assert_int_equal(count(svg, "<circle"), 1);
+    assert_int_equal(tu_count(svg, "<svg x="), 1);
+    assert_int_equal(tu_count(svg, "<circle"), 1);
     double cx, cy;
     char *panel = panel_text(svg, 0);
     circle_at(panel, 0, &cx, &cy);
@@ -615,7 +535,7 @@ static void test_degenerate(void **state)
     opt.view = AFFECT_SVG_FRONT;
     opt.title = "all equal";
     svg = render(m, &roles, &opt, NULL);
-    assert_int_equal(count(svg, "<svg x="), 8);
+    assert_int_equal(tu_count(svg, "<svg x="), 8);
     affect_free(svg);
     opt.view = AFFECT_SVG_TOP;
     svg = render(m, &roles, &opt, NULL);
@@ -626,7 +546,7 @@ static void test_degenerate(void **state)
     opt.panel_size = 32;
     opt.frames = 64;
     svg = render(m, &roles, &opt, NULL);
-    assert_int_equal(count(svg, "<svg x="), 50);
+    assert_int_equal(tu_count(svg, "<svg x="), 50);
     affect_free(svg);
     affect_motion_free(m);
 }

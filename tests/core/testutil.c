@@ -1,5 +1,8 @@
 /*
- * testutil.c — see testutil.h. The out-of-memory helpers keep the counting allocator's state
+ * testutil.c — see testutil.h. The SVG checker is a small XML checker for exactly what
+ * svg.c and plot.c emit (no comments, CDATA, processing instructions or single-quoted
+ * attributes), strict enough to catch a missing escape or a misnested group. The out-of-memory
+ * helpers keep the counting allocator's state
  * in three file-level counters: affect_set_allocator takes plain function pointers, and the
  * test executables are single-threaded.
  */
@@ -43,6 +46,98 @@ const char *tu_corpus_dir(void)
         return NULL;
     }
     return dir;
+}
+
+/* ---- text and SVG ---- */
+
+size_t tu_count(const char *s, const char *needle)
+{
+    size_t n = 0, k = strlen(needle);
+    for (const char *p = strstr(s, needle); p; p = strstr(p + k, needle))
+        n++;
+    return n;
+}
+
+/* Whether s contains needle (lowercase ASCII letters) in any case. */
+static bool has_ci(const char *s, const char *needle)
+{
+    size_t k = strlen(needle);
+    for (; *s; s++) {
+        size_t i = 0;
+        while (i < k && s[i] && (s[i] | 0x20) == needle[i])
+            i++;
+        if (i == k)
+            return true;
+    }
+    return false;
+}
+
+void tu_assert_svg_well_formed(const char *s, size_t len)
+{
+    assert_int_equal(strlen(s), len);
+    assert_true(strncmp(s, "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"", 47) == 0);
+    assert_true(len > 7 && strcmp(s + len - 7, "</svg>\n") == 0);
+    assert_false(has_ci(s, "nan"));
+    assert_false(has_ci(s, "inf"));
+    for (const unsigned char *u = (const unsigned char *)s; *u; u++) {
+        if (*u >= 0x80) { /* UTF-8: a lead byte and its continuation bytes */
+            int n = *u >= 0xF0 ? 3 : *u >= 0xE0 ? 2 : 1;
+            assert_true(*u >= 0xC2 && *u <= 0xF4);
+            for (int i = 1; i <= n; i++)
+                assert_int_equal(u[i] & 0xC0, 0x80);
+            u += n;
+        }
+    }
+    char stack[64][16];
+    int depth = 0;
+    bool root_closed = false;
+    for (const char *p = s; *p; p++) {
+        if (*p == '&') {
+            static const char *const ents[] = {"&amp;", "&lt;", "&gt;", "&quot;", "&#39;"};
+            bool ok = false;
+            for (int i = 0; i < 5; i++)
+                ok = ok || strncmp(p, ents[i], strlen(ents[i])) == 0;
+            if (!ok)
+                fail_msg("bad entity at byte %zu", (size_t)(p - s));
+            continue;
+        }
+        if (*p == '>')
+            fail_msg("stray '>' at byte %zu", (size_t)(p - s));
+        if (*p != '<')
+            continue;
+        assert_false(root_closed);
+        bool closing = p[1] == '/';
+        const char *name = p + (closing ? 2 : 1);
+        size_t n = strspn(name, "abcdefghijklmnopqrstuvwxyz");
+        assert_true(n > 0 && n < 16);
+        if (name[n] == '\0' || !strchr(" />\n", name[n]))
+            fail_msg("bad tag name at byte %zu", (size_t)(p - s));
+        const char *q = name + n;
+        bool in_quote = false;
+        for (; *q && (in_quote || *q != '>'); q++) {
+            if (*q == '"')
+                in_quote = !in_quote;
+            if (*q == '<' || (in_quote && *q == '>'))
+                fail_msg("unescaped %c inside a tag at byte %zu", *q, (size_t)(q - s));
+        }
+        assert_int_equal(*q, '>');
+        if (closing) {
+            assert_true(depth > 0);
+            depth--;
+            if (strlen(stack[depth]) != n || strncmp(stack[depth], name, n) != 0)
+                fail_msg("</%.*s> closes <%s>", (int)n, name, stack[depth]);
+            if (depth == 0)
+                root_closed = true;
+        } else if (q[-1] != '/') {
+            assert_true(depth < 64);
+            memcpy(stack[depth], name, n);
+            stack[depth][n] = '\0';
+            depth++;
+        }
+        p = q;
+    }
+    assert_int_equal(depth, 0);
+    assert_true(root_closed);
 }
 
 /* ---- out of memory ---- */

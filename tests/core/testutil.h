@@ -1,13 +1,14 @@
 /*
  * testutil.h — helpers shared by the core unit tests: reading files, building small motions,
- * locating the real corpus (tests that need it skip when it is absent), and out-of-memory
- * fault injection.
+ * locating the real corpus (tests that need it skip when it is absent), checking the SVG
+ * documents the writers emit, and out-of-memory fault injection.
  */
 #ifndef AFFECT_TESTUTIL_H
 #define AFFECT_TESTUTIL_H
 
 #include <math.h>
 #include <setjmp.h>
+#include <stdbool.h>
 #include <stdlib.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -30,6 +31,21 @@ const char *tu_corpus_dir(void);
         if (!(fabs(tu_a_ - tu_b_) <= (tol)))                                                   \
             fail_msg("%s = %.9g, expected %.9g (tolerance %g)", #a, tu_a_, tu_b_, (double)(tol)); \
     } while (0)
+
+/* ---- text and SVG ---- */
+
+/* Number of non-overlapping occurrences of needle (not empty) in s. */
+size_t tu_count(const char *s, const char *needle);
+
+/* Fails the test unless s is a well-formed standalone SVG document of len bytes as our
+ * writers emit it: strlen(s) == len; it starts with
+ * `<svg xmlns="http://www.w3.org/2000/svg" width="` and ends with "</svg>\n"; no "nan" or
+ * "inf" in any case; valid UTF-8; tag names of lowercase ASCII letters (under 16), followed
+ * by a space, newline, '/' or '>'; every tag closed by '>' with balanced double quotes, no
+ * '<' anywhere inside it and no '>' inside a quoted attribute; no stray '>' in text; only
+ * the five predefined entities; tags properly nested (at most 64 deep) under one root
+ * element that ends the document. */
+void tu_assert_svg_well_formed(const char *s, size_t len);
 
 /* ---- out of memory ----
  * A counting allocator, installed with affect_set_allocator, that fails exactly the fail_at-th
