@@ -7,7 +7,11 @@
 # Configures build-bench (-DCMAKE_BUILD_TYPE=Release -DAFFECT_WERROR=ON; AFFECT_BENCH_BUILD names
 # another build directory), builds the bench targets, prints the machine (CPU, memory, OS,
 # compiler, flags) and runs each benchmark pinned to CPU 0 with taskset when it is available:
-# bench_import and bench_laban (corpus), then bench_knn (the built module, no arguments).
+# bench_import and bench_laban (corpus), then bench_knn (the built module, no arguments), then
+# bench_hmm with OPENBLAS_NUM_THREADS=1, which writes its data and models to
+# $build/tests/bench/hmm-data, and its pomegranate peer tests/bench/hmm_peer.py on those files,
+# when /usr/bin/python3 can import pomegranate (otherwise it says the peer was skipped).
+# AFFECT_BENCH_ONLY="bench_hmm ..." runs only the benchmarks it names (default: all).
 # Record the output in docs/BENCHMARKS.md.
 set -euo pipefail
 
@@ -35,14 +39,37 @@ echo "flags:    Release: $(sed -n 's/^CMAKE_C_FLAGS_RELEASE:[A-Z]*=//p' "$build/
 echo "pinned:   ${pin[*]:-no (taskset not available)}"
 echo
 
+only="${AFFECT_BENCH_ONLY:-}"
+want() { [[ -z "$only" || " $only " == *" $1 "* ]]; }
+
 for bench in bench_import bench_laban; do
+    want "$bench" || continue
     echo "== $bench"
     "${pin[@]}" "$build/tests/bench/$bench" "$@"
     echo
 done
 
 for bench in bench_knn; do
+    want "$bench" || continue
     echo "== $bench"
     "${pin[@]}" "$build/tests/bench/$bench"
     echo
 done
+
+# The HMM engine and its peer, both with single-threaded OpenBLAS, on the same data.
+if want bench_hmm; then
+    hmm_data="$build/tests/bench/hmm-data"
+    mkdir -p "$hmm_data"
+    echo "== bench_hmm"
+    OPENBLAS_NUM_THREADS=1 "${pin[@]}" "$build/tests/bench/bench_hmm" --out "$hmm_data"
+    echo
+    echo "== hmm_peer (pomegranate)"
+    if /usr/bin/python3 -c "import pomegranate" 2>/dev/null; then
+        OPENBLAS_NUM_THREADS=1 "${pin[@]}" /usr/bin/python3 "$root/tests/bench/hmm_peer.py" \
+            "$hmm_data/hmm-m15.bin" "$hmm_data/hmm-m63.bin"
+    else
+        echo "hmm_peer: skipped: /usr/bin/python3 cannot import pomegranate" \
+             "(apt-get install python3-pomegranate)"
+    fi
+    echo
+fi
