@@ -85,10 +85,8 @@
 #include <time.h>
 #include <unistd.h>
 
-#define RUNS 5
-#define TARGET_RUN_SECONDS 1.0
-#define CALIBRATE_SECONDS 0.1
-#define MAX_REPEAT 100000
+#include "benchutil.h"
+
 
 #define N_STATES 7u
 #define N_MIX 4u
@@ -115,10 +113,6 @@ typedef struct dataset {
     affect_hmm_seq *seqs;
 } dataset;
 
-typedef struct result {
-    double median, min, max; /* seconds per run */
-    unsigned repeat;         /* passes per run */
-} result;
 
 /* What the kernels need. */
 typedef struct bench_ctx {
@@ -137,18 +131,7 @@ typedef struct bench_ctx {
 /* Values the timed loops write so the compiler cannot drop their work. */
 static volatile double g_sink;
 
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
-}
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
 
 /* ---- the random GMM-HMM and its data ---- */
 
@@ -478,42 +461,22 @@ static int k_train(bench_ctx *c)
     return rc;
 }
 
-/* RUNS timed runs of `repeat` passes after one untimed pass; repeat 0: calibrate as
- * bench_import does. */
+/* One kernel, measured by bench_measure (benchutil.h). */
+typedef struct pass_args {
+    kernel_fn fn;
+    bench_ctx *c;
+} pass_args;
+
+static int one_pass(void *arg)
+{
+    const pass_args *a = arg;
+    return a->fn(a->c);
+}
+
 static int measure(kernel_fn fn, bench_ctx *c, unsigned repeat, result *r)
 {
-    if (fn(c))
-        return 1;
-    if (repeat == 0) {
-        unsigned k = 1;
-        double t;
-        for (;;) {
-            double t0 = now();
-            for (unsigned i = 0; i < k; i++)
-                if (fn(c))
-                    return 1;
-            t = now() - t0;
-            if (t >= CALIBRATE_SECONDS || k >= MAX_REPEAT)
-                break;
-            k *= 2;
-        }
-        double want = t > 0 ? k * TARGET_RUN_SECONDS / t : MAX_REPEAT;
-        repeat = want < 1 ? 1 : want > MAX_REPEAT ? MAX_REPEAT : (unsigned)(want + 0.5);
-    }
-    double t[RUNS];
-    for (int run = 0; run < RUNS; run++) {
-        double t0 = now();
-        for (unsigned k = 0; k < repeat; k++)
-            if (fn(c))
-                return 1;
-        t[run] = now() - t0;
-    }
-    qsort(t, RUNS, sizeof t[0], cmp_double);
-    r->median = t[RUNS / 2];
-    r->min = t[0];
-    r->max = t[RUNS - 1];
-    r->repeat = repeat;
-    return 0;
+    pass_args a = {fn, c};
+    return bench_measure(one_pass, &a, repeat, r);
 }
 
 static void row(const char *name, const result *r, double frames)

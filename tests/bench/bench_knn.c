@@ -58,12 +58,12 @@
 #include <string.h>
 #include <time.h>
 
+#include "benchutil.h"
+
 #ifndef AFFECT_BENCH_MODULE
 #define AFFECT_BENCH_MODULE "build-bench/affect.so"
 #endif
 
-#define RUNS 5
-#define TARGET_RUN_SECONDS 1.0
 #define MAX_ROUNDS 1000
 #define N_MOTIONS 10000
 #define N_SEEDS 625 /* × 4 actions × 4 emotions */
@@ -74,12 +74,12 @@
 #define STR(x) #x
 #define XSTR(x) STR(x)
 
-typedef struct result {
+typedef struct knn_result {
     double median, p95;      /* of the median run: seconds per query */
     double run_min, run_max; /* fastest and slowest run's median */
     unsigned per_run;        /* queries per run */
     double rows;             /* mean rows returned per query */
-} result;
+} knn_result;
 
 typedef struct hit {
     sqlite3_int64 id;
@@ -102,18 +102,7 @@ typedef struct sbuf {
 
 static volatile double g_sink;
 
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
-}
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
 
 static void sb_add(sbuf *b, const char *fmt, ...)
 {
@@ -206,7 +195,7 @@ static long run_one(sqlite3 *db, sqlite3_stmt *st, const inputs *in, int i, bool
 
 /* Times the N_QUERIES queries, `rounds` at a time per run (0: calibrate from one pass). */
 static int measure(sqlite3 *db, sqlite3_stmt *st, const inputs *in, bool blob, unsigned rounds,
-                   result *r)
+                   knn_result *r)
 {
     if (rounds == 0) {
         double t0 = now();
@@ -344,7 +333,7 @@ static char *brute_sql(char names[N_COMP][32], const char *query, const int *com
     return b.s;
 }
 
-static void row(const char *name, const result *r, const result *base)
+static void row(const char *name, const knn_result *r, const knn_result *base)
 {
     printf("%-26s %8u %10.3f %10.3f %10.3f %10.3f %8.1f", name, r->per_run, r->median * 1e3,
            r->p95 * 1e3, r->run_min * 1e3, r->run_max * 1e3, r->rows);
@@ -557,7 +546,7 @@ int main(int argc, char **argv)
         }
     }
 
-    result rv[Q_COUNT], rb[Q_COUNT];
+    knn_result rv[Q_COUNT], rb[Q_COUNT];
     for (int q = 0; q < Q_COUNT; q++) {
         bool blob = q == Q_BLOB || q == Q_VECTOR;
         if (measure(db, vt[q], in, blob, rounds, &rv[q]) ||

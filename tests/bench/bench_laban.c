@@ -60,14 +60,12 @@
 #include <string.h>
 #include <time.h>
 
+#include "benchutil.h"
+
 #ifndef AFFECT_BENCH_CORPUS
 #define AFFECT_BENCH_CORPUS "../shared/corpora/bandai-namco-1/data"
 #endif
 
-#define RUNS 5
-#define TARGET_RUN_SECONDS 1.0
-#define CALIBRATE_SECONDS 0.1
-#define MAX_REPEAT 100000
 #define SYNTH_MIN_FRAMES 100000u
 #define SYNTH_FPS 30.0
 #define TARGET_FRAMES_PER_SECOND 1e6
@@ -93,26 +91,11 @@ typedef struct dataset {
     double *xyz, *xy, *scratch;
 } dataset;
 
-typedef struct result {
-    double median, min, max; /* seconds per run */
-    unsigned repeat;         /* passes over the data set per run */
-} result;
 
 /* Values the timed loops write so the compiler cannot drop their work. */
 static volatile double g_sink;
 
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
-}
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
 
 static int cmp_str(const void *a, const void *b)
 {
@@ -487,43 +470,23 @@ static int k_directional(const dataset *d, void *ctx)
     return 0;
 }
 
-/* RUNS timed runs of `repeat` passes, after one untimed pass that warms caches and the
- * allocator. repeat 0: calibrate, doubling the passes until they take CALIBRATE_SECONDS, then
- * scaling to TARGET_RUN_SECONDS per run. */
+/* One kernel over a data set, measured by bench_measure (benchutil.h). */
+typedef struct pass_args {
+    const dataset *d;
+    kernel_fn fn;
+    void *ctx;
+} pass_args;
+
+static int one_pass(void *arg)
+{
+    const pass_args *a = arg;
+    return a->fn(a->d, a->ctx);
+}
+
 static int measure(const dataset *d, kernel_fn fn, void *ctx, unsigned repeat, result *r)
 {
-    if (fn(d, ctx))
-        return 1;
-    if (repeat == 0) {
-        unsigned k = 1;
-        double t;
-        for (;;) {
-            double t0 = now();
-            for (unsigned i = 0; i < k; i++)
-                if (fn(d, ctx))
-                    return 1;
-            t = now() - t0;
-            if (t >= CALIBRATE_SECONDS || k >= MAX_REPEAT)
-                break;
-            k *= 2;
-        }
-        double want = t > 0 ? k * TARGET_RUN_SECONDS / t : MAX_REPEAT;
-        repeat = want < 1 ? 1 : want > MAX_REPEAT ? MAX_REPEAT : (unsigned)(want + 0.5);
-    }
-    double t[RUNS];
-    for (int run = 0; run < RUNS; run++) {
-        double t0 = now();
-        for (unsigned k = 0; k < repeat; k++)
-            if (fn(d, ctx))
-                return 1;
-        t[run] = now() - t0;
-    }
-    qsort(t, RUNS, sizeof t[0], cmp_double);
-    r->median = t[RUNS / 2];
-    r->min = t[0];
-    r->max = t[RUNS - 1];
-    r->repeat = repeat;
-    return 0;
+    pass_args a = {d, fn, ctx};
+    return bench_measure(one_pass, &a, repeat, r);
 }
 
 enum { K_READ, K_VECTOR, K_BOX, K_KIN, K_HULL3D, K_FLOWBOX, K_HULL2D, K_DIR, K_COUNT };
