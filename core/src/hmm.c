@@ -14,11 +14,20 @@
  *
  * How it works.
  *
- * Densities. Per (state i, mixture j) the model keeps the Cholesky factor L of Σ_ij (Σ = L Lᵀ,
- * row-major lower triangle) and the constant c_ij = log w_ij − ½ m log 2π − Σ_k log L_kk. The
- * frames are processed in blocks of up to 1024 (fewer for very large models, see
- * block_frames): D = X − μ_ij for the block, then Y = D L^{-T} by one cblas_dtrsm, and
- * log(w_ij N(x_t)) = c_ij − ½‖y_t‖². Diagonal covariances keep 1/σ and use a direct loop.
+ * Densities. Per (state i, mixture j) = component k the model keeps the Cholesky factor L_k of
+ * Σ_k (Σ = L Lᵀ, row-major lower triangle), the constant c_k = log w_k − ½ m log 2π − Σ log L_rr,
+ * and for full covariances the inverse factor W_k = L_k⁻¹, a centre c (the mean of all component
+ * means) and ib_k = W_k (μ_k − c) (prepare_inverses). Then ‖L_k⁻¹(x − μ_k)‖² = ‖W_k (x − c) − ib_k‖²
+ * for every component from one set of matrix products: the rows of all the W_k are cut into
+ * panels of TRI_ROWS rows; a panel needs only the columns up to its last row (W is lower
+ * triangular), so per 128 frames each panel is one cblas_dgemm of the centred frames by an
+ * (N·M·rows) × r1 matrix, about (1 + TRI_ROWS/m)/2 of the full product's flops. dgemm runs near
+ * the core's peak where N·M small triangular solves do not (docs/BENCHMARKS.md: the engine scores
+ * faster than the bare dtrsm calls of the solve formulation). Subtracting c first keeps
+ * W x − W μ from cancelling when the data sit far from the origin (test_wide_full: 3e-15
+ * relative instead of 8e-12). log(w N(x_t)) = c_k − ½‖y‖². Diagonal covariances keep 1/σ and use
+ * a direct loop. Frames are processed in blocks of up to 1024 (fewer for very large models, see
+ * block_frames).
  * log b_i(x_t) is the log-sum-exp over j; the within-state responsibilities
  * ρ_tij = w_ij N_ij(x_t) / b_i(x_t) are kept when posteriors are wanted. Factoring calls
  * LAPACKE_dpotrf_work in column-major 'U' form on the row-major array: Σ is symmetric, so this
@@ -77,6 +86,9 @@
 #define LOG_2PI 1.83787706640934548356
 #define BLOCK_FRAMES 1024u    /* frames per density / scatter block, at most */
 #define BLOCK_DOUBLES 262144u /* ... and at most this many doubles per block buffer */
+#define SUB_FRAMES 128u /* frames per panel product (full covariances) */
+#define TRI_ROWS 8u /* rows of the inverse factors per product (full covariances); 8 was the \
+                       fastest of 4 .. 64 in bench_hmm at m = 15 and m = 63 */
 #define LINEAR_MIN 1e-100     /* a linear-space sum below this is redone in log space */
 /* exp of less than EXP_MIN is taken as 0: below DBL_MIN, it skips libm's slow underflow path, and
  * such terms are below one ulp of the sums they join (whose largest term is 1) */
@@ -104,6 +116,9 @@ struct affect_hmm {
     double *fac;         /* N × M × cs: Cholesky factors (full) or 1/σ (diagonal) */
     double *half_logdet; /* N × M: ½ log det Σ */
     double *cnorm;       /* N × M: log w − ½ m log 2π − ½ log det Σ */
+    double *inv;         /* full: the inverse factors L⁻¹ by row panels (see prepare_inverses) */
+    double *ib;          /* full: N × M × m, L⁻¹ (μ − centre) */
+    double *centre;      /* full: m, the mean of the component means */
     /* training report */
     bool has_report;
     bool converged;
@@ -170,13 +185,23 @@ static bool allowed(const affect_hmm_config *cfg, uint32_t i, uint32_t l)
     return cfg->max_jump == 0 || l - i <= cfg->max_jump;
 }
 
+/* Doubles per frame of the densities' second block buffer: the frame (diagonal), or the
+ * centred frame and one panel product over all components (full, see densities). */
+static uint32_t dbuf_width(const affect_hmm_config *cfg)
+{
+    uint32_t rows = cfg->dim < TRI_ROWS ? cfg->dim : TRI_ROWS;
+    if (cfg->cov != AFFECT_HMM_FULL)
+        return cfg->dim;
+    return cfg->dim + cfg->n_states * cfg->n_mix * rows; /* (the product needs min(n, SUB_FRAMES) rows) */
+}
+
 /* Frames per block: at most BLOCK_FRAMES, and the block buffers (frames × N × M and
- * frames × m doubles) at most BLOCK_DOUBLES each. Depends on the configuration only, so the
+ * frames × dbuf_width doubles) at most BLOCK_DOUBLES each. Depends on the configuration only, so the
  * arithmetic (and its rounding) is the same in every call. */
 static uint32_t block_frames(const affect_hmm_config *cfg)
 {
-    uint32_t k = cfg->n_states * cfg->n_mix;
-    uint32_t wide = k > cfg->dim ? k : cfg->dim;
+    uint32_t k = cfg->n_states * cfg->n_mix, d = dbuf_width(cfg);
+    uint32_t wide = k > d ? k : d;
     uint32_t b = BLOCK_DOUBLES / wide;
     if (b > BLOCK_FRAMES)
         b = BLOCK_FRAMES;
@@ -223,7 +248,8 @@ static void *ws_alloc(const ws_part *parts, size_t n)
 static affect_hmm *model_alloc(const affect_hmm_config *cfg)
 {
     size_t n = cfg->n_states, k = (size_t)cfg->n_states * cfg->n_mix, m = cfg->dim, cs, km, kc;
-    if (cfg->cov == AFFECT_HMM_FULL) {
+    bool full = cfg->cov == AFFECT_HMM_FULL;
+    if (full) {
         if (!affect_mul_size(m, m, &cs))
             return NULL;
     } else {
@@ -245,9 +271,12 @@ static affect_hmm *model_alloc(const affect_hmm_config *cfg)
         {NULL, k, sizeof(double)},                         /* half_logdet */
         {NULL, k, sizeof(double)},                         /* cnorm */
         {NULL, (size_t)cfg->max_iter + 1, sizeof(double)}, /* loglik */
+        {NULL, full ? kc : 0, sizeof(double)},             /* inv */
+        {NULL, full ? km : 0, sizeof(double)},             /* ib */
+        {NULL, m, sizeof(double)},                         /* centre */
     };
-    double *p[11];
-    for (int i = 0; i < 11; i++)
+    double *p[14];
+    for (int i = 0; i < 14; i++)
         parts[i + 1].slot = (void **)&p[i];
     void *block = ws_alloc(parts, sizeof parts / sizeof parts[0]);
     if (!block)
@@ -267,6 +296,9 @@ static affect_hmm *model_alloc(const affect_hmm_config *cfg)
     h->half_logdet = p[8];
     h->cnorm = p[9];
     h->loglik = p[10];
+    h->inv = p[11];
+    h->ib = p[12];
+    h->centre = p[13];
     h->loglik[0] = 0.0;
     return h;
 }
@@ -314,7 +346,63 @@ static int factor_one(affect_hmm *h, size_t k)
     return 0;
 }
 
-/* Recomputes the logs of start, transitions and the per-component constants. */
+/* Full covariances: the inverse factors W_k = L_k⁻¹ (lower triangular) stored by panels of
+ * TRI_ROWS rows for densities: panel p holds rows r0 .. r1 − 1 of every W_k, columns 0 .. r1 − 1
+ * only (the rest is 0), as one row-major (K·(r1 − r0)) × r1 matrix, k-major; the panels follow
+ * one another. */
+static double *inv_row(const affect_hmm *h, uint32_t k, uint32_t r)
+{
+    uint32_t m = h->cfg.dim, K = h->cfg.n_states * h->cfg.n_mix;
+    uint32_t r0 = r - r % TRI_ROWS, r1 = m - r0 < TRI_ROWS ? m : r0 + TRI_ROWS;
+    size_t base = 0;
+    for (uint32_t q = 0; q < r0; q += TRI_ROWS) /* panels before: K × TRI_ROWS × (q + TRI_ROWS) */
+        base += (size_t)K * TRI_ROWS * (q + TRI_ROWS);
+    return h->inv + base + ((size_t)k * (r1 - r0) + (r - r0)) * r1;
+}
+
+/* Fills the panels of W_k (forward substitution, row by row: W[r][c] = (δ_rc −
+ * Σ_{c ≤ s < r} L[r][s] W[s][c]) / L[r][r]), the centre c (the mean of the component means) and
+ * ib_k = W_k (μ_k − c). The densities then need one matrix product per panel for all components
+ * together instead of one triangular solve per component; subtracting c first keeps the
+ * cancellation in W x − W μ small when the data sit far from the origin. */
+static void prepare_inverses(affect_hmm *h)
+{
+    uint32_t m = h->cfg.dim, K = h->cfg.n_states * h->cfg.n_mix;
+    for (uint32_t d = 0; d < m; d++) {
+        double s = 0.0;
+        for (uint32_t k = 0; k < K; k++)
+            s += h->means[(size_t)k * m + d];
+        h->centre[d] = s / K;
+    }
+    for (uint32_t k = 0; k < K; k++) {
+        const double *f = h->fac + (size_t)k * h->cs;
+        const double *mu = h->means + (size_t)k * m;
+        for (uint32_t r = 0; r < m; r++) {
+            double *w = inv_row(h, k, r);
+            const double *l = f + (size_t)r * m;
+            uint32_t r1 = r - r % TRI_ROWS + TRI_ROWS < m ? r - r % TRI_ROWS + TRI_ROWS : m;
+            for (uint32_t c = 0; c < r1; c++)
+                w[c] = 0.0;
+            for (uint32_t s = 0; s < r; s++) { /* w −= L[r][s] W[s] (row s has s + 1 entries) */
+                const double *ws = inv_row(h, k, s);
+                double lrs = l[s];
+                for (uint32_t c = 0; c <= s; c++)
+                    w[c] -= lrs * ws[c];
+            }
+            w[r] += 1.0;
+            double d = l[r];
+            double y = 0.0;
+            for (uint32_t c = 0; c <= r; c++) {
+                w[c] /= d;
+                y += w[c] * (mu[c] - h->centre[c]);
+            }
+            h->ib[(size_t)k * m + r] = y;
+        }
+    }
+}
+
+/* Recomputes the logs of start, transitions and the per-component constants (and, for full
+ * covariances, the inverse factors), after the factors changed. */
 static void refresh_logs(affect_hmm *h)
 {
     size_t n = h->cfg.n_states, k = n * h->cfg.n_mix;
@@ -325,6 +413,8 @@ static void refresh_logs(affect_hmm *h)
     double c = -0.5 * (double)h->cfg.dim * LOG_2PI;
     for (size_t i = 0; i < k; i++)
         h->cnorm[i] = h->weights[i] > 0 ? log(h->weights[i]) + c - h->half_logdet[i] : -INFINITY;
+    if (h->cfg.cov == AFFECT_HMM_FULL)
+        prepare_inverses(h);
 }
 
 /* ------------------------------------------------------------------------------------------ */
@@ -336,22 +426,6 @@ static inline double exp0(double v)
     return v < EXP_MIN ? 0.0 : exp(v);
 }
 
-/* Sum of squares with four partial sums (fixed order). */
-static double sumsq(const double *v, uint32_t n)
-{
-    double s0 = 0, s1 = 0, s2 = 0, s3 = 0;
-    uint32_t d = 0;
-    for (; d + 4 <= n; d += 4) {
-        s0 += v[d] * v[d];
-        s1 += v[d + 1] * v[d + 1];
-        s2 += v[d + 2] * v[d + 2];
-        s3 += v[d + 3] * v[d + 3];
-    }
-    for (; d < n; d++)
-        s0 += v[d] * v[d];
-    return (s0 + s1) + (s2 + s3);
-}
-
 /* log b_i(x_t) for frames x[0 .. n) (n ≤ block) into lb (n × N) and, when rho is not NULL, the
  * within-state responsibilities into rho (n × N × M). cbuf holds block × N × M doubles, dbuf
  * block × m. */
@@ -359,36 +433,61 @@ static void densities(const affect_hmm *h, const double *x, uint32_t n, double *
                       double *cbuf, double *dbuf)
 {
     uint32_t N = h->cfg.n_states, M = h->cfg.n_mix, m = h->cfg.dim, K = N * M;
-    for (uint32_t k = 0; k < K; k++) {
-        const double *mu = h->means + (size_t)k * m;
-        const double *f = h->fac + (size_t)k * h->cs;
-        double *out = cbuf + (size_t)k * n;
-        double c = h->cnorm[k];
-        if (c == -INFINITY) { /* weight 0 */
-            for (uint32_t t = 0; t < n; t++)
-                out[t] = -INFINITY;
-            continue;
-        }
-        if (h->cfg.cov == AFFECT_HMM_FULL) {
-            for (uint32_t t = 0; t < n; t++) {
-                const double *xt = x + (size_t)t * m;
-                double *dt = dbuf + (size_t)t * m;
-                for (uint32_t d = 0; d < m; d++)
-                    dt[d] = xt[d] - mu[d];
+    if (h->cfg.cov == AFFECT_HMM_FULL) {
+        /* ‖L⁻¹(x − μ)‖² = ‖W (x − c) − ib‖², panel by panel and SUB_FRAMES frames at a time
+         * (so that the product stays in cache): Y = −ib, then Y += (X − c)[:, 0..r1) Pᵀ for all
+         * components at once (one dgemm with β = 1), then the sums of squares row by row */
+        double *xc = dbuf, *y = dbuf + (size_t)n * m;
+        for (uint32_t t = 0; t < n; t++)
+            for (uint32_t d = 0; d < m; d++)
+                xc[(size_t)t * m + d] = x[(size_t)t * m + d] - h->centre[d];
+        for (size_t i = 0; i < (size_t)K * n; i++)
+            cbuf[i] = 0.0;
+        for (uint32_t t0 = 0; t0 < n; t0 += SUB_FRAMES) {
+            uint32_t nt = n - t0 < SUB_FRAMES ? n - t0 : SUB_FRAMES;
+            const double *panel = h->inv;
+            for (uint32_t r0 = 0; r0 < m; r0 += TRI_ROWS) {
+                uint32_t r1 = m - r0 < TRI_ROWS ? m : r0 + TRI_ROWS, rows = r1 - r0;
+                uint32_t wide = K * rows;
+                for (uint32_t k = 0; k < K; k++)
+                    for (uint32_t r = 0; r < rows; r++)
+                        y[(size_t)k * rows + r] = -h->ib[(size_t)k * m + r0 + r];
+                for (uint32_t t = 1; t < nt; t++)
+                    memcpy(y + (size_t)t * wide, y, wide * sizeof *y);
+                cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasTrans, (int)nt, (int)wide, (int)r1,
+                            1.0, xc + (size_t)t0 * m, (int)m, panel, (int)r1, 1.0, y, (int)wide);
+                for (uint32_t t = 0; t < nt; t++) {
+                    const double *yt = y + (size_t)t * wide;
+                    for (uint32_t k = 0; k < K; k++) {
+                        const double *v = yt + (size_t)k * rows;
+                        double s = 0.0;
+                        for (uint32_t r = 0; r < rows; r++)
+                            s += v[r] * v[r];
+                        cbuf[(size_t)k * n + t0 + t] += s;
+                    }
+                }
+                panel += (size_t)wide * r1;
             }
-            cblas_dtrsm(CblasRowMajor, CblasRight, CblasLower, CblasTrans, CblasNonUnit, (int)n,
-                        (int)m, 1.0, f, (int)m, dbuf, (int)m);
+        }
+        for (uint32_t k = 0; k < K; k++) {
+            double c = h->cnorm[k], *out = cbuf + (size_t)k * n;
             for (uint32_t t = 0; t < n; t++)
-                out[t] = c - 0.5 * sumsq(dbuf + (size_t)t * m, m);
-        } else {
+                out[t] = c == -INFINITY ? -INFINITY : c - 0.5 * out[t];
+        }
+    } else {
+        for (uint32_t k = 0; k < K; k++) {
+            const double *mu = h->means + (size_t)k * m;
+            const double *f = h->fac + (size_t)k * h->cs;
+            double *out = cbuf + (size_t)k * n;
+            double c = h->cnorm[k];
             for (uint32_t t = 0; t < n; t++) {
                 const double *xt = x + (size_t)t * m;
                 double q = 0.0;
                 for (uint32_t d = 0; d < m; d++) {
-                    double y = (xt[d] - mu[d]) * f[d];
-                    q += y * y;
+                    double v = (xt[d] - mu[d]) * f[d];
+                    q += v * v;
                 }
-                out[t] = c - 0.5 * q;
+                out[t] = c == -INFINITY ? -INFINITY : c - 0.5 * q;
             }
         }
     }
@@ -503,7 +602,7 @@ typedef struct fb_ws {
     double *lb;    /* T × N */
     double *alpha; /* T × N */
     double *cbuf;  /* block × N × M */
-    double *dbuf;  /* block × m */
+    double *dbuf;  /* block × dbuf_width */
     double *v[6];  /* N each */
     double *vv;    /* N × N */
 } fb_ws;
@@ -728,7 +827,7 @@ affect_status affect_hmm_loglik(const affect_hmm *h, const double *x, uint32_t n
     size_t N = h->cfg.n_states, K = N * h->cfg.n_mix, B = h->block;
     double *cbuf, *dbuf, *lb, *a0, *a1, *p;
     ws_part parts[] = {
-        {(void **)&cbuf, B * K, sizeof(double)}, {(void **)&dbuf, B * h->cfg.dim, sizeof(double)},
+        {(void **)&cbuf, B * K, sizeof(double)}, {(void **)&dbuf, B * dbuf_width(&h->cfg), sizeof(double)},
         {(void **)&lb, B * N, sizeof(double)},   {(void **)&a0, N, sizeof(double)},
         {(void **)&a1, N, sizeof(double)},       {(void **)&p, N, sizeof(double)}};
     void *ws = ws_alloc(parts, sizeof parts / sizeof parts[0]);
@@ -754,7 +853,7 @@ affect_status affect_hmm_viterbi(const affect_hmm *h, const double *x, uint32_t 
     double *cbuf, *dbuf, *lb, *d0, *d1;
     uint8_t *bp; /* N ≤ 256: a state fits in a byte */
     ws_part parts[] = {
-        {(void **)&cbuf, B * K, sizeof(double)}, {(void **)&dbuf, B * m, sizeof(double)},
+        {(void **)&cbuf, B * K, sizeof(double)}, {(void **)&dbuf, B * dbuf_width(&h->cfg), sizeof(double)},
         {(void **)&lb, B * N, sizeof(double)},   {(void **)&d0, N, sizeof(double)},
         {(void **)&d1, N, sizeof(double)},       {(void **)&bp, TN, 1}};
     void *ws = ws_alloc(parts, sizeof parts / sizeof parts[0]);
@@ -814,7 +913,7 @@ static void fb_parts(const affect_hmm *h, size_t T, fb_ws *w, ws_part *parts, si
     parts[n++] = (ws_part){(void **)&w->lb, T * N, sizeof(double)}; /* T·N ≤ T·K */
     parts[n++] = (ws_part){(void **)&w->alpha, T * N, sizeof(double)};
     parts[n++] = (ws_part){(void **)&w->cbuf, B * K, sizeof(double)};
-    parts[n++] = (ws_part){(void **)&w->dbuf, B * h->cfg.dim, sizeof(double)};
+    parts[n++] = (ws_part){(void **)&w->dbuf, B * dbuf_width(&h->cfg), sizeof(double)};
     for (int i = 0; i < 6; i++)
         parts[n++] = (ws_part){(void **)&w->v[i], N, sizeof(double)};
     parts[n++] = (ws_part){(void **)&w->vv, N * N, sizeof(double)};

@@ -528,6 +528,110 @@ static void recover(affect_hmm_topology top)
     affect_hmm_free(truth);
 }
 
+/* ---- the inverse-factor densities on wide models, far from the origin ---- */
+
+/* log N(x; μ, Σ) by a long-double Cholesky and forward substitution: independent of the engine's
+ * inverse factors and of BLAS. */
+static double wide_logpdf(const double *x, const double *mu, const double *cov, uint32_t m)
+{
+    long double l[48 * 48] = {0}, y[48], logdet = 0, q = 0;
+    assert_true(m <= 48);
+    for (uint32_t r = 0; r < m; r++)
+        for (uint32_t c = 0; c <= r; c++) {
+            long double s = cov[r * m + c];
+            for (uint32_t e = 0; e < c; e++)
+                s -= l[r * m + e] * l[c * m + e];
+            l[r * m + c] = r == c ? sqrtl(s) : s / l[c * m + c];
+        }
+    for (uint32_t r = 0; r < m; r++) {
+        long double s = (long double)x[r] - mu[r];
+        for (uint32_t e = 0; e < r; e++)
+            s -= l[r * m + e] * y[e];
+        y[r] = s / l[r * m + r];
+        q += y[r] * y[r];
+        logdet += logl(l[r * m + r]);
+    }
+    return (double)(-0.5L * (long double)m * LOG_2PI - logdet - 0.5L * q);
+}
+
+static void test_wide_full(void **state)
+{
+    (void)state;
+    /* m = 40: three panels of inverse-factor rows (16, 16, 8); data and means near 1000 with
+     * spreads from 0.01 to 1, so W x − W μ would cancel badly without the centring */
+    enum { N = 2, M = 3, m = 40, T = 60 };
+    affect_rng rng;
+    affect_rng_seed(&rng, 11);
+    static double start[N] = {1, 0}, trans[N * N] = {0.9, 0.1, 0.2, 0.8}, w[N * M], mu[N * M * m],
+                  cov[N * M * m * m], x[T * m];
+    for (uint32_t k = 0; k < N * M; k++) {
+        w[k] = 1.0 / M;
+        double spread = k % 2 ? 0.01 : 1.0;
+        for (uint32_t d = 0; d < m; d++)
+            mu[k * m + d] = 1000.0 + d + 3.0 * affect_rng_normal(&rng);
+        static double a[m * m];
+        for (uint32_t e = 0; e < m * m; e++)
+            a[e] = spread * affect_rng_normal(&rng) / sqrt(m);
+        for (uint32_t r = 0; r < m; r++)
+            for (uint32_t c = 0; c < m; c++) {
+                double v = r == c ? 0.05 * spread * spread : 0.0;
+                for (uint32_t e = 0; e < m; e++)
+                    v += a[r * m + e] * a[c * m + e];
+                cov[(k * m + r) * m + c] = v;
+            }
+    }
+    for (uint32_t t = 0; t < T; t++) { /* near component t mod (N·M), plus noise */
+        uint32_t k = t % (N * M);
+        for (uint32_t d = 0; d < m; d++)
+            x[t * m + d] = mu[k * m + d] + (k % 2 ? 0.01 : 1.0) * affect_rng_normal(&rng);
+    }
+    affect_hmm_config cfg;
+    config(&cfg, N, M, m, AFFECT_HMM_FULL, AFFECT_HMM_ERGODIC, 0, false);
+    affect_hmm *h = NULL;
+    affect_error err;
+    assert_int_equal(affect_hmm_from_params(&cfg, start, trans, w, mu, cov, &h, &err), AFFECT_OK);
+    /* the forward recursion by hand on the reference densities */
+    double alpha[N], ref = 0.0;
+    for (uint32_t t = 0; t < T; t++) {
+        double lb[N], next[N], mx = -INFINITY;
+        for (uint32_t i = 0; i < N; i++) {
+            double lg[M], lm = -INFINITY, s = 0.0;
+            for (uint32_t j = 0; j < M; j++) {
+                uint32_t k = i * M + j;
+                lg[j] = log(w[k]) + wide_logpdf(x + t * m, mu + k * m, cov + k * m * m, m);
+                lm = lg[j] > lm ? lg[j] : lm;
+            }
+            for (uint32_t j = 0; j < M; j++)
+                s += exp(lg[j] - lm);
+            lb[i] = lm + log(s);
+        }
+        for (uint32_t l = 0; l < N; l++) {
+            double v = t == 0 ? (l == 0 ? 0.0 : -INFINITY) : -INFINITY;
+            if (t > 0) {
+                double mm = -INFINITY, s = 0.0;
+                for (uint32_t i = 0; i < N; i++)
+                    mm = alpha[i] + log(trans[i * N + l]) > mm ? alpha[i] + log(trans[i * N + l]) : mm;
+                for (uint32_t i = 0; i < N; i++)
+                    s += exp(alpha[i] + log(trans[i * N + l]) - mm);
+                v = mm + log(s);
+            }
+            next[l] = v + lb[l];
+            mx = next[l] > mx ? next[l] : mx;
+        }
+        memcpy(alpha, next, sizeof alpha);
+        if (t == T - 1) {
+            double s = 0.0;
+            for (uint32_t i = 0; i < N; i++)
+                s += exp(alpha[i] - mx);
+            ref = mx + log(s);
+        }
+    }
+    double ll;
+    assert_int_equal(affect_hmm_loglik(h, x, T, &ll, &err), AFFECT_OK);
+    tu_assert_near(ll, ref, 1e-13 * fabs(ref)); /* 8e-12 without the centring */
+    affect_hmm_free(h);
+}
+
 static void test_recovers_model(void **state)
 {
     (void)state;
@@ -1247,6 +1351,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_brute_force),
+        cmocka_unit_test(test_wide_full),
         cmocka_unit_test(test_recovers_model),
         cmocka_unit_test(test_long_sequence),
         cmocka_unit_test(test_posteriors),

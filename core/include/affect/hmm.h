@@ -10,8 +10,9 @@
  *
  * Observations are T × m row-major doubles. Every recursion runs in log space with careful
  * log-sum-exp, so sequences of any length neither underflow nor overflow. Gaussian densities use
- * the Cholesky factor of each covariance, computed once per model (LAPACKE_dpotrf), and the
- * Mahalanobis distances of all frames at once as a triangular solve (cblas_dtrsm).
+ * the Cholesky factor of each covariance, computed once per model (LAPACKE_dpotrf), and its
+ * inverse, so that the Mahalanobis distances of a block of frames under every component are a
+ * few matrix products (cblas_dgemm; see hmm.c).
  *
  * Training: every sequence is split into N equal segments; the frames of segment i, pooled over
  * all sequences, are clustered by k-means (k-means++ seeding from the seed) into M clusters whose
