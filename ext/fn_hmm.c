@@ -23,7 +23,7 @@
  * scale ("arm" | "none"; default arm when the first motion's right arm roles resolve), up
  * ("y"), velocity (false).
  *
- * How hmm_train works: the aggregate context holds one pointer to a train_state, allocated on
+ * How hmm_train works: the aggregate context holds one pointer to a ax_seqs, allocated on
  * the first row. That row's options are parsed and checked at once; the first non-NULL motion
  * fixes the feature definition (affect_features_create); every motion is turned into its
  * observation sequence on arrival and only the sequence is kept (not the motion). xFinal
@@ -48,6 +48,8 @@
  */
 #include "fn_hmm.h"
 
+#include "seqs.h"
+
 #include <inttypes.h>
 #include <math.h>
 #include <string.h>
@@ -57,302 +59,16 @@
 #include "affect/hmm_blob.h"
 #include "affect/strbuf.h"
 
-/* ---- options ---- */
-
-/* A whole-number option in [0, max] into *out (unchanged when absent). */
-static ax_arg opt_whole(sqlite3_context *ctx, const ax_opts *opts, const char *key, double max,
-                        double *out)
-{
-    double v = *out;
-    if (ax_opt_number(ctx, opts, key, &v) != AX_OK)
-        return AX_ERROR;
-    if (v != floor(v) || v < 0 || v > max) {
-        char num[32];
-        affect_format_g(num, sizeof num, 17, v);
-        ax_errorf(ctx, "option \"%s\" must be a whole number from 0 to %.0f, got %s", key, max,
-                  num);
-        return AX_ERROR;
-    }
-    *out = v;
-    return AX_OK;
-}
-
-static ax_arg opt_u32(sqlite3_context *ctx, const ax_opts *opts, const char *key,
-                      uint32_t *out)
-{
-    double v = *out;
-    if (opt_whole(ctx, opts, key, 4294967295.0, &v) != AX_OK)
-        return AX_ERROR;
-    *out = (uint32_t)v;
-    return AX_OK;
-}
-
-static const char *const train_keys[] = {"states",   "mixtures", "covariance", "topology",
-                                         "max_jump", "start",    "joints",     "normalize",
-                                         "scale",    "up",       "velocity",   "max_iter",
-                                         "tol",      "reg",      "seed",       NULL};
-
-typedef struct train_state {
-    bool failed;             /* an error was reported: xFinal only frees */
-    char *opts_text;         /* the first row's options text, NULL when none */
-    size_t opts_len;
-    affect_hmm_config cfg;
-    affect_features_options fo;
-    char **joints;           /* fo.joints storage: copies of the "joints" option's names */
-    uint32_t n_joints;
-    affect_features *feat;   /* fixed by the first non-NULL motion */
-    affect_hmm_seq *seqs;    /* observation sequences (each x owned) */
-    uint32_t n_seqs, cap;
-    uint64_t rows;           /* rows seen, NULL motions included */
-} train_state;
-
-static void train_state_free(train_state *ts)
-{
-    if (!ts)
-        return;
-    for (uint32_t i = 0; i < ts->n_seqs; i++)
-        affect_free((void *)ts->seqs[i].x);
-    affect_free(ts->seqs);
-    for (uint32_t i = 0; i < ts->n_joints; i++)
-        affect_free(ts->joints[i]);
-    affect_free(ts->joints);
-    affect_features_free(ts->feat);
-    sqlite3_free(ts->opts_text);
-    sqlite3_free(ts);
-}
-
-/* The "joints" option: a non-empty array of names, copied into ts. */
-static ax_arg read_joints(sqlite3_context *ctx, const ax_opts *opts, train_state *ts)
-{
-    const affect_json_node *n = ax_opt(opts, "joints");
-    if (!n)
-        return AX_OK;
-    if (n->type != AFFECT_JSON_ARRAY || n->count == 0) {
-        ax_errorf(ctx, "option \"joints\" must be a non-empty array of joint or role names, "
-                       "got %s", n->type == AFFECT_JSON_ARRAY ? "an empty array"
-                                                              : affect_json_type_name(n->type));
-        return AX_ERROR;
-    }
-    ts->joints = affect_calloc(n->count, sizeof *ts->joints);
-    if (!ts->joints) {
-        sqlite3_result_error_nomem(ctx);
-        return AX_ERROR;
-    }
-    uint32_t i = 0;
-    for (const affect_json_node *e = affect_json_first(opts->doc, n); e;
-         e = affect_json_next_sibling(opts->doc, e), i++) {
-        if (e->type != AFFECT_JSON_STRING || e->str_len == 0 || strlen(e->str) != e->str_len) {
-            ax_errorf(ctx, "option \"joints\": entry %u must be a joint or role name, got %s",
-                      i + 1, e->type == AFFECT_JSON_STRING ? "a string that is empty or "
-                                                             "contains NUL"
-                                                           : affect_json_type_name(e->type));
-            return AX_ERROR;
-        }
-        ts->joints[i] = affect_strndup(e->str, e->str_len);
-        if (!ts->joints[i]) {
-            sqlite3_result_error_nomem(ctx);
-            return AX_ERROR;
-        }
-        ts->n_joints = i + 1;
-    }
-    ts->fo.joints = (const char *const *)ts->joints;
-    ts->fo.n_joints = ts->n_joints;
-    return AX_OK;
-}
-
-/* Parses and checks the first row's options (argument 2) into ts. */
-static ax_arg read_train_options(sqlite3_context *ctx, int argc, sqlite3_value **argv,
-                                 train_state *ts)
-{
-    static const char *const covs[] = {"full", "diag", NULL};
-    static const char *const topologies[] = {"ergodic", "left-right", NULL};
-    static const char *const starts[] = {"first", "learn", NULL};
-    static const char *const scales[] = {"arm", "none", NULL};
-    affect_hmm_config_default(&ts->cfg);
-    affect_features_options_default(&ts->fo);
-    ax_opts opts;
-    if (ax_opts_parse(ctx, argc, argv, 1, train_keys, &opts) != AX_OK)
-        return AX_ERROR;
-    int cov = (int)ts->cfg.cov, topology = (int)ts->cfg.topology, start = ts->cfg.learn_start,
-        scale = -1;
-    double seed = (double)ts->cfg.seed;
-    ax_arg r = AX_ERROR;
-    if (opt_u32(ctx, &opts, "states", &ts->cfg.n_states) ||
-        opt_u32(ctx, &opts, "mixtures", &ts->cfg.n_mix) ||
-        ax_opt_enum(ctx, &opts, "covariance", covs, &cov) ||
-        ax_opt_enum(ctx, &opts, "topology", topologies, &topology) ||
-        opt_u32(ctx, &opts, "max_jump", &ts->cfg.max_jump) ||
-        ax_opt_enum(ctx, &opts, "start", starts, &start) ||
-        opt_u32(ctx, &opts, "max_iter", &ts->cfg.max_iter) ||
-        ax_opt_number(ctx, &opts, "tol", &ts->cfg.tol) ||
-        ax_opt_number(ctx, &opts, "reg", &ts->cfg.reg) ||
-        opt_whole(ctx, &opts, "seed", 9007199254740992.0, &seed) ||
-        read_joints(ctx, &opts, ts) ||
-        ax_opt_bool(ctx, &opts, "normalize", &ts->fo.normalize) ||
-        ax_opt_enum(ctx, &opts, "scale", scales, &scale) ||
-        ax_opt_up(ctx, &opts, &ts->fo.up_axis) ||
-        ax_opt_bool(ctx, &opts, "velocity", &ts->fo.velocity))
-        goto done;
-    ts->cfg.cov = cov ? AFFECT_HMM_DIAG : AFFECT_HMM_FULL;
-    ts->cfg.topology = topology ? AFFECT_HMM_LEFT_RIGHT : AFFECT_HMM_ERGODIC;
-    ts->cfg.learn_start = start == 1;
-    ts->cfg.seed = (uint64_t)seed;
-    ts->fo.scale = scale == 0   ? AFFECT_FEATURES_SCALE_ARM
-                   : scale == 1 ? AFFECT_FEATURES_SCALE_NONE
-                                : AFFECT_FEATURES_SCALE_AUTO;
-    /* the configuration is checked now (with a stand-in dimension; the real one is known
-     * with the first motion), so bad options fail on the first row */
-    ts->cfg.dim = 3;
-    const char *msg = affect_hmm_config_check(&ts->cfg);
-    if (msg) {
-        ax_errorf(ctx, "%s", msg);
-        goto done;
-    }
-    if (argc > 1 && sqlite3_value_type(argv[1]) == SQLITE_TEXT) {
-        const unsigned char *text = sqlite3_value_text(argv[1]);
-        int n = sqlite3_value_bytes(argv[1]);
-        ts->opts_text = sqlite3_malloc64((sqlite3_uint64)n + 1);
-        if (!text || !ts->opts_text) {
-            sqlite3_result_error_nomem(ctx);
-            goto done;
-        }
-        memcpy(ts->opts_text, text, (size_t)n);
-        ts->opts_text[n] = '\0';
-        ts->opts_len = (size_t)n;
-    }
-    r = AX_OK;
-done:
-    ax_opts_free(&opts);
-    return r;
-}
-
-/* Whether a later row's options are the first row's (the same text, or both absent). */
-static ax_arg same_options(sqlite3_context *ctx, int argc, sqlite3_value **argv,
-                           const train_state *ts)
-{
-    if (argc <= 1)
-        return AX_OK;
-    int type = sqlite3_value_type(argv[1]);
-    bool same;
-    if (type == SQLITE_NULL) {
-        same = ts->opts_text == NULL;
-    } else if (type != SQLITE_TEXT || ts->opts_text == NULL) {
-        same = false;
-    } else {
-        const unsigned char *text = sqlite3_value_text(argv[1]);
-        if (!text) {
-            sqlite3_result_error_nomem(ctx);
-            return AX_ERROR;
-        }
-        same = (size_t)sqlite3_value_bytes(argv[1]) == ts->opts_len &&
-               memcmp(text, ts->opts_text, ts->opts_len) == 0;
-    }
-    if (!same) {
-        ax_errorf(ctx, "options must be the same on every row");
-        return AX_ERROR;
-    }
-    return AX_OK;
-}
-
-/* Reports a core error met on a row: "row 3: …" (out of memory as SQLITE_NOMEM). */
-static void row_error(sqlite3_context *ctx, const train_state *ts, const affect_error *err)
-{
-    if (err->status == AFFECT_ERR_NOMEM)
-        sqlite3_result_error_nomem(ctx);
-    else
-        ax_errorf(ctx, "row %" PRIu64 ": %s", ts->rows, err->msg);
-}
-
-/* Fixes the feature definition on the first motion and completes the configuration. */
-static ax_arg first_motion(sqlite3_context *ctx, train_state *ts, const affect_motion *m)
-{
-    affect_error err;
-    if (affect_features_create(&ts->fo, m, &ts->feat, &err)) {
-        row_error(ctx, ts, &err);
-        return AX_ERROR;
-    }
-    uint32_t dim = affect_features_dim(ts->feat);
-    if (dim > AFFECT_HMM_MAX_DIM) {
-        ax_errorf(ctx, "the observations would have %u dimensions (%u joints x 3%s); at most %u: "
-                       "choose fewer joints with \"joints\"", dim, ts->feat->n_joints,
-                  ts->feat->velocity ? " x 2 with velocity" : "", AFFECT_HMM_MAX_DIM);
-        return AX_ERROR;
-    }
-    ts->cfg.dim = dim;
-    const char *msg = affect_hmm_config_check(&ts->cfg);
-    if (msg) {
-        ax_errorf(ctx, "%s", msg);
-        return AX_ERROR;
-    }
-    return AX_OK;
-}
-
-/* Checks one row and keeps its observation sequence; AX_ERROR when an error was reported. */
-static ax_arg add_row(sqlite3_context *ctx, int argc, sqlite3_value **argv, train_state *ts)
-{
-    if (same_options(ctx, argc, argv, ts) != AX_OK)
-        return AX_ERROR;
-    affect_motion *m = NULL;
-    ax_arg r = ax_arg_motion(ctx, argv, 0, &m);
-    if (r != AX_OK)
-        return r == AX_NULL ? AX_OK : AX_ERROR;
-    affect_error err;
-    double *x = NULL;
-    uint32_t n_frames = 0;
-    r = AX_ERROR;
-    if (!ts->feat && first_motion(ctx, ts, m) != AX_OK)
-        goto done;
-    if (m->fps != ts->feat->fps) {
-        char a[32], b[32];
-        affect_format_g(a, sizeof a, 10, m->fps);
-        affect_format_g(b, sizeof b, 10, ts->feat->fps);
-        ax_errorf(ctx, "row %" PRIu64 ": the motion has %s fps, the first one %s (resample it "
-                       "with motion_resample)", ts->rows, a, b);
-        goto done;
-    }
-    if (m->n_frames < ts->cfg.n_states) {
-        ax_errorf(ctx, "row %" PRIu64 ": the motion has %u frames; %u states need at least %u",
-                  ts->rows, m->n_frames, ts->cfg.n_states, ts->cfg.n_states);
-        goto done;
-    }
-    if (ts->n_seqs == UINT32_MAX) {
-        ax_errorf(ctx, "row %" PRIu64 ": too many motions", ts->rows);
-        goto done;
-    }
-    if (ts->n_seqs == ts->cap) {
-        uint32_t cap = ts->cap ? (ts->cap > UINT32_MAX / 2 ? UINT32_MAX : ts->cap * 2) : 16;
-        size_t bytes;
-        affect_hmm_seq *seqs = NULL;
-        if (affect_mul_size(cap, sizeof *seqs, &bytes))
-            seqs = affect_realloc(ts->seqs, bytes);
-        if (!seqs) {
-            sqlite3_result_error_nomem(ctx);
-            goto done;
-        }
-        ts->seqs = seqs;
-        ts->cap = cap;
-    }
-    if (affect_features_extract(ts->feat, m, &x, &n_frames, &err)) {
-        row_error(ctx, ts, &err);
-        goto done;
-    }
-    ts->seqs[ts->n_seqs].x = x;
-    ts->seqs[ts->n_seqs].n_frames = n_frames;
-    ts->n_seqs++;
-    r = AX_OK;
-done:
-    affect_motion_free(m);
-    return r;
-}
+static const char *const train_keys[] = {AX_SEQS_KEYS, NULL};
 
 void ax_hmm_train_step(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 {
-    train_state **slot = sqlite3_aggregate_context(ctx, (int)sizeof *slot);
+    ax_seqs **slot = sqlite3_aggregate_context(ctx, (int)sizeof *slot);
     if (!slot) {
         sqlite3_result_error_nomem(ctx);
         return;
     }
-    train_state *ts = *slot;
+    ax_seqs *ts = *slot;
     if (ts && ts->failed)
         return;
     if (!ts) {
@@ -364,21 +80,23 @@ void ax_hmm_train_step(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         memset(ts, 0, sizeof *ts);
         *slot = ts;
         ts->rows++;
-        if (read_train_options(ctx, argc, argv, ts) != AX_OK) {
+        ax_opts opts;
+        if (ax_seqs_options(ctx, argc, argv, 1, train_keys, ts, &opts) != AX_OK) {
             ts->failed = true;
             return;
         }
+        ax_opts_free(&opts);
     } else {
         ts->rows++;
     }
-    if (add_row(ctx, argc, argv, ts) != AX_OK)
+    if (ax_seqs_add(ctx, argc, argv, ts) != AX_OK)
         ts->failed = true;
 }
 
 void ax_hmm_train_final(sqlite3_context *ctx)
 {
-    train_state **slot = sqlite3_aggregate_context(ctx, 0);
-    train_state *ts = slot ? *slot : NULL;
+    ax_seqs **slot = sqlite3_aggregate_context(ctx, 0);
+    ax_seqs *ts = slot ? *slot : NULL;
     affect_hmm *h = NULL;
     affect_error err;
     if (!ts || ts->failed || ts->n_seqs == 0) {
@@ -398,7 +116,7 @@ void ax_hmm_train_final(sqlite3_context *ctx)
         sqlite3_result_blob64(ctx, blob, size, sqlite3_free);
 done:
     affect_hmm_free(h);
-    train_state_free(ts);
+    ax_seqs_free(ts);
     if (slot)
         *slot = NULL;
 }

@@ -1,0 +1,53 @@
+/*
+ * seqs.h — the observation sequences an aggregate collects for training (hmm_train,
+ * affect_train): the HMM and observation options, the feature definition fixed by the first
+ * motion, and one observation sequence per non-NULL motion.
+ *
+ * Usage in an aggregate's xStep (options at argument opt_i, the motion at argument 0):
+ *     first row:  ax_seqs_options(ctx, argc, argv, opt_i, allowed_keys, ts, &opts)
+ *                 (reads the HMM/feature keys; the caller reads its own keys from opts, then
+ *                 ax_opts_free(&opts))
+ *     every row:  ax_seqs_add(ctx, argc, argv, ts)   (ts->n_seqs grows unless the motion is NULL)
+ *     xFinal:     train on ts->seqs, then ax_seqs_free(ts)
+ */
+#ifndef AFFECT_EXT_SEQS_H
+#define AFFECT_EXT_SEQS_H
+
+#include "common.h"
+
+#include "affect/features.h"
+#include "affect/hmm.h"
+
+typedef struct ax_seqs {
+    bool failed;             /* an error was reported: xFinal only frees */
+    int opt_i;               /* the options' argument index */
+    char *opts_text;         /* the first row's options text, NULL when none */
+    size_t opts_len;
+    affect_hmm_config cfg;
+    affect_features_options fo;
+    char **joints;           /* fo.joints storage: copies of the "joints" option's names */
+    uint32_t n_joints;
+    affect_features *feat;   /* fixed by the first non-NULL motion */
+    affect_hmm_seq *seqs;    /* observation sequences (each x owned) */
+    uint32_t n_seqs, cap;
+    uint64_t rows;           /* rows seen, NULL motions included */
+} ax_seqs;
+
+/* The HMM and observation option keys (states … seed), for building an allowed-keys list. */
+#define AX_SEQS_KEYS                                                                              \
+    "states", "mixtures", "covariance", "topology", "max_jump", "start", "joints", "normalize",  \
+        "scale", "up", "velocity", "max_iter", "tol", "reg", "seed"
+
+/* Parses the first row's options (argument opt_i; keys must be in allowed) into opts and reads
+ * the HMM and observation keys into ts; on AX_OK the caller frees opts. */
+ax_arg ax_seqs_options(sqlite3_context *ctx, int argc, sqlite3_value **argv, int opt_i,
+                       const char *const *allowed, ax_seqs *ts, ax_opts *opts);
+/* Checks one row (same options as the first, a motion or NULL at argument 0) and keeps its
+ * observation sequence; AX_ERROR when an error was reported. */
+ax_arg ax_seqs_add(sqlite3_context *ctx, int argc, sqlite3_value **argv, ax_seqs *ts);
+/* Reports a core error met on the current row: "row 3: …" (out of memory as SQLITE_NOMEM). */
+void ax_seqs_row_error(sqlite3_context *ctx, const ax_seqs *ts, const affect_error *err);
+/* Frees ts and everything it holds (sqlite3_free for ts itself); NULL is fine. */
+void ax_seqs_free(ax_seqs *ts);
+
+#endif
