@@ -1,0 +1,938 @@
+/*
+ * svm.c — linear multi-class SVM on libsvm for very long, few vectors (see affect/svm.h).
+ *
+ * Usage:
+ *     affect_svm *m;
+ *     affect_svm_select_c(X, n, d, y, c, cands, n_cand, 5, seed, &C, &acc, &err);
+ *     affect_svm_train(X, n, d, y, c, C, &m, &err);
+ *     uint32_t k = affect_svm_predict(m, x, NULL);
+ *     affect_svm_encode(m, &w);  ...  affect_svm_decode(&r, &m2, &err);
+ *     affect_svm_free(m);
+ *
+ * How it works. Training computes G = X Xᵀ once (cblas_dsyrk, mirrored) and gives libsvm a
+ * C-SVC problem with kernel_type PRECOMPUTED: problem row r (a sample, the samples grouped by
+ * class in class order and in their original order within a class) is the node array
+ *     {0, r+1}, {1, G[r][0]}, …, {m, G[r][m−1]}, {−1, 0}
+ * in problem order, where r+1 is the sample's serial number: libsvm's kernel value K(r, s) is
+ * x_r[serial of s].value. Labels are the class indices, so libsvm's class order (first
+ * appearance) is ours. From the trained model we copy nSV, rho, sv_coef and the support
+ * vectors' training indices (svm_get_sv_indices, 1-based problem rows, mapped to 0-based
+ * sample indices), and build the primal weights of the linear kernel exactly as
+ * svm_predict_values combines kernel values: for the pair (i, j), i < j,
+ *     w_ij = Σ_{SV s of class i} sv_coef[j−1][s] x_s + Σ_{SV s of class j} sv_coef[i][s] x_s,
+ * accumulated in that order; dec_ij(x) = w_ij·x − rho_ij. The libsvm model is then freed: it
+ * points into our problem's node arrays and owns memory from the C library's malloc.
+ *
+ * Cross-validation trains on the rows and columns of G of the training folds (one problem
+ * per fold, reused across the candidates of C) and predicts the held-out samples in the dual,
+ * Σ coef · G[t][s] − rho with libsvm's layout and vote, so X is touched only once.
+ *
+ * The encoding is the layout documented in affect/svm.h, written and read field by field
+ * through affect/bytes.h.
+ */
+#include "affect/svm.h"
+
+#include <cblas.h>
+#include <inttypes.h>
+#include <math.h>
+#include <string.h>
+#include <svm.h>
+
+#include "affect/rng.h"
+
+struct affect_svm {
+    uint32_t c;       /* classes */
+    uint32_t n_train; /* samples of the training set (of the whole data set in a CV model) */
+    uint32_t l;       /* total support vectors */
+    size_t d;         /* dimension */
+    double C;
+    uint32_t *label;    /* c: libsvm's class k is our class label[k] */
+    uint32_t *nsv;      /* c: support vectors per libsvm class */
+    uint32_t *sv_index; /* l: 0-based sample index of each support vector */
+    double *sv_coef;    /* (c − 1) × l, libsvm's sv_coef row after row */
+    double *rho;        /* c(c − 1)/2 */
+    double *w;          /* c(c − 1)/2 × d; NULL in cross-validation models */
+};
+
+/* A libsvm problem over a subset of the samples, built from the Gram matrix. */
+typedef struct problem {
+    struct svm_problem prob;
+    struct svm_node *nodes; /* m × (m + 2) */
+    struct svm_node **rows; /* m */
+    double *labels;         /* m */
+    uint32_t *ids;          /* m: problem row → sample index */
+    size_t m;
+    uint32_t n_classes; /* classes present */
+} problem;
+
+static size_t n_pairs(uint32_t c)
+{
+    return (size_t)c * (c - 1) / 2;
+}
+
+static void quiet(const char *s)
+{
+    (void)s;
+}
+
+void affect_svm_free(affect_svm *m)
+{
+    if (!m)
+        return;
+    affect_free(m->label);
+    affect_free(m->nsv);
+    affect_free(m->sv_index);
+    affect_free(m->sv_coef);
+    affect_free(m->rho);
+    affect_free(m->w);
+    affect_free(m);
+}
+
+/* ---- checks ---- */
+
+static affect_status check_sizes(size_t n, size_t d, affect_error *err)
+{
+    if (d == 0)
+        return affect_fail(err, AFFECT_ERR_RANGE, "dimension must be at least 1");
+    if (d > AFFECT_SVM_MAX_DIM)
+        return affect_fail(err, AFFECT_ERR_RANGE, "dimension %zu too large (at most %u)", d,
+                           AFFECT_SVM_MAX_DIM);
+    if (n > AFFECT_SVM_MAX_SAMPLES)
+        return affect_fail(err, AFFECT_ERR_RANGE, "too many samples: %zu (at most %u)", n,
+                           AFFECT_SVM_MAX_SAMPLES);
+    return AFFECT_OK;
+}
+
+/* Classes, sizes, labels in range and every class present. */
+static affect_status check_data(size_t n, size_t d, const uint32_t *y, uint32_t c,
+                                affect_error *err)
+{
+    if (c < 2)
+        return affect_fail(err, AFFECT_ERR_INVALID, "need at least 2 classes");
+    if (c > AFFECT_SVM_MAX_CLASSES)
+        return affect_fail(err, AFFECT_ERR_INVALID, "at most %u classes, got %u",
+                           AFFECT_SVM_MAX_CLASSES, c);
+    affect_status st = check_sizes(n, d, err);
+    if (st != AFFECT_OK)
+        return st;
+    bool seen[AFFECT_SVM_MAX_CLASSES] = {false};
+    for (size_t i = 0; i < n; i++) {
+        if (y[i] >= c)
+            return affect_fail(err, AFFECT_ERR_INVALID, "sample %zu: class %u out of range 0 .. %u",
+                               i, y[i], c - 1);
+        seen[y[i]] = true;
+    }
+    for (uint32_t k = 0; k < c; k++)
+        if (!seen[k])
+            return affect_fail(err, AFFECT_ERR_INVALID, "class %u has no training sample", k);
+    return AFFECT_OK;
+}
+
+static affect_status check_finite(const double *X, size_t n, size_t d, affect_error *err)
+{
+    for (size_t i = 0; i < n; i++)
+        for (size_t j = 0; j < d; j++)
+            if (!isfinite(X[i * d + j]))
+                return affect_fail(err, AFFECT_ERR_INVALID,
+                                   "sample %zu, component %zu is not finite", i, j);
+    return AFFECT_OK;
+}
+
+static bool positive_finite(double v)
+{
+    return isfinite(v) && v > 0;
+}
+
+/* ---- Gram matrix ---- */
+
+affect_status affect_svm_gram(const double *X, size_t n, size_t d, double *G, affect_error *err)
+{
+    affect_status st = check_sizes(n, d, err);
+    if (st != AFFECT_OK || n == 0)
+        return st;
+    cblas_dsyrk(CblasRowMajor, CblasUpper, CblasNoTrans, (int)n, (int)d, 1.0, X, (int)d, 0.0, G,
+                (int)n);
+    for (size_t i = 1; i < n; i++)
+        for (size_t j = 0; j < i; j++)
+            G[i * n + j] = G[j * n + i];
+    return AFFECT_OK;
+}
+
+/* A new Gram matrix of X (sizes already checked), with every entry finite. */
+static affect_status gram_new(const double *X, size_t n, size_t d, double **out, affect_error *err)
+{
+    size_t nn;
+    *out = NULL;
+    if (!affect_mul_size(n, n, &nn))
+        return affect_fail(err, AFFECT_ERR_RANGE, "too many samples: %zu", n);
+    double *G = affect_malloc_array(nn, sizeof *G);
+    if (!G)
+        return affect_nomem(err);
+    affect_status st = affect_svm_gram(X, n, d, G, err);
+    if (st != AFFECT_OK) {
+        affect_free(G);
+        return st;
+    }
+    for (size_t i = 0; i < n; i++)
+        for (size_t j = i; j < n; j++)
+            if (!isfinite(G[i * n + j])) {
+                affect_free(G);
+                return affect_fail(
+                    err, AFFECT_ERR_RANGE,
+                    "Gram entry (%zu, %zu) is not finite (the features are too large)", i, j);
+            }
+    *out = G;
+    return AFFECT_OK;
+}
+
+/* ---- the libsvm problem ---- */
+
+static void problem_free(problem *p)
+{
+    affect_free(p->nodes);
+    affect_free(p->rows);
+    affect_free(p->labels);
+    affect_free(p->ids);
+    memset(p, 0, sizeof *p);
+}
+
+/* The problem of the samples i with fold_of[i] != skip (all of them when fold_of is NULL),
+ * grouped by class in class order, in their original order within a class. */
+static affect_status problem_build(const double *G, size_t n, const uint32_t *y, uint32_t c,
+                                   const uint32_t *fold_of, uint32_t skip, problem *p,
+                                   affect_error *err)
+{
+    memset(p, 0, sizeof *p);
+    size_t m = 0, stride, count;
+    for (size_t i = 0; i < n; i++)
+        if (!fold_of || fold_of[i] != skip)
+            m++;
+    if (!affect_add_size(m, 2, &stride) || !affect_mul_size(m, stride, &count))
+        return affect_fail(err, AFFECT_ERR_RANGE, "too many samples: %zu", m);
+    p->ids = affect_malloc_array(m, sizeof *p->ids);
+    p->labels = affect_malloc_array(m, sizeof *p->labels);
+    p->rows = affect_malloc_array(m, sizeof *p->rows);
+    p->nodes = affect_malloc_array(count, sizeof *p->nodes);
+    if (!p->ids || !p->labels || !p->rows || !p->nodes) {
+        problem_free(p);
+        return affect_nomem(err);
+    }
+    size_t r = 0;
+    for (uint32_t k = 0; k < c; k++) {
+        size_t r0 = r;
+        for (size_t i = 0; i < n; i++)
+            if (y[i] == k && (!fold_of || fold_of[i] != skip))
+                p->ids[r++] = (uint32_t)i;
+        if (r > r0)
+            p->n_classes++;
+    }
+    for (r = 0; r < m; r++) {
+        struct svm_node *row = p->nodes + r * stride;
+        const double *g = G + (size_t)p->ids[r] * n;
+        row[0].index = 0;
+        row[0].value = (double)(r + 1);
+        for (size_t s = 0; s < m; s++) {
+            row[s + 1].index = (int)(s + 1);
+            row[s + 1].value = g[p->ids[s]];
+        }
+        row[m + 1].index = -1;
+        row[m + 1].value = 0;
+        p->rows[r] = row;
+        p->labels[r] = (double)y[p->ids[r]];
+    }
+    p->m = m;
+    p->prob.l = (int)m;
+    p->prob.y = p->labels;
+    p->prob.x = p->rows;
+    return AFFECT_OK;
+}
+
+/* Trains libsvm on p with penalty C; *out is libsvm's model (free with
+ * svm_free_and_destroy_model, before p). */
+static affect_status fit(const problem *p, double C, struct svm_model **out, affect_error *err)
+{
+    struct svm_parameter param;
+    memset(&param, 0, sizeof param);
+    param.svm_type = C_SVC;
+    param.kernel_type = PRECOMPUTED;
+    param.degree = 3;
+    param.cache_size = AFFECT_SVM_CACHE_MB;
+    param.eps = AFFECT_SVM_EPS;
+    param.C = C;
+    param.nr_weight = 0;
+    param.weight_label = NULL;
+    param.weight = NULL;
+    param.nu = 0.5;
+    param.p = 0.1;
+    param.shrinking = 1;
+    param.probability = 0;
+    *out = NULL;
+    const char *msg = svm_check_parameter(&p->prob, &param);
+    if (msg)
+        return affect_fail(err, AFFECT_ERR_INVALID, "libsvm rejected the parameters: %s", msg);
+    svm_set_print_string_function(quiet);
+    *out = svm_train(&p->prob, &param);
+    if (!*out)
+        return affect_nomem(err);
+    return AFFECT_OK;
+}
+
+/* Copies the description of libsvm's model sm, trained on p, into a new model without
+ * weights. */
+static affect_status extract(const struct svm_model *sm, const problem *p, size_t d, double C,
+                             affect_svm **out, affect_error *err)
+{
+    affect_status st = AFFECT_OK;
+    int *svi = NULL;
+    int labels[AFFECT_SVM_MAX_CLASSES];
+    uint32_t c = (uint32_t)svm_get_nr_class(sm);
+    uint32_t l = (uint32_t)svm_get_nr_sv(sm);
+    /* 2 ≤ c ≤ the classes we gave libsvm, l ≤ the rows of the problem: no overflow */
+    size_t n_coef = (size_t)(c - 1) * l;
+    *out = NULL;
+    affect_svm *m = affect_calloc(1, sizeof *m);
+    if (!m)
+        return affect_nomem(err);
+    m->c = c;
+    m->n_train = (uint32_t)p->m;
+    m->l = l;
+    m->d = d;
+    m->C = C;
+    m->label = affect_malloc_array(c, sizeof *m->label);
+    m->nsv = affect_malloc_array(c, sizeof *m->nsv);
+    m->sv_index = affect_malloc_array(l, sizeof *m->sv_index);
+    m->sv_coef = affect_malloc_array(n_coef, sizeof *m->sv_coef);
+    m->rho = affect_malloc_array(n_pairs(c), sizeof *m->rho);
+    svi = affect_malloc_array(l, sizeof *svi);
+    if (!m->label || !m->nsv || !m->sv_index || !m->sv_coef || !m->rho || !svi) {
+        st = affect_nomem(err);
+        goto cleanup;
+    }
+    svm_get_labels(sm, labels);
+    svm_get_sv_indices(sm, svi);
+    for (uint32_t k = 0; k < c; k++) {
+        m->label[k] = (uint32_t)labels[k];
+        m->nsv[k] = (uint32_t)sm->nSV[k];
+    }
+    for (uint32_t i = 0; i < l; i++)
+        m->sv_index[i] = p->ids[svi[i] - 1];
+    for (uint32_t j = 0; j + 1 < c; j++)
+        for (uint32_t i = 0; i < l; i++)
+            m->sv_coef[(size_t)j * l + i] = sm->sv_coef[j][i];
+    for (size_t k = 0; k < n_pairs(c); k++)
+        m->rho[k] = sm->rho[k];
+    *out = m;
+    m = NULL;
+cleanup:
+    affect_free(svi);
+    affect_svm_free(m);
+    return st;
+}
+
+/* First offset of each class's support vectors. */
+static void sv_starts(const affect_svm *m, uint32_t *start)
+{
+    start[0] = 0;
+    for (uint32_t k = 1; k < m->c; k++)
+        start[k] = start[k - 1] + m->nsv[k - 1];
+}
+
+/* The primal weights of the linear kernel, from the support vectors' rows of X. */
+static affect_status primal(affect_svm *m, const double *X, affect_error *err)
+{
+    size_t d = m->d, total;
+    if (!affect_mul_size(n_pairs(m->c), d, &total))
+        return affect_fail(err, AFFECT_ERR_RANGE, "weights of %zu pairs x %zu too large",
+                           n_pairs(m->c), d);
+    m->w = affect_calloc(total, sizeof *m->w);
+    if (!m->w)
+        return affect_nomem(err);
+    uint32_t start[AFFECT_SVM_MAX_CLASSES];
+    sv_starts(m, start);
+    size_t p = 0;
+    for (uint32_t i = 0; i < m->c; i++)
+        for (uint32_t j = i + 1; j < m->c; j++, p++) {
+            double *w = m->w + p * d;
+            const double *coef1 = m->sv_coef + (size_t)(j - 1) * m->l;
+            const double *coef2 = m->sv_coef + (size_t)i * m->l;
+            for (uint32_t k = 0; k < m->nsv[i]; k++) {
+                uint32_t s = start[i] + k;
+                const double *x = X + (size_t)m->sv_index[s] * d;
+                for (size_t t = 0; t < d; t++)
+                    w[t] += coef1[s] * x[t];
+            }
+            for (uint32_t k = 0; k < m->nsv[j]; k++) {
+                uint32_t s = start[j] + k;
+                const double *x = X + (size_t)m->sv_index[s] * d;
+                for (size_t t = 0; t < d; t++)
+                    w[t] += coef2[s] * x[t];
+            }
+        }
+    return AFFECT_OK;
+}
+
+/* libsvm's winner: most votes, the first (in libsvm's class order) among equals. */
+static uint32_t winner(const uint32_t *votes, uint32_t c)
+{
+    uint32_t best = 0;
+    for (uint32_t k = 1; k < c; k++)
+        if (votes[k] > votes[best])
+            best = k;
+    return best;
+}
+
+/* ---- training and prediction ---- */
+
+affect_status affect_svm_train(const double *X, size_t n, size_t d, const uint32_t *y, uint32_t c,
+                               double C, affect_svm **out, affect_error *err)
+{
+    affect_status st;
+    double *G = NULL;
+    problem p;
+    struct svm_model *sm = NULL;
+    affect_svm *m = NULL;
+    memset(&p, 0, sizeof p);
+    *out = NULL;
+    if ((st = check_data(n, d, y, c, err)) != AFFECT_OK)
+        return st;
+    if (!positive_finite(C))
+        return affect_fail(err, AFFECT_ERR_INVALID, "C must be a positive finite number, got %g",
+                           C);
+    if ((st = check_finite(X, n, d, err)) != AFFECT_OK)
+        return st;
+    if ((st = gram_new(X, n, d, &G, err)) != AFFECT_OK)
+        goto cleanup;
+    if ((st = problem_build(G, n, y, c, NULL, 0, &p, err)) != AFFECT_OK)
+        goto cleanup;
+    affect_free(G);
+    G = NULL;
+    if ((st = fit(&p, C, &sm, err)) != AFFECT_OK)
+        goto cleanup;
+    if ((uint32_t)svm_get_nr_class(sm) != c) {
+        st = affect_fail(err, AFFECT_ERR_RANGE, "libsvm returned %d classes, expected %u",
+                         svm_get_nr_class(sm), c);
+        goto cleanup;
+    }
+    if ((st = extract(sm, &p, d, C, &m, err)) != AFFECT_OK)
+        goto cleanup;
+    for (uint32_t k = 0; k < c; k++)
+        if (m->label[k] != k) {
+            st = affect_fail(err, AFFECT_ERR_RANGE,
+                             "libsvm reordered the classes (class %u at position %u)", m->label[k],
+                             k);
+            goto cleanup;
+        }
+    svm_free_and_destroy_model(&sm);
+    problem_free(&p);
+    if ((st = primal(m, X, err)) != AFFECT_OK)
+        goto cleanup;
+    *out = m;
+    m = NULL;
+cleanup:
+    if (sm)
+        svm_free_and_destroy_model(&sm);
+    problem_free(&p);
+    affect_free(G);
+    affect_svm_free(m);
+    return st;
+}
+
+uint32_t affect_svm_predict(const affect_svm *m, const double *x, double *dec)
+{
+    uint32_t votes[AFFECT_SVM_MAX_CLASSES] = {0};
+    size_t p = 0, d = m->d;
+    for (uint32_t i = 0; i < m->c; i++)
+        for (uint32_t j = i + 1; j < m->c; j++, p++) {
+            const double *w = m->w + p * d;
+            double s = 0;
+            for (size_t t = 0; t < d; t++)
+                s += w[t] * x[t];
+            s -= m->rho[p];
+            if (dec)
+                dec[p] = s;
+            if (s > 0)
+                votes[i]++;
+            else
+                votes[j]++;
+        }
+    return m->label[winner(votes, m->c)];
+}
+
+/* The prediction of a model without weights for the sample whose kernel values with every
+ * sample are g (a row of the Gram matrix): svm_predict_values's sums and vote. */
+static uint32_t dual_predict(const affect_svm *m, const double *g)
+{
+    uint32_t votes[AFFECT_SVM_MAX_CLASSES] = {0};
+    uint32_t start[AFFECT_SVM_MAX_CLASSES];
+    sv_starts(m, start);
+    size_t p = 0;
+    for (uint32_t i = 0; i < m->c; i++)
+        for (uint32_t j = i + 1; j < m->c; j++, p++) {
+            const double *coef1 = m->sv_coef + (size_t)(j - 1) * m->l;
+            const double *coef2 = m->sv_coef + (size_t)i * m->l;
+            double s = 0;
+            for (uint32_t k = 0; k < m->nsv[i]; k++)
+                s += coef1[start[i] + k] * g[m->sv_index[start[i] + k]];
+            for (uint32_t k = 0; k < m->nsv[j]; k++)
+                s += coef2[start[j] + k] * g[m->sv_index[start[j] + k]];
+            s -= m->rho[p];
+            if (s > 0)
+                votes[i]++;
+            else
+                votes[j]++;
+        }
+    return m->label[winner(votes, m->c)];
+}
+
+/* ---- accessors ---- */
+
+uint32_t affect_svm_n_classes(const affect_svm *m)
+{
+    return m->c;
+}
+
+size_t affect_svm_dim(const affect_svm *m)
+{
+    return m->d;
+}
+
+double affect_svm_C(const affect_svm *m)
+{
+    return m->C;
+}
+
+uint32_t affect_svm_n_train(const affect_svm *m)
+{
+    return m->n_train;
+}
+
+uint32_t affect_svm_total_sv(const affect_svm *m)
+{
+    return m->l;
+}
+
+uint32_t affect_svm_n_sv(const affect_svm *m, uint32_t k)
+{
+    return k < m->c ? m->nsv[k] : 0;
+}
+
+const uint32_t *affect_svm_sv_indices(const affect_svm *m)
+{
+    return m->sv_index;
+}
+
+const double *affect_svm_sv_coef(const affect_svm *m, uint32_t j)
+{
+    return j + 1 < m->c ? m->sv_coef + (size_t)j * m->l : NULL;
+}
+
+uint32_t affect_svm_pair_index(const affect_svm *m, uint32_t p, uint32_t q)
+{
+    if (p >= q || q >= m->c)
+        return UINT32_MAX;
+    return (uint32_t)((size_t)p * (2 * (size_t)m->c - p - 1) / 2 + (q - p - 1));
+}
+
+const double *affect_svm_weights(const affect_svm *m, uint32_t p, uint32_t q, double *rho)
+{
+    uint32_t k = affect_svm_pair_index(m, p, q);
+    if (k == UINT32_MAX)
+        return NULL;
+    if (rho)
+        *rho = m->rho[k];
+    return m->w + (size_t)k * m->d;
+}
+
+/* ---- cross-validation ---- */
+
+/* Uniform in 0 .. bound−1 (bound ≥ 1), without modulo bias: draws below 2^64 mod bound are
+ * rejected. */
+static uint64_t rng_below(affect_rng *r, uint64_t bound)
+{
+    uint64_t threshold = (0 - bound) % bound;
+    for (;;) {
+        uint64_t x = affect_rng_next(r);
+        if (x >= threshold)
+            return x % bound;
+    }
+}
+
+affect_status affect_stratified_folds(const uint32_t *y, size_t n, uint32_t c, uint32_t k,
+                                      uint64_t seed, uint32_t *fold_of, affect_error *err)
+{
+    if (k < 2)
+        return affect_fail(err, AFFECT_ERR_INVALID, "need at least 2 folds, got %u", k);
+    if (c == 0)
+        return affect_fail(err, AFFECT_ERR_INVALID, "need at least 1 class");
+    if (n > AFFECT_SVM_MAX_SAMPLES)
+        return affect_fail(err, AFFECT_ERR_RANGE, "too many samples: %zu (at most %u)", n,
+                           AFFECT_SVM_MAX_SAMPLES);
+    for (size_t i = 0; i < n; i++)
+        if (y[i] >= c)
+            return affect_fail(err, AFFECT_ERR_INVALID, "sample %zu: class %u out of range 0 .. %u",
+                               i, y[i], c - 1);
+    if (n == 0)
+        return AFFECT_OK;
+    size_t *start = affect_calloc((size_t)c + 1, sizeof *start);
+    uint32_t *order = affect_malloc_array(n, sizeof *order);
+    if (!start || !order) {
+        affect_free(start);
+        affect_free(order);
+        return affect_nomem(err);
+    }
+    /* counting sort by class, stable */
+    for (size_t i = 0; i < n; i++)
+        start[y[i] + 1]++;
+    for (uint32_t j = 0; j < c; j++)
+        start[j + 1] += start[j];
+    for (size_t i = 0; i < n; i++)
+        order[start[y[i]]++] = (uint32_t)i;
+    /* start[j] is now the end of class j's run */
+    affect_rng rng;
+    affect_rng_seed(&rng, seed);
+    size_t begin = 0;
+    for (uint32_t j = 0; j < c; j++) {
+        size_t end = start[j];
+        for (size_t i = end - begin; i > 1; i--) {
+            size_t a = begin + i - 1, b = begin + (size_t)rng_below(&rng, i);
+            uint32_t t = order[a];
+            order[a] = order[b];
+            order[b] = t;
+        }
+        begin = end;
+    }
+    uint32_t kk = n < k ? (uint32_t)n : k;
+    for (size_t r = 0; r < n; r++)
+        fold_of[order[r]] = (uint32_t)(r % kk);
+    affect_free(start);
+    affect_free(order);
+    return AFFECT_OK;
+}
+
+affect_status affect_svm_select_c(const double *X, size_t n, size_t d, const uint32_t *y,
+                                  uint32_t c, const double *candidates, size_t n_cand,
+                                  uint32_t folds, uint64_t seed, double *best_c, double *best_acc,
+                                  affect_error *err)
+{
+    affect_status st;
+    double *G = NULL;
+    uint32_t *fold_of = NULL;
+    size_t *correct = NULL, *size = NULL, n_cells;
+    problem p;
+    struct svm_model *sm = NULL;
+    affect_svm *m = NULL;
+    memset(&p, 0, sizeof p);
+    if ((st = check_data(n, d, y, c, err)) != AFFECT_OK)
+        return st;
+    if (n_cand == 0)
+        return affect_fail(err, AFFECT_ERR_INVALID, "need at least one candidate C");
+    for (size_t i = 0; i < n_cand; i++)
+        if (!positive_finite(candidates[i]))
+            return affect_fail(err, AFFECT_ERR_INVALID,
+                               "candidate %zu: C = %g is not a positive finite number", i,
+                               candidates[i]);
+    if (folds < 2)
+        return affect_fail(err, AFFECT_ERR_INVALID, "need at least 2 folds, got %u", folds);
+    if ((st = check_finite(X, n, d, err)) != AFFECT_OK)
+        return st;
+    uint32_t k = n < folds ? (uint32_t)n : folds;
+    if (!affect_mul_size(n_cand, k, &n_cells))
+        return affect_fail(err, AFFECT_ERR_RANGE, "too many candidates: %zu", n_cand);
+    fold_of = affect_malloc_array(n, sizeof *fold_of);
+    correct = affect_calloc(n_cells, sizeof *correct);
+    size = affect_calloc(k, sizeof *size);
+    if (!fold_of || !correct || !size) {
+        st = affect_nomem(err);
+        goto cleanup;
+    }
+    if ((st = affect_stratified_folds(y, n, c, folds, seed, fold_of, err)) != AFFECT_OK)
+        goto cleanup;
+    if ((st = gram_new(X, n, d, &G, err)) != AFFECT_OK)
+        goto cleanup;
+    for (size_t i = 0; i < n; i++)
+        size[fold_of[i]]++;
+    for (uint32_t f = 0; f < k; f++) {
+        if ((st = problem_build(G, n, y, c, fold_of, f, &p, err)) != AFFECT_OK)
+            goto cleanup;
+        for (size_t ci = 0; ci < n_cand; ci++) {
+            size_t *hits = &correct[ci * k + f];
+            if (p.n_classes == 1) {
+                uint32_t only = y[p.ids[0]];
+                for (size_t t = 0; t < n; t++)
+                    if (fold_of[t] == f && y[t] == only)
+                        (*hits)++;
+                continue;
+            }
+            if ((st = fit(&p, candidates[ci], &sm, err)) != AFFECT_OK)
+                goto cleanup;
+            st = extract(sm, &p, d, candidates[ci], &m, err);
+            svm_free_and_destroy_model(&sm);
+            if (st != AFFECT_OK)
+                goto cleanup;
+            for (size_t t = 0; t < n; t++)
+                if (fold_of[t] == f && dual_predict(m, G + t * n) == y[t])
+                    (*hits)++;
+            affect_svm_free(m);
+            m = NULL;
+        }
+        problem_free(&p);
+    }
+    for (size_t ci = 0; ci < n_cand; ci++) {
+        double acc = 0;
+        for (uint32_t f = 0; f < k; f++)
+            acc += (double)correct[ci * k + f] / (double)size[f];
+        acc /= k;
+        if (ci == 0 || acc > *best_acc || (acc == *best_acc && candidates[ci] < *best_c)) {
+            *best_acc = acc;
+            *best_c = candidates[ci];
+        }
+    }
+cleanup:
+    if (sm)
+        svm_free_and_destroy_model(&sm);
+    affect_svm_free(m);
+    problem_free(&p);
+    affect_free(G);
+    affect_free(fold_of);
+    affect_free(correct);
+    affect_free(size);
+    return st;
+}
+
+/* ---- serialisation ---- */
+
+void affect_svm_encode(const affect_svm *m, affect_bw *w)
+{
+    size_t P = n_pairs(m->c), n_coef = (size_t)(m->c - 1) * m->l;
+    affect_bw_u8(w, AFFECT_SVM_FORMAT_VERSION);
+    affect_bw_u32(w, m->c);
+    affect_bw_u64(w, (uint64_t)m->d);
+    affect_bw_f64(w, m->C);
+    affect_bw_u32(w, m->n_train);
+    affect_bw_u32(w, m->c);
+    affect_bw_u32s(w, m->label, m->c);
+    affect_bw_u32(w, m->c);
+    affect_bw_u32s(w, m->nsv, m->c);
+    affect_bw_u32(w, m->l);
+    affect_bw_u32s(w, m->sv_index, m->l);
+    affect_bw_u32(w, m->c - 1);
+    affect_bw_f64s(w, m->sv_coef, n_coef);
+    affect_bw_u32(w, (uint32_t)P);
+    affect_bw_f64s(w, m->rho, P);
+    affect_bw_u32(w, (uint32_t)P);
+    affect_bw_f64s(w, m->w, P * m->d);
+}
+
+static affect_status truncated(affect_error *err, const char *field, size_t off)
+{
+    return affect_fail(err, AFFECT_ERR_FORMAT, "SVM: truncated in %s (offset %zu)", field, off);
+}
+
+static affect_status get_u32(affect_br *r, uint32_t *v, const char *field, affect_error *err)
+{
+    return affect_br_u32(r, v) ? AFFECT_OK : truncated(err, field, r->off);
+}
+
+/* A count that must equal expected: "SVM: 3 classes but 2 labels (offset 25)". */
+static affect_status get_count(affect_br *r, uint32_t c, uint32_t expected, const char *field,
+                               const char *what, affect_error *err)
+{
+    size_t off = r->off;
+    uint32_t v;
+    affect_status st = get_u32(r, &v, field, err);
+    if (st != AFFECT_OK)
+        return st;
+    if (v != expected)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "SVM: %u classes but %u %s (offset %zu)", c, v,
+                           what, off);
+    return AFFECT_OK;
+}
+
+/* n uint32 values into a new array (n checked against the bytes left first). */
+static affect_status get_u32s(affect_br *r, size_t n, uint32_t **out, const char *field,
+                              affect_error *err)
+{
+    if (!affect_br_has(r, n, 4))
+        return truncated(err, field, r->off);
+    *out = affect_malloc_array(n, sizeof **out);
+    if (!*out)
+        return affect_nomem(err);
+    affect_br_u32s(r, *out, n);
+    return AFFECT_OK;
+}
+
+/* n finite float64 values into a new array. */
+static affect_status get_f64s(affect_br *r, size_t n, double **out, const char *field,
+                              affect_error *err)
+{
+    if (!affect_br_has(r, n, 8))
+        return truncated(err, field, r->off);
+    *out = affect_malloc_array(n, sizeof **out);
+    if (!*out)
+        return affect_nomem(err);
+    size_t off = r->off;
+    affect_br_f64s(r, *out, n);
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite((*out)[i]))
+            return affect_fail(err, AFFECT_ERR_FORMAT, "SVM: non-finite value in %s (offset %zu)",
+                               field, off + 8 * i);
+    return AFFECT_OK;
+}
+
+affect_status affect_svm_decode(affect_br *r, affect_svm **out, affect_error *err)
+{
+    affect_status st;
+    size_t off;
+    uint8_t version;
+    uint32_t c, n, l;
+    uint64_t d, sum = 0;
+    size_t P, n_coef, n_w;
+    double C;
+    *out = NULL;
+    affect_svm *m = affect_calloc(1, sizeof *m);
+    if (!m)
+        return affect_nomem(err);
+
+    off = r->off;
+    if (!affect_br_u8(r, &version)) {
+        st = truncated(err, "the version", off);
+        goto cleanup;
+    }
+    if (version != AFFECT_SVM_FORMAT_VERSION) {
+        st = affect_fail(err, AFFECT_ERR_FORMAT,
+                         "SVM: unknown format version %u at offset %zu (this build reads %u)",
+                         version, off, AFFECT_SVM_FORMAT_VERSION);
+        goto cleanup;
+    }
+    off = r->off;
+    if ((st = get_u32(r, &c, "the class count", err)) != AFFECT_OK)
+        goto cleanup;
+    if (c < 2 || c > AFFECT_SVM_MAX_CLASSES) {
+        st = affect_fail(err, AFFECT_ERR_FORMAT,
+                         "SVM: class count %u out of range 2 .. %u (offset %zu)", c,
+                         AFFECT_SVM_MAX_CLASSES, off);
+        goto cleanup;
+    }
+    off = r->off;
+    if (!affect_br_u64(r, &d)) {
+        st = truncated(err, "the dimension", off);
+        goto cleanup;
+    }
+    if (d < 1 || d > AFFECT_SVM_MAX_DIM) {
+        st = affect_fail(err, AFFECT_ERR_FORMAT,
+                         "SVM: dimension %" PRIu64 " out of range 1 .. %u (offset %zu)", d,
+                         AFFECT_SVM_MAX_DIM, off);
+        goto cleanup;
+    }
+    off = r->off;
+    if (!affect_br_f64(r, &C)) {
+        st = truncated(err, "C", off);
+        goto cleanup;
+    }
+    if (!positive_finite(C)) {
+        st = affect_fail(err, AFFECT_ERR_FORMAT,
+                         "SVM: C = %g is not a positive finite number (offset %zu)", C, off);
+        goto cleanup;
+    }
+    off = r->off;
+    if ((st = get_u32(r, &n, "the sample count", err)) != AFFECT_OK)
+        goto cleanup;
+    if (n < c || n > AFFECT_SVM_MAX_SAMPLES) {
+        st = affect_fail(err, AFFECT_ERR_FORMAT,
+                         "SVM: sample count %u out of range %u .. %u (offset %zu)", n, c,
+                         AFFECT_SVM_MAX_SAMPLES, off);
+        goto cleanup;
+    }
+    m->c = c;
+    m->d = (size_t)d;
+    m->C = C;
+    m->n_train = n;
+
+    if ((st = get_count(r, c, c, "the number of labels", "labels", err)) != AFFECT_OK)
+        goto cleanup;
+    off = r->off;
+    if ((st = get_u32s(r, c, &m->label, "the labels", err)) != AFFECT_OK)
+        goto cleanup;
+    for (uint32_t k = 0; k < c; k++)
+        if (m->label[k] != k) {
+            st = affect_fail(err, AFFECT_ERR_FORMAT,
+                             "SVM: label %u at position %u, expected %u (offset %zu)", m->label[k],
+                             k, k, off + 4 * (size_t)k);
+            goto cleanup;
+        }
+
+    if ((st = get_count(r, c, c, "the number of support-vector counts", "support-vector counts",
+                        err)) != AFFECT_OK)
+        goto cleanup;
+    if ((st = get_u32s(r, c, &m->nsv, "the support-vector counts", err)) != AFFECT_OK)
+        goto cleanup;
+    for (uint32_t k = 0; k < c; k++)
+        sum += m->nsv[k];
+    off = r->off;
+    if ((st = get_u32(r, &l, "the total of support vectors", err)) != AFFECT_OK)
+        goto cleanup;
+    if (sum != l) {
+        st = affect_fail(err, AFFECT_ERR_FORMAT,
+                         "SVM: support-vector counts sum to %" PRIu64 " but the total is %u "
+                         "(offset %zu)",
+                         sum, l, off);
+        goto cleanup;
+    }
+    if (l > n) {
+        st = affect_fail(err, AFFECT_ERR_FORMAT,
+                         "SVM: %u support vectors but %u training samples (offset %zu)", l, n, off);
+        goto cleanup;
+    }
+    m->l = l;
+    off = r->off;
+    if ((st = get_u32s(r, l, &m->sv_index, "the support-vector indices", err)) != AFFECT_OK)
+        goto cleanup;
+    for (uint32_t k = 0, s = 0; k < c; k++)
+        for (uint32_t i = 0; i < m->nsv[k]; i++, s++) {
+            size_t at = off + 4 * (size_t)s;
+            if (m->sv_index[s] >= n) {
+                st = affect_fail(err, AFFECT_ERR_FORMAT,
+                                 "SVM: support vector %u has training index %u, not below %u "
+                                 "(offset %zu)",
+                                 s, m->sv_index[s], n, at);
+                goto cleanup;
+            }
+            if (i > 0 && m->sv_index[s] <= m->sv_index[s - 1]) {
+                st = affect_fail(err, AFFECT_ERR_FORMAT,
+                                 "SVM: support vector %u has training index %u, not above the "
+                                 "previous %u of its class (offset %zu)",
+                                 s, m->sv_index[s], m->sv_index[s - 1], at);
+                goto cleanup;
+            }
+        }
+
+    P = n_pairs(c);
+    if ((st = get_count(r, c, c - 1, "the number of coefficient rows", "coefficient rows", err)) !=
+        AFFECT_OK)
+        goto cleanup;
+    if (!affect_mul_size(c - 1, l, &n_coef)) {
+        st = truncated(err, "the coefficients", r->off);
+        goto cleanup;
+    }
+    if ((st = get_f64s(r, n_coef, &m->sv_coef, "the coefficients", err)) != AFFECT_OK)
+        goto cleanup;
+    if ((st = get_count(r, c, (uint32_t)P, "the number of rho values", "rho values", err)) !=
+        AFFECT_OK)
+        goto cleanup;
+    if ((st = get_f64s(r, P, &m->rho, "the rho values", err)) != AFFECT_OK)
+        goto cleanup;
+    if ((st = get_count(r, c, (uint32_t)P, "the number of weight vectors", "weight vectors",
+                        err)) != AFFECT_OK)
+        goto cleanup;
+    if (!affect_mul_size(P, m->d, &n_w)) {
+        st = truncated(err, "the weights", r->off);
+        goto cleanup;
+    }
+    if ((st = get_f64s(r, n_w, &m->w, "the weights", err)) != AFFECT_OK)
+        goto cleanup;
+    *out = m;
+    m = NULL;
+cleanup:
+    affect_svm_free(m);
+    return st;
+}
