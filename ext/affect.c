@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include "common.h"
+#include "fn_affect.h"
 #include "fn_hmm.h"
 #include "fn_laban.h"
 #include "fn_motion.h"
@@ -163,6 +164,20 @@ static const ax_aggregate aggregates[] = {
     {"laban_plot", 4, ax_laban_plot_step, ax_laban_plot_final},
     {"hmm_train", 1, ax_hmm_train_step, ax_hmm_train_final},
     {"hmm_train", 2, ax_hmm_train_step, ax_hmm_train_final},
+    {"affect_train", 2, ax_affect_train_step, ax_affect_train_final},
+    {"affect_train", 3, ax_affect_train_step, ax_affect_train_final},
+    {"affect_crossval_json", 4, ax_affect_crossval_step, ax_affect_crossval_final},
+};
+
+/* The functions on a classifier BLOB: each registration gets its own one-classifier cache
+ * (fn_affect.c) as user data, freed with the connection. */
+static const ax_function classifier_functions[] = {
+    {"affect_classify", 2, false, ax_affect_classify},
+    {"affect_classify", 3, false, ax_affect_classify},
+    {"affect_scores", 2, true, ax_affect_scores},
+    {"fisher_score", 2, false, ax_fisher_score},
+    {"affect_embed", 2, false, ax_affect_embed},
+    {"affect_info", 1, true, ax_affect_info},
 };
 
 #ifdef _WIN32
@@ -205,7 +220,27 @@ int sqlite3_affect_init(sqlite3 *db, char **err, const sqlite3_api_routines *api
             return rc;
         }
     }
-    int rc = ax_register_points(db);
+    for (size_t i = 0; i < sizeof classifier_functions / sizeof classifier_functions[0]; i++) {
+        const ax_function *f = &classifier_functions[i];
+        ax_cls_fn *user = ax_cls_fn_new(f->name);
+        if (!user)
+            return SQLITE_NOMEM;
+        int flags = AX_PURE | (f->json ? subtype_flag : 0);
+        int rc = sqlite3_create_function_v2(db, f->name, f->n_arg, flags, user, f->fn, NULL,
+                                            NULL, ax_cls_fn_free); /* frees user on failure */
+        if (rc != SQLITE_OK) {
+            *err = sqlite3_mprintf("affect: cannot register %s/%d: %s", f->name, f->n_arg,
+                                   sqlite3_errmsg(db));
+            return rc;
+        }
+    }
+    int rc = ax_register_affect_tables(db);
+    if (rc != SQLITE_OK) {
+        *err = sqlite3_mprintf("affect: cannot register affect_crossval/affect_salience: %s",
+                               sqlite3_errmsg(db));
+        return rc;
+    }
+    rc = ax_register_points(db);
     if (rc != SQLITE_OK) {
         *err = sqlite3_mprintf("affect: cannot register motion_points: %s", sqlite3_errmsg(db));
         return rc;

@@ -298,78 +298,6 @@ void ax_hmm_viterbi_loglik(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 
 /* ---- hmm_info ---- */
 
-static void put_doubles(affect_strbuf *sb, const double *v, size_t n)
-{
-    affect_strbuf_putc(sb, '[');
-    for (size_t i = 0; i < n; i++) {
-        if (i)
-            affect_strbuf_putc(sb, ',');
-        affect_strbuf_double(sb, v[i]);
-    }
-    affect_strbuf_putc(sb, ']');
-}
-
-/* A rows × cols row-major matrix as an array of arrays. */
-static void put_matrix(affect_strbuf *sb, const double *v, size_t rows, size_t cols)
-{
-    affect_strbuf_putc(sb, '[');
-    for (size_t i = 0; i < rows; i++) {
-        if (i)
-            affect_strbuf_putc(sb, ',');
-        put_doubles(sb, v + i * cols, cols);
-    }
-    affect_strbuf_putc(sb, ']');
-}
-
-static void put_names(affect_strbuf *sb, char *const *names, uint32_t n)
-{
-    affect_strbuf_putc(sb, '[');
-    for (uint32_t i = 0; i < n; i++) {
-        if (i)
-            affect_strbuf_putc(sb, ',');
-        affect_strbuf_json_string(sb, names[i]);
-    }
-    affect_strbuf_putc(sb, ']');
-}
-
-static void put_config(affect_strbuf *sb, const affect_hmm_config *c)
-{
-    affect_strbuf_printf(sb, "{\"states\":%u,\"mixtures\":%u,\"dim\":%u,\"covariance\":\"%s\","
-                             "\"topology\":\"%s\",\"max_jump\":%u,\"start\":\"%s\","
-                             "\"max_iter\":%u,\"tol\":",
-                         c->n_states, c->n_mix, c->dim,
-                         c->cov == AFFECT_HMM_DIAG ? "diag" : "full",
-                         c->topology == AFFECT_HMM_LEFT_RIGHT ? "left-right" : "ergodic",
-                         c->max_jump, c->learn_start ? "learn" : "first", c->max_iter);
-    affect_strbuf_double(sb, c->tol);
-    affect_strbuf_puts(sb, ",\"reg\":");
-    affect_strbuf_double(sb, c->reg);
-    affect_strbuf_printf(sb, ",\"seed\":%" PRIu64 "}", c->seed);
-}
-
-static void put_features(affect_strbuf *sb, const affect_features *f)
-{
-    static const char *const axes[] = {"x", "y", "z"};
-    affect_strbuf_puts(sb, "{\"joints\":");
-    put_names(sb, f->joints, f->n_joints);
-    affect_strbuf_puts(sb, ",\"skeleton\":");
-    put_names(sb, f->skeleton, f->n_joints);
-    affect_strbuf_puts(sb, ",\"parents\":[");
-    for (uint32_t j = 0; j < f->n_joints; j++)
-        affect_strbuf_printf(sb, "%s%d", j ? "," : "", (int)f->parents[j]);
-    affect_strbuf_printf(sb, "],\"normalize\":%s,\"scale\":\"%s\",\"up\":\"%s\",\"velocity\":%s,"
-                             "\"fps\":",
-                         f->normalize ? "true" : "false", f->scale_arm ? "arm" : "none",
-                         axes[f->up_axis], f->velocity ? "true" : "false");
-    affect_strbuf_double(sb, f->fps);
-    affect_strbuf_puts(sb, ",\"unit\":");
-    if (f->unit[0])
-        affect_strbuf_json_string(sb, f->unit);
-    else
-        affect_strbuf_puts(sb, "null");
-    affect_strbuf_printf(sb, ",\"dim\":%u}", affect_features_dim(f));
-}
-
 void ax_hmm_info(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 {
     model_arg ma;
@@ -391,30 +319,30 @@ void ax_hmm_info(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     affect_strbuf sb;
     affect_strbuf_init(&sb);
     affect_strbuf_puts(&sb, "{\"config\":");
-    put_config(&sb, c);
+    ax_json_hmm_config(&sb, c);
     affect_strbuf_puts(&sb, ",\"features\":");
-    put_features(&sb, f);
+    ax_json_features(&sb, f);
     affect_strbuf_printf(&sb, ",\"training\":{\"iterations\":%u,\"converged\":%s,\"loglik\":",
                          rep.iterations, rep.converged ? "true" : "false");
-    put_doubles(&sb, rep.loglik, (size_t)rep.iterations + 1);
+    ax_json_doubles(&sb, rep.loglik, (size_t)rep.iterations + 1);
     affect_strbuf_printf(&sb, ",\"reseeded\":%u,\"sequences\":%u,\"frames\":%" PRIu64 "}",
                          rep.reseeded, rep.n_sequences, rep.n_frames);
     affect_strbuf_puts(&sb, ",\"start_probabilities\":");
-    put_doubles(&sb, affect_hmm_start(h), n);
+    ax_json_doubles(&sb, affect_hmm_start(h), n);
     affect_strbuf_puts(&sb, ",\"transitions\":");
-    put_matrix(&sb, affect_hmm_transitions(h), n, n);
+    ax_json_matrix(&sb, affect_hmm_transitions(h), n, n);
     affect_strbuf_puts(&sb, ",\"weights\":");
-    put_matrix(&sb, affect_hmm_weights(h), n, c->n_mix);
+    ax_json_matrix(&sb, affect_hmm_weights(h), n, c->n_mix);
     affect_strbuf_puts(&sb, ",\"durations\":{\"mean_frames\":");
     affect_strbuf_double(&sb, mean);
     affect_strbuf_puts(&sb, ",\"mean_seconds\":");
     affect_strbuf_double(&sb, mean / f->fps);
     affect_strbuf_puts(&sb, ",\"frames\":");
-    put_doubles(&sb, dur, n);
+    ax_json_doubles(&sb, dur, n);
     for (uint32_t i = 0; i < n; i++)
         dur[i] /= f->fps;
     affect_strbuf_puts(&sb, ",\"seconds\":");
-    put_doubles(&sb, dur, n);
+    ax_json_doubles(&sb, dur, n);
     affect_strbuf_puts(&sb, "}}");
     ax_result_json_buffer(ctx, &sb);
 done:

@@ -15,7 +15,7 @@
 
 
 /* A whole-number option in [0, max] into *out (unchanged when absent). */
-static ax_arg opt_whole(sqlite3_context *ctx, const ax_opts *opts, const char *key, double max,
+ax_arg ax_opt_whole(sqlite3_context *ctx, const ax_opts *opts, const char *key, double max,
                         double *out)
 {
     double v = *out;
@@ -32,11 +32,11 @@ static ax_arg opt_whole(sqlite3_context *ctx, const ax_opts *opts, const char *k
     return AX_OK;
 }
 
-static ax_arg opt_u32(sqlite3_context *ctx, const ax_opts *opts, const char *key,
+ax_arg ax_opt_u32(sqlite3_context *ctx, const ax_opts *opts, const char *key,
                       uint32_t *out)
 {
     double v = *out;
-    if (opt_whole(ctx, opts, key, 4294967295.0, &v) != AX_OK)
+    if (ax_opt_whole(ctx, opts, key, 4294967295.0, &v) != AX_OK)
         return AX_ERROR;
     *out = (uint32_t)v;
     return AX_OK;
@@ -114,16 +114,16 @@ ax_arg ax_seqs_options(sqlite3_context *ctx, int argc, sqlite3_value **argv, int
         scale = -1;
     double seed = (double)ts->cfg.seed;
     ax_arg r = AX_ERROR;
-    if (opt_u32(ctx, opts, "states", &ts->cfg.n_states) ||
-        opt_u32(ctx, opts, "mixtures", &ts->cfg.n_mix) ||
+    if (ax_opt_u32(ctx, opts, "states", &ts->cfg.n_states) ||
+        ax_opt_u32(ctx, opts, "mixtures", &ts->cfg.n_mix) ||
         ax_opt_enum(ctx, opts, "covariance", covs, &cov) ||
         ax_opt_enum(ctx, opts, "topology", topologies, &topology) ||
-        opt_u32(ctx, opts, "max_jump", &ts->cfg.max_jump) ||
+        ax_opt_u32(ctx, opts, "max_jump", &ts->cfg.max_jump) ||
         ax_opt_enum(ctx, opts, "start", starts, &start) ||
-        opt_u32(ctx, opts, "max_iter", &ts->cfg.max_iter) ||
+        ax_opt_u32(ctx, opts, "max_iter", &ts->cfg.max_iter) ||
         ax_opt_number(ctx, opts, "tol", &ts->cfg.tol) ||
         ax_opt_number(ctx, opts, "reg", &ts->cfg.reg) ||
-        opt_whole(ctx, opts, "seed", 9007199254740992.0, &seed) ||
+        ax_opt_whole(ctx, opts, "seed", 9007199254740992.0, &seed) ||
         read_joints(ctx, opts, ts) ||
         ax_opt_bool(ctx, opts, "normalize", &ts->fo.normalize) ||
         ax_opt_enum(ctx, opts, "scale", scales, &scale) ||
@@ -283,3 +283,76 @@ done:
     return r;
 }
 
+/* ---- JSON pieces shared by hmm_info and affect_info ---- */
+
+void ax_json_doubles(affect_strbuf *sb, const double *v, size_t n)
+{
+    affect_strbuf_putc(sb, '[');
+    for (size_t i = 0; i < n; i++) {
+        if (i)
+            affect_strbuf_putc(sb, ',');
+        affect_strbuf_double(sb, v[i]);
+    }
+    affect_strbuf_putc(sb, ']');
+}
+
+/* A rows × cols row-major matrix as an array of arrays. */
+void ax_json_matrix(affect_strbuf *sb, const double *v, size_t rows, size_t cols)
+{
+    affect_strbuf_putc(sb, '[');
+    for (size_t i = 0; i < rows; i++) {
+        if (i)
+            affect_strbuf_putc(sb, ',');
+        ax_json_doubles(sb, v + i * cols, cols);
+    }
+    affect_strbuf_putc(sb, ']');
+}
+
+void ax_json_names(affect_strbuf *sb, char *const *names, uint32_t n)
+{
+    affect_strbuf_putc(sb, '[');
+    for (uint32_t i = 0; i < n; i++) {
+        if (i)
+            affect_strbuf_putc(sb, ',');
+        affect_strbuf_json_string(sb, names[i]);
+    }
+    affect_strbuf_putc(sb, ']');
+}
+
+void ax_json_hmm_config(affect_strbuf *sb, const affect_hmm_config *c)
+{
+    affect_strbuf_printf(sb, "{\"states\":%u,\"mixtures\":%u,\"dim\":%u,\"covariance\":\"%s\","
+                             "\"topology\":\"%s\",\"max_jump\":%u,\"start\":\"%s\","
+                             "\"max_iter\":%u,\"tol\":",
+                         c->n_states, c->n_mix, c->dim,
+                         c->cov == AFFECT_HMM_DIAG ? "diag" : "full",
+                         c->topology == AFFECT_HMM_LEFT_RIGHT ? "left-right" : "ergodic",
+                         c->max_jump, c->learn_start ? "learn" : "first", c->max_iter);
+    affect_strbuf_double(sb, c->tol);
+    affect_strbuf_puts(sb, ",\"reg\":");
+    affect_strbuf_double(sb, c->reg);
+    affect_strbuf_printf(sb, ",\"seed\":%" PRIu64 "}", c->seed);
+}
+
+void ax_json_features(affect_strbuf *sb, const affect_features *f)
+{
+    static const char *const axes[] = {"x", "y", "z"};
+    affect_strbuf_puts(sb, "{\"joints\":");
+    ax_json_names(sb, f->joints, f->n_joints);
+    affect_strbuf_puts(sb, ",\"skeleton\":");
+    ax_json_names(sb, f->skeleton, f->n_joints);
+    affect_strbuf_puts(sb, ",\"parents\":[");
+    for (uint32_t j = 0; j < f->n_joints; j++)
+        affect_strbuf_printf(sb, "%s%d", j ? "," : "", (int)f->parents[j]);
+    affect_strbuf_printf(sb, "],\"normalize\":%s,\"scale\":\"%s\",\"up\":\"%s\",\"velocity\":%s,"
+                             "\"fps\":",
+                         f->normalize ? "true" : "false", f->scale_arm ? "arm" : "none",
+                         axes[f->up_axis], f->velocity ? "true" : "false");
+    affect_strbuf_double(sb, f->fps);
+    affect_strbuf_puts(sb, ",\"unit\":");
+    if (f->unit[0])
+        affect_strbuf_json_string(sb, f->unit);
+    else
+        affect_strbuf_puts(sb, "null");
+    affect_strbuf_printf(sb, ",\"dim\":%u}", affect_features_dim(f));
+}

@@ -50,4 +50,19 @@ void ax_seqs_row_error(sqlite3_context *ctx, const ax_seqs *ts, const affect_err
 /* Frees ts and everything it holds (sqlite3_free for ts itself); NULL is fine. */
 void ax_seqs_free(ax_seqs *ts);
 
+/* A whole-number option in [0, max] (unchanged when absent): "option \"states\" must be a
+ * whole number from 0 to 256, got 2.5". */
+ax_arg ax_opt_whole(sqlite3_context *ctx, const ax_opts *opts, const char *key, double max,
+                    double *out);
+ax_arg ax_opt_u32(sqlite3_context *ctx, const ax_opts *opts, const char *key, uint32_t *out);
+
+/* JSON pieces: an array of doubles, a rows × cols matrix as an array of arrays, an array of
+ * names, an HMM configuration object, a feature definition object. */
+struct affect_strbuf;
+void ax_json_doubles(struct affect_strbuf *sb, const double *v, size_t n);
+void ax_json_matrix(struct affect_strbuf *sb, const double *v, size_t rows, size_t cols);
+void ax_json_names(struct affect_strbuf *sb, char *const *names, uint32_t n);
+void ax_json_hmm_config(struct affect_strbuf *sb, const affect_hmm_config *c);
+void ax_json_features(struct affect_strbuf *sb, const affect_features *f);
+
 #endif

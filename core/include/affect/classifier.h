@@ -1,0 +1,191 @@
+/*
+ * affect/classifier.h — the hybrid generative–discriminative emotion recognizer (SCIENCE.md §3;
+ * thesis chapter 4, Fig. 4.1): one HMM per class, Fisher scores of a motion under every class
+ * HMM, a per-dimension normalization, a linear SVM, and supervised PCA with k-nearest-neighbour
+ * classification in the projection. Maximum-likelihood recognition (the class HMM with the
+ * highest log-likelihood) comes with it.
+ *
+ * Training (affect_classifier_train), everything on the training sequences only:
+ *   1. one HMM per class (affect_hmm_train, the same configuration and seed for every class);
+ *   2. F_i = [F(x_i | Λ_1) … F(x_i | Λ_C)], each part affect_fisher_score with the chosen groups;
+ *   3. normalization fitted on the rows F_i: z-score per dimension (mean, population standard
+ *      deviation; a dimension that is constant over the training set keeps scale 1, so it is 0
+ *      for every training motion), or none; z-scores are limited to ±score_clip (default 5),
+ *      for training rows and evaluated motions alike. Without the limit one entry decides:
+ *      the score of a tiny transition probability is Σ_t ξ_t(i, l) / a_il, nearly constant
+ *      over the training motions (that is why a_il is tiny) and huge for a new motion that
+ *      takes the transition, so its z-score reaches 10⁶ and more. On motion_synth's held-out
+ *      performers this limit takes Fisher + SVM from 71 % to 100 % (tests/sql/affect.sql);
+ *   4. linear SVM (affect/svm.h) with C given, or chosen from AFFECT_CLASSIFIER_C_GRID by
+ *      seeded stratified inner cross-validation (svm_folds folds) when cfg->svm_c is 0;
+ *   5. sPCA (affect/spca.h) with the label kernel and dims asked (dims are capped by the label
+ *      kernel's rank: at most C − 1 for C classes), and the training rows' coordinates kept for
+ *      kNN (k = knn_k, capped at the training count). With a grid (affect_classifier_grid),
+ *      dims, σ and k are first chosen by inner cross-validation on the training rows. The
+ *      inner folds reuse the HMMs and normalization fitted on all training motions (retraining
+ *      the HMMs per inner fold would multiply the cost by the fold count); no motion outside
+ *      the training set is ever used.
+ * Training accuracies are kept for affect_classifier_info-style reports: ML and SVM by
+ * resubstitution; kNN leave-one-out (each training motion among the others, since with itself
+ * among its neighbours the count is meaningless).
+ *
+ * Evaluation (affect_classifier_eval) of a new sequence: log-likelihood under every class HMM
+ * (ML label), its normalized Fisher representation, SVM decision values and label, sPCA
+ * coordinates, kNN votes and label. Labels are class indices 0 .. C − 1 into the names given
+ * at training.
+ *
+ * Binary form (docs/FORMATS.md, "classifier BLOB"): magic "AFCL", version, then the labels,
+ * configuration, the class HMMs as model BLOBs (affect/hmm_blob.h, each with the feature
+ * definition), normalization, SVM, sPCA, the training coordinates and labels, the training
+ * report, and an FNV-1a 64 checksum of everything before it.
+ *
+ * Errors (AFFECT_ERR_INVALID unless said) name the place: "class \"sad\" has no training
+ * motion", "motion 4: Fisher score under class \"angry\" is not finite", the HMM's, Fisher's,
+ * SVM's and sPCA's own messages prefixed by the stage ("training the HMM of class \"happy\": …");
+ * decoding: "truncated: …", "not a classifier (bad magic bytes at offset 0)", "classifier
+ * checksum mismatch: the BLOB is corrupt" (AFFECT_ERR_FORMAT); AFFECT_ERR_NOMEM.
+ *
+ * Thread safety: no global state; a trained classifier is read-only and may be shared.
+ */
+#ifndef AFFECT_CLASSIFIER_H
+#define AFFECT_CLASSIFIER_H
+
+#include "affect/features.h"
+#include "affect/fisher.h"
+#include "affect/hmm.h"
+#include "affect/spca.h"
+#include "affect/svm.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define AFFECT_CLASSIFIER_MAGIC "AFCL"
+#define AFFECT_CLASSIFIER_VERSION 1u
+#define AFFECT_CLASSIFIER_MAX_CLASSES 64u
+/* C values tried when svm_c = 0 (chosen by inner cross-validation; ties → the smallest) */
+#define AFFECT_CLASSIFIER_C_GRID {0.001, 0.01, 0.1, 1.0, 10.0, 100.0, 1000.0}
+
+#define AFFECT_CLASSIFIER_GRID_MAX 128u
+
+/* Optional search over sPCA dims, RBF σ and k, by seeded stratified inner cross-validation on
+ * the training motions (kNN accuracy in the projection fitted on the inner training rows);
+ * a list left empty keeps the configuration's single value. Ties go to the earliest
+ * combination in the order dims, σ, k as listed. */
+typedef struct affect_classifier_grid {
+    uint32_t n_dims, n_sigma, n_k;
+    uint32_t folds; /* inner folds (default 5) */
+    uint32_t dims[AFFECT_CLASSIFIER_GRID_MAX];
+    double sigma[AFFECT_CLASSIFIER_GRID_MAX];
+    uint32_t k[AFFECT_CLASSIFIER_GRID_MAX];
+} affect_classifier_grid;
+
+typedef struct affect_classifier_config {
+    affect_hmm_config hmm;          /* the class HMMs (dim = the feature dimension) */
+    unsigned groups;                /* Fisher groups (default AFFECT_FISHER_ALL) */
+    bool zscore;                    /* z-score normalization (default true) */
+    double score_clip;              /* z-scores limited to ± this (default 5; 0 = no limit) */
+    double svm_c;                   /* > 0, or 0 = inner cross-validation (default 0) */
+    uint32_t svm_folds;             /* inner folds for C (default 5) */
+    uint32_t spca_dims;             /* default 3 */
+    affect_spca_kernel spca_kernel; /* default RBF (the thesis's best) */
+    double spca_sigma;              /* RBF σ (default 0.25) */
+    uint32_t knn_k;                 /* default 5 */
+    affect_classifier_grid grid;    /* default: no search */
+} affect_classifier_config;
+
+void affect_classifier_config_default(affect_classifier_config *cfg);
+/* NULL when cfg is usable, else a static message ("knn_k must be at least 1"). */
+const char *affect_classifier_config_check(const affect_classifier_config *cfg);
+
+typedef struct affect_classifier affect_classifier; /* opaque */
+
+/* Trains on n sequences with class indices y[i] in 0 .. n_classes − 1 named labels[k] (copied;
+ * every class needs at least one sequence, n_classes ≥ 2). feat (copied) is the observation
+ * definition the sequences were extracted with; cfg->hmm.dim must be its dimension. */
+affect_status affect_classifier_train(const affect_classifier_config *cfg,
+                                      const affect_features *feat, const affect_hmm_seq *seqs,
+                                      const uint32_t *y, uint32_t n, const char *const *labels,
+                                      uint32_t n_classes, affect_classifier **out,
+                                      affect_error *err);
+void affect_classifier_free(affect_classifier *c);
+
+/* What evaluating one sequence gives; every pointer may be NULL (not wanted). */
+typedef struct affect_classifier_out {
+    double *loglik;   /* n_classes: log P(x | Λ_k) */
+    double *fisher;   /* dim: the normalized Fisher representation */
+    double *decision; /* n_classes (n_classes − 1) / 2: SVM one-vs-one decision values */
+    double *embed;    /* spca_dims: sPCA coordinates */
+    uint32_t *votes;  /* n_classes: kNN votes */
+    uint32_t ml, svm, knn; /* labels (class indices) */
+} affect_classifier_out;
+
+/* Evaluates a sequence (T × dim, from affect_features_extract with the classifier's
+ * definition). With ml_only, only loglik and ml are filled (no Fisher scores: much faster). */
+affect_status affect_classifier_eval(const affect_classifier *c, const double *x, uint32_t T,
+                                     bool ml_only, affect_classifier_out *out, affect_error *err);
+
+/* ---- read-only views ---- */
+const affect_classifier_config *affect_classifier_get_config(const affect_classifier *c);
+uint32_t affect_classifier_n_classes(const affect_classifier *c);
+const char *affect_classifier_label(const affect_classifier *c, uint32_t k);
+const affect_features *affect_classifier_features(const affect_classifier *c);
+const affect_hmm *affect_classifier_hmm(const affect_classifier *c, uint32_t k);
+size_t affect_classifier_dim(const affect_classifier *c);      /* the whole representation */
+size_t affect_classifier_part_dim(const affect_classifier *c); /* per class HMM */
+const affect_svm *affect_classifier_svm(const affect_classifier *c);
+const affect_spca *affect_classifier_spca(const affect_classifier *c);
+uint32_t affect_classifier_n_train(const affect_classifier *c);
+const uint32_t *affect_classifier_train_labels(const affect_classifier *c); /* n_train */
+const double *affect_classifier_train_embed(const affect_classifier *c);    /* n_train × p */
+const double *affect_classifier_norm_mean(const affect_classifier *c);      /* dim */
+const double *affect_classifier_norm_scale(const affect_classifier *c);     /* dim */
+
+typedef struct affect_classifier_report {
+    double svm_c;        /* the C used */
+    double svm_cv_acc;   /* inner cross-validated accuracy of that C (NaN when C was given) */
+    double train_acc_ml; /* resubstitution */
+    double train_acc_svm;
+    double train_acc_knn; /* leave-one-out */
+    double grid_cv_acc;   /* inner cross-validated kNN accuracy of the chosen combination (NaN
+                             without a grid search); cfg's spca_dims, spca_sigma and knn_k hold
+                             the chosen values */
+} affect_classifier_report;
+void affect_classifier_get_report(const affect_classifier *c, affect_classifier_report *r);
+
+/* ---- salient features (thesis §4.2.4, Figs. 4.6 and 4.8) ----
+ * The weight of a Fisher-score entry is the largest magnitude of its coefficient over the sPCA
+ * axes (the axes are unit vectors in the normalized score space). For each class HMM, state
+ * and mixture component, the component's weight is the largest weight among its covariance
+ * entries, and top lists its top_n heaviest covariance entries (observation coordinates r ≤ s:
+ * a variance when r = s), heaviest first, ties to the lower index. The classifier must have
+ * been trained with the covariance group. */
+#define AFFECT_SALIENCE_TOP_MAX 32u
+typedef struct affect_salience_item {
+    uint32_t r, s;
+    double weight;
+} affect_salience_item;
+typedef struct affect_salience_row {
+    uint32_t cls, state, mix;
+    double weight;
+    uint32_t n_top;
+    affect_salience_item top[AFFECT_SALIENCE_TOP_MAX];
+} affect_salience_row;
+/* *rows (free with affect_free) receives n_classes × N × M rows, class-major then state, then
+ * mixture. Errors: "the classifier has no covariance scores (trained without the covariances
+ * group)", "top must be between 1 and 32". */
+affect_status affect_classifier_salience(const affect_classifier *c, uint32_t top_n,
+                                         affect_salience_row **rows, size_t *n_rows,
+                                         affect_error *err);
+
+/* ---- binary form ---- */
+affect_status affect_classifier_encode(const affect_classifier *c, unsigned char **out,
+                                       size_t *size, affect_error *err);
+affect_status affect_classifier_decode(const unsigned char *data, size_t size,
+                                       affect_classifier **out, affect_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,79 @@
+/*
+ * affect/crossval.h — evaluation protocols for the recognizer (affect/classifier.h): stratified
+ * k-fold cross-validation (seeded) and leave-one-group-out (a group per motion: its content,
+ * or its performer), with maximum likelihood, Fisher + SVM and Fisher + sPCA + kNN scored on
+ * the same folds.
+ *
+ * Per fold a classifier is trained on the training motions only (HMMs, normalization, SVM,
+ * sPCA, and the optional grid search inside it) and every held-out motion is classified by the
+ * three methods. A class missing from a fold's training motions (possible with
+ * leave-one-group-out) is left out of that fold's classifier; its held-out motions then count
+ * as errors. Folds: affect_stratified_folds (affect/svm.h) with the seed; groups: fold g holds
+ * the motions of group g (groups numbered by the caller, 0 .. n_groups − 1; an empty group
+ * gives no fold).
+ *
+ * Metrics per method and fold, over the fold's held-out motions: accuracy; balanced accuracy
+ * = the mean recall over the classes present among them; macro-F1 = the mean of
+ * F1 = 2 TP / (2 TP + FP + FN) over the classes present among them or predicted for them; the
+ * confusion matrix (row = true class, column = predicted). The summary per method: the mean and
+ * sample standard deviation (n − 1) of each metric over the folds, the pooled confusion matrix
+ * and the pooled accuracy (correct / all motions).
+ *
+ * progress (may be NULL) receives one line per fold ("fold 3/10: 40 training, 4 held out,
+ * svm 0.75, knn 0.75, ml 0.5").
+ */
+#ifndef AFFECT_CROSSVAL_H
+#define AFFECT_CROSSVAL_H
+
+#include "affect/classifier.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+enum { AFFECT_CV_ML = 0, AFFECT_CV_SVM = 1, AFFECT_CV_KNN = 2, AFFECT_CV_METHODS = 3 };
+
+typedef struct affect_cv_config {
+    affect_classifier_config cls;
+    uint32_t folds; /* k of the stratified k-fold (default 10; ignored with groups) */
+    uint64_t seed;  /* fold assignment (default 1) */
+    void (*progress)(void *ctx, const char *line);
+    void *progress_ctx;
+} affect_cv_config;
+
+void affect_cv_config_default(affect_cv_config *cfg);
+
+typedef struct affect_cv_fold {
+    uint32_t fold;    /* 0-based */
+    int32_t group;    /* the held-out group, or −1 (k-fold) */
+    uint32_t n_train, n_test;
+    double accuracy[AFFECT_CV_METHODS], balanced[AFFECT_CV_METHODS], f1[AFFECT_CV_METHODS];
+    uint32_t *confusion[AFFECT_CV_METHODS]; /* n_classes × n_classes each */
+    double svm_c, spca_sigma;               /* what the fold's classifier used */
+    uint32_t spca_dims, knn_k;
+} affect_cv_fold;
+
+typedef struct affect_cv_result {
+    uint32_t n_classes, n_folds;
+    affect_cv_fold *folds;
+    double mean_accuracy[AFFECT_CV_METHODS], sd_accuracy[AFFECT_CV_METHODS];
+    double mean_balanced[AFFECT_CV_METHODS], sd_balanced[AFFECT_CV_METHODS];
+    double mean_f1[AFFECT_CV_METHODS], sd_f1[AFFECT_CV_METHODS];
+    double pooled_accuracy[AFFECT_CV_METHODS];
+    uint32_t *pooled[AFFECT_CV_METHODS]; /* n_classes × n_classes */
+} affect_cv_result;
+
+/* Runs the protocol on n sequences (class y[i] in 0 .. n_classes − 1 named labels[k]); group
+ * NULL = stratified k-fold, else leave-one-group-out over group[i] in 0 .. n_groups − 1. */
+affect_status affect_crossval(const affect_cv_config *cfg, const affect_features *feat,
+                              const affect_hmm_seq *seqs, const uint32_t *y, uint32_t n,
+                              const char *const *labels, uint32_t n_classes,
+                              const uint32_t *group, uint32_t n_groups, affect_cv_result **out,
+                              affect_error *err);
+void affect_cv_result_free(affect_cv_result *r);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

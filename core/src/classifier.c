@@ -1,0 +1,1101 @@
+/*
+ * classifier.c — the hybrid recognizer of affect/classifier.h: class HMMs → Fisher scores →
+ * normalization → linear SVM, and sPCA → kNN; maximum likelihood alongside.
+ *
+ * Usage:
+ *     affect_classifier_config cfg;
+ *     affect_classifier_config_default(&cfg);
+ *     cfg.hmm.dim = affect_features_dim(feat);
+ *     affect_classifier *c;
+ *     if (affect_classifier_train(&cfg, feat, seqs, y, n, labels, 4, &c, &err) == AFFECT_OK) {
+ *         affect_classifier_out o = {0};
+ *         affect_classifier_eval(c, x, T, false, &o, &err);   (o.svm, o.knn, o.ml)
+ *         affect_classifier_free(c);
+ *     }
+ *
+ * How it works. Training keeps the n × D matrix of Fisher representations (D = C × the
+ * per-HMM score dimension) only while it trains; the classifier keeps the HMMs, the
+ * normalization (mean and scale per dimension), the SVM's one-vs-one weight vectors, the sPCA
+ * axes and the training coordinates — O(D) doubles, not O(n D). Evaluation computes the
+ * sequence's score under each HMM into one D-vector, normalizes it and applies the SVM and the
+ * projection.
+ *
+ * The binary form, version 1 (little-endian, affect/bytes.h):
+ *     "AFCL", u32 version, u32 flags (0)
+ *     u32 C, C × (u32 length, bytes) labels
+ *     u32 groups, u8 zscore, f64 score_clip, f64 svm_c, u32 svm_folds, u32 spca_dims, u8 kernel, f64 sigma,
+ *     u32 knn_k (the chosen values when a grid was searched)
+ *     u32 grid n_dims, n_sigma, n_k, folds; the lists (u32, f64, u32); f64 grid CV accuracy
+ *     f64 C used, f64 its inner CV accuracy, f64 × 3 training accuracies (ML, SVM, kNN)
+ *     C × (u64 length, the class HMM's model BLOB)
+ *     u64 D, D × f64 mean, D × f64 scale
+ *     the SVM (affect_svm_encode), the sPCA (affect_spca_encode)
+ *     u32 n, n × u32 training labels, n × p × f64 training coordinates
+ *     u64 FNV-1a 64 of every byte before it
+ * Every HMM BLOB carries the feature definition; the decoder requires them to be identical and
+ * keeps the first.
+ */
+#include "affect/classifier.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "affect/bytes.h"
+#include "affect/hmm_blob.h"
+
+struct affect_classifier {
+    affect_classifier_config cfg;
+    uint32_t n_classes;
+    char **labels;
+    affect_features *feat;
+    affect_hmm **hmms;
+    size_t part; /* Fisher entries per class HMM */
+    size_t dim;  /* n_classes × part */
+    double *mean, *scale;
+    affect_svm *svm;
+    affect_spca *spca;
+    uint32_t n_train;
+    uint32_t *train_y;
+    double *train_z; /* n_train × p */
+    affect_classifier_report report;
+};
+
+void affect_classifier_config_default(affect_classifier_config *cfg)
+{
+    memset(cfg, 0, sizeof *cfg);
+    affect_hmm_config_default(&cfg->hmm);
+    cfg->groups = AFFECT_FISHER_ALL;
+    cfg->zscore = true;
+    cfg->svm_c = 0.0;
+    cfg->svm_folds = 5;
+    cfg->spca_dims = 3;
+    cfg->spca_kernel = AFFECT_SPCA_RBF;
+    cfg->spca_sigma = 0.25;
+    cfg->knn_k = 5;
+    cfg->score_clip = 5.0;
+    cfg->grid.folds = 5;
+}
+
+void affect_classifier_free(affect_classifier *c)
+{
+    if (!c)
+        return;
+    for (uint32_t k = 0; c->labels && k < c->n_classes; k++)
+        affect_free(c->labels[k]);
+    affect_free(c->labels);
+    for (uint32_t k = 0; c->hmms && k < c->n_classes; k++)
+        affect_hmm_free(c->hmms[k]);
+    affect_free(c->hmms);
+    affect_features_free(c->feat);
+    affect_free(c->mean);
+    affect_free(c->scale);
+    affect_svm_free(c->svm);
+    affect_spca_free(c->spca);
+    affect_free(c->train_y);
+    affect_free(c->train_z);
+    affect_free(c);
+}
+
+/* A copy of a feature definition (through its binary form). */
+static affect_status copy_features(const affect_features *f, affect_features **out,
+                                   affect_error *err)
+{
+    size_t size;
+    if (!affect_features_encoded_size(f, &size))
+        return affect_nomem(err);
+    unsigned char *buf = affect_malloc(size);
+    if (!buf)
+        return affect_nomem(err);
+    affect_features_encode_into(f, buf);
+    affect_status st = affect_features_decode(buf, size, out, err);
+    affect_free(buf);
+    return st;
+}
+
+/* Allocates c with room for n_classes labels and HMMs (all NULL). */
+static affect_classifier *alloc_classifier(uint32_t n_classes)
+{
+    affect_classifier *c = affect_calloc(1, sizeof *c);
+    if (!c)
+        return NULL;
+    c->n_classes = n_classes;
+    c->labels = affect_calloc(n_classes, sizeof *c->labels);
+    c->hmms = affect_calloc(n_classes, sizeof *c->hmms);
+    if (!c->labels || !c->hmms) {
+        affect_classifier_free(c);
+        return NULL;
+    }
+    return c;
+}
+
+const char *affect_classifier_config_check(const affect_classifier_config *cfg)
+{
+    if (cfg->groups == 0 || (cfg->groups & ~(unsigned)AFFECT_FISHER_ALL) != 0)
+        return "groups must be a non-empty combination of start, transitions, weights, means, "
+               "covariances";
+    if (!(cfg->svm_c >= 0) || !isfinite(cfg->svm_c))
+        return "svm_c must be a positive finite number, or 0 to choose it by cross-validation";
+    if (!(cfg->score_clip >= 0) || !isfinite(cfg->score_clip))
+        return "score_clip must be a finite number, 0 or more (0: no limit)";
+    if (cfg->svm_folds < 2)
+        return "svm_folds must be at least 2";
+    if (cfg->spca_dims < 1)
+        return "spca_dims must be at least 1";
+    if (cfg->spca_kernel != AFFECT_SPCA_LINEAR && cfg->spca_kernel != AFFECT_SPCA_RBF)
+        return "spca_kernel must be linear or rbf";
+    if (!(cfg->spca_sigma > 0) || !isfinite(cfg->spca_sigma))
+        return "spca_sigma must be a positive finite number";
+    if (cfg->knn_k < 1)
+        return "knn_k must be at least 1";
+    const affect_classifier_grid *g = &cfg->grid;
+    if (g->n_dims > AFFECT_CLASSIFIER_GRID_MAX || g->n_sigma > AFFECT_CLASSIFIER_GRID_MAX ||
+        g->n_k > AFFECT_CLASSIFIER_GRID_MAX)
+        return "grid lists must have at most 128 values";
+    if (g->folds < 2)
+        return "grid folds must be at least 2";
+    for (uint32_t i = 0; i < g->n_dims; i++)
+        if (g->dims[i] < 1)
+            return "grid spca_dims must be whole numbers of at least 1";
+    for (uint32_t i = 0; i < g->n_sigma; i++)
+        if (!(g->sigma[i] > 0) || !isfinite(g->sigma[i]))
+            return "grid spca_sigma must be positive finite numbers";
+    for (uint32_t i = 0; i < g->n_k; i++)
+        if (g->k[i] < 1)
+            return "grid knn_k must be whole numbers of at least 1";
+    return affect_hmm_config_check(&cfg->hmm);
+}
+
+/* Prefixes err's message (unless it is out of memory) with a formatted context, keeping the
+ * status unless status is not 0: "training the HMM of class \"sad\": …". */
+static affect_status prefixed(affect_error *err, affect_status status, const char *fmt, ...)
+{
+    if (err->status == AFFECT_ERR_NOMEM)
+        return AFFECT_ERR_NOMEM;
+    char msg[AFFECT_ERROR_MSG_MAX], head[AFFECT_ERROR_MSG_MAX];
+    memcpy(msg, err->msg, sizeof msg);
+    msg[sizeof msg - 1] = '\0';
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(head, sizeof head, fmt, ap);
+    va_end(ap);
+    return affect_fail(err, status ? status : err->status, "%s: %s", head, msg);
+}
+
+/* The raw Fisher representation of x under every class HMM into f (dim), and the
+ * log-likelihoods into ll (n_classes). */
+static affect_status represent(const affect_classifier *c, const double *x, uint32_t T, double *f,
+                               double *ll, affect_error *err)
+{
+    for (uint32_t k = 0; k < c->n_classes; k++) {
+        if (affect_fisher_score(c->hmms[k], x, T, c->cfg.groups, f + (size_t)k * c->part, &ll[k],
+                                err))
+            return prefixed(err, 0, "Fisher score under the HMM of class \"%s\"", c->labels[k]);
+        for (size_t e = 0; e < c->part; e++) {
+            double *v = &f[(size_t)k * c->part + e];
+            if (isnan(*v))
+                return affect_fail(err, AFFECT_ERR_RANGE,
+                                   "Fisher score under class \"%s\" is not a number (entry %zu)",
+                                   c->labels[k], e);
+            if (isinf(*v)) /* Σ ξ / a_il with a_il subnormal: the largest finite value */
+                *v = *v > 0 ? DBL_MAX : -DBL_MAX;
+        }
+    }
+    return AFFECT_OK;
+}
+
+static uint32_t argmax(const double *v, uint32_t n)
+{
+    uint32_t best = 0;
+    for (uint32_t k = 1; k < n; k++)
+        if (v[k] > v[best])
+            best = k;
+    return best;
+}
+
+/* v limited to [−limit, limit] (limit 0: unchanged). */
+static double clip(double v, double limit)
+{
+    if (limit > 0)
+        return v > limit ? limit : v < -limit ? -limit : v;
+    return v;
+}
+
+/* Fits the normalization on the rows of f (n × dim) and applies it in place. Per dimension
+ * the values are first divided by their largest magnitude a (Fisher scores of tiny
+ * probabilities reach 1e200 and more, whose sums of squares would overflow): with u = f / a,
+ * mean = a · mean(u) and scale = a · sd(u), and the training rows become (u − mean(u)) / sd(u).
+ * A dimension that is constant over the training set (sd 0) keeps scale 1. The z-scores are
+ * then limited to ±score_clip (here and in affect_classifier_eval). */
+static void fit_normalization(affect_classifier *c, double *f, uint32_t n)
+{
+    size_t D = c->dim;
+    for (size_t e = 0; e < D; e++) {
+        c->mean[e] = 0.0;
+        c->scale[e] = 1.0;
+    }
+    if (!c->cfg.zscore)
+        return;
+    for (size_t e = 0; e < D; e++) {
+        double a = 0.0, mu = 0.0, var = 0.0;
+        for (uint32_t i = 0; i < n; i++)
+            if (fabs(f[(size_t)i * D + e]) > a)
+                a = fabs(f[(size_t)i * D + e]);
+        if (a == 0.0)
+            continue; /* all 0: mean 0, scale 1 */
+        for (uint32_t i = 0; i < n; i++)
+            mu += f[(size_t)i * D + e] / a;
+        mu /= n;
+        for (uint32_t i = 0; i < n; i++) {
+            double d = f[(size_t)i * D + e] / a - mu;
+            var += d * d;
+        }
+        double sd = sqrt(var / n), scale = sd * a;
+        c->mean[e] = mu * a;
+        if (!(sd > 0) || !(scale > 0) || !isfinite(scale)) { /* constant: centre only */
+            for (uint32_t i = 0; i < n; i++)
+                f[(size_t)i * D + e] = (f[(size_t)i * D + e] - c->mean[e]);
+            continue;
+        }
+        c->scale[e] = scale;
+        for (uint32_t i = 0; i < n; i++)
+            f[(size_t)i * D + e] = clip((f[(size_t)i * D + e] / a - mu) / sd, c->cfg.score_clip);
+    }
+}
+
+/* Leave-one-out kNN accuracy over the training coordinates. */
+static affect_status loo_knn(const affect_classifier *c, double *acc, affect_error *err)
+{
+    uint32_t n = c->n_train, p = affect_spca_dims(c->spca);
+    if (n < 2) {
+        *acc = NAN;
+        return AFFECT_OK;
+    }
+    double *z = affect_malloc_array((size_t)(n - 1) * p, sizeof *z);
+    uint32_t *y = affect_malloc_array(n - 1, sizeof *y);
+    affect_status st = AFFECT_OK;
+    if (!z || !y) {
+        st = affect_nomem(err);
+        goto done;
+    }
+    uint32_t hits = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        for (uint32_t j = 0, o = 0; j < n; j++) {
+            if (j == i)
+                continue;
+            memcpy(z + (size_t)o * p, c->train_z + (size_t)j * p, p * sizeof *z);
+            y[o++] = c->train_y[j];
+        }
+        uint32_t label;
+        st = affect_knn_classify(z, y, n - 1, p, c->n_classes, c->train_z + (size_t)i * p,
+                                 c->cfg.knn_k, &label, NULL, err);
+        if (st)
+            goto done;
+        hits += label == c->train_y[i];
+    }
+    *acc = (double)hits / n;
+done:
+    affect_free(z);
+    affect_free(y);
+    return st;
+}
+
+/* The grid's candidate lists (a list left empty: the configuration's value). */
+typedef struct grid_lists {
+    uint32_t n_dims, n_sigma, n_k, max_dims;
+    const uint32_t *dims, *k;
+    const double *sigma;
+} grid_lists;
+
+static void grid_lists_of(const affect_classifier_config *cfg, grid_lists *g)
+{
+    const affect_classifier_grid *gr = &cfg->grid;
+    g->n_dims = gr->n_dims ? gr->n_dims : 1;
+    g->dims = gr->n_dims ? gr->dims : &cfg->spca_dims;
+    g->n_sigma = cfg->spca_kernel == AFFECT_SPCA_RBF && gr->n_sigma ? gr->n_sigma : 1;
+    g->sigma = cfg->spca_kernel == AFFECT_SPCA_RBF && gr->n_sigma ? gr->sigma : &cfg->spca_sigma;
+    g->n_k = gr->n_k ? gr->n_k : 1;
+    g->k = gr->n_k ? gr->k : &cfg->knn_k;
+    g->max_dims = 0;
+    for (uint32_t i = 0; i < g->n_dims; i++)
+        if (g->dims[i] > g->max_dims)
+            g->max_dims = g->dims[i];
+}
+
+/* Scratch of the grid search. */
+typedef struct grid_ws {
+    uint32_t *fold_of, *tr_y, *te_y;
+    double *gram, *sub_gram, *tr_x, *tr_z, *te_z, *tr_p, *te_p;
+    uint32_t *hits; /* n_dims × n_sigma × n_k */
+} grid_ws;
+
+static void grid_ws_free(grid_ws *w)
+{
+    affect_free(w->fold_of);
+    affect_free(w->tr_y);
+    affect_free(w->te_y);
+    affect_free(w->gram);
+    affect_free(w->sub_gram);
+    affect_free(w->tr_x);
+    affect_free(w->tr_z);
+    affect_free(w->te_z);
+    affect_free(w->tr_p);
+    affect_free(w->te_p);
+    affect_free(w->hits);
+}
+
+static bool grid_ws_alloc(grid_ws *w, uint32_t n, size_t D, uint32_t max_dims, size_t combos)
+{
+    size_t nd, nn, np;
+    memset(w, 0, sizeof *w);
+    if (!affect_mul_size(n, D, &nd) || !affect_mul_size(n, n, &nn) ||
+        !affect_mul_size(n, max_dims, &np))
+        return false;
+    w->fold_of = affect_malloc_array(n, sizeof *w->fold_of);
+    w->tr_y = affect_malloc_array(n, sizeof *w->tr_y);
+    w->te_y = affect_malloc_array(n, sizeof *w->te_y);
+    w->gram = affect_malloc_array(nn, sizeof *w->gram);
+    w->sub_gram = affect_malloc_array(nn, sizeof *w->sub_gram);
+    w->tr_x = affect_malloc_array(nd, sizeof *w->tr_x);
+    w->tr_z = affect_malloc_array(np, sizeof *w->tr_z);
+    w->te_z = affect_malloc_array(np, sizeof *w->te_z);
+    w->tr_p = affect_malloc_array(np, sizeof *w->tr_p);
+    w->te_p = affect_malloc_array(np, sizeof *w->te_p);
+    w->hits = affect_calloc(combos, sizeof *w->hits);
+    return w->fold_of && w->tr_y && w->te_y && w->gram && w->sub_gram && w->tr_x && w->tr_z &&
+           w->te_z && w->tr_p && w->te_p && w->hits;
+}
+
+/* The first p of q coordinates of n rows, contiguous. */
+static void prefix_rows(const double *z, uint32_t n, uint32_t q, uint32_t p, double *out)
+{
+    for (uint32_t i = 0; i < n; i++)
+        memcpy(out + (size_t)i * p, z + (size_t)i * q, p * sizeof *out);
+}
+
+/* One inner fold: fits sPCA per σ on the other folds' rows and counts the kNN hits of every
+ * (dims, σ, k) on this fold's rows. */
+static affect_status grid_fold(const affect_classifier *c, const double *f, const uint32_t *y,
+                               uint32_t n, uint32_t fold, const grid_lists *g, grid_ws *w,
+                               affect_error *err)
+{
+    size_t D = c->dim;
+    uint32_t n_tr = 0, n_te = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        if (w->fold_of[i] == fold) {
+            w->te_y[n_te++] = y[i];
+            continue;
+        }
+        memcpy(w->tr_x + (size_t)n_tr * D, f + (size_t)i * D, D * sizeof *f);
+        w->tr_y[n_tr++] = y[i];
+    }
+    if (n_te == 0 || n_tr == 0)
+        return AFFECT_OK;
+    for (uint32_t i = 0, a = 0; i < n; i++) { /* the training rows' Gram sub-matrix */
+        if (w->fold_of[i] == fold)
+            continue;
+        for (uint32_t j = 0, b = 0; j < n; j++)
+            if (w->fold_of[j] != fold)
+                w->sub_gram[(size_t)a * n_tr + b++] = w->gram[(size_t)i * n + j];
+        a++;
+    }
+    for (uint32_t s = 0; s < g->n_sigma; s++) {
+        affect_spca *sp = NULL;
+        affect_status st = affect_spca_fit_gram(w->tr_x, w->sub_gram, n_tr, D, w->tr_y,
+                                                c->n_classes, c->cfg.spca_kernel, g->sigma[s],
+                                                g->max_dims, &sp, err);
+        if (st)
+            return st;
+        uint32_t q = affect_spca_dims(sp);
+        affect_spca_embed_rows(sp, w->tr_x, n_tr, w->tr_z);
+        for (uint32_t i = 0, t = 0; i < n; i++)
+            if (w->fold_of[i] == fold)
+                affect_spca_embed(sp, f + (size_t)i * D, w->te_z + (size_t)t++ * q);
+        affect_spca_free(sp);
+        for (uint32_t di = 0; di < g->n_dims; di++) {
+            uint32_t p = g->dims[di] < q ? g->dims[di] : q;
+            prefix_rows(w->tr_z, n_tr, q, p, w->tr_p);
+            prefix_rows(w->te_z, n_te, q, p, w->te_p);
+            for (uint32_t ki = 0; ki < g->n_k; ki++)
+                for (uint32_t t = 0; t < n_te; t++) {
+                    uint32_t label;
+                    st = affect_knn_classify(w->tr_p, w->tr_y, n_tr, p, c->n_classes,
+                                             w->te_p + (size_t)t * p, g->k[ki], &label, NULL,
+                                             err);
+                    if (st)
+                        return st;
+                    w->hits[((size_t)di * g->n_sigma + s) * g->n_k + ki] += label == w->te_y[t];
+                }
+        }
+    }
+    return AFFECT_OK;
+}
+
+/* Chooses spca_dims, spca_sigma and knn_k (into c->cfg) by inner cross-validation on the
+ * normalized training rows f. */
+static affect_status grid_search(affect_classifier *c, const double *f, const uint32_t *y,
+                                 uint32_t n, affect_error *err)
+{
+    grid_lists g;
+    grid_lists_of(&c->cfg, &g);
+    size_t combos = (size_t)g.n_dims * g.n_sigma * g.n_k;
+    grid_ws w;
+    affect_status st;
+    if (!grid_ws_alloc(&w, n, c->dim, g.max_dims, combos)) {
+        st = affect_nomem(err);
+        goto done;
+    }
+    if ((st = affect_stratified_folds(y, n, c->n_classes, c->cfg.grid.folds, c->cfg.hmm.seed,
+                                      w.fold_of, err)) != AFFECT_OK ||
+        (st = affect_svm_gram(f, n, c->dim, w.gram, err)) != AFFECT_OK)
+        goto done;
+    for (uint32_t fold = 0; fold < c->cfg.grid.folds; fold++)
+        if ((st = grid_fold(c, f, y, n, fold, &g, &w, err)) != AFFECT_OK)
+            goto done;
+    size_t best = 0;
+    for (size_t e = 1; e < combos; e++)
+        if (w.hits[e] > w.hits[best])
+            best = e;
+    c->cfg.knn_k = g.k[best % g.n_k];
+    c->cfg.spca_sigma = g.sigma[best / g.n_k % g.n_sigma];
+    c->cfg.spca_dims = g.dims[best / g.n_k / g.n_sigma];
+    c->report.grid_cv_acc = (double)w.hits[best] / n;
+done:
+    grid_ws_free(&w);
+    return st;
+}
+
+/* Steps 4 and 5 and the training accuracies, on the normalized rows f (n × dim). */
+static affect_status fit_discriminative(affect_classifier *c, const double *f, const uint32_t *y,
+                                        uint32_t n, const double *ll, affect_error *err)
+{
+    const affect_classifier_config *cfg = &c->cfg;
+    size_t D = c->dim;
+    double C = cfg->svm_c, cv = NAN;
+    if (C == 0) {
+        static const double grid[] = AFFECT_CLASSIFIER_C_GRID;
+        if (affect_svm_select_c(f, n, D, y, c->n_classes, grid, sizeof grid / sizeof grid[0],
+                                cfg->svm_folds, cfg->hmm.seed, &C, &cv, err))
+            return prefixed(err, 0, "choosing the SVM's C");
+    }
+    if (affect_svm_train(f, n, D, y, c->n_classes, C, &c->svm, err))
+        return prefixed(err, 0, "training the SVM");
+    c->report.grid_cv_acc = NAN;
+    const affect_classifier_grid *gr = &cfg->grid;
+    if ((gr->n_dims || gr->n_sigma || gr->n_k) && grid_search(c, f, y, n, err))
+        return prefixed(err, 0, "searching the sPCA/kNN grid");
+    if (affect_spca_fit(f, n, D, y, c->n_classes, cfg->spca_kernel, cfg->spca_sigma,
+                        cfg->spca_dims, &c->spca, err))
+        return prefixed(err, 0, "fitting the supervised PCA");
+    uint32_t p = affect_spca_dims(c->spca);
+    c->n_train = n;
+    c->train_y = affect_malloc_array(n, sizeof *c->train_y);
+    c->train_z = affect_malloc_array((size_t)n * p, sizeof *c->train_z);
+    if (!c->train_y || !c->train_z)
+        return affect_nomem(err);
+    memcpy(c->train_y, y, n * sizeof *y);
+    affect_spca_embed_rows(c->spca, f, n, c->train_z);
+    uint32_t hit_ml = 0, hit_svm = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        hit_ml += argmax(ll + (size_t)i * c->n_classes, c->n_classes) == y[i];
+        hit_svm += affect_svm_predict(c->svm, f + (size_t)i * D, NULL) == y[i];
+    }
+    c->report.svm_c = C;
+    c->report.svm_cv_acc = cv;
+    c->report.train_acc_ml = (double)hit_ml / n;
+    c->report.train_acc_svm = (double)hit_svm / n;
+    return loo_knn(c, &c->report.train_acc_knn, err);
+}
+
+affect_status affect_classifier_train(const affect_classifier_config *cfg,
+                                      const affect_features *feat, const affect_hmm_seq *seqs,
+                                      const uint32_t *y, uint32_t n, const char *const *labels,
+                                      uint32_t n_classes, affect_classifier **out,
+                                      affect_error *err)
+{
+    *out = NULL;
+    const char *msg = affect_classifier_config_check(cfg);
+    if (msg)
+        return affect_fail(err, AFFECT_ERR_INVALID, "%s", msg);
+    if (n_classes < 2 || n_classes > AFFECT_CLASSIFIER_MAX_CLASSES)
+        return affect_fail(err, AFFECT_ERR_INVALID, "need 2 to %u classes, got %u",
+                           AFFECT_CLASSIFIER_MAX_CLASSES, n_classes);
+    if (cfg->hmm.dim != affect_features_dim(feat))
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "the HMM dimension %u is not the feature dimension %u", cfg->hmm.dim,
+                           affect_features_dim(feat));
+    for (uint32_t i = 0; i < n; i++)
+        if (y[i] >= n_classes)
+            return affect_fail(err, AFFECT_ERR_INVALID, "motion %u: class %u of %u classes", i,
+                               y[i], n_classes);
+    affect_classifier *c = alloc_classifier(n_classes);
+    affect_hmm_seq *mine = affect_malloc_array(n ? n : 1, sizeof *mine);
+    double *f = NULL, *ll = NULL;
+    affect_status st;
+    if (!c || !mine) {
+        st = affect_nomem(err);
+        goto done;
+    }
+    c->cfg = *cfg;
+    for (uint32_t k = 0; k < n_classes; k++) {
+        uint32_t count = 0;
+        for (uint32_t i = 0; i < n; i++)
+            if (y[i] == k)
+                mine[count++] = seqs[i];
+        if (count == 0) {
+            st = affect_fail(err, AFFECT_ERR_INVALID, "class \"%s\" has no training motion",
+                             labels[k]);
+            goto done;
+        }
+        c->labels[k] = affect_strndup(labels[k], strlen(labels[k]));
+        if (!c->labels[k]) {
+            st = affect_nomem(err);
+            goto done;
+        }
+        if ((st = affect_hmm_train(&cfg->hmm, mine, count, &c->hmms[k], err)) != AFFECT_OK) {
+            st = prefixed(err, 0, "training the HMM of class \"%s\"", labels[k]);
+            goto done;
+        }
+    }
+    if ((st = copy_features(feat, &c->feat, err)) != AFFECT_OK)
+        goto done;
+    c->part = affect_fisher_dim(&cfg->hmm, cfg->groups);
+    if (!affect_mul_size(c->part, n_classes, &c->dim)) {
+        st = affect_nomem(err);
+        goto done;
+    }
+    size_t cells;
+    if (!affect_mul_size(c->dim, n, &cells)) {
+        st = affect_nomem(err);
+        goto done;
+    }
+    f = affect_malloc_array(cells, sizeof *f);
+    ll = affect_malloc_array((size_t)n * n_classes, sizeof *ll);
+    c->mean = affect_malloc_array(c->dim, sizeof *c->mean);
+    c->scale = affect_malloc_array(c->dim, sizeof *c->scale);
+    if (!f || !ll || !c->mean || !c->scale) {
+        st = affect_nomem(err);
+        goto done;
+    }
+    for (uint32_t i = 0; i < n; i++)
+        if ((st = represent(c, seqs[i].x, seqs[i].n_frames, f + (size_t)i * c->dim,
+                            ll + (size_t)i * n_classes, err)) != AFFECT_OK) {
+            st = prefixed(err, 0, "motion %u", i);
+            goto done;
+        }
+    fit_normalization(c, f, n);
+    st = fit_discriminative(c, f, y, n, ll, err);
+done:
+    affect_free(mine);
+    affect_free(f);
+    affect_free(ll);
+    if (st == AFFECT_OK)
+        *out = c;
+    else
+        affect_classifier_free(c);
+    return st;
+}
+
+affect_status affect_classifier_eval(const affect_classifier *c, const double *x, uint32_t T,
+                                     bool ml_only, affect_classifier_out *out, affect_error *err)
+{
+    uint32_t C = c->n_classes;
+    double *ll = affect_malloc_array(C, sizeof *ll), *f = NULL;
+    affect_status st = AFFECT_OK;
+    if (!ll) {
+        st = affect_nomem(err);
+        goto done;
+    }
+    if (ml_only) {
+        for (uint32_t k = 0; k < C; k++)
+            if ((st = affect_hmm_loglik(c->hmms[k], x, T, &ll[k], err)) != AFFECT_OK) {
+                st = prefixed(err, 0, "scoring under the HMM of class \"%s\"", c->labels[k]);
+                goto done;
+            }
+    } else {
+        f = out->fisher ? out->fisher : affect_malloc_array(c->dim, sizeof *f);
+        if (!f) {
+            st = affect_nomem(err);
+            goto done;
+        }
+        if ((st = represent(c, x, T, f, ll, err)) != AFFECT_OK)
+            goto done;
+        for (size_t e = 0; e < c->dim; e++)
+            f[e] = clip((f[e] - c->mean[e]) / c->scale[e], c->cfg.score_clip);
+        out->svm = affect_svm_predict(c->svm, f, out->decision);
+        uint32_t p = affect_spca_dims(c->spca);
+        double zbuf[64], *z = out->embed ? out->embed : zbuf;
+        if (!out->embed && p > 64) {
+            st = affect_fail(err, AFFECT_ERR_INVALID, "too many sPCA dimensions (%u)", p);
+            goto done;
+        }
+        affect_spca_embed(c->spca, f, z);
+        if ((st = affect_knn_classify(c->train_z, c->train_y, c->n_train, p, C, z, c->cfg.knn_k,
+                                      &out->knn, out->votes, err)) != AFFECT_OK)
+            goto done;
+    }
+    out->ml = argmax(ll, C);
+    if (out->loglik)
+        memcpy(out->loglik, ll, C * sizeof *ll);
+done:
+    if (f != out->fisher)
+        affect_free(f);
+    affect_free(ll);
+    return st;
+}
+
+/* ---- views ---- */
+
+const affect_classifier_config *affect_classifier_get_config(const affect_classifier *c)
+{
+    return &c->cfg;
+}
+
+uint32_t affect_classifier_n_classes(const affect_classifier *c)
+{
+    return c->n_classes;
+}
+
+const char *affect_classifier_label(const affect_classifier *c, uint32_t k)
+{
+    return k < c->n_classes ? c->labels[k] : NULL;
+}
+
+const affect_features *affect_classifier_features(const affect_classifier *c)
+{
+    return c->feat;
+}
+
+const affect_hmm *affect_classifier_hmm(const affect_classifier *c, uint32_t k)
+{
+    return k < c->n_classes ? c->hmms[k] : NULL;
+}
+
+size_t affect_classifier_dim(const affect_classifier *c)
+{
+    return c->dim;
+}
+
+size_t affect_classifier_part_dim(const affect_classifier *c)
+{
+    return c->part;
+}
+
+const affect_svm *affect_classifier_svm(const affect_classifier *c)
+{
+    return c->svm;
+}
+
+const affect_spca *affect_classifier_spca(const affect_classifier *c)
+{
+    return c->spca;
+}
+
+uint32_t affect_classifier_n_train(const affect_classifier *c)
+{
+    return c->n_train;
+}
+
+const uint32_t *affect_classifier_train_labels(const affect_classifier *c)
+{
+    return c->train_y;
+}
+
+const double *affect_classifier_train_embed(const affect_classifier *c)
+{
+    return c->train_z;
+}
+
+const double *affect_classifier_norm_mean(const affect_classifier *c)
+{
+    return c->mean;
+}
+
+const double *affect_classifier_norm_scale(const affect_classifier *c)
+{
+    return c->scale;
+}
+
+void affect_classifier_get_report(const affect_classifier *c, affect_classifier_report *r)
+{
+    *r = c->report;
+}
+
+/* ---- salient features ---- */
+
+/* Inserts (r, s, weight) into the row's top list (heaviest first; ties keep the earlier). */
+static void top_insert(affect_salience_row *row, uint32_t top_n, uint32_t r, uint32_t s,
+                       double weight)
+{
+    uint32_t n = row->n_top;
+    if (n == top_n && !(weight > row->top[n - 1].weight))
+        return;
+    uint32_t pos = n < top_n ? n : top_n - 1;
+    while (pos > 0 && weight > row->top[pos - 1].weight) {
+        row->top[pos] = row->top[pos - 1];
+        pos--;
+    }
+    row->top[pos] = (affect_salience_item){r, s, weight};
+    if (n < top_n)
+        row->n_top = n + 1;
+}
+
+affect_status affect_classifier_salience(const affect_classifier *c, uint32_t top_n,
+                                         affect_salience_row **rows, size_t *n_rows,
+                                         affect_error *err)
+{
+    *rows = NULL;
+    *n_rows = 0;
+    if (top_n < 1 || top_n > AFFECT_SALIENCE_TOP_MAX)
+        return affect_fail(err, AFFECT_ERR_INVALID, "top must be between 1 and %u",
+                           AFFECT_SALIENCE_TOP_MAX);
+    if (!(c->cfg.groups & AFFECT_FISHER_COVS))
+        return affect_fail(err, AFFECT_ERR_INVALID, "the classifier has no covariance scores "
+                                                    "(trained without the covariances group)");
+    uint32_t N = c->cfg.hmm.n_states, M = c->cfg.hmm.n_mix, C = c->n_classes;
+    size_t count = (size_t)C * N * M;
+    affect_salience_row *out = affect_calloc(count, sizeof *out);
+    if (!out)
+        return affect_nomem(err);
+    for (size_t e = 0; e < count; e++) {
+        out[e].cls = (uint32_t)(e / ((size_t)N * M));
+        out[e].state = (uint32_t)(e / M % N);
+        out[e].mix = (uint32_t)(e % M);
+    }
+    const double *U = affect_spca_axes(c->spca);
+    uint32_t p = affect_spca_dims(c->spca);
+    for (size_t e = 0; e < c->part; e++) {
+        affect_fisher_entry fe;
+        affect_status st = affect_fisher_describe(&c->cfg.hmm, c->cfg.groups, e, &fe, err);
+        if (st) {
+            affect_free(out);
+            return st;
+        }
+        if (fe.group != AFFECT_FISHER_COVS)
+            continue;
+        for (uint32_t k = 0; k < C; k++) {
+            size_t idx = (size_t)k * c->part + e;
+            double w = 0.0;
+            for (uint32_t a = 0; a < p; a++) {
+                double v = fabs(U[(size_t)a * c->dim + idx]);
+                if (v > w)
+                    w = v;
+            }
+            affect_salience_row *row = &out[((size_t)k * N + fe.state) * M + fe.other];
+            if (w > row->weight)
+                row->weight = w;
+            top_insert(row, top_n, fe.r, fe.s, w);
+        }
+    }
+    *rows = out;
+    *n_rows = count;
+    return AFFECT_OK;
+}
+
+/* ---- binary form ---- */
+
+affect_status affect_classifier_encode(const affect_classifier *c, unsigned char **out,
+                                       size_t *size, affect_error *err)
+{
+    *out = NULL;
+    *size = 0;
+    affect_bw w;
+    affect_bw_init(&w);
+    const affect_classifier_config *cfg = &c->cfg;
+    affect_bw_bytes(&w, AFFECT_CLASSIFIER_MAGIC, 4);
+    affect_bw_u32(&w, AFFECT_CLASSIFIER_VERSION);
+    affect_bw_u32(&w, 0);
+    affect_bw_u32(&w, c->n_classes);
+    for (uint32_t k = 0; k < c->n_classes; k++) {
+        size_t len = strlen(c->labels[k]);
+        affect_bw_u32(&w, (uint32_t)len);
+        affect_bw_bytes(&w, c->labels[k], len);
+    }
+    affect_bw_u32(&w, cfg->groups);
+    affect_bw_u8(&w, cfg->zscore);
+    affect_bw_f64(&w, cfg->score_clip);
+    affect_bw_f64(&w, cfg->svm_c);
+    affect_bw_u32(&w, cfg->svm_folds);
+    affect_bw_u32(&w, cfg->spca_dims);
+    affect_bw_u8(&w, (uint8_t)cfg->spca_kernel);
+    affect_bw_f64(&w, cfg->spca_sigma);
+    affect_bw_u32(&w, cfg->knn_k);
+    const affect_classifier_grid *g = &cfg->grid;
+    affect_bw_u32(&w, g->n_dims);
+    affect_bw_u32(&w, g->n_sigma);
+    affect_bw_u32(&w, g->n_k);
+    affect_bw_u32(&w, g->folds);
+    affect_bw_u32s(&w, g->dims, g->n_dims);
+    affect_bw_f64s(&w, g->sigma, g->n_sigma);
+    affect_bw_u32s(&w, g->k, g->n_k);
+    affect_bw_f64(&w, c->report.grid_cv_acc);
+    affect_bw_f64(&w, c->report.svm_c);
+    affect_bw_f64(&w, c->report.svm_cv_acc);
+    affect_bw_f64(&w, c->report.train_acc_ml);
+    affect_bw_f64(&w, c->report.train_acc_svm);
+    affect_bw_f64(&w, c->report.train_acc_knn);
+    for (uint32_t k = 0; k < c->n_classes; k++) {
+        unsigned char *blob;
+        size_t len;
+        affect_status st = affect_hmm_blob_encode(c->hmms[k], c->feat, &blob, &len, err);
+        if (st) {
+            affect_bw_free(&w);
+            return st;
+        }
+        affect_bw_u64(&w, len);
+        affect_bw_bytes(&w, blob, len);
+        affect_free(blob);
+    }
+    affect_bw_u64(&w, c->dim);
+    affect_bw_f64s(&w, c->mean, c->dim);
+    affect_bw_f64s(&w, c->scale, c->dim);
+    affect_svm_encode(c->svm, &w);
+    affect_spca_encode(c->spca, &w);
+    uint32_t p = affect_spca_dims(c->spca);
+    affect_bw_u32(&w, c->n_train);
+    affect_bw_u32s(&w, c->train_y, c->n_train);
+    affect_bw_f64s(&w, c->train_z, (size_t)c->n_train * p);
+    if (!w.failed)
+        affect_bw_u64(&w, affect_fnv1a64(w.data, w.len));
+    if (w.failed) {
+        affect_bw_free(&w);
+        return affect_nomem(err);
+    }
+    *out = w.data;
+    *size = w.len;
+    return AFFECT_OK;
+}
+
+/* "truncated in <what> (offset N)" */
+static affect_status truncated(affect_error *err, const affect_br *r, const char *what)
+{
+    return affect_fail(err, AFFECT_ERR_FORMAT, "truncated in %s (offset %zu)", what, r->off);
+}
+
+static affect_status invalid(affect_error *err, const affect_br *r, const char *what)
+{
+    return affect_fail(err, AFFECT_ERR_FORMAT, "invalid %s (offset %zu)", what, r->off);
+}
+
+/* The grid lists (false when truncated or a count is too large). */
+static bool decode_grid(affect_br *r, affect_classifier_grid *g)
+{
+    if (!affect_br_u32(r, &g->n_dims) || !affect_br_u32(r, &g->n_sigma) ||
+        !affect_br_u32(r, &g->n_k) || !affect_br_u32(r, &g->folds))
+        return false;
+    if (g->n_dims > AFFECT_CLASSIFIER_GRID_MAX || g->n_sigma > AFFECT_CLASSIFIER_GRID_MAX ||
+        g->n_k > AFFECT_CLASSIFIER_GRID_MAX)
+        return false;
+    return affect_br_u32s(r, g->dims, g->n_dims) && affect_br_f64s(r, g->sigma, g->n_sigma) &&
+           affect_br_u32s(r, g->k, g->n_k);
+}
+
+/* The header, labels and configuration. */
+static affect_status decode_head(affect_br *r, affect_classifier **out, affect_error *err)
+{
+    const unsigned char *magic;
+    uint32_t version, flags, n_classes;
+    if (!affect_br_bytes(r, &magic, 4) || !affect_br_u32(r, &version) ||
+        !affect_br_u32(r, &flags) || !affect_br_u32(r, &n_classes))
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "truncated: %zu bytes is shorter than the classifier header", r->size);
+    if (memcmp(magic, AFFECT_CLASSIFIER_MAGIC, 4) != 0)
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "not a classifier (bad magic bytes at offset 0)");
+    if (version != AFFECT_CLASSIFIER_VERSION)
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "unknown classifier format version %u (this build reads 1 .. 1)",
+                           version);
+    if (flags != 0)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "unknown classifier flags %u (offset 8)",
+                           flags);
+    if (n_classes < 2 || n_classes > AFFECT_CLASSIFIER_MAX_CLASSES)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "invalid class count %u (offset 12)",
+                           n_classes);
+    affect_classifier *c = alloc_classifier(n_classes);
+    if (!c)
+        return affect_nomem(err);
+    *out = c;
+    for (uint32_t k = 0; k < n_classes; k++) {
+        uint32_t len;
+        const unsigned char *p;
+        if (!affect_br_u32(r, &len) || !affect_br_bytes(r, &p, len))
+            return truncated(err, r, "the labels");
+        if (len == 0 || memchr(p, 0, len))
+            return invalid(err, r, "label");
+        c->labels[k] = affect_strndup((const char *)p, len);
+        if (!c->labels[k])
+            return affect_nomem(err);
+    }
+    affect_classifier_config *cfg = &c->cfg;
+    affect_classifier_config_default(cfg);
+    uint8_t zscore, kernel;
+    if (!affect_br_u32(r, &cfg->groups) || !affect_br_u8(r, &zscore) ||
+        !affect_br_f64(r, &cfg->score_clip) || !affect_br_f64(r, &cfg->svm_c) || !affect_br_u32(r, &cfg->svm_folds) ||
+        !affect_br_u32(r, &cfg->spca_dims) || !affect_br_u8(r, &kernel) ||
+        !affect_br_f64(r, &cfg->spca_sigma) || !affect_br_u32(r, &cfg->knn_k) ||
+        !decode_grid(r, &cfg->grid) || !affect_br_f64(r, &c->report.grid_cv_acc) ||
+        !affect_br_f64(r, &c->report.svm_c) || !affect_br_f64(r, &c->report.svm_cv_acc) ||
+        !affect_br_f64(r, &c->report.train_acc_ml) ||
+        !affect_br_f64(r, &c->report.train_acc_svm) ||
+        !affect_br_f64(r, &c->report.train_acc_knn))
+        return truncated(err, r, "the configuration");
+    if (zscore > 1 || kernel > 1)
+        return invalid(err, r, "configuration");
+    cfg->zscore = zscore;
+    cfg->spca_kernel = kernel ? AFFECT_SPCA_RBF : AFFECT_SPCA_LINEAR;
+    return AFFECT_OK;
+}
+
+/* Whether two feature definitions have the same binary form. */
+static affect_status same_features(const affect_features *a, const affect_features *b,
+                                   bool *same, affect_error *err)
+{
+    size_t na, nb;
+    if (!affect_features_encoded_size(a, &na) || !affect_features_encoded_size(b, &nb))
+        return affect_nomem(err);
+    *same = false;
+    if (na != nb)
+        return AFFECT_OK;
+    unsigned char *ba = affect_malloc(na), *bb = affect_malloc(nb);
+    if (!ba || !bb) {
+        affect_free(ba);
+        affect_free(bb);
+        return affect_nomem(err);
+    }
+    affect_features_encode_into(a, ba);
+    affect_features_encode_into(b, bb);
+    *same = memcmp(ba, bb, na) == 0;
+    affect_free(ba);
+    affect_free(bb);
+    return AFFECT_OK;
+}
+
+/* The class HMMs (and the feature definition). */
+static affect_status decode_hmms(affect_br *r, affect_classifier *c, affect_error *err)
+{
+    for (uint32_t k = 0; k < c->n_classes; k++) {
+        uint64_t len;
+        const unsigned char *p;
+        if (!affect_br_u64(r, &len) || len > r->size - r->off ||
+            !affect_br_bytes(r, &p, (size_t)len))
+            return truncated(err, r, "the class HMMs");
+        affect_features *f = NULL;
+        affect_status st = affect_hmm_blob_decode(p, (size_t)len, &c->hmms[k], &f, err);
+        if (st)
+            return prefixed(err, AFFECT_ERR_FORMAT, "the HMM of class \"%s\"", c->labels[k]);
+        if (!c->feat) {
+            c->feat = f;
+        } else {
+            bool same = false;
+            st = same_features(c->feat, f, &same, err);
+            affect_features_free(f);
+            if (st)
+                return st;
+            if (!same)
+                return affect_fail(err, AFFECT_ERR_FORMAT,
+                                   "the HMM of class \"%s\" has another feature definition",
+                                   c->labels[k]);
+        }
+        const affect_hmm_config *hc = affect_hmm_get_config(c->hmms[k]);
+        const affect_hmm_config *h0 = affect_hmm_get_config(c->hmms[0]);
+        if (hc->n_states != h0->n_states || hc->n_mix != h0->n_mix || hc->dim != h0->dim ||
+            hc->cov != h0->cov || hc->learn_start != h0->learn_start)
+            return affect_fail(err, AFFECT_ERR_FORMAT,
+                               "the HMM of class \"%s\" has another configuration",
+                               c->labels[k]);
+    }
+    c->cfg.hmm = *affect_hmm_get_config(c->hmms[0]);
+    return AFFECT_OK;
+}
+
+/* Everything after the HMMs. */
+static affect_status decode_rest(affect_br *r, affect_classifier *c, affect_error *err)
+{
+    const char *msg = affect_classifier_config_check(&c->cfg);
+    if (msg)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "invalid configuration: %s", msg);
+    c->part = affect_fisher_dim(&c->cfg.hmm, c->cfg.groups);
+    uint64_t dim;
+    if (!affect_br_u64(r, &dim))
+        return truncated(err, r, "the normalization");
+    if (!affect_mul_size(c->part, c->n_classes, &c->dim) || dim != c->dim)
+        return invalid(err, r, "representation dimension");
+    if (!affect_br_has(r, c->dim, 16))
+        return truncated(err, r, "the normalization");
+    c->mean = affect_malloc_array(c->dim, sizeof *c->mean);
+    c->scale = affect_malloc_array(c->dim, sizeof *c->scale);
+    if (!c->mean || !c->scale)
+        return affect_nomem(err);
+    affect_br_f64s(r, c->mean, c->dim);
+    affect_br_f64s(r, c->scale, c->dim);
+    for (size_t e = 0; e < c->dim; e++)
+        if (!isfinite(c->mean[e]) || !(c->scale[e] > 0) || !isfinite(c->scale[e]))
+            return invalid(err, r, "normalization");
+    affect_status st;
+    if ((st = affect_svm_decode(r, &c->svm, err)) != AFFECT_OK)
+        return st;
+    if ((st = affect_spca_decode(r, &c->spca, err)) != AFFECT_OK)
+        return st;
+    if (affect_svm_n_classes(c->svm) != c->n_classes || affect_svm_dim(c->svm) != c->dim ||
+        affect_spca_input_dim(c->spca) != c->dim)
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "the SVM or sPCA does not match the classifier's %u classes and %zu "
+                           "dimensions", c->n_classes, c->dim);
+    uint32_t p = affect_spca_dims(c->spca), n;
+    if (!affect_br_u32(r, &n))
+        return truncated(err, r, "the training set");
+    if (n == 0 || !affect_br_has(r, n, 4 + 8 * (size_t)p))
+        return truncated(err, r, "the training set");
+    c->n_train = n;
+    c->train_y = affect_malloc_array(n, sizeof *c->train_y);
+    c->train_z = affect_malloc_array((size_t)n * p, sizeof *c->train_z);
+    if (!c->train_y || !c->train_z)
+        return affect_nomem(err);
+    affect_br_u32s(r, c->train_y, n);
+    affect_br_f64s(r, c->train_z, (size_t)n * p);
+    for (uint32_t i = 0; i < n; i++)
+        if (c->train_y[i] >= c->n_classes)
+            return invalid(err, r, "training label");
+    for (size_t e = 0; e < (size_t)n * p; e++)
+        if (!isfinite(c->train_z[e]))
+            return invalid(err, r, "training coordinates");
+    return AFFECT_OK;
+}
+
+affect_status affect_classifier_decode(const unsigned char *data, size_t size,
+                                       affect_classifier **out, affect_error *err)
+{
+    *out = NULL;
+    if (size < 24)
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "truncated: %zu bytes is shorter than the classifier header", size);
+    if (memcmp(data, AFFECT_CLASSIFIER_MAGIC, 4) != 0)
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "not a classifier (bad magic bytes at offset 0)");
+    uint64_t sum = 0;
+    for (int i = 0; i < 8; i++)
+        sum |= (uint64_t)data[size - 8 + (size_t)i] << (8 * i);
+    if (affect_fnv1a64(data, size - 8) != sum)
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "classifier checksum mismatch: the BLOB is corrupt");
+    affect_br r;
+    affect_br_init(&r, data, size - 8);
+    affect_classifier *c = NULL;
+    affect_status st = decode_head(&r, &c, err);
+    if (st == AFFECT_OK)
+        st = decode_hmms(&r, c, err);
+    if (st == AFFECT_OK)
+        st = decode_rest(&r, c, err);
+    if (st == AFFECT_OK && r.off != r.size)
+        st = affect_fail(err, AFFECT_ERR_FORMAT, "%zu unexpected bytes after the training set "
+                         "(offset %zu)", r.size - r.off, r.off);
+    if (st) {
+        affect_classifier_free(c);
+        return st;
+    }
+    *out = c;
+    return AFFECT_OK;
+}

@@ -1,0 +1,299 @@
+/*
+ * crossval.c — k-fold and leave-one-group-out evaluation of the recognizer (see
+ * affect/crossval.h).
+ *
+ * Usage:
+ *     affect_cv_config cfg;
+ *     affect_cv_config_default(&cfg);
+ *     cfg.cls.hmm.dim = affect_features_dim(feat);
+ *     affect_cv_result *r;
+ *     if (affect_crossval(&cfg, feat, seqs, y, n, labels, 4, NULL, 0, &r, &err) == AFFECT_OK) {
+ *         ... r->mean_accuracy[AFFECT_CV_SVM] ...
+ *         affect_cv_result_free(r);
+ *     }
+ *
+ * How it works: the fold of every motion is fixed first (stratified folds, or its group), then
+ * fold by fold the training motions are gathered (classes absent from them removed and the
+ * others renumbered in order), a classifier is trained on them alone, and each held-out motion
+ * is evaluated once (affect_classifier_eval gives all three labels). Nothing of a held-out
+ * motion reaches training: the only shared inputs are the configuration and the feature
+ * definition (tests/core/test_crossval.c checks this by corrupting the held-out motions).
+ */
+#include "affect/crossval.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#define MAX_FOLDS 1024u
+
+void affect_cv_config_default(affect_cv_config *cfg)
+{
+    memset(cfg, 0, sizeof *cfg);
+    affect_classifier_config_default(&cfg->cls);
+    cfg->folds = 10;
+    cfg->seed = 1;
+}
+
+void affect_cv_result_free(affect_cv_result *r)
+{
+    if (!r)
+        return;
+    for (uint32_t f = 0; r->folds && f < r->n_folds; f++)
+        for (int m = 0; m < AFFECT_CV_METHODS; m++)
+            affect_free(r->folds[f].confusion[m]);
+    affect_free(r->folds);
+    for (int m = 0; m < AFFECT_CV_METHODS; m++)
+        affect_free(r->pooled[m]);
+    affect_free(r);
+}
+
+/* Accuracy, balanced accuracy and macro-F1 of a confusion matrix (C × C). */
+static void metrics(const uint32_t *cm, uint32_t C, double *acc, double *bal, double *f1)
+{
+    uint64_t total = 0, correct = 0;
+    double rec_sum = 0.0, f1_sum = 0.0;
+    uint32_t rec_n = 0, f1_n = 0;
+    for (uint32_t k = 0; k < C; k++) {
+        uint64_t row = 0, col = 0, tp = cm[(size_t)k * C + k];
+        for (uint32_t j = 0; j < C; j++) {
+            row += cm[(size_t)k * C + j];
+            col += cm[(size_t)j * C + k];
+        }
+        total += row;
+        correct += tp;
+        if (row > 0) {
+            rec_sum += (double)tp / (double)row;
+            rec_n++;
+        }
+        if (row > 0 || col > 0) {
+            f1_sum += 2.0 * (double)tp / (double)(row + col);
+            f1_n++;
+        }
+    }
+    *acc = total ? (double)correct / (double)total : NAN;
+    *bal = rec_n ? rec_sum / rec_n : NAN;
+    *f1 = f1_n ? f1_sum / f1_n : NAN;
+}
+
+/* Mean and sample standard deviation of v[0 .. n) (NaN entries skipped). */
+static void mean_sd(const double *v, uint32_t n, double *mean, double *sd)
+{
+    double s = 0.0;
+    uint32_t k = 0;
+    for (uint32_t i = 0; i < n; i++)
+        if (!isnan(v[i])) {
+            s += v[i];
+            k++;
+        }
+    *mean = k ? s / k : NAN;
+    double q = 0.0;
+    for (uint32_t i = 0; i < n; i++)
+        if (!isnan(v[i]))
+            q += (v[i] - *mean) * (v[i] - *mean);
+    *sd = k > 1 ? sqrt(q / (k - 1)) : NAN;
+}
+
+/* Scratch of one fold. */
+typedef struct fold_ws {
+    affect_hmm_seq *seqs;
+    uint32_t *y, *map;   /* map: class → index among the present classes, or UINT32_MAX */
+    const char **labels; /* present classes' names */
+    uint32_t *back;      /* present index → class */
+} fold_ws;
+
+static void progress(const affect_cv_config *cfg, const affect_cv_fold *f, uint32_t n_folds)
+{
+    if (!cfg->progress)
+        return;
+    char line[256];
+    snprintf(line, sizeof line,
+             "fold %u/%u: %u training, %u held out, svm %.3f, knn %.3f, ml %.3f", f->fold + 1,
+             n_folds, f->n_train, f->n_test, f->accuracy[AFFECT_CV_SVM],
+             f->accuracy[AFFECT_CV_KNN], f->accuracy[AFFECT_CV_ML]);
+    cfg->progress(cfg->progress_ctx, line);
+}
+
+/* Trains on the motions outside fold `fold` and scores the ones in it into f. */
+static affect_status run_fold(const affect_cv_config *cfg, const affect_features *feat,
+                              const affect_hmm_seq *seqs, const uint32_t *y, uint32_t n,
+                              const char *const *labels, uint32_t C, const uint32_t *fold_of,
+                              uint32_t fold, fold_ws *w, affect_cv_fold *f, affect_error *err)
+{
+    uint32_t n_tr = 0, present = 0;
+    for (uint32_t k = 0; k < C; k++)
+        w->map[k] = UINT32_MAX;
+    for (uint32_t i = 0; i < n; i++)
+        if (fold_of[i] != fold) {
+            w->seqs[n_tr] = seqs[i];
+            w->y[n_tr++] = y[i];
+            w->map[y[i]] = 0;
+        }
+    for (uint32_t k = 0; k < C; k++)
+        if (w->map[k] == 0) {
+            w->map[k] = present;
+            w->back[present] = k;
+            w->labels[present++] = labels[k];
+        }
+    for (uint32_t i = 0; i < n_tr; i++)
+        w->y[i] = w->map[w->y[i]];
+    f->n_train = n_tr;
+    f->n_test = n - n_tr;
+    if (present < 2)
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "fold %u: the training motions have fewer than 2 classes", fold + 1);
+    affect_classifier *c = NULL;
+    affect_status st = affect_classifier_train(&cfg->cls, feat, w->seqs, w->y, n_tr, w->labels,
+                                               present, &c, err);
+    if (st) {
+        if (st != AFFECT_ERR_NOMEM) {
+            char msg[AFFECT_ERROR_MSG_MAX];
+            memcpy(msg, err->msg, sizeof msg);
+            msg[sizeof msg - 1] = '\0';
+            st = affect_fail(err, st, "fold %u: %s", fold + 1, msg);
+        }
+        return st;
+    }
+    const affect_classifier_config *cc = affect_classifier_get_config(c);
+    affect_classifier_report rep;
+    affect_classifier_get_report(c, &rep);
+    f->svm_c = rep.svm_c;
+    f->spca_dims = affect_spca_dims(affect_classifier_spca(c));
+    f->spca_sigma = cc->spca_sigma;
+    f->knn_k = cc->knn_k;
+    for (uint32_t i = 0; i < n && st == AFFECT_OK; i++) {
+        if (fold_of[i] != fold)
+            continue;
+        affect_classifier_out o = {0};
+        st = affect_classifier_eval(c, seqs[i].x, seqs[i].n_frames, false, &o, err);
+        if (st) {
+            if (st != AFFECT_ERR_NOMEM) {
+                char msg[AFFECT_ERROR_MSG_MAX];
+                memcpy(msg, err->msg, sizeof msg);
+                msg[sizeof msg - 1] = '\0';
+                st = affect_fail(err, st, "fold %u, motion %u: %s", fold + 1, i, msg);
+            }
+            break;
+        }
+        uint32_t pred[AFFECT_CV_METHODS] = {o.ml, o.svm, o.knn};
+        for (int m = 0; m < AFFECT_CV_METHODS; m++)
+            f->confusion[m][(size_t)y[i] * C + w->back[pred[m]]]++;
+    }
+    affect_classifier_free(c);
+    if (st)
+        return st;
+    for (int m = 0; m < AFFECT_CV_METHODS; m++)
+        metrics(f->confusion[m], C, &f->accuracy[m], &f->balanced[m], &f->f1[m]);
+    return AFFECT_OK;
+}
+
+static void summarize(affect_cv_result *r)
+{
+    uint32_t C = r->n_classes;
+    for (int m = 0; m < AFFECT_CV_METHODS; m++) {
+        double acc[MAX_FOLDS], bal[MAX_FOLDS], f1[MAX_FOLDS];
+        uint32_t nf = r->n_folds; /* ≤ MAX_FOLDS, checked by affect_crossval */
+        for (uint32_t f = 0; f < nf; f++) {
+            acc[f] = r->folds[f].accuracy[m];
+            bal[f] = r->folds[f].balanced[m];
+            f1[f] = r->folds[f].f1[m];
+            for (size_t e = 0; e < (size_t)C * C; e++)
+                r->pooled[m][e] += r->folds[f].confusion[m][e];
+        }
+        mean_sd(acc, nf, &r->mean_accuracy[m], &r->sd_accuracy[m]);
+        mean_sd(bal, nf, &r->mean_balanced[m], &r->sd_balanced[m]);
+        mean_sd(f1, nf, &r->mean_f1[m], &r->sd_f1[m]);
+        double pb, pf;
+        metrics(r->pooled[m], C, &r->pooled_accuracy[m], &pb, &pf);
+    }
+}
+
+affect_status affect_crossval(const affect_cv_config *cfg, const affect_features *feat,
+                              const affect_hmm_seq *seqs, const uint32_t *y, uint32_t n,
+                              const char *const *labels, uint32_t n_classes,
+                              const uint32_t *group, uint32_t n_groups, affect_cv_result **out,
+                              affect_error *err)
+{
+    *out = NULL;
+    if (n_classes < 2 || n_classes > AFFECT_CLASSIFIER_MAX_CLASSES)
+        return affect_fail(err, AFFECT_ERR_INVALID, "need 2 to %u classes, got %u",
+                           AFFECT_CLASSIFIER_MAX_CLASSES, n_classes);
+    if (!group && cfg->folds < 2)
+        return affect_fail(err, AFFECT_ERR_INVALID, "folds must be at least 2");
+    if (group && n_groups > MAX_FOLDS)
+        return affect_fail(err, AFFECT_ERR_INVALID, "at most %u groups, got %u", MAX_FOLDS,
+                           n_groups);
+    if (!group && cfg->folds > MAX_FOLDS)
+        return affect_fail(err, AFFECT_ERR_INVALID, "at most %u folds, got %u", MAX_FOLDS,
+                           cfg->folds);
+    for (uint32_t i = 0; i < n; i++)
+        if (y[i] >= n_classes || (group && group[i] >= n_groups))
+            return affect_fail(err, AFFECT_ERR_INVALID, "motion %u: class or group out of range",
+                               i);
+    uint32_t *fold_of = affect_malloc_array(n ? n : 1, sizeof *fold_of);
+    affect_cv_result *r = affect_calloc(1, sizeof *r);
+    fold_ws w = {0};
+    w.seqs = affect_malloc_array(n ? n : 1, sizeof *w.seqs);
+    w.y = affect_malloc_array(n ? n : 1, sizeof *w.y);
+    w.map = affect_malloc_array(n_classes, sizeof *w.map);
+    w.back = affect_malloc_array(n_classes, sizeof *w.back);
+    w.labels = affect_malloc_array(n_classes, sizeof *w.labels);
+    affect_status st = AFFECT_OK;
+    if (!fold_of || !r || !w.seqs || !w.y || !w.map || !w.back || !w.labels) {
+        st = affect_nomem(err);
+        goto done;
+    }
+    r->n_classes = n_classes;
+    uint32_t k = cfg->folds;
+    if (group) {
+        memcpy(fold_of, group, n * sizeof *fold_of);
+        k = n_groups;
+    } else {
+        if (k > n)
+            k = n;
+        if ((st = affect_stratified_folds(y, n, n_classes, k, cfg->seed, fold_of, err)))
+            goto done;
+    }
+    r->folds = affect_calloc(k ? k : 1, sizeof *r->folds);
+    for (int m = 0; m < AFFECT_CV_METHODS; m++)
+        r->pooled[m] = affect_calloc((size_t)n_classes * n_classes, sizeof(uint32_t));
+    if (!r->folds || !r->pooled[0] || !r->pooled[1] || !r->pooled[2]) {
+        st = affect_nomem(err);
+        goto done;
+    }
+    for (uint32_t fold = 0; fold < k; fold++) {
+        bool any = false;
+        for (uint32_t i = 0; i < n && !any; i++)
+            any = fold_of[i] == fold;
+        if (!any)
+            continue; /* an empty group */
+        affect_cv_fold *f = &r->folds[r->n_folds++];
+        f->fold = fold;
+        f->group = group ? (int32_t)fold : -1;
+        for (int m = 0; m < AFFECT_CV_METHODS; m++) {
+            f->confusion[m] = affect_calloc((size_t)n_classes * n_classes, sizeof(uint32_t));
+            if (!f->confusion[m]) {
+                st = affect_nomem(err);
+                goto done;
+            }
+        }
+        if ((st = run_fold(cfg, feat, seqs, y, n, labels, n_classes, fold_of, fold, &w, f,
+                           err)))
+            goto done;
+        progress(cfg, f, k);
+    }
+    summarize(r);
+done:
+    affect_free(fold_of);
+    affect_free(w.seqs);
+    affect_free(w.y);
+    affect_free(w.map);
+    affect_free(w.back);
+    affect_free(w.labels);
+    if (st) {
+        affect_cv_result_free(r);
+        return st;
+    }
+    *out = r;
+    return AFFECT_OK;
+}
