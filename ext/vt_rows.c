@@ -3,9 +3,10 @@
  *
  * How it works: each spec is registered as an eponymous-only module whose aux pointer is the
  * spec. xBestIndex passes every usable equality constraint on a hidden argument column to
- * xFilter, in column order, and records which ones in idxNum (bit i = argument i); a required
- * argument whose constraint exists but is unusable gets SQLITE_CONSTRAINT (SQLite then tries
- * another plan), a missing one is an error showing the usage. xFilter rebuilds the argument
+ * xFilter, in column order, and records which ones in idxNum (bit i = argument i); an
+ * argument whose constraint exists but is unusable in this plan (its value comes from a table
+ * joined later) gets SQLITE_CONSTRAINT, so SQLite picks a plan that knows it; a missing
+ * required one is an error showing the usage. xFilter rebuilds the argument
  * list (NULL for the ones not given), clears the previous rows, and calls fill. Cells are
  * returned as stored (text and BLOBs copied by SQLite, SQLITE_TRANSIENT).
  */
@@ -193,10 +194,10 @@ static int rows_best_index(sqlite3_vtab *vtab, sqlite3_index_info *info)
     int mask = 0, next = 1;
     for (int a = 0; a < spec->n_args; a++) {
         if (usable[a] < 0) {
+            if (seen[a]) /* a plan where the argument's value is known exists: use that one */
+                return SQLITE_CONSTRAINT;
             if (a >= spec->min_args)
                 continue;
-            if (seen[a])
-                return SQLITE_CONSTRAINT;
             sqlite3_free(vtab->zErrMsg);
             vtab->zErrMsg = sqlite3_mprintf("%s: argument %d is required, as in %s", spec->name,
                                             a + 1, spec->usage);

@@ -80,6 +80,43 @@ SELECT i.name, printf('%.3f', l.distance) AS distance
                     AND emotion IN ('normal', 'neutral') ORDER BY name LIMIT 1)
    AND l.label = 'sad' AND l.radius = 0.1 AND l.components = '["TimeAll","FlowAll"]';
 
+-- ---- emotion recognition: class HMMs, Fisher scores, SVM, sPCA + kNN (thesis chapter 4) ----
+-- trained on the real corpus's four emotions when it was imported, else on motion_synth
+DROP TABLE IF EXISTS rec_data;
+CREATE TABLE rec_data AS
+SELECT id, name, content, emotion, motion FROM motions
+ WHERE source <> 'synth' AND emotion IN ('angry', 'happy', 'sad', 'normal')
+   AND content IN ('walk', 'run', 'dash', 'walk-back', 'walk-left', 'walk-right',
+                   'bow', 'bye', 'byebye', 'guide');
+INSERT INTO rec_data
+SELECT id, name, content, emotion, motion FROM motions
+ WHERE source = 'synth' AND NOT EXISTS (SELECT 1 FROM rec_data);
+DROP TABLE IF EXISTS classifiers;
+CREATE TABLE classifiers AS
+SELECT 'four emotions' AS name,
+       affect_train(motion, emotion, '{"states":5,"mixtures":1,"covariance":"diag","velocity":true,"max_iter":20,"seed":7}') AS model
+  FROM rec_data;
+
+.print
+.print '== emotion recognizer (affect_train: HMM per emotion, Fisher scores, SVM, sPCA + kNN) =='
+SELECT json_extract(affect_info(model), '$.training_motions') AS motions,
+       json_extract(affect_info(model), '$.dimensions.fisher') AS fisher_dims,
+       length(model) AS blob_bytes,
+       printf('%.2f', json_extract(affect_info(model), '$.training_accuracy.ml')) AS train_ml,
+       printf('%.2f', json_extract(affect_info(model), '$.training_accuracy.svm')) AS train_svm,
+       printf('%.2f', json_extract(affect_info(model), '$.training_accuracy.knn_leave_one_out'))
+           AS knn_loo
+  FROM classifiers;
+
+.print
+.print '== the other styles, as the four-emotion classifier sees them (Fisher + SVM) =='
+SELECT emotion AS style, group_concat(label || ' ' || n, ', ') AS recognized_as
+  FROM (SELECT emotion, affect_classify(c.model, m.motion) AS label, count(*) AS n
+          FROM motions AS m, classifiers AS c
+         WHERE m.source <> 'synth' AND m.emotion IN ('proud', 'not-confident', 'tired')
+         GROUP BY emotion, label ORDER BY emotion, n DESC, label)
+ GROUP BY emotion;
+
 -- ---- the HTML page ----
 .headers off
 .mode list
@@ -124,6 +161,37 @@ SELECT '<h2>Laban Weight and Time by emotion (thesis Fig. 5.1)</h2><p>Each point
                   '{"title":"Laban Weight vs Time","x_label":"WeightAll (peak kinetic energy)",'
                   || '"y_label":"TimeAll (peak acceleration)","log_x":true,"log_y":true,"means":true}')
   FROM motion_laban;
+SELECT '<h2>Emotion recognition: the sPCA embedding of the Fisher scores (thesis Fig. 4.5)</h2>'
+    || '<p>One HMM per emotion; each training motion''s Fisher scores under the four HMMs, '
+    || 'z-scored, projected by supervised PCA (RBF label kernel) onto its first two axes. Drawn '
+    || 'by <code>laban_plot(json_extract(affect_scores(model, motion), ''$.embedding[0]''), …)</code>.</p>'
+    || laban_plot(json_extract(s, '$.embedding[0]'), json_extract(s, '$.embedding[1]'), emotion,
+                  '{"title":"Fisher scores, supervised PCA","x_label":"sPCA axis 1",'
+                  || '"y_label":"sPCA axis 2","means":true}')
+  FROM (SELECT d.emotion, affect_scores(c.model, d.motion) AS s
+          FROM rec_data AS d, classifiers AS c);
+SELECT '<h2>Salient features: the heaviest sPCA weight among each HMM component''s covariance '
+    || 'scores (thesis Fig. 4.6)</h2><p>Rows: emotion HMMs; columns: states (mixture 0). Darker '
+    || 'is more discriminative; the tooltip names the top covariance entries. From '
+    || '<code>SELECT * FROM affect_salience(model)</code>.</p>'
+    || '<svg xmlns="http://www.w3.org/2000/svg" width="' || (120 + 60 * max(state + 1)) || '" height="'
+    || (40 + 40 * count(DISTINCT label)) || '" font-family="sans-serif" font-size="12">'
+    || group_concat(cell, '') || '</svg>'
+  FROM (SELECT label, state,
+               CASE WHEN state = 0 THEN printf('<text x="110" y="%d" text-anchor="end">%s</text>',
+                                               49 + 40 * li, label) ELSE '' END
+               || CASE WHEN li = 0 THEN printf('<text x="%d" y="20" text-anchor="middle">state %d</text>',
+                                               145 + 60 * state, state + 1) ELSE '' END
+               || printf('<rect x="%d" y="%d" width="56" height="36" fill="rgb(%d,%d,%d)"><title>%s, state %d: %s</title></rect>',
+                         117 + 60 * state, 27 + 40 * li,
+                         255 - CAST(200 * weight / wmax AS INTEGER), 255 - CAST(140 * weight / wmax AS INTEGER), 255,
+                         label, state + 1, replace(replace(top, '"', ''), '<', ''))
+               || printf('<text x="%d" y="%d" text-anchor="middle" fill="#000">%.3f</text>',
+                         145 + 60 * state, 50 + 40 * li, weight) AS cell
+          FROM (SELECT a.*, (SELECT max(weight) FROM affect_salience((SELECT model FROM classifiers))) AS wmax,
+                       dense_rank() OVER (ORDER BY label) - 1 AS li
+                  FROM affect_salience((SELECT model FROM classifiers)) AS a WHERE mixture = 0)
+         ORDER BY label, state);
 SELECT '</body></html>';
 .output stdout
 SELECT 'wrote demo.html';
