@@ -5,8 +5,9 @@
  * spec. xBestIndex passes every usable equality constraint on a hidden argument column to
  * xFilter, in column order, and records which ones in idxNum (bit i = argument i); an
  * argument whose constraint exists but is unusable in this plan (its value comes from a table
- * joined later) gets SQLITE_CONSTRAINT, so SQLite picks a plan that knows it; a missing
- * required one is an error showing the usage. xFilter rebuilds the argument
+ * joined later) gets SQLITE_CONSTRAINT, so SQLite picks a plan that knows it. A plan without
+ * a required argument (SQLite asks for such plans when it splits an OR of constraints) gets a
+ * huge cost and, should it still be chosen, fails in xFilter with the usage. xFilter rebuilds the argument
  * list (NULL for the ones not given), clears the previous rows, and calls fill. Cells are
  * returned as stored (text and BLOBs copied by SQLite, SQLITE_TRANSIENT).
  */
@@ -16,6 +17,7 @@
 #include <string.h>
 
 #define MAX_ARGS 8
+#define MISSING_SHIFT 16 /* idxNum bits 16..: 1 + the first missing required argument */
 
 typedef struct rows_vtab {
     sqlite3_vtab base;
@@ -192,23 +194,23 @@ static int rows_best_index(sqlite3_vtab *vtab, sqlite3_index_info *info)
             usable[a] = i;
     }
     int mask = 0, next = 1;
+    bool missing = false;
     for (int a = 0; a < spec->n_args; a++) {
         if (usable[a] < 0) {
             if (seen[a]) /* a plan where the argument's value is known exists: use that one */
                 return SQLITE_CONSTRAINT;
-            if (a >= spec->min_args)
-                continue;
-            sqlite3_free(vtab->zErrMsg);
-            vtab->zErrMsg = sqlite3_mprintf("%s: argument %d is required, as in %s", spec->name,
-                                            a + 1, spec->usage);
-            return vtab->zErrMsg ? SQLITE_ERROR : SQLITE_NOMEM;
+            if (a < spec->min_args && !missing) { /* reported by xFilter if no plan is better */
+                missing = true;
+                mask |= (a + 1) << MISSING_SHIFT;
+            }
+            continue;
         }
         info->aConstraintUsage[usable[a]].argvIndex = next++;
         info->aConstraintUsage[usable[a]].omit = 1;
         mask |= 1 << a;
     }
     info->idxNum = mask;
-    info->estimatedCost = 1e6;
+    info->estimatedCost = missing ? 1e300 : 1e6;
     info->estimatedRows = 100;
     return SQLITE_OK;
 }
@@ -220,6 +222,12 @@ static int rows_filter(sqlite3_vtab_cursor *cur, int idx_num, const char *idx_st
     rows_cursor *c = (rows_cursor *)cur;
     rows_vtab *vt = (rows_vtab *)cur->pVtab;
     const ax_rows_spec *spec = vt->spec;
+    if (idx_num >> MISSING_SHIFT) {
+        sqlite3_free(vt->base.zErrMsg);
+        vt->base.zErrMsg = sqlite3_mprintf("%s: argument %d is required, as in %s", spec->name,
+                                           idx_num >> MISSING_SHIFT, spec->usage);
+        return vt->base.zErrMsg ? SQLITE_ERROR : SQLITE_NOMEM;
+    }
     sqlite3_value *args[MAX_ARGS];
     int given = 0;
     for (int a = 0; a < spec->n_args; a++)

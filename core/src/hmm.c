@@ -354,9 +354,9 @@ static double *inv_row(const affect_hmm *h, uint32_t k, uint32_t r)
 {
     uint32_t m = h->cfg.dim, K = h->cfg.n_states * h->cfg.n_mix;
     uint32_t r0 = r - r % TRI_ROWS, r1 = m - r0 < TRI_ROWS ? m : r0 + TRI_ROWS;
-    size_t base = 0;
-    for (uint32_t q = 0; q < r0; q += TRI_ROWS) /* panels before: K × TRI_ROWS × (q + TRI_ROWS) */
-        base += (size_t)K * TRI_ROWS * (q + TRI_ROWS);
+    /* the panels before: Σ_{p < P} K × TRI_ROWS × (p + 1) TRI_ROWS, P = r0 / TRI_ROWS */
+    size_t P = r0 / TRI_ROWS;
+    size_t base = (size_t)K * TRI_ROWS * TRI_ROWS * (P * (P + 1) / 2);
     return h->inv + base + ((size_t)k * (r1 - r0) + (r - r0)) * r1;
 }
 
@@ -1315,18 +1315,26 @@ static void scatter(const affect_hmm *h, const double *const *rows, const double
     for (size_t t0 = 0; t0 < T; t0 += B) {
         size_t nb = T - t0 < B ? T - t0 : B;
         for (size_t t = 0; t < nb; t++) {
-            const double *xt = rows ? rows[t0 + t] : x + (t0 + t) * m;
+            const double *restrict xt = rows ? rows[t0 + t] : x + (t0 + t) * m;
             double rr = r ? r[(t0 + t) * stride] : 1.0;
-            double sq = r ? sqrt(rr) : 1.0;
-            double *dt = dbuf + t * m;
             *n += rr;
-            for (uint32_t d = 0; d < m; d++) {
-                double v = xt[d] - c[d];
-                s1[d] += rr * v;
-                if (full)
+            double *restrict sum = s1;
+            const double *restrict ctr = c;
+            if (full) {
+                double sq = r ? sqrt(rr) : 1.0;
+                double *restrict dt = dbuf + t * m;
+                for (uint32_t d = 0; d < m; d++) {
+                    double v = xt[d] - ctr[d];
+                    sum[d] += rr * v;
                     dt[d] = sq * v;
-                else
-                    S[d] += rr * v * v;
+                }
+            } else {
+                double *restrict sq_sum = S;
+                for (uint32_t d = 0; d < m; d++) {
+                    double v = xt[d] - ctr[d];
+                    sum[d] += rr * v;
+                    sq_sum[d] += rr * v * v;
+                }
             }
         }
         if (full)
