@@ -21,7 +21,7 @@ void ax_error(sqlite3_context *ctx, const affect_error *err)
 
 void ax_errorf(sqlite3_context *ctx, const char *fmt, ...)
 {
-    char msg[AFFECT_ERROR_MSG_MAX + 64];
+    char msg[AFFECT_ERROR_MSG_MAX + 512]; /* room for a list of the allowed option keys */
     int n = snprintf(msg, sizeof msg, "%s: ", AX_NAME(ctx));
     if (n < 0)
         n = 0;
@@ -224,13 +224,15 @@ ax_arg ax_opts_parse(sqlite3_context *ctx, int argc, sqlite3_value **argv, int i
         for (int k = 0; allowed[k] && !known; k++)
             known = strcmp(allowed[k], m->key) == 0;
         if (!known) {
-            char list[256] = "";
+            char list[448] = ""; /* affect_crossval's 29 keys take 283 bytes */
             size_t used = 0;
             for (int k = 0; allowed[k]; k++) {
                 int w = snprintf(list + used, sizeof list - used, "%s%s", k ? ", " : "",
                                  allowed[k]);
-                if (w < 0 || (size_t)w >= sizeof list - used)
+                if (w < 0 || (size_t)w >= sizeof list - used) {
+                    list[used] = '\0'; /* never a key cut in the middle */
                     break;
+                }
                 used += (size_t)w;
             }
             ax_errorf(ctx, "unknown option \"%.64s\" (expected %s)", m->key,

@@ -178,11 +178,16 @@ static ax_arg opt_grid(sqlite3_context *ctx, const ax_opts *opts, cls_train *t)
         grid_list(ctx, opts, g, "spca_sigma", t->grid_sigma, &gr->n_sigma) ||
         grid_list(ctx, opts, g, "knn_k", t->grid_k, &gr->n_k))
         return AX_ERROR;
-    for (uint32_t i = 0; i < gr->n_dims; i++)
-        gr->dims[i] = t->grid_dims[i] >= 1 && t->grid_dims[i] <= 1000 ? (uint32_t)t->grid_dims[i]
-                                                                        : 0;
-    for (uint32_t i = 0; i < gr->n_k; i++)
-        gr->k[i] = t->grid_k[i] >= 1 && t->grid_k[i] <= 100000 ? (uint32_t)t->grid_k[i] : 0;
+    /* a value that is not a whole number in range becomes 0, which the configuration check
+     * refuses ("grid knn_k must be whole numbers of at least 1") */
+    for (uint32_t i = 0; i < gr->n_dims; i++) {
+        double v = t->grid_dims[i];
+        gr->dims[i] = v >= 1 && v <= 1000 && v == floor(v) ? (uint32_t)v : 0;
+    }
+    for (uint32_t i = 0; i < gr->n_k; i++) {
+        double v = t->grid_k[i];
+        gr->k[i] = v >= 1 && v <= 100000 && v == floor(v) ? (uint32_t)v : 0;
+    }
     for (uint32_t i = 0; i < gr->n_sigma; i++)
         gr->sigma[i] = t->grid_sigma[i];
     return AX_OK;
@@ -264,6 +269,8 @@ static ax_arg train_row(sqlite3_context *ctx, int argc, sqlite3_value **argv, cl
     /* labels grow with the sequences (their capacity) */
     char **labels = affect_realloc(t->labels, (size_t)t->s.cap * sizeof *labels);
     if (!labels) {
+        affect_free((void *)t->s.seqs[before].x); /* keep labels and sequences paired */
+        t->s.n_seqs = before;
         sqlite3_result_error_nomem(ctx);
         return AX_ERROR;
     }
@@ -588,7 +595,7 @@ void ax_affect_scores(sqlite3_context *ctx, int argc, sqlite3_value **argv)
                 uint32_t lo = k < q ? k : q, hi = k < q ? q : k;
                 double v = b.o.decision[affect_svm_pair_index(affect_classifier_svm(c), lo, hi)];
                 double mine = k == lo ? v : -v; /* positive: k wins against q */
-                svm_votes += mine > 0 || (mine == 0 && k == hi ? false : mine > 0);
+                svm_votes += k == lo ? v > 0 : !(v > 0); /* libsvm's vote: ties to hi */
                 if (!first)
                     affect_strbuf_putc(&sb, ',');
                 first = false;
@@ -838,7 +845,10 @@ void ax_affect_crossval_step(sqlite3_context *ctx, int argc, sqlite3_value **arg
     if (s->t.s.n_seqs == before)
         return;
     char **groups = affect_realloc(s->groups, (size_t)s->t.s.cap * sizeof *groups);
-    if (!groups) {
+    if (!groups) { /* keep groups, labels and sequences paired */
+        affect_free(s->t.labels[before]);
+        affect_free((void *)s->t.s.seqs[before].x);
+        s->t.s.n_seqs = before;
         sqlite3_result_error_nomem(ctx);
         s->t.s.failed = true;
         return;

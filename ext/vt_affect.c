@@ -13,10 +13,11 @@
  *       motion: the component's mean pose on the training skeleton, for motion_svg)
  *
  * affect_crossval runs, on the same connection,
- *   SELECT affect_crossval_json("motion_column", "label_column", <"group" column or NULL>,
- *                               :options) FROM "table"
- * (identifiers quoted; options {"group": "content"} selects leave-one-group-out over that
- * column, otherwise stratified k-fold with "folds" (10) and "seed"), then turns the JSON's rows
+ *   SELECT affect_crossval_json(t."motion_column", t."label_column", <t."group" or NULL>,
+ *                               :options) FROM "table" AS t
+ * (identifiers quoted and qualified, so that a misspelt column is "no such column: t.x", not
+ * a string; options {"group": "content"} selects leave-one-group-out over that column,
+ * otherwise stratified k-fold with "folds" (10) and "seed"), then turns the JSON's rows
  * into table rows; its errors are that statement's (for instance "affect_crossval_json: row 3:
  * …"), prefixed with "affect_crossval: ". The options are affect_train's plus folds, group,
  * methods (["ml", "svm", "knn"]) and verbose (progress lines on stderr).
@@ -33,23 +34,31 @@
 
 #define CV_COLUMNS 14
 
-/* The "group" option of an options text (NULL when absent or not a string); *bad when the
- * text is not a JSON object (affect_crossval_json reports that itself). */
-static char *group_column(const char *options, size_t len)
+/* The "group" option of an options text into *out (NULL when absent or not a string, or when
+ * the text is not a JSON object: affect_crossval_json reports that itself). SQLITE_NOMEM when
+ * memory ran out (never a silent "no group", which would change the protocol). */
+static int group_column(const char *options, size_t len, char **out)
 {
     affect_json_doc *doc = NULL;
     affect_error err;
-    char *out = NULL;
-    if (!options || affect_json_parse(options, len, &doc, &err))
-        return NULL;
+    *out = NULL;
+    if (!options)
+        return SQLITE_OK;
+    if (affect_json_parse(options, len, &doc, &err))
+        return err.status == AFFECT_ERR_NOMEM ? SQLITE_NOMEM : SQLITE_OK;
     const affect_json_node *root = affect_json_root(doc);
+    int rc = SQLITE_OK;
     if (root->type == AFFECT_JSON_OBJECT)
         for (const affect_json_node *e = affect_json_first(doc, root); e;
              e = affect_json_next_sibling(doc, e))
-            if (strcmp(e->key, "group") == 0 && e->type == AFFECT_JSON_STRING)
-                out = sqlite3_mprintf("%s", e->str);
+            if (strcmp(e->key, "group") == 0 && e->type == AFFECT_JSON_STRING) {
+                sqlite3_free(*out);
+                *out = sqlite3_mprintf("%s", e->str);
+                if (!*out)
+                    rc = SQLITE_NOMEM;
+            }
     affect_json_free(doc);
-    return out;
+    return rc;
 }
 
 static int cv_fill(sqlite3 *db, int argc, sqlite3_value **argv, ax_rows *rows, char **msg)
@@ -70,8 +79,14 @@ static int cv_fill(sqlite3 *db, int argc, sqlite3_value **argv, ax_rows *rows, c
     size_t options_len = argc > 3 ? (size_t)sqlite3_value_bytes(argv[3]) : 0;
     if (!table || !motion || !label)
         return SQLITE_NOMEM;
-    char *group = group_column(options, options_len);
-    char *inner = group ? sqlite3_mprintf("\"%w\"", group) : sqlite3_mprintf("NULL");
+    if (argc > 3 && sqlite3_value_type(argv[3]) != SQLITE_NULL && !options)
+        return SQLITE_NOMEM;
+    char *group = NULL;
+    if (group_column(options, options_len, &group) != SQLITE_OK)
+        return SQLITE_NOMEM;
+    /* columns qualified by the table's alias: an unknown one is "no such column", never the
+     * string literal SQLite makes of an unresolved double-quoted name */
+    char *inner = group ? sqlite3_mprintf("t.\"%w\"", group) : sqlite3_mprintf("NULL");
     char *sql =
         inner ? sqlite3_mprintf(
                     "SELECT json_extract(r.value, '$.method'), json_extract(r.value, '$.fold'), "
@@ -86,7 +101,8 @@ static int cv_fill(sqlite3 *db, int argc, sqlite3_value **argv, ax_rows *rows, c
                     "json_object('labels', json_extract(j.v, '$.labels'), "
                     "'matrix', json_extract(r.value, '$.confusion')), "
                     "json_extract(r.value, '$.params') "
-                    "FROM (SELECT affect_crossval_json(\"%w\", \"%w\", %s, ?1) AS v FROM \"%w\") "
+                    "FROM (SELECT affect_crossval_json(t.\"%w\", t.\"%w\", %s, ?1) AS v "
+                    "FROM \"%w\" AS t) "
                     "AS j, json_each(j.v, '$.rows') AS r",
                     motion, label, inner, table)
               : NULL;
@@ -235,10 +251,15 @@ static int salience_fill(sqlite3 *db, int argc, sqlite3_value **argv, ax_rows *r
                                    "(from affect_train), got %s", ax_type_name(argv[0]));
     uint32_t top = 5;
     if (argc > 1 && sqlite3_value_type(argv[1]) != SQLITE_NULL) {
-        if (sqlite3_value_type(argv[1]) != SQLITE_INTEGER || sqlite3_value_int64(argv[1]) < 1 ||
-            sqlite3_value_int64(argv[1]) > AFFECT_SALIENCE_TOP_MAX)
+        if (sqlite3_value_type(argv[1]) != SQLITE_INTEGER)
             return salience_error(msg, "affect_salience: argument 2 (top) must be an integer "
                                        "from 1 to 32, got %s", ax_type_name(argv[1]));
+        if (sqlite3_value_int64(argv[1]) < 1 ||
+            sqlite3_value_int64(argv[1]) > AFFECT_SALIENCE_TOP_MAX) {
+            *msg = sqlite3_mprintf("affect_salience: argument 2 (top) must be an integer from 1 "
+                                   "to 32, got %lld", sqlite3_value_int64(argv[1]));
+            return *msg ? SQLITE_ERROR : SQLITE_NOMEM;
+        }
         top = (uint32_t)sqlite3_value_int64(argv[1]);
     }
     const unsigned char *data = sqlite3_value_blob(argv[0]);

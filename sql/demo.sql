@@ -114,6 +114,8 @@ SELECT emotion AS style, group_concat(label || ' ' || n, ', ') AS recognized_as
   FROM (SELECT emotion, affect_classify(c.model, m.motion) AS label, count(*) AS n
           FROM motions AS m, classifiers AS c
          WHERE m.source <> 'synth' AND m.emotion IN ('proud', 'not-confident', 'tired')
+           AND json_extract(motion_info(m.motion), '$.names')   -- the training skeleton only
+               = (SELECT json_extract(motion_info(motion), '$.names') FROM rec_data LIMIT 1)
          GROUP BY emotion, label ORDER BY emotion, n DESC, label)
  GROUP BY emotion;
 

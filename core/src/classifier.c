@@ -622,8 +622,9 @@ affect_status affect_classifier_eval(const affect_classifier *c, const double *x
         }
         if ((st = represent(c, x, T, f, ll, err)) != AFFECT_OK)
             goto done;
-        for (size_t e = 0; e < c->dim; e++)
-            f[e] = clip((f[e] - c->mean[e]) / c->scale[e], c->cfg.score_clip);
+        if (c->cfg.zscore) /* as fit_normalization: no z-scores, no limit */
+            for (size_t e = 0; e < c->dim; e++)
+                f[e] = clip((f[e] - c->mean[e]) / c->scale[e], c->cfg.score_clip);
         out->svm = affect_svm_predict(c->svm, f, out->decision);
         uint32_t p = affect_spca_dims(c->spca);
         double zbuf[64], *z = out->embed ? out->embed : zbuf;
