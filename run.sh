@@ -9,8 +9,11 @@
 #                             corpus (skipped when absent), a sanitizer build, and the fuzzers
 #
 # Works on a fresh Debian 12 machine as root (or with sudo). Set AFFECT_FUZZ_SECONDS to change
-# the time each fuzz target runs (default 20).
+# the time each fuzz target runs (default 20). OpenBLAS runs single-threaded unless
+# OPENBLAS_NUM_THREADS is set: at this project's matrix sizes its threads cost more than they
+# give (the corpus evaluation runs 2-3 times slower with them on this 2-core machine).
 set -euo pipefail
+export OPENBLAS_NUM_THREADS="${OPENBLAS_NUM_THREADS:-1}"
 cd "$(dirname "$0")"
 ROOT=$(pwd)
 
