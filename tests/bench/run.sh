@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # tests/bench/run.sh — build the benchmarks in Release and run them on one core.
 #
-# Usage: bash tests/bench/run.sh [extra arguments for the corpus benchmarks, bench_import and
-#                                   bench_laban, e.g. a corpus directory]
+# Usage: bash tests/bench/run.sh [extra arguments for the corpus benchmarks, bench_import,
+#                                   bench_laban and bench_affect, e.g. a corpus directory]
 #
 # Configures build-bench (-DCMAKE_BUILD_TYPE=Release -DAFFECT_WERROR=ON; AFFECT_BENCH_BUILD names
 # another build directory), builds the bench targets, prints the machine (CPU, memory, OS,
@@ -10,7 +10,9 @@
 # bench_import and bench_laban (corpus), then bench_knn (the built module, no arguments), then
 # bench_hmm with OPENBLAS_NUM_THREADS=1, which writes its data and models to
 # $build/tests/bench/hmm-data, and its pomegranate peer tests/bench/hmm_peer.py on those files,
-# when /usr/bin/python3 can import pomegranate (otherwise it says the peer was skipped).
+# when /usr/bin/python3 can import pomegranate (otherwise it says the peer was skipped), then
+# bench_affect (corpus; the recognizer and its 10-fold cross-validation, a few minutes) with
+# OPENBLAS_NUM_THREADS=1.
 # AFFECT_BENCH_ONLY="bench_hmm ..." runs only the benchmarks it names (default: all).
 # Record the output in docs/BENCHMARKS.md.
 set -euo pipefail
@@ -71,5 +73,12 @@ if want bench_hmm; then
         echo "hmm_peer: skipped: /usr/bin/python3 cannot import pomegranate" \
              "(apt-get install python3-pomegranate)"
     fi
+    echo
+fi
+
+# The recognizer on the corpus, single-threaded OpenBLAS like the HMM engine's benchmark.
+if want bench_affect; then
+    echo "== bench_affect"
+    OPENBLAS_NUM_THREADS=1 "${pin[@]}" "$build/tests/bench/bench_affect" "$@"
     echo
 fi
