@@ -742,7 +742,7 @@ void ax_affect_info(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 static const char *const cv_keys[] = {
     AX_SEQS_KEYS, "groups",     "score_normalization", "score_clip", "svm_c",   "svm_folds",
     "spca_dims",  "spca_kernel", "spca_sigma",          "knn_k",      "grid",    "folds",
-    "group",      "methods",     "verbose",             NULL};
+    "group",      "methods",     "verbose",             "threads",    NULL};
 
 typedef struct cv_state {
     cls_train t;    /* first (freed through cls_train_free) */
@@ -750,6 +750,7 @@ typedef struct cv_state {
     uint32_t folds;
     unsigned methods; /* bit m = AFFECT_CV_* */
     bool verbose;
+    uint32_t threads;
 } cv_state;
 
 static void cv_state_free(cv_state *s)
@@ -767,9 +768,20 @@ static ax_arg read_cv_options(sqlite3_context *ctx, const ax_opts *opts, cv_stat
     static const char *const names[] = {"ml", "svm", "knn"};
     s->folds = 10;
     s->methods = 7;
+    s->threads = 1;
     if (ax_opt_u32(ctx, opts, "folds", &s->folds) ||
-        ax_opt_bool(ctx, opts, "verbose", &s->verbose))
+        ax_opt_bool(ctx, opts, "verbose", &s->verbose) ||
+        ax_opt_u32(ctx, opts, "threads", &s->threads))
         return AX_ERROR;
+    if (s->threads < 1 || s->threads > 64) {
+        ax_errorf(ctx, "option \"threads\" must be from 1 to 64, got %u", s->threads);
+        return AX_ERROR;
+    }
+    if (s->threads > 1 && !sqlite3_threadsafe()) {
+        ax_errorf(ctx, "option \"threads\" needs SQLite built thread-safe (this one is "
+                       "SQLITE_THREADSAFE=0)");
+        return AX_ERROR;
+    }
     if (s->folds < 2 || s->folds > 1024) {
         ax_errorf(ctx, "option \"folds\" must be from 2 to 1024, got %u", s->folds);
         return AX_ERROR;
@@ -1003,6 +1015,7 @@ static void cv_final(sqlite3_context *ctx, cv_state *s)
     cfg.cls = s->t.cfg;
     cfg.folds = s->folds;
     cfg.seed = s->t.s.cfg.seed;
+    cfg.threads = s->threads;
     if (s->verbose)
         cfg.progress = cv_progress;
     if (affect_crossval(&cfg, s->t.s.feat, s->t.s.seqs, y, n, (const char *const *)classes,

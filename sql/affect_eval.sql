@@ -14,8 +14,8 @@
 -- with the largest log-likelihood). Cells: mean ± sample sd of the per-fold accuracies, then
 -- the pooled accuracy (correct / all motions). Configurations are listed in `configs`; the last
 -- one chooses sPCA dims, RBF σ and k by nested 5-fold cross-validation inside each training
--- fold. About 2 minutes with OPENBLAS_NUM_THREADS=1 (OpenBLAS's threads only add overhead at
--- these sizes).
+-- fold. Folds run two at a time ("threads": 2; the results do not depend on it): about 35 s
+-- on the 2-core machine with OPENBLAS_NUM_THREADS=1 (OpenBLAS's own threads only compete).
 .headers off
 .mode list
 
@@ -46,11 +46,12 @@ DROP TABLE IF EXISTS temp.results;
 CREATE TEMP TABLE results AS
 SELECT c.k, c.name, '10-fold' AS protocol, r.*
   FROM configs AS c, affect_crossval('eval_data', 'motion', 'emotion',
-                                     json_set(c.options, '$.folds', 10)) AS r
+                                     json_set(c.options, '$.folds', 10, '$.threads', 2)) AS r
 UNION ALL
 SELECT c.k, c.name, 'LOCO', r.*
   FROM configs AS c, affect_crossval('eval_data', 'motion', 'emotion',
-                                     json_set(c.options, '$.group', 'content')) AS r;
+                                     json_set(c.options, '$.group', 'content', '$.threads', 2))
+       AS r;
 
 SELECT '| configuration | protocol | HMM + ML | Fisher + SVM | Fisher + sPCA + kNN |';
 SELECT '|---|---|---:|---:|---:|';
@@ -99,12 +100,13 @@ DROP TABLE IF EXISTS temp.results7;
 CREATE TEMP TABLE results7 AS
 SELECT '10-fold' AS protocol, r.*
   FROM affect_crossval('eval_data7', 'motion', 'emotion',
-                       json_set((SELECT options FROM configs WHERE k = 1), '$.folds', 10)) AS r
+                       json_set((SELECT options FROM configs WHERE k = 1), '$.folds', 10,
+                                '$.threads', 2)) AS r
 UNION ALL
 SELECT 'LOCO', r.*
   FROM affect_crossval('eval_data7', 'motion', 'emotion',
                        json_set((SELECT options FROM configs WHERE k = 1), '$.group',
-                                'content')) AS r;
+                                'content', '$.threads', 2)) AS r;
 SELECT '';
 SELECT 'Seven styles (angry, happy, sad, normal, proud, not-confident, tired; 77 motions; chance 14 %), '
        || (SELECT name FROM configs WHERE k = 1) || ':';

@@ -24,6 +24,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
+#include <threads.h>
 
 #define MAX_FOLDS 1024u
 
@@ -33,6 +34,7 @@ void affect_cv_config_default(affect_cv_config *cfg)
     affect_classifier_config_default(&cfg->cls);
     cfg->folds = 10;
     cfg->seed = 1;
+    cfg->threads = 1;
 }
 
 void affect_cv_result_free(affect_cv_result *r)
@@ -114,12 +116,30 @@ static void progress(const affect_cv_config *cfg, const affect_cv_fold *f, uint3
     cfg->progress(cfg->progress_ctx, line);
 }
 
+/* What every fold reads (shared, read-only while folds run). */
+typedef struct run_ctx {
+    const affect_cv_config *cfg;
+    const affect_features *feat;
+    const affect_hmm_seq *seqs;
+    const uint32_t *y;
+    uint32_t n;
+    const char *const *labels;
+    uint32_t C;
+    const uint32_t *fold_of;
+    uint32_t k;
+    affect_cv_result *r;
+} run_ctx;
+
 /* Trains on the motions outside fold `fold` and scores the ones in it into f. */
-static affect_status run_fold(const affect_cv_config *cfg, const affect_features *feat,
-                              const affect_hmm_seq *seqs, const uint32_t *y, uint32_t n,
-                              const char *const *labels, uint32_t C, const uint32_t *fold_of,
-                              uint32_t fold, fold_ws *w, affect_cv_fold *f, affect_error *err)
+static affect_status run_fold(const run_ctx *rc, uint32_t fold, fold_ws *w, affect_cv_fold *f,
+                              affect_error *err)
 {
+    const affect_cv_config *cfg = rc->cfg;
+    const affect_features *feat = rc->feat;
+    const affect_hmm_seq *seqs = rc->seqs;
+    const uint32_t *y = rc->y, *fold_of = rc->fold_of;
+    const char *const *labels = rc->labels;
+    uint32_t n = rc->n, C = rc->C;
     uint32_t n_tr = 0, present = 0;
     for (uint32_t k = 0; k < C; k++)
         w->map[k] = UINT32_MAX;
@@ -187,6 +207,115 @@ static affect_status run_fold(const affect_cv_config *cfg, const affect_features
     return AFFECT_OK;
 }
 
+static void fold_ws_free(fold_ws *w)
+{
+    affect_free(w->seqs);
+    affect_free(w->y);
+    affect_free(w->map);
+    affect_free(w->back);
+    affect_free(w->labels);
+}
+
+static bool fold_ws_alloc(fold_ws *w, uint32_t n, uint32_t n_classes)
+{
+    w->seqs = affect_malloc_array(n ? n : 1, sizeof *w->seqs);
+    w->y = affect_malloc_array(n ? n : 1, sizeof *w->y);
+    w->map = affect_malloc_array(n_classes, sizeof *w->map);
+    w->back = affect_malloc_array(n_classes, sizeof *w->back);
+    w->labels = affect_malloc_array(n_classes, sizeof *w->labels);
+    return w->seqs && w->y && w->map && w->back && w->labels;
+}
+
+/* The parallel run: workers take the folds in order from a shared counter; each fold's
+ * result lands in its own slot, so the output does not depend on the schedule. */
+typedef struct worker {
+    const run_ctx *rc;
+    mtx_t *lock;
+    uint32_t *next;       /* the next fold to take (under lock) */
+    bool *stop;           /* set (under lock) by the first failure */
+    affect_status *status; /* per fold */
+    affect_error *errs;    /* per fold */
+    fold_ws w;
+} worker;
+
+static int worker_main(void *arg)
+{
+    worker *wk = arg;
+    const run_ctx *rc = wk->rc;
+    for (;;) {
+        mtx_lock(wk->lock);
+        uint32_t i = *wk->stop ? rc->r->n_folds : (*wk->next)++;
+        mtx_unlock(wk->lock);
+        if (i >= rc->r->n_folds)
+            return 0;
+        affect_cv_fold *f = &rc->r->folds[i];
+        wk->status[i] = run_fold(rc, f->fold, &wk->w, f, &wk->errs[i]);
+        mtx_lock(wk->lock);
+        if (wk->status[i] != AFFECT_OK)
+            *wk->stop = true;
+        else
+            progress(rc->cfg, f, rc->k); /* one line at a time, in completion order */
+        mtx_unlock(wk->lock);
+    }
+}
+
+static affect_status run_parallel(const run_ctx *rc, affect_error *err)
+{
+    uint32_t nf = rc->r->n_folds, T = rc->cfg->threads < nf ? rc->cfg->threads : nf;
+    worker *wk = affect_calloc(T, sizeof *wk);
+    thrd_t *th = affect_calloc(T, sizeof *th);
+    affect_status *status = affect_calloc(nf, sizeof *status);
+    affect_error *errs = affect_calloc(nf, sizeof *errs);
+    affect_status st = AFFECT_OK;
+    mtx_t lock;
+    uint32_t next = 0, started = 0;
+    bool stop = false, have_lock = false;
+    if (!wk || !th || !status || !errs) {
+        st = affect_nomem(err);
+        goto done;
+    }
+    for (uint32_t t = 0; t < T; t++)
+        if (!fold_ws_alloc(&wk[t].w, rc->n, rc->C)) {
+            st = affect_nomem(err);
+            goto done;
+        }
+    if (mtx_init(&lock, mtx_plain) != thrd_success) {
+        st = affect_fail(err, AFFECT_ERR_RANGE, "cannot create a lock for the worker threads");
+        goto done;
+    }
+    have_lock = true;
+    for (uint32_t t = 0; t < T; t++) {
+        wk[t] = (worker){rc, &lock, &next, &stop, status, errs, wk[t].w};
+        if (thrd_create(&th[t], worker_main, &wk[t]) != thrd_success)
+            break;
+        started++;
+    }
+    if (started == 0) { /* no thread at all: run here */
+        worker_main(&wk[0]);
+    } else {
+        for (uint32_t t = 0; t < started; t++)
+            thrd_join(th[t], NULL);
+    }
+    for (uint32_t i = 0; i < nf; i++) /* the first failure in fold order */
+        if (status[i] != AFFECT_OK) {
+            *err = errs[i];
+            st = status[i];
+            break;
+        }
+    if (st == AFFECT_OK && next < nf && !stop) /* some threads failed to start: finish here */
+        worker_main(&wk[0]);
+done:
+    if (have_lock)
+        mtx_destroy(&lock);
+    for (uint32_t t = 0; wk && t < T; t++)
+        fold_ws_free(&wk[t].w);
+    affect_free(wk);
+    affect_free(th);
+    affect_free(status);
+    affect_free(errs);
+    return st;
+}
+
 static void summarize(affect_cv_result *r)
 {
     uint32_t C = r->n_classes;
@@ -218,6 +347,9 @@ affect_status affect_crossval(const affect_cv_config *cfg, const affect_features
     if (n_classes < 2 || n_classes > AFFECT_CLASSIFIER_MAX_CLASSES)
         return affect_fail(err, AFFECT_ERR_INVALID, "need 2 to %u classes, got %u",
                            AFFECT_CLASSIFIER_MAX_CLASSES, n_classes);
+    if (cfg->threads < 1 || cfg->threads > 64)
+        return affect_fail(err, AFFECT_ERR_INVALID, "threads must be from 1 to 64, got %u",
+                           cfg->threads);
     if (!group && cfg->folds < 2)
         return affect_fail(err, AFFECT_ERR_INVALID, "folds must be at least 2");
     if (group && n_groups > MAX_FOLDS)
@@ -233,13 +365,8 @@ affect_status affect_crossval(const affect_cv_config *cfg, const affect_features
     uint32_t *fold_of = affect_malloc_array(n ? n : 1, sizeof *fold_of);
     affect_cv_result *r = affect_calloc(1, sizeof *r);
     fold_ws w = {0};
-    w.seqs = affect_malloc_array(n ? n : 1, sizeof *w.seqs);
-    w.y = affect_malloc_array(n ? n : 1, sizeof *w.y);
-    w.map = affect_malloc_array(n_classes, sizeof *w.map);
-    w.back = affect_malloc_array(n_classes, sizeof *w.back);
-    w.labels = affect_malloc_array(n_classes, sizeof *w.labels);
     affect_status st = AFFECT_OK;
-    if (!fold_of || !r || !w.seqs || !w.y || !w.map || !w.back || !w.labels) {
+    if (!fold_ws_alloc(&w, n, n_classes) || !fold_of || !r) {
         st = affect_nomem(err);
         goto done;
     }
@@ -277,19 +404,21 @@ affect_status affect_crossval(const affect_cv_config *cfg, const affect_features
                 goto done;
             }
         }
-        if ((st = run_fold(cfg, feat, seqs, y, n, labels, n_classes, fold_of, fold, &w, f,
-                           err)))
-            goto done;
-        progress(cfg, f, k);
     }
+    run_ctx rc = {cfg, feat, seqs, y, n, labels, n_classes, fold_of, k, r};
+    if (cfg->threads > 1 && r->n_folds > 1) {
+        st = run_parallel(&rc, err);
+    } else {
+        for (uint32_t i = 0; i < r->n_folds && st == AFFECT_OK; i++)
+            if ((st = run_fold(&rc, r->folds[i].fold, &w, &r->folds[i], err)) == AFFECT_OK)
+                progress(cfg, &r->folds[i], k);
+    }
+    if (st)
+        goto done;
     summarize(r);
 done:
     affect_free(fold_of);
-    affect_free(w.seqs);
-    affect_free(w.y);
-    affect_free(w.map);
-    affect_free(w.back);
-    affect_free(w.labels);
+    fold_ws_free(&w);
     if (st) {
         affect_cv_result_free(r);
         return st;

@@ -36,6 +36,7 @@
 #include <inttypes.h>
 #include <math.h>
 #include <string.h>
+#include <threads.h>
 #include <svm.h>
 
 #include "affect/rng.h"
@@ -73,6 +74,13 @@ static size_t n_pairs(uint32_t c)
 static void quiet(const char *s)
 {
     (void)s;
+}
+
+static once_flag quiet_once = ONCE_FLAG_INIT;
+
+static void install_quiet(void)
+{
+    svm_set_print_string_function(quiet);
 }
 
 void affect_svm_free(affect_svm *m)
@@ -270,7 +278,7 @@ static affect_status fit(const problem *p, double C, struct svm_model **out, aff
     const char *msg = svm_check_parameter(&p->prob, &param);
     if (msg)
         return affect_fail(err, AFFECT_ERR_INVALID, "libsvm rejected the parameters: %s", msg);
-    svm_set_print_string_function(quiet);
+    call_once(&quiet_once, install_quiet); /* once per process: no concurrent writes */
     *out = svm_train(&p->prob, &param);
     if (!*out)
         return affect_nomem(err);

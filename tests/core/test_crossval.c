@@ -260,6 +260,49 @@ static void collect(void *ctx, const char *line)
     strcpy(l->text[l->n++], line);
 }
 
+/* ---- threads ---- */
+
+static void test_threads(void **state)
+{
+    dataset *d = *state;
+    affect_cv_config cfg;
+    cv_config(&cfg, d->feat);
+    cfg.folds = 4;
+    cfg.seed = 5;
+    lines progress = {0};
+    cfg.progress = collect;
+    cfg.progress_ctx = &progress;
+    affect_cv_result *one = run_ok(&cfg, d->feat, d->seqs, d->y, d->n, EMOTIONS, N_EMOTIONS,
+                                   NULL, 0);
+    for (uint32_t t = 2; t <= 5; t += 3) { /* 2 threads, and more threads than folds */
+        cfg.threads = t;
+        progress.n = 0;
+        affect_cv_result *many = run_ok(&cfg, d->feat, d->seqs, d->y, d->n, EMOTIONS,
+                                        N_EMOTIONS, NULL, 0);
+        assert_true(same_results(one, many));
+        assert_int_equal(progress.n, 4); /* one line per fold, in completion order */
+        affect_cv_result_free(many);
+    }
+    affect_cv_result_free(one);
+    cfg.threads = 0;
+    run_fails(&cfg, d->feat, d->seqs, d->y, d->n, EMOTIONS, N_EMOTIONS, NULL, 0,
+              "threads must be from 1 to 64, got 0");
+    /* an error in one fold stops them all: group 1 holds every class but 0, so its training
+     * motions have one class */
+    uint32_t group[N_MOTIONS];
+    for (uint32_t i = 0; i < d->n; i++)
+        group[i] = d->y[i] == 0 ? 0 : 1;
+    cfg.threads = 2;
+    cfg.progress = NULL;
+    affect_cv_result *r = (affect_cv_result *)d;
+    affect_error err;
+    assert_int_equal(affect_crossval(&cfg, d->feat, d->seqs, d->y, d->n, EMOTIONS, N_EMOTIONS,
+                                     group, 2, &r, &err),
+                     AFFECT_ERR_INVALID);
+    assert_string_equal(err.msg, "fold 2: the training motions have fewer than 2 classes");
+    assert_null(r);
+}
+
 /* ---- the fixture ---- */
 
 static int setup(void **state)
@@ -714,6 +757,7 @@ int main(void)
         cmocka_unit_test(test_stratified_folds), cmocka_unit_test(test_kfold),
         cmocka_unit_test(test_no_leakage),       cmocka_unit_test(test_leave_one_group_out),
         cmocka_unit_test(test_errors),           cmocka_unit_test(test_small_and_out_of_memory),
+        cmocka_unit_test(test_threads),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

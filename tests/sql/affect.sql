@@ -322,6 +322,7 @@ SELECT * FROM affect_salience();
 CREATE TABLE cv AS SELECT * FROM affect_crossval('cvs', 'm', 'emotion', '{"states":2,"mixtures":1,"joints":["head"],"max_iter":2,"svm_c":0.01,"folds":4,"seed":3}');
 CREATE TABLE cv_again AS SELECT * FROM affect_crossval('cvs', 'm', 'emotion', '{"states":2,"mixtures":1,"joints":["head"],"max_iter":2,"svm_c":0.01,"folds":4,"seed":3}');
 CREATE TABLE cv_seed4 AS SELECT * FROM affect_crossval('cvs', 'm', 'emotion', '{"states":2,"mixtures":1,"joints":["head"],"max_iter":2,"svm_c":0.01,"folds":4,"seed":4}');
+CREATE TABLE cv_threads AS SELECT * FROM affect_crossval('cvs', 'm', 'emotion', '{"states":2,"mixtures":1,"joints":["head"],"max_iter":2,"svm_c":0.01,"folds":4,"seed":3,"threads":2}');
 
 SELECT 'affect_crossval: 3 methods × (4 folds + a summary)', count(*) = 15
    AND sum(fold IS NULL) = 3 AND group_concat(DISTINCT method) = 'ml,svm,knn'
@@ -331,6 +332,13 @@ SELECT 'the same seed gives the same rows, another seed other folds',
        (SELECT count(*) FROM (SELECT * FROM cv EXCEPT SELECT * FROM cv_again)) = 0
    AND (SELECT count(*) FROM cv_again) = 15
    AND (SELECT count(*) FROM (SELECT * FROM cv EXCEPT SELECT * FROM cv_seed4)) > 0;
+
+SELECT 'two threads give the same rows as one',
+       (SELECT count(*) FROM (SELECT * FROM cv EXCEPT SELECT * FROM cv_threads)) = 0
+   AND (SELECT count(*) FROM cv_threads) = 15;
+
+SELECT * FROM affect_crossval('cvs', 'm', 'emotion', '{"threads":0}');
+-- error: affect_crossval: affect_crossval_json: option "threads" must be from 1 to 64, got 0
 
 SELECT 'fold rows: 8 held out (2 per emotion), 24 training; accuracy from the confusion matrix: ' || method || ' ' || fold,
        n_test = 8 AND n_train = 24 AND held_out IS NULL AND fold BETWEEN 1 AND 4
@@ -608,7 +616,7 @@ SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"group":1}');
 -- error: affect_crossval: affect_crossval_json: option "group" must be a column name
 
 SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"fold":3}');
--- error: affect_crossval: affect_crossval_json: unknown option "fold" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, max_iter, tol, reg, seed, groups, score_normalization, score_clip, svm_c, svm_folds, spca_dims, spca_kernel, spca_sigma, knn_k, grid, folds, group, methods, verbose)
+-- error: affect_crossval: affect_crossval_json: unknown option "fold" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, max_iter, tol, reg, seed, groups, score_normalization, score_clip, svm_c, svm_folds, spca_dims, spca_kernel, spca_sigma, knn_k, grid, folds, group, methods, verbose, threads)
 
 SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"knn_k":0}');
 -- error: affect_crossval: affect_crossval_json: knn_k must be at least 1

@@ -19,7 +19,14 @@
  * sample standard deviation (n − 1) of each metric over the folds, the pooled confusion matrix
  * and the pooled accuracy (correct / all motions).
  *
- * progress (may be NULL) receives one line per fold ("fold 3/10: 40 training, 4 held out,
+ * Threads: with threads > 1, that many C11 threads take the folds in turn (the folds are
+ * independent; each result goes to its own slot and every fold computes exactly what it
+ * computes alone, so the result is the same bytes whatever the thread count). The allocator
+ * installed with affect_set_allocator and the BLAS must then be thread-safe (SQLite's and
+ * OpenBLAS's are); libsvm's print function is set once per process (affect/svm.h).
+ *
+ * progress (may be NULL) receives one line per fold (with threads: in completion order, one
+ * call at a time) ("fold 3/10: 40 training, 4 held out,
  * svm 0.75, knn 0.75, ml 0.5").
  */
 #ifndef AFFECT_CROSSVAL_H
@@ -37,6 +44,7 @@ typedef struct affect_cv_config {
     affect_classifier_config cls;
     uint32_t folds; /* k of the stratified k-fold (default 10; ignored with groups) */
     uint64_t seed;  /* fold assignment (default 1) */
+    uint32_t threads; /* folds run at once, each in its own thread (default 1, at most 64) */
     void (*progress)(void *ctx, const char *line);
     void *progress_ctx;
 } affect_cv_config;

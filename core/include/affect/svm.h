@@ -25,11 +25,12 @@
  * inside libsvm aborts the process rather than returning AFFECT_ERR_NOMEM. libsvm's memory is
  * freed before each function returns.
  *
- * Thread safety: a trained model is read-only and may be shared. Training installs a silent
- * print function in libsvm (svm_set_print_string_function) before every svm_train; it is
- * libsvm's only process-wide setting, and every call installs the same function, so the
- * setting is idempotent (concurrent trainings store the same pointer). A program that gives
- * libsvm its own print function elsewhere will find it replaced.
+ * Thread safety: a trained model is read-only and may be shared, and trainings may run
+ * concurrently. The first training installs a silent print function in libsvm
+ * (svm_set_print_string_function, libsvm's only process-wide setting) exactly once per process
+ * (C11 call_once), so concurrent trainings never write it. A program that gives libsvm its own
+ * print function before that will find it replaced; one that does so afterwards keeps its own
+ * (and libsvm's training messages).
  */
 #ifndef AFFECT_SVM_H
 #define AFFECT_SVM_H
