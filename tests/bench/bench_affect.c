@@ -44,6 +44,8 @@
  *     with the fastest and slowest; training one call per run, the passes calibrated so that a
  *     run takes about a second (or --repeat).
  *  2. affect_crossval (stratified 10-fold, seed 7) on the 44 motions, --cv-runs times (3;
+ *     --threads N runs N folds at once; --cv-only measures this alone, as run.sh does a second
+ *     time, unpinned, with --threads 2;
  *     no warm-up: a run trains 10 classifiers), median, fastest and slowest wall time against
  *     the goal of CV_GOAL_SECONDS, each run's CPU time next to it (CLOCK_PROCESS_CPUTIME_ID:
  *     less than the wall time when another process shared the core); the accuracies it
@@ -544,9 +546,10 @@ typedef struct cv_summary {
     double mean_acc[AFFECT_CV_METHODS], pooled_acc[AFFECT_CV_METHODS];
 } cv_summary;
 
-static int bench_crossval(const dataset *d, uint32_t runs, cv_summary *s)
+static int bench_crossval(const dataset *d, uint32_t runs, uint32_t threads, cv_summary *s)
 {
-    printf("== 2. affect_crossval: stratified %u-fold, seed %u, %u runs\n", CV_FOLDS, SEED, runs);
+    printf("== 2. affect_crossval: stratified %u-fold, seed %u, %u runs, %u thread%s\n", CV_FOLDS,
+           SEED, runs, threads, threads == 1 ? "" : "s (folds in parallel)");
     double t[MAX_RUNS], cpu[MAX_RUNS], folds[MAX_RUNS][CV_FOLDS];
     affect_cv_result *res[MAX_RUNS] = {0};
     int rc = 1;
@@ -556,6 +559,7 @@ static int bench_crossval(const dataset *d, uint32_t runs, cv_summary *s)
         cfg.cls = d->cfg;
         cfg.folds = CV_FOLDS;
         cfg.seed = SEED;
+        cfg.threads = threads;
         double at[CV_FOLDS];
         cv_clock clk = {.at = at};
         cfg.progress = cv_progress;
@@ -1052,7 +1056,8 @@ static int parse_count(const char *flag, const char *v, uint32_t max, uint32_t *
 int main(int argc, char **argv)
 {
     const char *dir = AFFECT_BENCH_CORPUS;
-    uint32_t cv_runs = CV_RUNS, fold_runs = FOLD_RUNS, fold = 0, repeat = 0;
+    uint32_t cv_runs = CV_RUNS, fold_runs = FOLD_RUNS, fold = 0, repeat = 0, threads = 1;
+    bool cv_only = false;
     for (int i = 1; i < argc; i++) {
         if (strcmp(argv[i], "--repeat") == 0 && i + 1 < argc) {
             if (parse_count("--repeat", argv[++i], MAX_REPEAT, &repeat))
@@ -1066,10 +1071,15 @@ int main(int argc, char **argv)
         } else if (strcmp(argv[i], "--fold") == 0 && i + 1 < argc) {
             if (parse_count("--fold", argv[++i], CV_FOLDS, &fold))
                 return 2;
+        } else if (strcmp(argv[i], "--threads") == 0 && i + 1 < argc) {
+            if (parse_count("--threads", argv[++i], 64, &threads))
+                return 2;
+        } else if (strcmp(argv[i], "--cv-only") == 0) {
+            cv_only = true;
         } else if (argv[i][0] == '-') {
             fprintf(stderr,
                     "usage: %s [corpus directory] [--repeat N] [--cv-runs N] "
-                    "[--fold-runs N] [--fold K]\n",
+                    "[--fold-runs N] [--fold K] [--threads N] [--cv-only]\n",
                     argv[0]);
             return 2;
         } else {
@@ -1087,10 +1097,11 @@ int main(int argc, char **argv)
     if (lc || prepare(&d))
         goto done;
 
-    int threads = openblas_get_num_threads();
+    int blas_threads = openblas_get_num_threads();
     print_load("at start");
-    printf("openblas: %s; %d thread%s%s\n", openblas_get_config(), threads, threads == 1 ? "" : "s",
-           threads == 1 ? "" : " (WARNING: set OPENBLAS_NUM_THREADS=1 for single-core numbers)");
+    printf("openblas: %s; %d thread%s%s\n", openblas_get_config(), blas_threads,
+           blas_threads == 1 ? "" : "s",
+           blas_threads == 1 ? "" : " (WARNING: set OPENBLAS_NUM_THREADS=1 for single-core numbers)");
     size_t part = affect_fisher_dim(&d.cfg.hmm, d.cfg.groups);
     printf("data set: %s\n  %u motions (angry, happy, normal, sad: 11 each), %llu frames at %g "
            "fps, %u joints -> %u dimensions (unit %s, no velocity)\n",
@@ -1101,12 +1112,20 @@ int main(int argc, char **argv)
            N_STATES, N_MIX, SEED, part, part * N_CLASSES);
     fflush(stdout);
 
+    cv_summary cs = {0};
+    if (cv_only) { /* the cross-validation alone (run.sh: unpinned, with --threads 2) */
+        if (bench_crossval(&d, cv_runs, threads, &cs))
+            goto done;
+        printf("BENCH affect_crossval_10fold_threads%u %.2f s\n", threads, cs.median);
+        printf("BENCH affect_crossval_10fold_threads%u_cpu %.2f s\n", threads, cs.cpu);
+        rc = 0;
+        goto done;
+    }
     thr_result tr;
     if (bench_throughput(&d, repeat, &tr))
         goto done;
     fflush(stdout);
-    cv_summary cs = {0};
-    if (bench_crossval(&d, cv_runs, &cs))
+    if (bench_crossval(&d, cv_runs, threads, &cs))
         goto done;
     fflush(stdout);
     uint32_t f0 = fold ? fold - 1 : cs.typical;

@@ -12,7 +12,7 @@
 # $build/tests/bench/hmm-data, and its pomegranate peer tests/bench/hmm_peer.py on those files,
 # when /usr/bin/python3 can import pomegranate (otherwise it says the peer was skipped), then
 # bench_affect (corpus; the recognizer and its 10-fold cross-validation, a few minutes) with
-# OPENBLAS_NUM_THREADS=1.
+# OPENBLAS_NUM_THREADS=1, then its cross-validation again with two threads, unpinned.
 # AFFECT_BENCH_ONLY="bench_hmm ..." runs only the benchmarks it names (default: all).
 # Record the output in docs/BENCHMARKS.md.
 set -euo pipefail
@@ -80,5 +80,8 @@ fi
 if want bench_affect; then
     echo "== bench_affect"
     OPENBLAS_NUM_THREADS=1 "${pin[@]}" "$build/tests/bench/bench_affect" "$@"
+    echo
+    echo "== bench_affect --cv-only --threads 2 (unpinned: both cores)"
+    OPENBLAS_NUM_THREADS=1 "$build/tests/bench/bench_affect" --cv-only --threads 2 "$@"
     echo
 fi
