@@ -34,6 +34,7 @@
  * the same model and sequence give bit-identical scores (for a given BLAS thread count).
  */
 #include "affect/fisher.h"
+#include "internal.h"
 
 #include <cblas.h>
 #include <lapacke.h>
@@ -173,34 +174,7 @@ affect_status affect_fisher_describe(const affect_hmm_config *cfg, unsigned grou
 }
 
 /* ------------------------------------------------------------------------------------------ */
-/* the workspace: one allocation                                                             */
-
-typedef struct ws_part {
-    double **slot;
-    size_t count; /* doubles */
-} ws_part;
-
-/* One block holding every part (each 64-byte aligned within it); NULL on overflow or failure. */
-static void *ws_alloc(const ws_part *parts, size_t n)
-{
-    size_t total = 0;
-    for (size_t i = 0; i < n; i++) {
-        size_t bytes;
-        if (!affect_mul_size(parts[i].count, sizeof(double), &bytes) ||
-            !affect_add_size(bytes, 63, &bytes) ||
-            !affect_add_size(total, bytes & ~(size_t)63, &total))
-            return NULL;
-    }
-    char *block = affect_malloc(total);
-    if (!block)
-        return NULL;
-    size_t off = 0;
-    for (size_t i = 0; i < n; i++) {
-        *parts[i].slot = (double *)(void *)(block + off);
-        off += (parts[i].count * sizeof(double) + 63) & ~(size_t)63;
-    }
-    return block;
-}
+/* the workspace: one allocation (affect_ws_alloc, internal.h)                               */
 
 typedef struct fisher_ws {
     const affect_hmm *h;
@@ -356,17 +330,17 @@ affect_status affect_fisher_score(const affect_hmm *h, const double *x, uint32_t
     if (w.block > n_frames)
         w.block = n_frames;
     size_t mm = m * m; /* m ≤ 4096 */
-    ws_part parts[] = {
-        {&w.gamma, TK},
-        {&w.xi, N * N},
-        {&w.n, K},
-        {&w.s, dens ? m : 0},
-        {&w.S, want_S ? (full ? mm : m) : 0},
-        {&w.P, dens && full ? mm : 0},
-        {&w.Y, want_S && full ? mm : 0},
-        {&w.rows, want_S && full ? w.block * m : 0},
+    affect_ws_part parts[] = {
+        {(void **)&w.gamma, TK, sizeof(double)},
+        {(void **)&w.xi, N * N, sizeof(double)},
+        {(void **)&w.n, K, sizeof(double)},
+        {(void **)&w.s, dens ? m : 0, sizeof(double)},
+        {(void **)&w.S, want_S ? (full ? mm : m) : 0, sizeof(double)},
+        {(void **)&w.P, dens && full ? mm : 0, sizeof(double)},
+        {(void **)&w.Y, want_S && full ? mm : 0, sizeof(double)},
+        {(void **)&w.rows, want_S && full ? w.block * m : 0, sizeof(double)},
     };
-    void *ws = ws_alloc(parts, sizeof parts / sizeof parts[0]);
+    void *ws = affect_ws_alloc(parts, sizeof parts / sizeof parts[0]);
     if (!ws)
         return affect_nomem(err);
     double L;

@@ -82,6 +82,7 @@
 #include <string.h>
 
 #include "affect/rng.h"
+#include "internal.h"
 
 #define LOG_2PI 1.83787706640934548356
 #define BLOCK_FRAMES 1024u    /* frames per density / scatter block, at most */
@@ -211,36 +212,6 @@ static uint32_t block_frames(const affect_hmm_config *cfg)
 /* ------------------------------------------------------------------------------------------ */
 /* one-allocation workspaces                                                                  */
 
-typedef struct ws_part {
-    void **slot;
-    size_t count;
-    size_t elem;
-} ws_part;
-
-/* Allocates one block holding every part (each 64-byte aligned within it) and points the slots
- * into it; NULL on overflow or allocation failure. */
-static void *ws_alloc(const ws_part *parts, size_t n)
-{
-    size_t total = 0;
-    for (size_t i = 0; i < n; i++) {
-        size_t bytes;
-        if (!affect_mul_size(parts[i].count, parts[i].elem, &bytes) ||
-            !affect_add_size(bytes, 63, &bytes))
-            return NULL;
-        bytes &= ~(size_t)63;
-        if (!affect_add_size(total, bytes, &total))
-            return NULL;
-    }
-    char *block = affect_malloc(total);
-    if (!block)
-        return NULL;
-    size_t off = 0;
-    for (size_t i = 0; i < n; i++) {
-        *parts[i].slot = block + off;
-        off += (parts[i].count * parts[i].elem + 63) & ~(size_t)63;
-    }
-    return block;
-}
 
 /* ------------------------------------------------------------------------------------------ */
 /* the model object                                                                           */
@@ -258,7 +229,7 @@ static affect_hmm *model_alloc(const affect_hmm_config *cfg)
     if (!affect_mul_size(k, m, &km) || !affect_mul_size(k, cs, &kc))
         return NULL;
     affect_hmm *h = NULL;
-    ws_part parts[] = {
+    affect_ws_part parts[] = {
         {(void **)&h, 1, sizeof *h},
         {NULL, n, sizeof(double)},                         /* start */
         {NULL, n * n, sizeof(double)},                     /* trans */
@@ -278,7 +249,7 @@ static affect_hmm *model_alloc(const affect_hmm_config *cfg)
     double *p[14];
     for (int i = 0; i < 14; i++)
         parts[i + 1].slot = (void **)&p[i];
-    void *block = ws_alloc(parts, sizeof parts / sizeof parts[0]);
+    void *block = affect_ws_alloc(parts, sizeof parts / sizeof parts[0]);
     if (!block)
         return NULL;
     memset(h, 0, sizeof *h);
@@ -826,11 +797,11 @@ affect_status affect_hmm_loglik(const affect_hmm *h, const double *x, uint32_t n
         return st;
     size_t N = h->cfg.n_states, K = N * h->cfg.n_mix, B = h->block;
     double *cbuf, *dbuf, *lb, *a0, *a1, *p;
-    ws_part parts[] = {
+    affect_ws_part parts[] = {
         {(void **)&cbuf, B * K, sizeof(double)}, {(void **)&dbuf, B * dbuf_width(&h->cfg), sizeof(double)},
         {(void **)&lb, B * N, sizeof(double)},   {(void **)&a0, N, sizeof(double)},
         {(void **)&a1, N, sizeof(double)},       {(void **)&p, N, sizeof(double)}};
-    void *ws = ws_alloc(parts, sizeof parts / sizeof parts[0]);
+    void *ws = affect_ws_alloc(parts, sizeof parts / sizeof parts[0]);
     if (!ws)
         return affect_nomem(err);
     *loglik = forward_loglik(h, x, n_frames, cbuf, dbuf, lb, a0, a1, p);
@@ -852,11 +823,11 @@ affect_status affect_hmm_viterbi(const affect_hmm *h, const double *x, uint32_t 
         return affect_nomem(err);
     double *cbuf, *dbuf, *lb, *d0, *d1;
     uint8_t *bp; /* N ≤ 256: a state fits in a byte */
-    ws_part parts[] = {
+    affect_ws_part parts[] = {
         {(void **)&cbuf, B * K, sizeof(double)}, {(void **)&dbuf, B * dbuf_width(&h->cfg), sizeof(double)},
         {(void **)&lb, B * N, sizeof(double)},   {(void **)&d0, N, sizeof(double)},
         {(void **)&d1, N, sizeof(double)},       {(void **)&bp, TN, 1}};
-    void *ws = ws_alloc(parts, sizeof parts / sizeof parts[0]);
+    void *ws = affect_ws_alloc(parts, sizeof parts / sizeof parts[0]);
     if (!ws)
         return affect_nomem(err);
     for (uint32_t t0 = 0; t0 < n_frames; t0 += h->block) {
@@ -907,16 +878,16 @@ affect_status affect_hmm_viterbi(const affect_hmm *h, const double *x, uint32_t 
 #define FB_PARTS 11 /* the parts fb_parts appends */
 
 /* Points the forward–backward scratch into a workspace (parts appended at *np). */
-static void fb_parts(const affect_hmm *h, size_t T, fb_ws *w, ws_part *parts, size_t *np)
+static void fb_parts(const affect_hmm *h, size_t T, fb_ws *w, affect_ws_part *parts, size_t *np)
 {
     size_t N = h->cfg.n_states, K = N * h->cfg.n_mix, B = h->block, n = *np;
-    parts[n++] = (ws_part){(void **)&w->lb, T * N, sizeof(double)}; /* T·N ≤ T·K */
-    parts[n++] = (ws_part){(void **)&w->alpha, T * N, sizeof(double)};
-    parts[n++] = (ws_part){(void **)&w->cbuf, B * K, sizeof(double)};
-    parts[n++] = (ws_part){(void **)&w->dbuf, B * dbuf_width(&h->cfg), sizeof(double)};
+    parts[n++] = (affect_ws_part){(void **)&w->lb, T * N, sizeof(double)}; /* T·N ≤ T·K */
+    parts[n++] = (affect_ws_part){(void **)&w->alpha, T * N, sizeof(double)};
+    parts[n++] = (affect_ws_part){(void **)&w->cbuf, B * K, sizeof(double)};
+    parts[n++] = (affect_ws_part){(void **)&w->dbuf, B * dbuf_width(&h->cfg), sizeof(double)};
     for (int i = 0; i < 6; i++)
-        parts[n++] = (ws_part){(void **)&w->v[i], N, sizeof(double)};
-    parts[n++] = (ws_part){(void **)&w->vv, N * N, sizeof(double)};
+        parts[n++] = (affect_ws_part){(void **)&w->v[i], N, sizeof(double)};
+    parts[n++] = (affect_ws_part){(void **)&w->vv, N * N, sizeof(double)};
     *np = n;
 }
 
@@ -932,10 +903,10 @@ affect_status affect_hmm_posteriors(const affect_hmm *h, const double *x, uint32
         !affect_mul_size(TK, sizeof(double), &TK))
         return affect_nomem(err);
     fb_ws w;
-    ws_part parts[FB_PARTS];
+    affect_ws_part parts[FB_PARTS];
     size_t np = 0;
     fb_parts(h, n_frames, &w, parts, &np);
-    void *ws = ws_alloc(parts, np);
+    void *ws = affect_ws_alloc(parts, np);
     if (!ws)
         return affect_nomem(err);
     if (xi)
@@ -1665,7 +1636,7 @@ affect_status affect_hmm_train(const affect_hmm_config *cfg, const affect_hmm_se
     size_t N = cfg->n_states, M = cfg->n_mix, m = cfg->dim, K = N * M, F = (size_t)frames;
     size_t km, kc, tk;
     train_ws w;
-    ws_part parts[FB_PARTS + 20];
+    affect_ws_part parts[FB_PARTS + 20];
     size_t np = 0;
     if (!affect_mul_size(K, m, &km) || !affect_mul_size(K, h->cs, &kc) ||
         !affect_mul_size(max_t, K, &tk)) {
@@ -1673,25 +1644,25 @@ affect_status affect_hmm_train(const affect_hmm_config *cfg, const affect_hmm_se
         goto cleanup;
     }
     fb_parts(h, max_t, &w.fb, parts, &np);
-    parts[np++] = (ws_part){(void **)&w.rho, tk, sizeof(double)};
-    parts[np++] = (ws_part){(void **)&w.n, K, sizeof(double)};
-    parts[np++] = (ws_part){(void **)&w.s1, km, sizeof(double)};
-    parts[np++] = (ws_part){(void **)&w.S, kc, sizeof(double)};
-    parts[np++] = (ws_part){(void **)&w.xi, N * N, sizeof(double)};
-    parts[np++] = (ws_part){(void **)&w.g0, N, sizeof(double)};
-    parts[np++] = (ws_part){(void **)&w.tr.w, K, sizeof(worst_frame)};
-    parts[np++] = (ws_part){(void **)&w.tr.count, N, sizeof(uint32_t)};
-    parts[np++] = (ws_part){(void **)&w.fp, F, sizeof(const double *)};
-    parts[np++] = (ws_part){(void **)&w.mp, F, sizeof(const double *)};
-    parts[np++] = (ws_part){(void **)&w.asg, F, sizeof(uint32_t)};
-    parts[np++] = (ws_part){(void **)&w.d2, F, sizeof(double)};
-    parts[np++] = (ws_part){(void **)&w.cen, M * m, sizeof(double)};
-    parts[np++] = (ws_part){(void **)&w.sums, M * m, sizeof(double)};
-    parts[np++] = (ws_part){(void **)&w.cnt, M, sizeof(size_t)};
-    parts[np++] = (ws_part){(void **)&w.frac, M, sizeof(double)};
-    parts[np++] = (ws_part){(void **)&w.mbar, m, sizeof(double)};
-    parts[np++] = (ws_part){(void **)&w.pool, h->cs, sizeof(double)};
-    ws = ws_alloc(parts, np);
+    parts[np++] = (affect_ws_part){(void **)&w.rho, tk, sizeof(double)};
+    parts[np++] = (affect_ws_part){(void **)&w.n, K, sizeof(double)};
+    parts[np++] = (affect_ws_part){(void **)&w.s1, km, sizeof(double)};
+    parts[np++] = (affect_ws_part){(void **)&w.S, kc, sizeof(double)};
+    parts[np++] = (affect_ws_part){(void **)&w.xi, N * N, sizeof(double)};
+    parts[np++] = (affect_ws_part){(void **)&w.g0, N, sizeof(double)};
+    parts[np++] = (affect_ws_part){(void **)&w.tr.w, K, sizeof(worst_frame)};
+    parts[np++] = (affect_ws_part){(void **)&w.tr.count, N, sizeof(uint32_t)};
+    parts[np++] = (affect_ws_part){(void **)&w.fp, F, sizeof(const double *)};
+    parts[np++] = (affect_ws_part){(void **)&w.mp, F, sizeof(const double *)};
+    parts[np++] = (affect_ws_part){(void **)&w.asg, F, sizeof(uint32_t)};
+    parts[np++] = (affect_ws_part){(void **)&w.d2, F, sizeof(double)};
+    parts[np++] = (affect_ws_part){(void **)&w.cen, M * m, sizeof(double)};
+    parts[np++] = (affect_ws_part){(void **)&w.sums, M * m, sizeof(double)};
+    parts[np++] = (affect_ws_part){(void **)&w.cnt, M, sizeof(size_t)};
+    parts[np++] = (affect_ws_part){(void **)&w.frac, M, sizeof(double)};
+    parts[np++] = (affect_ws_part){(void **)&w.mbar, m, sizeof(double)};
+    parts[np++] = (affect_ws_part){(void **)&w.pool, h->cs, sizeof(double)};
+    ws = affect_ws_alloc(parts, np);
     if (!ws) {
         st = affect_nomem(err);
         goto cleanup;
