@@ -15,6 +15,7 @@
 
 #include "common.h"
 #include "fn_affect.h"
+#include "fn_generate.h"
 #include "fn_hmm.h"
 #include "fn_laban.h"
 #include "fn_motion.h"
@@ -228,6 +229,30 @@ int sqlite3_affect_init(sqlite3 *db, char **err, const sqlite3_api_routines *api
         int flags = AX_PURE | (f->json ? subtype_flag : 0);
         int rc = sqlite3_create_function_v2(db, f->name, f->n_arg, flags, user, f->fn, NULL,
                                             NULL, ax_cls_fn_free); /* frees user on failure */
+        if (rc != SQLITE_OK) {
+            *err = sqlite3_mprintf("affect: cannot register %s/%d: %s", f->name, f->n_arg,
+                                   sqlite3_errmsg(db));
+            return rc;
+        }
+    }
+    /* generation: reads (and may cache into) the laban index named by its argument, so not
+     * deterministic in SQLite's sense and not for triggers or views */
+    static const ax_function generation_functions[] = {
+        {"affect_generate", 3, false, ax_affect_generate},
+        {"affect_generate", 4, false, ax_affect_generate},
+        {"affect_generate_explain", 3, true, ax_affect_generate_explain},
+        {"affect_generate_explain", 4, true, ax_affect_generate_explain},
+        {"laban_salient", 1, true, ax_laban_salient},
+        {"laban_salient", 2, true, ax_laban_salient},
+    };
+    for (size_t i = 0; i < sizeof generation_functions / sizeof generation_functions[0]; i++) {
+        const ax_function *f = &generation_functions[i];
+        ax_gen_fn *user = ax_gen_fn_new(f->name);
+        if (!user)
+            return SQLITE_NOMEM;
+        int flags = SQLITE_UTF8 | SQLITE_DIRECTONLY | (f->json ? subtype_flag : 0);
+        int rc = sqlite3_create_function_v2(db, f->name, f->n_arg, flags, user, f->fn, NULL,
+                                            NULL, ax_gen_fn_free);
         if (rc != SQLITE_OK) {
             *err = sqlite3_mprintf("affect: cannot register %s/%d: %s", f->name, f->n_arg,
                                    sqlite3_errmsg(db));

@@ -1,0 +1,118 @@
+/*
+ * affect/generate.h — affective motion generation by an HMM trained on Laban nearest
+ * neighbours (SCIENCE.md §5 steps 5–7; thesis §5.3, Fig. 5.4), given the neighbours already
+ * chosen by the caller (steps 1–4 select them), and the DTW distance used to judge how much of
+ * the desired path a generated motion keeps.
+ *
+ * Observations. Every joint of the desired motion x_d, normalized as the HMM engine's default
+ * feature definition does (affect/features.h with normalize = true, scale = auto: the first
+ * frame's horizontal root position and heading removed, positions divided by the right arm
+ * length when the right_shoulder and right_hand roles resolve in x_d); each neighbour gets the
+ * same definition, normalized by its own first frame. Up axis: opt->up_axis.
+ *
+ * Skeletons. A neighbour is used only when its joint names are exactly those of x_d (the same
+ * set, any order); any other neighbour is EXCLUDED — never mapped by roles, never mixed — and
+ * counted in the report. When every neighbour is excluded the call fails. A neighbour at
+ * another frame rate is an error (resample it first), since state durations are in frames.
+ *
+ * Method (HMM_NN). opt->states states, one full-covariance Gaussian per state, ergodic, start
+ * fixed to the first state, trained by Baum–Welch (affect_hmm_train with opt->seed,
+ * opt->max_iter, opt->tol and the covariance floor opt->reg) on the used neighbours (in their
+ * order) followed by opt->copies copies of x_d's observations; every sequence initialised from
+ * N equal segments. Every training sequence must have at least `states` frames (an error
+ * names the first that has not; the state count is never reduced silently); x_d itself may be
+ * shorter when copies = 0. Then the Viterbi path S of x_d's observations under the model with
+ * every state covariance multiplied by opt->covariance_scale (s): log N(x; μ, sΣ) =
+ * −½ d²_Σ(x, μ) / s − (m/2) log s + const, so s weighs the emission term against the
+ * transitions by 1/s — s > 1 lets the path follow x_d more loosely (fewer state changes,
+ * stronger affect), s < 1 more tightly; s = 1 is the trained model. Output frame t is the mean
+ * of state S_t, low-pass filtered coordinate by coordinate (affect_lowpass: zero-lag
+ * Butterworth at opt->cutoff_hz for x_d's fps; not filtered when the cut-off is 0, at or above
+ * the Nyquist frequency, or the output has one frame), then de-normalized by the inverse of
+ * x_d's normalization transform: p = origin + Rᵀ (scale · p'). The result has x_d's joint
+ * names, parents, fps, unit and frame count.
+ *
+ * Errors (0-based neighbour indices): AFFECT_ERR_INVALID for
+ *   "no desired motion", "no neighbours", "neighbour 2 is missing",
+ *   "states must be between 1 and 256" (and the engine's other option messages),
+ *   "copies must be at most 1000, got 5000",
+ *   "cut-off must be a finite frequency of 0 Hz or more, got -1",
+ *   "covariance scale must be finite and greater than 0, got 0",
+ *   "no neighbour has the desired motion's skeleton (joint names)",
+ *   "neighbour 1 is at 60 fps, the desired motion at 30 (resample it first)",
+ *   "neighbour 3 has 8 frames, fewer than the 12 states",
+ *   "the desired motion has 8 frames, fewer than the 12 states (it is trained on with copies > 0)";
+ * the normalization's own errors prefixed with "desired motion: " or "neighbour 2: "
+ * (AFFECT_ERR_MISSING when the heading or arm roles do not resolve); the engine's numerical
+ * errors (AFFECT_ERR_RANGE); "out of memory" (AFFECT_ERR_NOMEM). Nothing leaks on any error.
+ */
+#ifndef AFFECT_GENERATE_H
+#define AFFECT_GENERATE_H
+
+#include "affect/normalize.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define AFFECT_GENERATE_MAX_COPIES 1000u
+
+typedef struct affect_generate_options {
+    uint32_t states;         /* HMM states N (default 12) */
+    uint32_t copies;         /* n_d copies of x_d added to the training set (default 0) */
+    double cutoff_hz;        /* low-pass cut-off of the output (default 3; 0 = no filter) */
+    double covariance_scale; /* s > 0 multiplying every state covariance for Viterbi (1) */
+    uint64_t seed;           /* k-means seeding of the engine (default 1) */
+    uint32_t max_iter;       /* Baum–Welch iterations at most (default 50) */
+    double tol;              /* relative log-likelihood change to stop (default 1e-4) */
+    double reg;              /* covariance diagonal floor, in normalized units² (1e-4) */
+    int up_axis;             /* 0 = x, 1 = y (default), 2 = z */
+} affect_generate_options;
+
+void affect_generate_options_default(affect_generate_options *opt);
+
+typedef struct affect_generate_report {
+    uint32_t neighbours_used; /* neighbours in the training set */
+    uint32_t excluded;        /* neighbours left out: their joint names differ from x_d's */
+    uint32_t iterations;      /* Baum–Welch iterations run */
+    double loglik;            /* final training log-likelihood (all sequences) */
+    double viterbi_logprob;   /* log-probability of the path S (under the scaled model) */
+    int32_t *path;            /* n_frames states S_t; the caller frees it with affect_free */
+    uint32_t n_frames;        /* entries of path */
+} affect_generate_report;
+
+/* Generates *out (free with affect_motion_free) from desired and the neighbours (opt NULL =
+ * the defaults). rep may be NULL; when given it is filled on success (path allocated) and
+ * zeroed on failure. */
+affect_status affect_generate(const affect_motion *desired, const affect_motion *const *neighbours,
+                              uint32_t n_neighbours, const affect_generate_options *opt,
+                              affect_motion **out, affect_generate_report *rep, affect_error *err);
+
+/* The normalization transform that the observations of m use (as affect_features_extract
+ * with the default definition computes it: translation and heading, arm scale when the
+ * right_shoulder and right_hand roles resolve). */
+affect_status affect_generate_transform(const affect_motion *m, int up_axis,
+                                        affect_normalize_transform *tf, affect_error *err);
+
+/* The exact inverse of the transform: out = origin + Rᵀ (scale · in) for n points of 3
+ * doubles (in == out allowed). */
+void affect_normalize_invert(const affect_normalize_transform *tf, const double *in, size_t n,
+                             double *out);
+
+/* Dynamic-time-warping distance between a and b, which must have the same joint names (same
+ * set, any order; frame rates and lengths may differ). Both are normalized as the generation's
+ * observations (the arm scale decided on a), the cost of matching frame i of a with frame k of
+ * b is the mean over joints of the Euclidean distance between the joint's normalized
+ * positions, the warping path runs from (0, 0) to (T_a − 1, T_b − 1) by steps (1, 0), (0, 1)
+ * and (1, 1), and *dist is the least total cost divided by the number of frame pairs on the
+ * path (ties: the shorter path). So it is the mean per-step joint distance in the normalized
+ * unit (right arm lengths when scaled), 0 for a motion and itself, and symmetric. Up axis y.
+ * Errors: "the motions have different joint names" (AFFECT_ERR_INVALID), the normalization's
+ * errors prefixed with "first motion: " / "second motion: ", "out of memory". */
+affect_status affect_dtw_distance(const affect_motion *a, const affect_motion *b, double *dist,
+                                  affect_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,1079 @@
+/*
+ * rmlr.c — elastic-net multinomial logistic regression by coordinate descent (see
+ * affect/rmlr.h for the model, the path and the cross-validation).
+ *
+ * Usage:
+ *     affect_rmlr_options o;
+ *     affect_rmlr_options_default(&o);
+ *     affect_rmlr *m;
+ *     if (affect_rmlr_cv(x, n, p, y, K, &o, &m, &err) != AFFECT_OK) ...
+ *     const double *beta = affect_rmlr_beta(m);   (K × p; β_kj ≠ 0: feature j salient for k)
+ *     uint32_t k = affect_rmlr_predict(m, x_new, probs);
+ *     affect_rmlr_free(m);
+ *
+ * How it works (written from the published method, Friedman, Hastie & Tibshirani 2010, §4; no
+ * code of glmnet's). A "fitter" holds one training set: its standardized features stored
+ * column by column (z, n × p column-major), labels, the coefficients and the linear
+ * predictors η (n × K). To fit one λ, the classes are visited in order 0 .. K−1; for class k,
+ * with p_i = P(y_i = k) at the current η, the log-likelihood in (β0k, βk) is replaced by its
+ * quadratic approximation: weights w_i = p_i(1 − p_i) (floored at W_MIN), working residuals
+ * r_i = (1{y_i = k} − p_i) / w_i. That weighted least-squares problem with the elastic-net
+ * penalty is solved by cyclic coordinate descent:
+ *     intercept  β0 += Σ w_i r_i / Σ w_i
+ *     feature j  β_j ← S((1/n) Σ w_i z_ij r_i + v_j β_j, λα) / (v_j + λ(1 − α)),
+ *                v_j = (1/n) Σ w_i z_ij², S the soft-threshold,
+ * updating r after every change; after a full pass, passes run over the non-zero
+ * coefficients only until they settle, then a full pass confirms (the active-set strategy).
+ * The inner loop stops when a pass changes no coordinate by more than tol in the weighted
+ * squared sense v_j Δβ_j² (the scale of the objective; the intercept with Σw/n). The step from
+ * the old to the new class-k parameters is halved (at most MAX_HALVINGS times) until the
+ * penalised objective does not increase, which keeps the partial Newton iteration from
+ * overshooting when probabilities approach 0 or 1. After each cycle over the classes, every
+ * feature's K coefficients are shifted by the common c_j that minimises their penalty (the
+ * likelihood does not change: the softmax ignores a shift common to all classes); without it
+ * block coordinate descent crawls along that flat direction. The cycle repeats until the
+ * penalised objective changes by at most tol relative; the intercepts are then centred.
+ * Successive λ values start from the previous solution (warm starts); at the automatic path's
+ * first λ (λ_max) the intercept-only start is the solution and is kept as is.
+ *
+ * Cross-validation keeps one fitter per fold in turn and, after each λ, predicts the held-out
+ * samples, so no path of coefficients is stored. Counts of misclassified samples are integers,
+ * so ties are exact.
+ */
+#include "affect/rmlr.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "affect/svm.h"
+
+/* Floor on the Newton weights p(1 − p) (the paper's 1e-5). */
+#define W_MIN 1e-5
+/* glmnet's floor on α in λ_max. */
+#define ALPHA_FLOOR 1e-3
+/* Step halvings before a class update is abandoned. */
+#define MAX_HALVINGS 30
+/* Relative slack of the descent test (floating-point noise in the objective). */
+#define DESCENT_SLACK 1e-13
+
+struct affect_rmlr {
+    uint32_t K, n_train, n_lambda, lambda_index;
+    size_t p;
+    bool converged;
+    double alpha, cv_error;
+    double *lambdas, *cv_errors, *mean, *sd, *beta0, *beta; /* one block, carved */
+};
+
+void affect_rmlr_options_default(affect_rmlr_options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->n_lambda = 100;
+    o->lambda_min_ratio = 0;
+    o->alphas = NULL;
+    o->n_alpha = AFFECT_RMLR_DEFAULT_N_ALPHA;
+    o->folds = 10;
+    o->seed = 0;
+    o->max_iter = 10000;
+    o->tol = 1e-7;
+}
+
+/* ---- the fitter ---- */
+
+typedef struct fitter {
+    size_t n, p;
+    uint32_t K;
+    double alpha;
+    uint32_t max_iter;
+    double tol;
+    uint32_t *y;                 /* n */
+    double *z;                   /* p × n: column j at z + j·n */
+    double *mean;                /* p */
+    double *sd;                  /* p */
+    double *beta;                /* K × p */
+    double *beta0;               /* K */
+    double *eta;                 /* n × K */
+    double *w, *r, *deta, *etak; /* n each */
+    double *v, *bold;            /* p each */
+} fitter;
+
+static void fitter_free(fitter *f)
+{
+    affect_free(f->y);
+    affect_free(f->z);
+    memset(f, 0, sizeof *f);
+}
+
+/* Sets up f on the rows i of x with fold_of[i] != skip (all rows when fold_of is NULL):
+ * standardizes, and starts from the intercept-only fit. Every class must be present. */
+static affect_status fitter_init(fitter *f, const double *x, size_t n_all, size_t p,
+                                 const uint32_t *y, uint32_t K, const uint32_t *fold_of,
+                                 uint32_t skip, double alpha, const affect_rmlr_options *o,
+                                 affect_error *err)
+{
+    size_t n = 0, np, nk, kp, total, t;
+    memset(f, 0, sizeof *f);
+    for (size_t i = 0; i < n_all; i++)
+        if (!fold_of || fold_of[i] != skip)
+            n++;
+    /* Sizes were checked by the caller for n_all, so n·p, n·K, K·p fit; sum them with checks. */
+    if (!affect_mul_size(n, p, &np) || !affect_mul_size(n, K, &nk) || !affect_mul_size(K, p, &kp) ||
+        !affect_add_size(np, nk, &total) || !affect_add_size(total, kp, &total) ||
+        !affect_mul_size(p, 4, &t) || !affect_add_size(total, t, &total) ||
+        !affect_mul_size(n, 4, &t) || !affect_add_size(total, t, &total) ||
+        !affect_add_size(total, K, &total))
+        return affect_fail(err, AFFECT_ERR_RANGE, "too many values: %zu samples × %zu features", n,
+                           p);
+    f->y = affect_malloc_array(n, sizeof *f->y);
+    f->z = affect_malloc_array(total, sizeof *f->z);
+    if (!f->y || !f->z) {
+        fitter_free(f);
+        return affect_nomem(err);
+    }
+    f->n = n;
+    f->p = p;
+    f->K = K;
+    f->alpha = alpha;
+    f->max_iter = o->max_iter;
+    f->tol = o->tol;
+    double *q = f->z + np;
+    f->mean = q, q += p;
+    f->sd = q, q += p;
+    f->v = q, q += p;
+    f->bold = q, q += p;
+    f->beta = q, q += kp;
+    f->beta0 = q, q += K;
+    f->eta = q, q += nk;
+    f->w = q, q += n;
+    f->r = q, q += n;
+    f->deta = q, q += n;
+    f->etak = q;
+
+    for (size_t i = 0, row = 0; i < n_all; i++) {
+        if (fold_of && fold_of[i] == skip)
+            continue;
+        f->y[row] = y[i];
+        for (size_t j = 0; j < p; j++)
+            f->z[j * n + row] = x[i * p + j];
+        row++;
+    }
+    for (size_t j = 0; j < p; j++) {
+        double *c = f->z + j * n, s = 0, ss = 0;
+        bool constant = true;
+        for (size_t i = 0; i < n; i++) {
+            s += c[i];
+            if (c[i] != c[0])
+                constant = false;
+        }
+        double m = s / (double)n;
+        for (size_t i = 0; i < n; i++)
+            ss += (c[i] - m) * (c[i] - m);
+        double sd = constant ? 0.0 : sqrt(ss / (double)n);
+        f->mean[j] = m;
+        f->sd[j] = sd;
+        for (size_t i = 0; i < n; i++)
+            c[i] = sd > 0 ? (c[i] - m) / sd : 0.0;
+    }
+    /* Intercept-only start: β0k = log(n_k / n), centred. */
+    memset(f->beta, 0, kp * sizeof *f->beta);
+    memset(f->beta0, 0, K * sizeof *f->beta0);
+    for (size_t i = 0; i < n; i++)
+        f->beta0[f->y[i]] += 1.0;
+    double mb = 0;
+    for (uint32_t k = 0; k < K; k++) {
+        f->beta0[k] = log(f->beta0[k] / (double)n);
+        mb += f->beta0[k];
+    }
+    mb /= K;
+    for (uint32_t k = 0; k < K; k++)
+        f->beta0[k] -= mb;
+    for (size_t i = 0; i < n; i++)
+        for (uint32_t k = 0; k < K; k++)
+            f->eta[i * K + k] = f->beta0[k];
+    return AFFECT_OK;
+}
+
+/* λ_max of the fitter's data (which must be at its intercept-only start). */
+static double fitter_lambda_max(const fitter *f)
+{
+    double g = 0;
+    for (uint32_t k = 0; k < f->K; k++) {
+        double pik = 0;
+        for (size_t i = 0; i < f->n; i++)
+            pik += f->y[i] == k;
+        pik /= (double)f->n;
+        for (size_t j = 0; j < f->p; j++) {
+            const double *c = f->z + j * f->n;
+            double s = 0;
+            for (size_t i = 0; i < f->n; i++)
+                s += c[i] * ((f->y[i] == k) - pik);
+            s = fabs(s / (double)f->n);
+            if (s > g)
+                g = s;
+        }
+    }
+    return g / (f->alpha > ALPHA_FLOOR ? f->alpha : ALPHA_FLOOR);
+}
+
+static double soft(double g, double t)
+{
+    return g > t ? g - t : g < -t ? g + t : 0.0;
+}
+
+/* The penalty of class k's coefficients b (p values), without λ. */
+static double penalty(const fitter *f, const double *b)
+{
+    double s = 0;
+    for (size_t j = 0; j < f->p; j++)
+        s += f->alpha * fabs(b[j]) + 0.5 * (1 - f->alpha) * b[j] * b[j];
+    return s;
+}
+
+/* −(1/n) log-likelihood with class k's linear predictor replaced by ek (n values), or the
+ * current one when ek is NULL. */
+static double loss_with(const fitter *f, uint32_t k, const double *ek)
+{
+    double s = 0;
+    uint32_t K = f->K;
+    for (size_t i = 0; i < f->n; i++) {
+        const double *e = f->eta + i * K;
+        double eki = ek ? ek[i] : e[k], mx = eki;
+        for (uint32_t l = 0; l < K; l++)
+            if (l != k && e[l] > mx)
+                mx = e[l];
+        double sum = 0;
+        for (uint32_t l = 0; l < K; l++)
+            sum += exp((l == k ? eki : e[l]) - mx);
+        double ey = f->y[i] == k ? eki : e[f->y[i]];
+        s += mx + log(sum) - ey;
+    }
+    return s / (double)f->n;
+}
+
+/* One partial Newton step for class k at λ. Counts coordinate passes in *passes; *loss receives
+ * −(1/n) log-likelihood after the step. */
+static void class_step(fitter *f, uint32_t k, double lambda, uint32_t *passes, double *loss)
+{
+    size_t n = f->n, p = f->p;
+    uint32_t K = f->K;
+    double *b = f->beta + (size_t)k * p, *w = f->w, *r = f->r, *v = f->v;
+    double la = lambda * f->alpha, l2 = lambda * (1 - f->alpha), sw = 0, lo = 0;
+    if (*passes >= f->max_iter)
+        return;
+
+    for (size_t i = 0; i < n; i++) {
+        const double *e = f->eta + i * K;
+        double mx = e[0], sum = 0;
+        for (uint32_t l = 1; l < K; l++)
+            if (e[l] > mx)
+                mx = e[l];
+        for (uint32_t l = 0; l < K; l++)
+            sum += exp(e[l] - mx);
+        double pk = exp(e[k] - mx) / sum;
+        lo += mx + log(sum) - e[f->y[i]];
+        double wi = pk * (1 - pk);
+        if (wi < W_MIN)
+            wi = W_MIN;
+        w[i] = wi;
+        r[i] = ((f->y[i] == k) - pk) / wi;
+        sw += wi;
+        f->etak[i] = e[k];
+    }
+    for (size_t j = 0; j < p; j++) {
+        const double *c = f->z + j * n;
+        double s = 0;
+        for (size_t i = 0; i < n; i++)
+            s += w[i] * c[i] * c[i];
+        v[j] = s / (double)n;
+    }
+    lo /= (double)n;
+    double f_old = lo + lambda * penalty(f, b);
+    double b0old = f->beta0[k], b0 = b0old;
+    memcpy(f->bold, b, p * sizeof *b);
+
+    bool full = true;
+    while (*passes < f->max_iter) {
+        (*passes)++;
+        double s = 0, maxd;
+        for (size_t i = 0; i < n; i++)
+            s += w[i] * r[i];
+        double d = s / sw;
+        b0 += d;
+        for (size_t i = 0; i < n; i++)
+            r[i] -= d;
+        maxd = sw / (double)n * d * d;
+        for (size_t j = 0; j < p; j++) {
+            if (f->sd[j] == 0 || (!full && b[j] == 0))
+                continue;
+            const double *c = f->z + j * n;
+            double g = 0;
+            for (size_t i = 0; i < n; i++)
+                g += w[i] * c[i] * r[i];
+            double nb = soft(g / (double)n + v[j] * b[j], la) / (v[j] + l2);
+            double dj = nb - b[j];
+            if (dj != 0) {
+                for (size_t i = 0; i < n; i++)
+                    r[i] -= c[i] * dj;
+                b[j] = nb;
+                if (v[j] * dj * dj > maxd)
+                    maxd = v[j] * dj * dj;
+            }
+        }
+        if (maxd < f->tol) {
+            if (full)
+                break;
+            full = true;
+        } else {
+            full = false;
+        }
+    }
+
+    /* The step old → new, halved until the objective does not increase. */
+    double db0 = b0 - b0old;
+    for (size_t i = 0; i < n; i++)
+        f->deta[i] = db0;
+    for (size_t j = 0; j < p; j++) {
+        double dj = b[j] - f->bold[j];
+        if (dj == 0)
+            continue;
+        const double *c = f->z + j * n;
+        for (size_t i = 0; i < n; i++)
+            f->deta[i] += c[i] * dj;
+    }
+    for (size_t j = 0; j < p; j++)
+        v[j] = b[j] - f->bold[j]; /* v now holds the full step of the coefficients */
+    double t = 1;
+    for (int h = 0;; h++) {
+        for (size_t i = 0; i < n; i++)
+            f->etak[i] = f->eta[i * K + k] + t * f->deta[i];
+        for (size_t j = 0; j < p; j++)
+            b[j] = f->bold[j] + t * v[j];
+        double l_new = loss_with(f, k, f->etak);
+        if (l_new + lambda * penalty(f, b) <= f_old + DESCENT_SLACK * (1 + fabs(f_old))) {
+            lo = l_new;
+            break;
+        }
+        if (h == MAX_HALVINGS) {
+            t = 0;
+            memcpy(b, f->bold, p * sizeof *b);
+            break;
+        }
+        t *= 0.5;
+    }
+    *loss = lo;
+    f->beta0[k] = b0old + t * db0;
+    for (size_t i = 0; i < n; i++)
+        f->eta[i * K + k] += t * f->deta[i];
+}
+
+static double total_penalty(const fitter *f)
+{
+    double pen = 0;
+    for (uint32_t k = 0; k < f->K; k++)
+        pen += penalty(f, f->beta + (size_t)k * f->p);
+    return pen;
+}
+
+/* The penalised objective at the current state. */
+static double objective(const fitter *f, double lambda)
+{
+    return loss_with(f, 0, NULL) + lambda * total_penalty(f);
+}
+
+/* The shift c minimising Σ_k α|b_k − c| + (1−α)/2 (b_k − c)² over the K values b (stride p),
+ * or 0 when no shift lowers it by more than rounding noise. The minimiser is where the
+ * (non-decreasing) subgradient crosses 0: either inside an interval between sorted values, where
+ * it solves a linear equation, or at one of the values; all candidates are tried. */
+static double center_shift(const double *b, size_t stride, uint32_t K, double alpha)
+{
+    double sum = 0;
+    for (uint32_t k = 0; k < K; k++)
+        sum += b[k * stride];
+    double f0 = 0, best = 0, fbest;
+    for (uint32_t k = 0; k < K; k++)
+        f0 += alpha * fabs(b[k * stride]) + 0.5 * (1 - alpha) * b[k * stride] * b[k * stride];
+    fbest = f0;
+    for (uint32_t m = 0; m <= 2 * K; m++) {
+        double c;
+        if (m < K) {
+            c = b[m * stride]; /* a breakpoint */
+        } else {
+            if (alpha >= 1)
+                break;
+            /* m − K values below c: the stationary point of that piece */
+            double below = (double)(m - K), above = (double)K - below;
+            c = (sum - alpha * (below - above) / (1 - alpha)) / (double)K;
+        }
+        double fc = 0;
+        for (uint32_t k = 0; k < K; k++) {
+            double d = b[k * stride] - c;
+            fc += alpha * fabs(d) + 0.5 * (1 - alpha) * d * d;
+        }
+        if (fc < fbest) {
+            fbest = fc;
+            best = c;
+        }
+    }
+    return fbest < f0 - DESCENT_SLACK * (1 + f0) ? best : 0.0;
+}
+
+/* Fits λ from the current state; returns whether it converged. */
+static bool fitter_solve(fitter *f, double lambda)
+{
+    uint32_t passes = 0;
+    bool converged = false;
+    double obj = objective(f, lambda), loss = obj;
+    for (;;) {
+        for (uint32_t k = 0; k < f->K; k++)
+            class_step(f, k, lambda, &passes, &loss);
+        /* Adding c_j to feature j's coefficients of every class leaves the probabilities
+         * alone; the shift minimising the penalty removes that flat direction, along which
+         * coordinate descent would crawl. */
+        for (size_t j = 0; j < f->p; j++) {
+            double c = center_shift(f->beta + j, f->p, f->K, f->alpha);
+            if (c == 0)
+                continue;
+            for (uint32_t k = 0; k < f->K; k++)
+                f->beta[(size_t)k * f->p + j] -= c;
+            const double *zc = f->z + j * f->n;
+            for (size_t i = 0; i < f->n; i++)
+                for (uint32_t k = 0; k < f->K; k++)
+                    f->eta[i * f->K + k] -= c * zc[i];
+        }
+        double now = loss + lambda * total_penalty(f); /* centring keeps the loss */
+        if (fabs(obj - now) <= f->tol * now) {
+            converged = true;
+            break;
+        }
+        obj = now;
+        if (passes >= f->max_iter)
+            break;
+    }
+    double m = 0;
+    for (uint32_t k = 0; k < f->K; k++)
+        m += f->beta0[k];
+    m /= f->K;
+    for (uint32_t k = 0; k < f->K; k++)
+        f->beta0[k] -= m;
+    for (size_t i = 0; i < f->n * f->K; i++)
+        f->eta[i] -= m;
+    return converged;
+}
+
+/* argmax_k of β0k + βkᵀz for raw x, standardized with mean and sd; probs optional. */
+static uint32_t predict_raw(uint32_t K, size_t p, const double *mean, const double *sd,
+                            const double *beta0, const double *beta, const double *x, double *probs)
+{
+    uint32_t best = 0;
+    double best_eta = 0, mx = 0;
+    for (uint32_t k = 0; k < K; k++) {
+        double e = beta0[k];
+        const double *b = beta + (size_t)k * p;
+        for (size_t j = 0; j < p; j++)
+            if (sd[j] > 0 && b[j] != 0)
+                e += b[j] * ((x[j] - mean[j]) / sd[j]);
+        if (probs)
+            probs[k] = e;
+        if (k == 0 || e > best_eta) {
+            best_eta = e;
+            best = k;
+        }
+    }
+    if (probs) {
+        double sum = 0;
+        mx = best_eta;
+        for (uint32_t k = 0; k < K; k++) {
+            probs[k] = exp(probs[k] - mx);
+            sum += probs[k];
+        }
+        for (uint32_t k = 0; k < K; k++)
+            probs[k] /= sum;
+    }
+    return best;
+}
+
+/* ---- argument checks ---- */
+
+static affect_status check_options(const affect_rmlr_options *o, bool cv, affect_error *err)
+{
+    if (cv) {
+        if (o->n_lambda < 1)
+            return affect_fail(err, AFFECT_ERR_INVALID, "n_lambda must be at least 1");
+        if (o->n_lambda > AFFECT_RMLR_MAX_LAMBDAS)
+            return affect_fail(err, AFFECT_ERR_RANGE, "too many lambdas: %u (at most %u)",
+                               o->n_lambda, AFFECT_RMLR_MAX_LAMBDAS);
+    }
+    if (!(o->lambda_min_ratio == 0 || (o->lambda_min_ratio > 0 && o->lambda_min_ratio < 1)))
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "lambda_min_ratio must be in (0, 1), or 0 for automatic, got %g",
+                           o->lambda_min_ratio);
+    if (cv) {
+        if (o->alphas) {
+            if (o->n_alpha < 1)
+                return affect_fail(err, AFFECT_ERR_INVALID, "need at least 1 alpha");
+            for (uint32_t a = 0; a < o->n_alpha; a++)
+                if (!(o->alphas[a] >= 0 && o->alphas[a] <= 1))
+                    return affect_fail(err, AFFECT_ERR_INVALID, "alpha %u = %g is not in [0, 1]", a,
+                                       o->alphas[a]);
+        }
+        if (o->folds < 2)
+            return affect_fail(err, AFFECT_ERR_INVALID, "need at least 2 folds, got %u", o->folds);
+    }
+    if (o->max_iter < 1)
+        return affect_fail(err, AFFECT_ERR_INVALID, "max_iter must be at least 1");
+    if (!(o->tol > 0 && isfinite(o->tol)))
+        return affect_fail(err, AFFECT_ERR_INVALID, "tol must be a positive finite number, got %g",
+                           o->tol);
+    return AFFECT_OK;
+}
+
+static affect_status check_sizes(size_t n, size_t p, uint32_t K, affect_error *err)
+{
+    size_t np;
+    if (n < 1)
+        return affect_fail(err, AFFECT_ERR_INVALID, "need at least 1 sample");
+    if (p < 1)
+        return affect_fail(err, AFFECT_ERR_INVALID, "need at least 1 feature");
+    if (p > AFFECT_RMLR_MAX_FEATURES)
+        return affect_fail(err, AFFECT_ERR_RANGE, "too many features: %zu (at most %u)", p,
+                           AFFECT_RMLR_MAX_FEATURES);
+    if (n > AFFECT_RMLR_MAX_SAMPLES || !affect_mul_size(n, p, &np) ||
+        !affect_mul_size(np, sizeof(double), &np))
+        return affect_fail(err, AFFECT_ERR_RANGE, "too many samples: %zu", n);
+    if (K < 2)
+        return affect_fail(err, AFFECT_ERR_INVALID, "need at least 2 classes, got %u", K);
+    if (K > AFFECT_RMLR_MAX_CLASSES)
+        return affect_fail(err, AFFECT_ERR_INVALID, "at most %u classes, got %u",
+                           AFFECT_RMLR_MAX_CLASSES, K);
+    return AFFECT_OK;
+}
+
+/* Labels in range, values finite; counts[k] (K values) receives the class sizes. */
+static affect_status check_data(const double *x, size_t n, size_t p, const uint32_t *y, uint32_t K,
+                                size_t *counts, affect_error *err)
+{
+    for (size_t i = 0; i < n; i++)
+        if (y[i] >= K)
+            return affect_fail(err, AFFECT_ERR_INVALID, "sample %zu: class %u out of range 0 .. %u",
+                               i, y[i], K - 1);
+    for (size_t i = 0; i < n; i++)
+        for (size_t j = 0; j < p; j++)
+            if (!isfinite(x[i * p + j]))
+                return affect_fail(err, AFFECT_ERR_INVALID, "sample %zu, feature %zu is not finite",
+                                   i, j);
+    for (uint32_t k = 0; k < K; k++)
+        counts[k] = 0;
+    for (size_t i = 0; i < n; i++)
+        counts[y[i]]++;
+    for (uint32_t k = 0; k < K; k++)
+        if (counts[k] == 0)
+            return affect_fail(err, AFFECT_ERR_INVALID, "class %u has no sample", k);
+    return AFFECT_OK;
+}
+
+static double min_ratio(const affect_rmlr_options *o, size_t n, size_t p)
+{
+    return o->lambda_min_ratio > 0 ? o->lambda_min_ratio : n > p ? 1e-4 : 1e-2;
+}
+
+/* n_lambda values log-spaced from lmax down to lmax·ratio. */
+static void make_path(double lmax, double ratio, uint32_t n_lambda, double *out)
+{
+    for (uint32_t l = 0; l < n_lambda; l++)
+        out[l] = n_lambda == 1 ? lmax : lmax * exp(log(ratio) * (double)l / (double)(n_lambda - 1));
+}
+
+affect_status affect_rmlr_fit_path(const double *x, size_t n, size_t p, const uint32_t *y,
+                                   uint32_t K, double alpha, const double *lambdas,
+                                   uint32_t n_lambda, const affect_rmlr_options *o,
+                                   double *lambda_out, double *beta_out, double *beta0_out,
+                                   uint8_t *converged_out, affect_error *err)
+{
+    affect_rmlr_options def;
+    affect_status st;
+    size_t *counts = NULL;
+    double *path = NULL;
+    fitter f = {0};
+    if (!o) {
+        affect_rmlr_options_default(&def);
+        o = &def;
+    }
+    if ((st = check_sizes(n, p, K, err)) != AFFECT_OK)
+        return st;
+    if (!(alpha >= 0 && alpha <= 1))
+        return affect_fail(err, AFFECT_ERR_INVALID, "alpha must be in [0, 1], got %g", alpha);
+    if (n_lambda < 1)
+        return affect_fail(err, AFFECT_ERR_INVALID, "need at least 1 lambda");
+    if (n_lambda > AFFECT_RMLR_MAX_LAMBDAS)
+        return affect_fail(err, AFFECT_ERR_RANGE, "too many lambdas: %u (at most %u)", n_lambda,
+                           AFFECT_RMLR_MAX_LAMBDAS);
+    if (lambdas)
+        for (uint32_t l = 0; l < n_lambda; l++)
+            if (!(lambdas[l] > 0 && isfinite(lambdas[l])))
+                return affect_fail(err, AFFECT_ERR_INVALID,
+                                   "lambda %u = %g is not a positive finite number", l, lambdas[l]);
+    if ((st = check_options(o, false, err)) != AFFECT_OK)
+        return st;
+    counts = affect_malloc_array(K, sizeof *counts);
+    path = affect_malloc_array(n_lambda, sizeof *path);
+    if (!counts || !path) {
+        st = affect_nomem(err);
+        goto cleanup;
+    }
+    if ((st = check_data(x, n, p, y, K, counts, err)) != AFFECT_OK)
+        goto cleanup;
+    if ((st = fitter_init(&f, x, n, p, y, K, NULL, 0, alpha, o, err)) != AFFECT_OK)
+        goto cleanup;
+    if (lambdas)
+        memcpy(path, lambdas, n_lambda * sizeof *path);
+    else
+        make_path(fitter_lambda_max(&f), min_ratio(o, n, p), n_lambda, path);
+    for (uint32_t l = 0; l < n_lambda; l++) {
+        /* At the automatic path's λ_max the intercept-only start is the exact solution (for
+         * α ≥ 1e-3); solving would only add rounding noise at the threshold. */
+        bool conv = (l == 0 && !lambdas && alpha >= ALPHA_FLOOR) || fitter_solve(&f, path[l]);
+        if (lambda_out)
+            lambda_out[l] = path[l];
+        if (beta_out)
+            memcpy(beta_out + (size_t)l * K * p, f.beta, (size_t)K * p * sizeof *f.beta);
+        if (beta0_out)
+            memcpy(beta0_out + (size_t)l * K, f.beta0, K * sizeof *f.beta0);
+        if (converged_out)
+            converged_out[l] = conv;
+    }
+cleanup:
+    fitter_free(&f);
+    affect_free(counts);
+    affect_free(path);
+    return st;
+}
+
+/* ---- the model ---- */
+
+void affect_rmlr_free(affect_rmlr *m)
+{
+    if (!m)
+        return;
+    affect_free(m->lambdas);
+    affect_free(m);
+}
+
+/* A model with its one block of doubles allocated for K, p, L (sizes already bounded). */
+static affect_status model_new(uint32_t K, size_t p, uint32_t L, affect_rmlr **out,
+                               affect_error *err)
+{
+    size_t kp, total;
+    *out = NULL;
+    if (!affect_mul_size(K, p, &kp) || !affect_add_size(kp, K, &total) ||
+        !affect_add_size(total, 2 * (size_t)L, &total) || !affect_add_size(total, p, &total) ||
+        !affect_add_size(total, p, &total))
+        return affect_fail(err, AFFECT_ERR_RANGE, "model too large");
+    affect_rmlr *m = affect_calloc(1, sizeof *m);
+    if (!m)
+        return affect_nomem(err);
+    m->lambdas = affect_calloc(total, sizeof(double));
+    if (!m->lambdas) {
+        affect_free(m);
+        return affect_nomem(err);
+    }
+    m->K = K;
+    m->p = p;
+    m->n_lambda = L;
+    m->cv_errors = m->lambdas + L;
+    m->mean = m->cv_errors + L;
+    m->sd = m->mean + p;
+    m->beta0 = m->sd + p;
+    m->beta = m->beta0 + K;
+    *out = m;
+    return AFFECT_OK;
+}
+
+affect_status affect_rmlr_cv(const double *x, size_t n, size_t p, const uint32_t *y, uint32_t K,
+                             const affect_rmlr_options *o, affect_rmlr **out, affect_error *err)
+{
+    static const double default_alphas[AFFECT_RMLR_DEFAULT_N_ALPHA] = {
+        0.05, 0.10, 0.15, 0.20, 0.25, 0.30, 0.35, 0.40, 0.45, 0.50,
+        0.55, 0.60, 0.65, 0.70, 0.75, 0.80, 0.85, 0.90, 0.95, 1.00};
+    affect_rmlr_options def;
+    affect_status st;
+    size_t *counts = NULL, *miss = NULL, cells;
+    uint32_t *fold_of = NULL;
+    double *paths = NULL;
+    fitter f = {0};
+    affect_rmlr *m = NULL;
+    *out = NULL;
+    if (!o) {
+        affect_rmlr_options_default(&def);
+        o = &def;
+    }
+    if ((st = check_sizes(n, p, K, err)) != AFFECT_OK)
+        return st;
+    if ((st = check_options(o, true, err)) != AFFECT_OK)
+        return st;
+    const double *alphas = o->alphas ? o->alphas : default_alphas;
+    uint32_t n_alpha = o->alphas ? o->n_alpha : AFFECT_RMLR_DEFAULT_N_ALPHA;
+    uint32_t L = o->n_lambda;
+    if (!affect_mul_size(n_alpha, L, &cells))
+        return affect_fail(err, AFFECT_ERR_RANGE, "too many alpha × lambda pairs");
+    counts = affect_malloc_array(K, sizeof *counts);
+    fold_of = affect_malloc_array(n, sizeof *fold_of);
+    miss = affect_calloc(cells, sizeof *miss);
+    paths = affect_malloc_array(cells, sizeof *paths);
+    if (!counts || !fold_of || !miss || !paths) {
+        st = affect_nomem(err);
+        goto cleanup;
+    }
+    if ((st = check_data(x, n, p, y, K, counts, err)) != AFFECT_OK)
+        goto cleanup;
+    for (uint32_t k = 0; k < K; k++)
+        if (counts[k] < 2) {
+            st = affect_fail(err, AFFECT_ERR_INVALID,
+                             "class %u has 1 sample (cross-validation needs at least 2)", k);
+            goto cleanup;
+        }
+    if ((st = affect_stratified_folds(y, n, K, o->folds, o->seed, fold_of, err)) != AFFECT_OK)
+        goto cleanup;
+    uint32_t folds = n < o->folds ? (uint32_t)n : o->folds;
+    double ratio = min_ratio(o, n, p);
+
+    /* The λ paths, from all the data. */
+    for (uint32_t a = 0; a < n_alpha; a++) {
+        if ((st = fitter_init(&f, x, n, p, y, K, NULL, 0, alphas[a], o, err)) != AFFECT_OK)
+            goto cleanup;
+        make_path(fitter_lambda_max(&f), ratio, L, paths + (size_t)a * L);
+        fitter_free(&f);
+    }
+    for (uint32_t a = 0; a < n_alpha; a++) {
+        const double *path = paths + (size_t)a * L;
+        for (uint32_t fo = 0; fo < folds; fo++) {
+            if ((st = fitter_init(&f, x, n, p, y, K, fold_of, fo, alphas[a], o, err)) != AFFECT_OK)
+                goto cleanup;
+            for (uint32_t l = 0; l < L; l++) {
+                fitter_solve(&f, path[l]);
+                for (size_t i = 0; i < n; i++)
+                    if (fold_of[i] == fo &&
+                        predict_raw(K, p, f.mean, f.sd, f.beta0, f.beta, x + i * p, NULL) != y[i])
+                        miss[(size_t)a * L + l]++;
+            }
+            fitter_free(&f);
+        }
+    }
+
+    /* The choice: fewest misclassified, then larger λ, then larger α. */
+    uint32_t ba = 0, bl = 0;
+    for (uint32_t a = 0; a < n_alpha; a++)
+        for (uint32_t l = 0; l < L; l++) {
+            size_t c = miss[(size_t)a * L + l], cb = miss[(size_t)ba * L + bl];
+            double lam = paths[(size_t)a * L + l], lb = paths[(size_t)ba * L + bl];
+            if (c < cb || (c == cb && (lam > lb || (lam == lb && alphas[a] > alphas[ba])))) {
+                ba = a;
+                bl = l;
+            }
+        }
+
+    if ((st = model_new(K, p, L, &m, err)) != AFFECT_OK)
+        goto cleanup;
+    if ((st = fitter_init(&f, x, n, p, y, K, NULL, 0, alphas[ba], o, err)) != AFFECT_OK)
+        goto cleanup;
+    const double *path = paths + (size_t)ba * L;
+    m->converged = true;
+    for (uint32_t l = alphas[ba] >= ALPHA_FLOOR ? 1 : 0; l <= bl; l++)
+        m->converged = fitter_solve(&f, path[l]);
+    m->n_train = (uint32_t)n;
+    m->lambda_index = bl;
+    m->alpha = alphas[ba];
+    m->cv_error = (double)miss[(size_t)ba * L + bl] / (double)n;
+    for (uint32_t l = 0; l < L; l++) {
+        m->lambdas[l] = path[l];
+        m->cv_errors[l] = (double)miss[(size_t)ba * L + l] / (double)n;
+    }
+    memcpy(m->mean, f.mean, p * sizeof *f.mean);
+    memcpy(m->sd, f.sd, p * sizeof *f.sd);
+    memcpy(m->beta0, f.beta0, K * sizeof *f.beta0);
+    memcpy(m->beta, f.beta, (size_t)K * p * sizeof *f.beta);
+    *out = m;
+    m = NULL;
+cleanup:
+    fitter_free(&f);
+    affect_rmlr_free(m);
+    affect_free(counts);
+    affect_free(fold_of);
+    affect_free(miss);
+    affect_free(paths);
+    return st;
+}
+
+/* ---- accessors ---- */
+
+uint32_t affect_rmlr_n_classes(const affect_rmlr *m)
+{
+    return m->K;
+}
+
+size_t affect_rmlr_n_features(const affect_rmlr *m)
+{
+    return m->p;
+}
+
+uint32_t affect_rmlr_n_train(const affect_rmlr *m)
+{
+    return m->n_train;
+}
+
+double affect_rmlr_alpha(const affect_rmlr *m)
+{
+    return m->alpha;
+}
+
+double affect_rmlr_lambda(const affect_rmlr *m)
+{
+    return m->lambdas[m->lambda_index];
+}
+
+uint32_t affect_rmlr_lambda_index(const affect_rmlr *m)
+{
+    return m->lambda_index;
+}
+
+double affect_rmlr_cv_error(const affect_rmlr *m)
+{
+    return m->cv_error;
+}
+
+bool affect_rmlr_converged(const affect_rmlr *m)
+{
+    return m->converged;
+}
+
+const double *affect_rmlr_lambdas(const affect_rmlr *m, uint32_t *count)
+{
+    if (count)
+        *count = m->n_lambda;
+    return m->lambdas;
+}
+
+const double *affect_rmlr_cv_errors(const affect_rmlr *m)
+{
+    return m->cv_errors;
+}
+
+const double *affect_rmlr_beta(const affect_rmlr *m)
+{
+    return m->beta;
+}
+
+const double *affect_rmlr_intercepts(const affect_rmlr *m)
+{
+    return m->beta0;
+}
+
+const double *affect_rmlr_means(const affect_rmlr *m)
+{
+    return m->mean;
+}
+
+const double *affect_rmlr_sds(const affect_rmlr *m)
+{
+    return m->sd;
+}
+
+uint32_t affect_rmlr_predict(const affect_rmlr *m, const double *x, double *probs)
+{
+    return predict_raw(m->K, m->p, m->mean, m->sd, m->beta0, m->beta, x, probs);
+}
+
+/* ---- serialisation ---- */
+
+void affect_rmlr_encode(const affect_rmlr *m, affect_bw *w)
+{
+    affect_bw_u8(w, AFFECT_RMLR_FORMAT_VERSION);
+    affect_bw_u32(w, m->K);
+    affect_bw_u32(w, (uint32_t)m->p);
+    affect_bw_u32(w, m->n_train);
+    affect_bw_u32(w, m->n_lambda);
+    affect_bw_u32(w, m->lambda_index);
+    affect_bw_u8(w, m->converged ? 1 : 0);
+    affect_bw_f64(w, m->alpha);
+    affect_bw_f64(w, m->cv_error);
+    affect_bw_f64s(w, m->lambdas, m->n_lambda);
+    affect_bw_f64s(w, m->cv_errors, m->n_lambda);
+    affect_bw_f64s(w, m->mean, m->p);
+    affect_bw_f64s(w, m->sd, m->p);
+    affect_bw_f64s(w, m->beta0, m->K);
+    affect_bw_f64s(w, m->beta, (size_t)m->K * m->p);
+}
+
+static affect_status truncated(affect_error *err, const char *field, size_t off)
+{
+    return affect_fail(err, AFFECT_ERR_FORMAT, "RMLR: truncated in %s (offset %zu)", field, off);
+}
+
+static affect_status get_u32(affect_br *r, uint32_t *v, const char *field, affect_error *err)
+{
+    return affect_br_u32(r, v) ? AFFECT_OK : truncated(err, field, r->off);
+}
+
+static affect_status get_f64(affect_br *r, double *v, const char *field, affect_error *err)
+{
+    return affect_br_f64(r, v) ? AFFECT_OK : truncated(err, field, r->off);
+}
+
+/* n float64 values into v (n checked against the bytes left first); *off receives the offset
+ * of the first. Values are not checked. */
+static affect_status get_f64s(affect_br *r, double *v, size_t n, size_t *off, const char *field,
+                              affect_error *err)
+{
+    if (!affect_br_has(r, n, 8))
+        return truncated(err, field, r->off);
+    *off = r->off;
+    affect_br_f64s(r, v, n);
+    return AFFECT_OK;
+}
+
+static affect_status check_finite(const double *v, size_t n, size_t off, const char *field,
+                                  affect_error *err)
+{
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(v[i]))
+            return affect_fail(err, AFFECT_ERR_FORMAT, "RMLR: non-finite value in %s (offset %zu)",
+                               field, off + 8 * i);
+    return AFFECT_OK;
+}
+
+affect_status affect_rmlr_decode(affect_br *r, affect_rmlr **out, affect_error *err)
+{
+    affect_status st;
+    size_t off, need, kp;
+    uint8_t version, conv;
+    uint32_t K, p, n, L, idx;
+    double alpha, cve;
+    affect_rmlr *m = NULL;
+    *out = NULL;
+
+    off = r->off;
+    if (!affect_br_u8(r, &version))
+        return truncated(err, "the version", off);
+    if (version != AFFECT_RMLR_FORMAT_VERSION)
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "RMLR: unknown format version %u at offset %zu (this build reads %u)",
+                           version, off, AFFECT_RMLR_FORMAT_VERSION);
+    off = r->off;
+    if ((st = get_u32(r, &K, "the class count", err)) != AFFECT_OK)
+        return st;
+    if (K < 2 || K > AFFECT_RMLR_MAX_CLASSES)
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "RMLR: class count %u out of range 2 .. %u (offset %zu)", K,
+                           AFFECT_RMLR_MAX_CLASSES, off);
+    off = r->off;
+    if ((st = get_u32(r, &p, "the feature count", err)) != AFFECT_OK)
+        return st;
+    if (p < 1 || p > AFFECT_RMLR_MAX_FEATURES)
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "RMLR: feature count %u out of range 1 .. %u (offset %zu)", p,
+                           AFFECT_RMLR_MAX_FEATURES, off);
+    off = r->off;
+    if ((st = get_u32(r, &n, "the sample count", err)) != AFFECT_OK)
+        return st;
+    if (n < K)
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "RMLR: sample count %u below the class count %u (offset %zu)", n, K,
+                           off);
+    off = r->off;
+    if ((st = get_u32(r, &L, "the lambda count", err)) != AFFECT_OK)
+        return st;
+    if (L < 1 || L > AFFECT_RMLR_MAX_LAMBDAS)
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "RMLR: lambda count %u out of range 1 .. %u (offset %zu)", L,
+                           AFFECT_RMLR_MAX_LAMBDAS, off);
+    off = r->off;
+    if ((st = get_u32(r, &idx, "the lambda index", err)) != AFFECT_OK)
+        return st;
+    if (idx >= L)
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "RMLR: lambda index %u not below the lambda count %u (offset %zu)", idx,
+                           L, off);
+    off = r->off;
+    if (!affect_br_u8(r, &conv))
+        return truncated(err, "the converged flag", off);
+    if (conv > 1)
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "RMLR: converged flag %u is not 0 or 1 (offset %zu)", conv, off);
+    off = r->off;
+    if ((st = get_f64(r, &alpha, "alpha", err)) != AFFECT_OK)
+        return st;
+    if (!(alpha >= 0 && alpha <= 1))
+        return affect_fail(err, AFFECT_ERR_FORMAT, "RMLR: alpha = %g is not in [0, 1] (offset %zu)",
+                           alpha, off);
+    off = r->off;
+    if ((st = get_f64(r, &cve, "the cross-validation error", err)) != AFFECT_OK)
+        return st;
+    if (!(cve >= 0 && cve <= 1))
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "RMLR: cross-validation error %g is not in [0, 1] (offset %zu)", cve,
+                           off);
+    /* Everything left has a known size: check it before allocating. */
+    kp = (size_t)K * p; /* ≤ 2^8 · 2^20 */
+    need = 2 * (size_t)L + 2 * (size_t)p + K + kp;
+    if (!affect_br_has(r, need, 8)) {
+        size_t at = r->off;
+        const char *field = "the lambdas";
+        size_t left = r->size - r->off, bounds[5] = {L, L, p, p, K};
+        const char *names[5] = {"the lambdas", "the cross-validation errors", "the means",
+                                "the standard deviations", "the intercepts"};
+        field = "the coefficients";
+        for (int s = 0; s < 5; s++) {
+            if (left < 8 * bounds[s]) {
+                field = names[s];
+                break;
+            }
+            left -= 8 * bounds[s];
+            at += 8 * bounds[s];
+        }
+        return truncated(err, field, at);
+    }
+    if ((st = model_new(K, p, L, &m, err)) != AFFECT_OK)
+        return st;
+    m->n_train = n;
+    m->lambda_index = idx;
+    m->converged = conv;
+    m->alpha = alpha;
+    m->cv_error = cve;
+    get_f64s(r, m->lambdas, L, &off, "the lambdas", err);
+    for (uint32_t l = 0; l < L; l++)
+        if (!(m->lambdas[l] > 0 && isfinite(m->lambdas[l]))) {
+            st = affect_fail(err, AFFECT_ERR_FORMAT,
+                             "RMLR: lambda %u = %g is not a positive finite number (offset %zu)", l,
+                             m->lambdas[l], off + 8 * (size_t)l);
+            goto cleanup;
+        }
+    get_f64s(r, m->cv_errors, L, &off, "the cross-validation errors", err);
+    for (uint32_t l = 0; l < L; l++)
+        if (!(m->cv_errors[l] >= 0 && m->cv_errors[l] <= 1)) {
+            st = affect_fail(err, AFFECT_ERR_FORMAT,
+                             "RMLR: cross-validation error %g is not in [0, 1] (offset %zu)",
+                             m->cv_errors[l], off + 8 * (size_t)l);
+            goto cleanup;
+        }
+    get_f64s(r, m->mean, p, &off, "the means", err);
+    if ((st = check_finite(m->mean, p, off, "the means", err)) != AFFECT_OK)
+        goto cleanup;
+    get_f64s(r, m->sd, p, &off, "the standard deviations", err);
+    for (uint32_t j = 0; j < p; j++)
+        if (!(m->sd[j] >= 0 && isfinite(m->sd[j]))) {
+            st = affect_fail(err, AFFECT_ERR_FORMAT,
+                             "RMLR: standard deviation %g is not a non-negative finite number "
+                             "(offset %zu)",
+                             m->sd[j], off + 8 * (size_t)j);
+            goto cleanup;
+        }
+    get_f64s(r, m->beta0, K, &off, "the intercepts", err);
+    if ((st = check_finite(m->beta0, K, off, "the intercepts", err)) != AFFECT_OK)
+        goto cleanup;
+    get_f64s(r, m->beta, kp, &off, "the coefficients", err);
+    if ((st = check_finite(m->beta, kp, off, "the coefficients", err)) != AFFECT_OK)
+        goto cleanup;
+    *out = m;
+    m = NULL;
+cleanup:
+    affect_rmlr_free(m);
+    return st;
+}

@@ -1,0 +1,1002 @@
+/*
+ * fn_generate.c — SQL wrappers of affect generation (core: affect/generate.h, affect/rmlr.h;
+ * SCIENCE.md §5, thesis Fig. 5.4):
+ *
+ *   affect_generate(index_name, desired_motion, target_label [, options])  → motion BLOB
+ *   affect_generate_explain(index_name, desired_motion, target_label [, options]) → JSON
+ *   laban_salient(index_name [, options])  → JSON: per label the salient Laban components
+ *                                            (elastic-net multinomial logistic regression),
+ *                                            and per pair of labels the discriminative set
+ *
+ * How it works: index_name names a `laban` virtual table (vt_laban.c). Its shadow tables give
+ * the labelled Laban vectors (`<index>_data`) and the content table (`<index>_info`). The
+ * salient components come from an RMLR fit on those vectors (missing components imputed by the
+ * component's mean); the fit is cached in `<index>_info` (keys `rmlr`, a BLOB, and
+ * `rmlr_generation`) and refitted when the index's generation changed (any rebuild or refresh),
+ * and kept per connection as well; when the database cannot be written (read-only, busy) the
+ * fit is only kept in memory. The components used for the neighbour search are
+ * L \ L′_target, or L \ (L′_source ∩ L′_target) when the source emotion is known: given
+ * (source_label), read from the index when the desired motion is one of its rows (same bytes),
+ * or recognized with a classifier (option classifier: the classifier BLOB as hex text, e.g.
+ * json_object('classifier', hex(model))). The neighbours are the index's own query:
+ *   SELECT rowid, distance FROM <index> WHERE query = :desired AND label = :target
+ *                                         AND radius = :epsilon AND components = :json
+ * (ε relative to the furthest target motion, the thesis's; at least the nearest one is kept),
+ * or `k = n` instead of the radius with the option k. Their motions are read from the content
+ * table and handed to affect_generate (core), which excludes neighbours on another skeleton.
+ *
+ * These functions read (and laban_salient and affect_generate may write the cache into) the
+ * index's tables, so they are registered SQLITE_DIRECTONLY (not usable from triggers or views)
+ * and not deterministic in SQLite's sense: for the same database content and options they
+ * return the same bytes.
+ *
+ * Options (affect_generate and affect_generate_explain): copies (n_d, 0), states (12), epsilon
+ * (0.1), k (instead of epsilon), components ("auto" = RMLR, or an array of names), source_label,
+ * classifier (hex text), cutoff_hz (3), covariance_scale (1), seed (1). laban_salient: seed,
+ * folds (10).
+ */
+#include "fn_generate.h"
+
+#include <inttypes.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "affect/bytes.h"
+#include "affect/classifier.h"
+#include "affect/features.h"
+#include "affect/generate.h"
+#include "affect/hmm_blob.h"
+#include "affect/laban.h"
+#include "affect/rmlr.h"
+#include "affect/strbuf.h"
+#include "seqs.h"
+
+#define N_COMP AFFECT_LABAN_N
+
+/* ---- the per-function cache of RMLR fits ---- */
+
+struct ax_gen_fn {
+    char name[32]; /* first: AX_NAME(ctx) reads it */
+    char *index;   /* the cached fit's index, generation and seed */
+    sqlite3_int64 generation;
+    uint64_t seed;
+    affect_rmlr *fit;
+};
+
+ax_gen_fn *ax_gen_fn_new(const char *name)
+{
+    ax_gen_fn *fn = sqlite3_malloc64(sizeof *fn);
+    if (!fn)
+        return NULL;
+    memset(fn, 0, sizeof *fn);
+    size_t len = strlen(name);
+    memcpy(fn->name, name, len < sizeof fn->name ? len + 1 : sizeof fn->name);
+    fn->name[sizeof fn->name - 1] = '\0';
+    return fn;
+}
+
+static void gen_cache_clear(ax_gen_fn *fn)
+{
+    sqlite3_free(fn->index);
+    affect_rmlr_free(fn->fit);
+    fn->index = NULL;
+    fn->fit = NULL;
+}
+
+void ax_gen_fn_free(void *p)
+{
+    ax_gen_fn *fn = p;
+    if (fn) {
+        gen_cache_clear(fn);
+        sqlite3_free(fn);
+    }
+}
+
+/* ---- the index ---- */
+
+typedef struct gen_index {
+    const char *name;
+    char *content, *motion; /* content table and motion column */
+    sqlite3_int64 generation;
+    uint32_t n;             /* rows with a label */
+    sqlite3_int64 *ids;
+    double *x;              /* n × N_COMP, missing components imputed by the mean */
+    uint32_t *y;            /* class of each row */
+    char **labels;          /* n: each row's label (owned) */
+    uint32_t n_classes;
+    char **classes;         /* distinct labels in byte order (pointers into labels) */
+} gen_index;
+
+static void index_free(gen_index *ix)
+{
+    sqlite3_free(ix->content);
+    sqlite3_free(ix->motion);
+    affect_free(ix->ids);
+    affect_free(ix->x);
+    affect_free(ix->y);
+    for (uint32_t i = 0; ix->labels && i < ix->n; i++)
+        affect_free(ix->labels[i]);
+    affect_free(ix->labels);
+    affect_free(ix->classes);
+    memset(ix, 0, sizeof *ix);
+}
+
+static int cmp_text(const void *a, const void *b)
+{
+    return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+/* Reports the connection's last error as "<fn>: <what>: <sqlite message>"; no error recorded
+ * means our own sqlite3_mprintf failed: out of memory. */
+static void db_error(sqlite3_context *ctx, const char *what)
+{
+    sqlite3 *db = sqlite3_context_db_handle(ctx);
+    int code = sqlite3_errcode(db);
+    if (code == SQLITE_NOMEM || code == SQLITE_OK)
+        sqlite3_result_error_nomem(ctx);
+    else
+        ax_errorf(ctx, "%s: %s", what, sqlite3_errmsg(db));
+}
+
+/* The index's _info values content, motion and generation; "not a laban table" otherwise. */
+static ax_arg index_info(sqlite3_context *ctx, gen_index *ix)
+{
+    sqlite3 *db = sqlite3_context_db_handle(ctx);
+    char *sql = sqlite3_mprintf(
+        "SELECT (SELECT sql FROM sqlite_schema WHERE type = 'table' AND name = %Q), "
+        "(SELECT value FROM \"%w_info\" WHERE key = 'content'), "
+        "(SELECT value FROM \"%w_info\" WHERE key = 'motion'), "
+        "(SELECT value FROM \"%w_info\" WHERE key = 'generation')",
+        ix->name, ix->name, ix->name, ix->name);
+    if (!sql) {
+        sqlite3_result_error_nomem(ctx);
+        return AX_ERROR;
+    }
+    sqlite3_stmt *st = NULL;
+    int rc = sqlite3_prepare_v2(db, sql, -1, &st, NULL);
+    sqlite3_free(sql);
+    if (rc != SQLITE_OK || sqlite3_step(st) != SQLITE_ROW) {
+        sqlite3_finalize(st);
+        if (sqlite3_errcode(db) == SQLITE_NOMEM) {
+            sqlite3_result_error_nomem(ctx);
+            return AX_ERROR;
+        }
+        ax_errorf(ctx, "\"%s\" is not a laban table (CREATE VIRTUAL TABLE %s USING laban(…))",
+                  ix->name, ix->name);
+        return AX_ERROR;
+    }
+    const char *def = (const char *)sqlite3_column_text(st, 0);
+    bool is_laban = def && sqlite3_strlike("%USING laban(%", def, 0) == 0 &&
+                    sqlite3_column_type(st, 1) == SQLITE_TEXT &&
+                    sqlite3_column_type(st, 2) == SQLITE_TEXT;
+    if (is_laban) {
+        ix->content = sqlite3_mprintf("%s", sqlite3_column_text(st, 1));
+        ix->motion = sqlite3_mprintf("%s", sqlite3_column_text(st, 2));
+        ix->generation = sqlite3_column_int64(st, 3);
+    }
+    sqlite3_finalize(st);
+    if (!is_laban) {
+        ax_errorf(ctx, "\"%s\" is not a laban table (CREATE VIRTUAL TABLE %s USING laban(…))",
+                  ix->name, ix->name);
+        return AX_ERROR;
+    }
+    if (!ix->content || !ix->motion) {
+        sqlite3_result_error_nomem(ctx);
+        return AX_ERROR;
+    }
+    return AX_OK;
+}
+
+/* The labelled rows: ids, vectors (NaN kept for now), labels. */
+static ax_arg index_rows(sqlite3_context *ctx, gen_index *ix)
+{
+    sqlite3 *db = sqlite3_context_db_handle(ctx);
+    char *sql = sqlite3_mprintf("SELECT id, CAST(label AS TEXT), vector FROM \"%w_data\" "
+                                "WHERE label IS NOT NULL ORDER BY id", ix->name);
+    sqlite3_stmt *st = NULL;
+    if (!sql || sqlite3_prepare_v2(db, sql, -1, &st, NULL) != SQLITE_OK) {
+        sqlite3_free(sql);
+        db_error(ctx, "reading the index");
+        return AX_ERROR;
+    }
+    sqlite3_free(sql);
+    uint32_t cap = 0;
+    ax_arg r = AX_ERROR;
+    int rc;
+    while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
+        if (ix->n == cap) {
+            cap = cap ? 2 * cap : 64;
+            sqlite3_int64 *ids = affect_realloc(ix->ids, cap * sizeof *ids);
+            if (ids)
+                ix->ids = ids;
+            double *x = affect_realloc(ix->x, (size_t)cap * N_COMP * sizeof *x);
+            if (x)
+                ix->x = x;
+            char **l = affect_realloc(ix->labels, cap * sizeof *l);
+            if (l)
+                ix->labels = l;
+            if (!ids || !x || !l) {
+                sqlite3_result_error_nomem(ctx);
+                goto done;
+            }
+        }
+        const unsigned char *v = sqlite3_column_blob(st, 2);
+        const char *label = (const char *)sqlite3_column_text(st, 1);
+        if (!label || sqlite3_column_bytes(st, 2) != 4 * N_COMP || !v) {
+            ax_errorf(ctx, "index \"%s\": row %" PRId64 " has no valid Laban vector", ix->name,
+                      (int64_t)sqlite3_column_int64(st, 0));
+            goto done;
+        }
+        ix->ids[ix->n] = sqlite3_column_int64(st, 0);
+        for (int j = 0; j < N_COMP; j++) {
+            uint32_t u = (uint32_t)v[4 * j] | (uint32_t)v[4 * j + 1] << 8 |
+                         (uint32_t)v[4 * j + 2] << 16 | (uint32_t)v[4 * j + 3] << 24;
+            float f;
+            memcpy(&f, &u, sizeof f);
+            ix->x[(size_t)ix->n * N_COMP + (size_t)j] = f;
+        }
+        ix->labels[ix->n] = affect_strndup(label, strlen(label));
+        if (!ix->labels[ix->n]) {
+            sqlite3_result_error_nomem(ctx);
+            goto done;
+        }
+        ix->n++;
+    }
+    if (rc != SQLITE_DONE) {
+        db_error(ctx, "reading the index");
+        goto done;
+    }
+    /* classes: the distinct labels in byte order */
+    ix->classes = affect_malloc_array(ix->n ? ix->n : 1, sizeof *ix->classes);
+    ix->y = affect_malloc_array(ix->n ? ix->n : 1, sizeof *ix->y);
+    if (!ix->classes || !ix->y) {
+        sqlite3_result_error_nomem(ctx);
+        goto done;
+    }
+    memcpy(ix->classes, ix->labels, ix->n * sizeof *ix->classes);
+    qsort(ix->classes, ix->n, sizeof *ix->classes, cmp_text);
+    uint32_t k = 0;
+    for (uint32_t i = 0; i < ix->n; i++)
+        if (k == 0 || strcmp(ix->classes[i], ix->classes[k - 1]) != 0)
+            ix->classes[k++] = ix->classes[i];
+    ix->n_classes = k;
+    for (uint32_t i = 0; i < ix->n; i++) {
+        char **hit = bsearch(&ix->labels[i], ix->classes, ix->n_classes, sizeof *ix->classes,
+                             cmp_text);
+        ix->y[i] = (uint32_t)(hit - ix->classes);
+    }
+    r = AX_OK;
+done:
+    sqlite3_finalize(st);
+    return r;
+}
+
+/* Missing components (NaN) become the component's mean over the rows that have it (0 when no
+ * row has it). */
+static void impute(gen_index *ix)
+{
+    for (int j = 0; j < N_COMP; j++) {
+        double s = 0.0;
+        uint32_t c = 0;
+        for (uint32_t i = 0; i < ix->n; i++) {
+            double v = ix->x[(size_t)i * N_COMP + (size_t)j];
+            if (isfinite(v)) {
+                s += v;
+                c++;
+            }
+        }
+        double mean = c ? s / c : 0.0;
+        for (uint32_t i = 0; i < ix->n; i++)
+            if (!isfinite(ix->x[(size_t)i * N_COMP + (size_t)j]))
+                ix->x[(size_t)i * N_COMP + (size_t)j] = mean;
+    }
+}
+
+static ax_arg index_load(sqlite3_context *ctx, const char *name, gen_index *ix)
+{
+    memset(ix, 0, sizeof *ix);
+    ix->name = name;
+    if (index_info(ctx, ix) != AX_OK || index_rows(ctx, ix) != AX_OK)
+        return AX_ERROR;
+    impute(ix);
+    return AX_OK;
+}
+
+/* ---- the RMLR fit, cached ---- */
+
+/* The persisted fit of the index, if its generation and seed are current; NULL otherwise. */
+static affect_rmlr *stored_fit(sqlite3 *db, const gen_index *ix, uint64_t seed)
+{
+    char *sql = sqlite3_mprintf("SELECT (SELECT value FROM \"%w_info\" WHERE key = 'rmlr'), "
+                                "(SELECT value FROM \"%w_info\" WHERE key = 'rmlr_generation')",
+                                ix->name, ix->name);
+    sqlite3_stmt *st = NULL;
+    affect_rmlr *fit = NULL;
+    if (sql && sqlite3_prepare_v2(db, sql, -1, &st, NULL) == SQLITE_OK &&
+        sqlite3_step(st) == SQLITE_ROW && sqlite3_column_type(st, 0) == SQLITE_BLOB) {
+        char expect[64];
+        sqlite3_snprintf(sizeof expect, expect, "%lld:%llu", (long long)ix->generation,
+                         (unsigned long long)seed);
+        const char *got = (const char *)sqlite3_column_text(st, 1);
+        if (got && strcmp(got, expect) == 0) {
+            affect_br r;
+            affect_br_init(&r, sqlite3_column_blob(st, 0), (size_t)sqlite3_column_bytes(st, 0));
+            affect_error err;
+            if (affect_rmlr_decode(&r, &fit, &err))
+                fit = NULL;
+        }
+    }
+    sqlite3_free(sql);
+    sqlite3_finalize(st);
+    return fit;
+}
+
+/* Stores the fit in the index's _info table; failures (read-only database, busy) are ignored:
+ * the fit stays cached in memory. */
+static void store_fit(sqlite3 *db, const gen_index *ix, uint64_t seed, const affect_rmlr *fit)
+{
+    affect_bw w;
+    affect_bw_init(&w);
+    affect_rmlr_encode(fit, &w);
+    char *sql = sqlite3_mprintf("INSERT OR REPLACE INTO \"%w_info\"(key, value) "
+                                "VALUES ('rmlr', ?1), ('rmlr_generation', ?2)",
+                                ix->name);
+    sqlite3_stmt *st = NULL;
+    if (!w.failed && sql && sqlite3_prepare_v2(db, sql, -1, &st, NULL) == SQLITE_OK) {
+        char gen[64];
+        sqlite3_snprintf(sizeof gen, gen, "%lld:%llu", (long long)ix->generation,
+                         (unsigned long long)seed);
+        sqlite3_bind_blob64(st, 1, w.data, w.len, SQLITE_STATIC);
+        sqlite3_bind_text(st, 2, gen, -1, SQLITE_TRANSIENT);
+        sqlite3_step(st);
+    }
+    sqlite3_finalize(st);
+    sqlite3_free(sql);
+    affect_bw_free(&w);
+}
+
+/* The index's RMLR fit: from this function's cache, the index's _info, or fitted now. */
+static ax_arg rmlr_fit(sqlite3_context *ctx, const gen_index *ix, uint64_t seed,
+                       uint32_t folds, const affect_rmlr **out)
+{
+    ax_gen_fn *fn = sqlite3_user_data(ctx);
+    if (fn->fit && fn->generation == ix->generation && fn->seed == seed &&
+        strcmp(fn->index, ix->name) == 0) {
+        *out = fn->fit;
+        return AX_OK;
+    }
+    gen_cache_clear(fn);
+    if (ix->n_classes < 2) {
+        ax_errorf(ctx, "index \"%s\" has %u label%s; salient components need at least 2",
+                  ix->name, ix->n_classes, ix->n_classes == 1 ? "" : "s");
+        return AX_ERROR;
+    }
+    sqlite3 *db = sqlite3_context_db_handle(ctx);
+    affect_rmlr *fit = stored_fit(db, ix, seed);
+    if (!fit) {
+        affect_rmlr_options o;
+        affect_rmlr_options_default(&o);
+        o.seed = seed;
+        o.folds = folds;
+        o.lambda_min_ratio = 0.01; /* the weakly penalized end of the path converges slowly
+                                      and is never chosen on these data */
+        affect_error err;
+        if (affect_rmlr_cv(ix->x, ix->n, N_COMP, ix->y, ix->n_classes, &o, &fit, &err)) {
+            if (err.status == AFFECT_ERR_NOMEM)
+                sqlite3_result_error_nomem(ctx);
+            else
+                ax_errorf(ctx, "salient components of \"%s\": %s", ix->name, err.msg);
+            return AX_ERROR;
+        }
+        store_fit(db, ix, seed, fit);
+    }
+    fn->index = sqlite3_mprintf("%s", ix->name);
+    if (!fn->index) {
+        affect_rmlr_free(fit);
+        sqlite3_result_error_nomem(ctx);
+        return AX_ERROR;
+    }
+    fn->fit = fit;
+    fn->generation = ix->generation;
+    fn->seed = seed;
+    *out = fit;
+    return AX_OK;
+}
+
+/* Salient components of class k: the non-zero coefficients. */
+static void salient_of(const affect_rmlr *fit, uint32_t k, bool on[N_COMP])
+{
+    const double *beta = affect_rmlr_beta(fit) + (size_t)k * N_COMP;
+    for (int j = 0; j < N_COMP; j++)
+        on[j] = beta[j] != 0.0;
+}
+
+static void put_components(affect_strbuf *sb, const bool on[N_COMP], bool want)
+{
+    affect_strbuf_putc(sb, '[');
+    bool first = true;
+    for (int j = 0; j < N_COMP; j++)
+        if (on[j] == want) {
+            affect_strbuf_puts(sb, first ? "" : ",");
+            affect_strbuf_json_string(sb, affect_laban_names[j]);
+            first = false;
+        }
+    affect_strbuf_putc(sb, ']');
+}
+
+/* ---- laban_salient ---- */
+
+static const char *const salient_keys[] = {"seed", "folds", NULL};
+
+void ax_laban_salient(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    const char *name;
+    size_t len;
+    ax_arg r = ax_arg_text(ctx, argv, 0, &name, &len);
+    if (r != AX_OK)
+        return;
+    ax_opts opts;
+    double seed = 1;
+    uint32_t folds = 10;
+    if (ax_opts_parse(ctx, argc, argv, 1, salient_keys, &opts) != AX_OK)
+        return;
+    gen_index ix;
+    memset(&ix, 0, sizeof ix);
+    const affect_rmlr *fit;
+    if (ax_opt_whole(ctx, &opts, "seed", 9007199254740992.0, &seed) ||
+        ax_opt_u32(ctx, &opts, "folds", &folds) || index_load(ctx, name, &ix) ||
+        rmlr_fit(ctx, &ix, (uint64_t)seed, folds, &fit))
+        goto done;
+    affect_strbuf sb;
+    affect_strbuf_init(&sb);
+    affect_strbuf_printf(&sb, "{\"index\":");
+    affect_strbuf_json_string(&sb, name);
+    affect_strbuf_printf(&sb, ",\"rows\":%u,\"alpha\":", ix.n);
+    affect_strbuf_double(&sb, affect_rmlr_alpha(fit));
+    affect_strbuf_puts(&sb, ",\"lambda\":");
+    affect_strbuf_double(&sb, affect_rmlr_lambda(fit));
+    affect_strbuf_puts(&sb, ",\"cv_error\":");
+    affect_strbuf_double(&sb, affect_rmlr_cv_error(fit));
+    affect_strbuf_puts(&sb, ",\"salient\":{");
+    for (uint32_t k = 0; k < ix.n_classes; k++) {
+        bool on[N_COMP];
+        salient_of(fit, k, on);
+        affect_strbuf_puts(&sb, k ? "," : "");
+        affect_strbuf_json_string(&sb, ix.classes[k]);
+        affect_strbuf_putc(&sb, ':');
+        put_components(&sb, on, true);
+    }
+    affect_strbuf_puts(&sb, "},\"pairs\":{");
+    bool first = true;
+    for (uint32_t a = 0; a < ix.n_classes; a++)
+        for (uint32_t b = a + 1; b < ix.n_classes; b++) {
+            bool sa[N_COMP], sbb[N_COMP], both[N_COMP];
+            salient_of(fit, a, sa);
+            salient_of(fit, b, sbb);
+            for (int j = 0; j < N_COMP; j++)
+                both[j] = sa[j] && sbb[j];
+            char *key = sqlite3_mprintf("%s|%s", ix.classes[a], ix.classes[b]);
+            affect_strbuf_puts(&sb, first ? "" : ",");
+            affect_strbuf_json_string(&sb, key ? key : "");
+            sqlite3_free(key);
+            affect_strbuf_putc(&sb, ':');
+            put_components(&sb, both, true);
+            first = false;
+        }
+    affect_strbuf_puts(&sb, "}}");
+    ax_result_json_buffer(ctx, &sb);
+done:
+    ax_opts_free(&opts);
+    index_free(&ix);
+}
+
+/* ---- affect_generate and affect_generate_explain ---- */
+
+static const char *const gen_keys[] = {"copies",     "states", "epsilon",   "k",
+                                       "components", "source_label", "classifier",
+                                       "cutoff_hz",  "covariance_scale", "seed", NULL};
+
+typedef struct gen_opts {
+    affect_generate_options g;
+    double epsilon;
+    uint32_t k;              /* 0: by epsilon */
+    bool auto_components;
+    bool use[N_COMP];        /* the components asked for (not auto) */
+    const char *source_label;
+    const char *classifier_hex;
+} gen_opts;
+
+/* The "components" option: "auto" or an array of component names. */
+static ax_arg opt_components(sqlite3_context *ctx, const ax_opts *opts, gen_opts *o)
+{
+    const affect_json_node *n = ax_opt(opts, "components");
+    o->auto_components = true;
+    if (!n || (n->type == AFFECT_JSON_STRING && strcmp(n->str, "auto") == 0))
+        return AX_OK;
+    if (n->type != AFFECT_JSON_ARRAY || n->count == 0) {
+        ax_errorf(ctx, "option \"components\" must be \"auto\" or a non-empty array of Laban "
+                       "component names (laban_names())");
+        return AX_ERROR;
+    }
+    o->auto_components = false;
+    for (const affect_json_node *e = affect_json_first(opts->doc, n); e;
+         e = affect_json_next_sibling(opts->doc, e)) {
+        int found = -1;
+        for (int j = 0; j < N_COMP && e->type == AFFECT_JSON_STRING; j++)
+            if (strcmp(e->str, affect_laban_names[j]) == 0)
+                found = j;
+        if (found < 0) {
+            ax_errorf(ctx, "option \"components\": %s%s%s is not a Laban component name "
+                           "(laban_names())",
+                      e->type == AFFECT_JSON_STRING ? "\"" : "",
+                      e->type == AFFECT_JSON_STRING ? e->str : affect_json_type_name(e->type),
+                      e->type == AFFECT_JSON_STRING ? "\"" : "");
+            return AX_ERROR;
+        }
+        o->use[found] = true;
+    }
+    return AX_OK;
+}
+
+static ax_arg read_gen_options(sqlite3_context *ctx, int argc, sqlite3_value **argv,
+                               ax_opts *opts, gen_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    affect_generate_options_default(&o->g);
+    o->epsilon = 0.1;
+    double seed = (double)o->g.seed;
+    if (ax_opts_parse(ctx, argc, argv, 3, gen_keys, opts) != AX_OK)
+        return AX_ERROR;
+    if (ax_opt_u32(ctx, opts, "copies", &o->g.copies) ||
+        ax_opt_u32(ctx, opts, "states", &o->g.states) ||
+        ax_opt_number(ctx, opts, "epsilon", &o->epsilon) || ax_opt_u32(ctx, opts, "k", &o->k) ||
+        opt_components(ctx, opts, o) ||
+        ax_opt_string(ctx, opts, "source_label", &o->source_label) ||
+        ax_opt_string(ctx, opts, "classifier", &o->classifier_hex) ||
+        ax_opt_number(ctx, opts, "cutoff_hz", &o->g.cutoff_hz) ||
+        ax_opt_number(ctx, opts, "covariance_scale", &o->g.covariance_scale) ||
+        ax_opt_whole(ctx, opts, "seed", 9007199254740992.0, &seed))
+        return AX_ERROR;
+    o->g.seed = (uint64_t)seed;
+    if (!(o->epsilon > 0) || !(o->epsilon <= 1)) {
+        ax_errorf(ctx, "option \"epsilon\" must be in (0, 1] (a fraction of the distance to the "
+                       "furthest target motion)");
+        return AX_ERROR;
+    }
+    if (ax_opt(opts, "k") && o->k == 0) {
+        ax_errorf(ctx, "option \"k\" must be at least 1");
+        return AX_ERROR;
+    }
+    return AX_OK;
+}
+
+/* Index of a label among the index's classes, or −1. */
+static int class_of(const gen_index *ix, const char *label)
+{
+    for (uint32_t k = 0; k < ix->n_classes; k++)
+        if (strcmp(ix->classes[k], label) == 0)
+            return (int)k;
+    return -1;
+}
+
+static void unknown_label(sqlite3_context *ctx, const gen_index *ix, const char *what,
+                          const char *label)
+{
+    affect_strbuf sb;
+    affect_strbuf_init(&sb);
+    for (uint32_t k = 0; k < ix->n_classes && k < 20; k++) {
+        affect_strbuf_puts(&sb, k ? ", " : "");
+        affect_strbuf_puts(&sb, ix->classes[k]);
+    }
+    char *list;
+    size_t len;
+    affect_error err;
+    if (affect_strbuf_finish(&sb, &list, &len, &err)) {
+        sqlite3_result_error_nomem(ctx);
+        return;
+    }
+    ax_errorf(ctx, "%s \"%s\": no motion of \"%s\" has this label (labels: %s)", what, label,
+              ix->name, len ? list : "none");
+    affect_free(list);
+}
+
+/* Where the source emotion came from. */
+typedef struct source_info {
+    int cls;            /* class index, or −1 */
+    const char *how;    /* "option", "index", "classifier", "none" */
+    char *recognized;   /* classifier's label (affect_free) */
+} source_info;
+
+static uint8_t hex_digit(char c, bool *bad)
+{
+    if (c >= '0' && c <= '9')
+        return (uint8_t)(c - '0');
+    if (c >= 'a' && c <= 'f')
+        return (uint8_t)(c - 'a' + 10);
+    if (c >= 'A' && c <= 'F')
+        return (uint8_t)(c - 'A' + 10);
+    *bad = true;
+    return 0;
+}
+
+/* The source label by the classifier of the option (hex text of a classifier BLOB). */
+static ax_arg classify_source(sqlite3_context *ctx, const char *hex, const affect_motion *m,
+                              source_info *src)
+{
+    size_t len = strlen(hex);
+    bool bad = len % 2 != 0;
+    unsigned char *blob = affect_malloc(len / 2 + 1);
+    if (!blob) {
+        sqlite3_result_error_nomem(ctx);
+        return AX_ERROR;
+    }
+    for (size_t i = 0; i + 1 < len; i += 2)
+        blob[i / 2] = (uint8_t)(hex_digit(hex[i], &bad) << 4 | hex_digit(hex[i + 1], &bad));
+    affect_classifier *c = NULL;
+    double *x = NULL;
+    uint32_t T = 0;
+    affect_error err;
+    ax_arg r = AX_ERROR;
+    if (bad) {
+        ax_errorf(ctx, "option \"classifier\" must be a classifier BLOB as hex text "
+                       "(json_object('classifier', hex(model)))");
+        goto done;
+    }
+    if (affect_classifier_decode(blob, len / 2, &c, &err) ||
+        affect_features_extract(affect_classifier_features(c), m, &x, &T, &err)) {
+        if (err.status == AFFECT_ERR_NOMEM)
+            sqlite3_result_error_nomem(ctx);
+        else
+            ax_errorf(ctx, "option \"classifier\": %s", err.msg);
+        goto done;
+    }
+    affect_classifier_out o = {0};
+    if (affect_classifier_eval(c, x, T, false, &o, &err)) {
+        ax_error(ctx, &err);
+        goto done;
+    }
+    const char *label = affect_classifier_label(c, o.svm);
+    src->recognized = affect_strndup(label, strlen(label));
+    if (!src->recognized) {
+        sqlite3_result_error_nomem(ctx);
+        goto done;
+    }
+    r = AX_OK;
+done:
+    affect_free(x);
+    affect_classifier_free(c);
+    affect_free(blob);
+    return r;
+}
+
+/* The source emotion: option, the index row with the desired motion's bytes, the classifier,
+ * or none. */
+static ax_arg find_source(sqlite3_context *ctx, const gen_index *ix, const gen_opts *o,
+                          sqlite3_value *desired, const affect_motion *m, source_info *src)
+{
+    src->cls = -1;
+    src->how = "none";
+    src->recognized = NULL;
+    if (o->source_label) {
+        src->cls = class_of(ix, o->source_label);
+        if (src->cls < 0) {
+            unknown_label(ctx, ix, "source_label", o->source_label);
+            return AX_ERROR;
+        }
+        src->how = "option";
+        return AX_OK;
+    }
+    if (o->classifier_hex) {
+        if (classify_source(ctx, o->classifier_hex, m, src) != AX_OK)
+            return AX_ERROR;
+        src->cls = class_of(ix, src->recognized);
+        src->how = "classifier";
+        return AX_OK;
+    }
+    const unsigned char *data = sqlite3_value_blob(desired);
+    size_t n = (size_t)sqlite3_value_bytes(desired);
+    uint64_t h = affect_fnv1a64(data, n);
+    sqlite3_int64 hash = h <= (uint64_t)INT64_MAX ? (sqlite3_int64)h
+                                                  : -(sqlite3_int64)(UINT64_MAX - h) - 1;
+    sqlite3 *db = sqlite3_context_db_handle(ctx);
+    char *sql = sqlite3_mprintf("SELECT CAST(label AS TEXT) FROM \"%w_data\" WHERE msize = ?1 "
+                                "AND mhash = ?2 AND label IS NOT NULL ORDER BY id LIMIT 1",
+                                ix->name);
+    sqlite3_stmt *st = NULL;
+    if (!sql || sqlite3_prepare_v2(db, sql, -1, &st, NULL) != SQLITE_OK) {
+        sqlite3_free(sql);
+        db_error(ctx, "reading the index");
+        return AX_ERROR;
+    }
+    sqlite3_free(sql);
+    sqlite3_bind_int64(st, 1, (sqlite3_int64)n);
+    sqlite3_bind_int64(st, 2, hash);
+    if (sqlite3_step(st) == SQLITE_ROW && sqlite3_column_text(st, 0)) {
+        src->cls = class_of(ix, (const char *)sqlite3_column_text(st, 0));
+        src->how = "index";
+    }
+    sqlite3_finalize(st);
+    return AX_OK;
+}
+
+/* The components for the neighbour search (and the salient sets, for the explanation). */
+typedef struct comp_choice {
+    bool use[N_COMP];
+    bool sal_t[N_COMP], sal_o[N_COMP];
+    bool fell_back; /* every component was salient: all used */
+    const affect_rmlr *fit;
+} comp_choice;
+
+static ax_arg choose_components(sqlite3_context *ctx, const gen_index *ix, const gen_opts *o,
+                                int target, const source_info *src, comp_choice *cc)
+{
+    memset(cc, 0, sizeof *cc);
+    if (!o->auto_components) {
+        memcpy(cc->use, o->use, sizeof cc->use);
+        return AX_OK;
+    }
+    if (rmlr_fit(ctx, ix, o->g.seed, 10, &cc->fit) != AX_OK)
+        return AX_ERROR;
+    salient_of(cc->fit, (uint32_t)target, cc->sal_t);
+    if (src->cls >= 0)
+        salient_of(cc->fit, (uint32_t)src->cls, cc->sal_o);
+    int used = 0;
+    for (int j = 0; j < N_COMP; j++) {
+        bool drop = src->cls >= 0 ? cc->sal_t[j] && cc->sal_o[j] : cc->sal_t[j];
+        cc->use[j] = !drop;
+        used += cc->use[j];
+    }
+    if (used == 0) {
+        for (int j = 0; j < N_COMP; j++)
+            cc->use[j] = true;
+        cc->fell_back = true;
+    }
+    return AX_OK;
+}
+
+static char *components_json(const bool use[N_COMP])
+{
+    affect_strbuf sb;
+    affect_strbuf_init(&sb);
+    put_components(&sb, use, true);
+    char *text;
+    size_t len;
+    affect_error err;
+    return affect_strbuf_finish(&sb, &text, &len, &err) ? NULL : text;
+}
+
+/* The neighbours: content rowids and distances from the index's own query. */
+typedef struct neighbours {
+    uint32_t n;
+    sqlite3_int64 ids[1024];
+    double dist[1024];
+    bool by_k, nearest_only;
+} neighbours;
+
+static ax_arg find_neighbours(sqlite3_context *ctx, const gen_index *ix, const gen_opts *o,
+                              sqlite3_value *desired, const char *target, const char *comps,
+                              neighbours *nb)
+{
+    sqlite3 *db = sqlite3_context_db_handle(ctx);
+    nb->n = 0;
+    nb->by_k = o->k > 0;
+    nb->nearest_only = false;
+    for (int pass = 0; pass < 2 && nb->n == 0; pass++) {
+        bool by_k = o->k > 0 || pass == 1;
+        char *sql = sqlite3_mprintf("SELECT rowid, distance FROM \"%w\" WHERE query = ?1 AND "
+                                    "label = ?2 AND components = ?3 AND %s = ?4 "
+                                    "ORDER BY distance, rowid",
+                                    ix->name, by_k ? "k" : "radius");
+        sqlite3_stmt *st = NULL;
+        if (!sql || sqlite3_prepare_v2(db, sql, -1, &st, NULL) != SQLITE_OK) {
+            sqlite3_free(sql);
+            db_error(ctx, "the neighbour search");
+            return AX_ERROR;
+        }
+        sqlite3_free(sql);
+        sqlite3_bind_value(st, 1, desired);
+        sqlite3_bind_text(st, 2, target, -1, SQLITE_STATIC);
+        sqlite3_bind_text(st, 3, comps, -1, SQLITE_STATIC);
+        if (by_k)
+            sqlite3_bind_int64(st, 4, o->k > 0 ? o->k : 1);
+        else
+            sqlite3_bind_double(st, 4, o->epsilon);
+        int rc;
+        while ((rc = sqlite3_step(st)) == SQLITE_ROW && nb->n < 1024) {
+            nb->ids[nb->n] = sqlite3_column_int64(st, 0);
+            nb->dist[nb->n++] = sqlite3_column_double(st, 1);
+        }
+        if (rc != SQLITE_ROW && rc != SQLITE_DONE) {
+            sqlite3_finalize(st);
+            db_error(ctx, "the neighbour search");
+            return AX_ERROR;
+        }
+        sqlite3_finalize(st);
+        nb->nearest_only = pass == 1;
+    }
+    return AX_OK;
+}
+
+/* The neighbours' motions from the content table. */
+static ax_arg load_neighbours(sqlite3_context *ctx, const gen_index *ix, const neighbours *nb,
+                              affect_motion **out)
+{
+    sqlite3 *db = sqlite3_context_db_handle(ctx);
+    char *sql = sqlite3_mprintf("SELECT \"%w\" FROM \"%w\" WHERE rowid = ?1", ix->motion,
+                                ix->content);
+    sqlite3_stmt *st = NULL;
+    if (!sql || sqlite3_prepare_v2(db, sql, -1, &st, NULL) != SQLITE_OK) {
+        sqlite3_free(sql);
+        db_error(ctx, "reading the content table");
+        return AX_ERROR;
+    }
+    sqlite3_free(sql);
+    ax_arg r = AX_OK;
+    for (uint32_t i = 0; i < nb->n && r == AX_OK; i++) {
+        sqlite3_reset(st);
+        sqlite3_bind_int64(st, 1, nb->ids[i]);
+        if (sqlite3_step(st) != SQLITE_ROW || sqlite3_column_type(st, 0) != SQLITE_BLOB) {
+            ax_errorf(ctx, "content row %" PRId64 " of \"%s\" has no motion (run the index's "
+                           "'check' command)", (int64_t)nb->ids[i], ix->name);
+            r = AX_ERROR;
+            break;
+        }
+        affect_error err;
+        if (affect_motion_decode(sqlite3_column_blob(st, 0), (size_t)sqlite3_column_bytes(st, 0),
+                                 &out[i], &err)) {
+            if (err.status == AFFECT_ERR_NOMEM)
+                sqlite3_result_error_nomem(ctx);
+            else
+                ax_errorf(ctx, "content row %" PRId64 ": %s", (int64_t)nb->ids[i], err.msg);
+            r = AX_ERROR;
+        }
+    }
+    sqlite3_finalize(st);
+    return r;
+}
+
+static void explain_json(sqlite3_context *ctx, const gen_index *ix, const gen_opts *o,
+                         const char *target, const source_info *src, const comp_choice *cc,
+                         const neighbours *nb, const affect_generate_report *rep,
+                         uint32_t frames)
+{
+    affect_strbuf sb;
+    affect_strbuf_init(&sb);
+    affect_strbuf_puts(&sb, "{\"index\":");
+    affect_strbuf_json_string(&sb, ix->name);
+    affect_strbuf_puts(&sb, ",\"target\":");
+    affect_strbuf_json_string(&sb, target);
+    affect_strbuf_puts(&sb, ",\"source\":{\"label\":");
+    if (src->cls >= 0)
+        affect_strbuf_json_string(&sb, ix->classes[src->cls]);
+    else
+        affect_strbuf_puts(&sb, "null");
+    affect_strbuf_printf(&sb, ",\"from\":\"%s\"", src->how);
+    if (src->recognized) {
+        affect_strbuf_puts(&sb, ",\"recognized\":");
+        affect_strbuf_json_string(&sb, src->recognized);
+    }
+    affect_strbuf_printf(&sb, "},\"components\":{\"chosen_by\":\"%s\",\"used\":",
+                         o->auto_components ? "rmlr" : "option");
+    put_components(&sb, cc->use, true);
+    affect_strbuf_puts(&sb, ",\"excluded\":");
+    put_components(&sb, cc->use, false);
+    if (o->auto_components) {
+        affect_strbuf_puts(&sb, ",\"salient_target\":");
+        put_components(&sb, cc->sal_t, true);
+        if (src->cls >= 0) {
+            affect_strbuf_puts(&sb, ",\"salient_source\":");
+            put_components(&sb, cc->sal_o, true);
+        }
+        affect_strbuf_printf(&sb, ",\"all_salient_fallback\":%s",
+                             cc->fell_back ? "true" : "false");
+    }
+    affect_strbuf_puts(&sb, "},\"neighbours\":{\"by\":");
+    if (nb->by_k)
+        affect_strbuf_printf(&sb, "\"k\",\"k\":%u", o->k);
+    else {
+        affect_strbuf_puts(&sb, "\"epsilon\",\"epsilon\":");
+        affect_strbuf_double(&sb, o->epsilon);
+    }
+    affect_strbuf_printf(&sb, ",\"nearest_only\":%s,\"rows\":[",
+                         nb->nearest_only ? "true" : "false");
+    for (uint32_t i = 0; i < nb->n; i++) {
+        affect_strbuf_printf(&sb, "%s{\"rowid\":%" PRId64 ",\"distance\":", i ? "," : "",
+                             (int64_t)nb->ids[i]);
+        affect_strbuf_double(&sb, nb->dist[i]);
+        affect_strbuf_putc(&sb, '}');
+    }
+    affect_strbuf_printf(&sb, "],\"used\":%u,\"excluded_skeleton\":%u},\"hmm\":{\"states\":%u,"
+                              "\"copies\":%u,\"iterations\":%u,\"loglik\":",
+                         rep->neighbours_used, rep->excluded, o->g.states, o->g.copies,
+                         rep->iterations);
+    affect_strbuf_double(&sb, rep->loglik);
+    affect_strbuf_puts(&sb, "},\"viterbi\":{\"logprob\":");
+    affect_strbuf_double(&sb, rep->viterbi_logprob);
+    affect_strbuf_puts(&sb, ",\"path\":[");
+    for (uint32_t t = 0; t < frames && rep->path; t++)
+        affect_strbuf_printf(&sb, "%s%d", t ? "," : "", (int)rep->path[t]);
+    affect_strbuf_puts(&sb, "]}}");
+    ax_result_json_buffer(ctx, &sb);
+}
+
+static void run_generation(sqlite3_context *ctx, int argc, sqlite3_value **argv, bool explain)
+{
+    const char *name, *target;
+    size_t len;
+    affect_motion *m = NULL, **motions = NULL;
+    ax_opts opts = {NULL, NULL};
+    gen_index ix;
+    memset(&ix, 0, sizeof ix);
+    source_info src = {-1, "none", NULL};
+    neighbours *nb = NULL;
+    char *comps = NULL;
+    affect_motion *out = NULL;
+    affect_generate_report rep;
+    memset(&rep, 0, sizeof rep);
+    if (ax_arg_text(ctx, argv, 0, &name, &len) != AX_OK ||
+        ax_arg_text(ctx, argv, 2, &target, &len) != AX_OK ||
+        ax_arg_motion(ctx, argv, 1, &m) != AX_OK)
+        goto done;
+    gen_opts o;
+    if (read_gen_options(ctx, argc, argv, &opts, &o) != AX_OK ||
+        index_load(ctx, name, &ix) != AX_OK)
+        goto done;
+    int t = class_of(&ix, target);
+    if (t < 0) {
+        unknown_label(ctx, &ix, "target label", target);
+        goto done;
+    }
+    comp_choice cc;
+    if (find_source(ctx, &ix, &o, argv[1], m, &src) != AX_OK ||
+        choose_components(ctx, &ix, &o, t, &src, &cc) != AX_OK)
+        goto done;
+    comps = components_json(cc.use);
+    nb = affect_malloc(sizeof *nb);
+    if (!comps || !nb) {
+        sqlite3_result_error_nomem(ctx);
+        goto done;
+    }
+    if (find_neighbours(ctx, &ix, &o, argv[1], target, comps, nb) != AX_OK)
+        goto done;
+    motions = affect_calloc(nb->n ? nb->n : 1, sizeof *motions);
+    if (!motions) {
+        sqlite3_result_error_nomem(ctx);
+        goto done;
+    }
+    if (load_neighbours(ctx, &ix, nb, motions) != AX_OK)
+        goto done;
+    affect_error err;
+    if (affect_generate(m, (const affect_motion *const *)motions, nb->n, &o.g, &out, &rep,
+                        &err)) {
+        ax_error(ctx, &err);
+        goto done;
+    }
+    if (explain)
+        explain_json(ctx, &ix, &o, target, &src, &cc, nb, &rep, m->n_frames);
+    else
+        ax_result_motion(ctx, out);
+done:
+    for (uint32_t i = 0; motions && nb && i < nb->n; i++)
+        affect_motion_free(motions[i]);
+    affect_free(motions);
+    affect_motion_free(out);
+    affect_free(rep.path);
+    affect_free(nb);
+    affect_free(comps);
+    affect_free(src.recognized);
+    index_free(&ix);
+    ax_opts_free(&opts);
+    affect_motion_free(m);
+}
+
+void ax_affect_generate(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    run_generation(ctx, argc, argv, false);
+}
+
+void ax_affect_generate_explain(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    run_generation(ctx, argc, argv, true);
+}

@@ -1,0 +1,730 @@
+/*
+ * test_rmlr.c — elastic-net multinomial logistic regression: the KKT conditions of the
+ * solution, the lasso path, recovery of the informative features, determinism, errors, the
+ * encoding (round trip, truncation, corruption) and out-of-memory handling.
+ */
+#include <stdio.h>
+#include <string.h>
+
+#include "testutil.h"
+
+#include "affect/rmlr.h"
+#include "affect/rng.h"
+
+#define P 27
+
+/* n samples of P features, classes i mod K; features 0 .. n_inf−1 carry the label (class k
+ * shifts feature k mod n_inf by sep), the others are noise; features get different scales and
+ * offsets so that standardization matters. */
+static void synth(size_t n, uint32_t K, size_t n_inf, double sep, uint64_t seed, double *x,
+                  uint32_t *y)
+{
+    affect_rng r;
+    affect_rng_seed(&r, seed);
+    for (size_t i = 0; i < n; i++) {
+        y[i] = (uint32_t)(i % K);
+        for (size_t j = 0; j < P; j++) {
+            double v = affect_rng_normal(&r);
+            if (j < n_inf && y[i] % n_inf == j)
+                v += sep;
+            if (j < n_inf && y[i] == K - 1 && K > n_inf)
+                v -= sep; /* the extra classes sit on the negative side of every feature */
+            x[i * P + j] = 3.0 + (double)(j + 1) * v;
+        }
+    }
+}
+
+/* Standardized copy of x (n × P) as the library does (population sd). */
+static void standardize(const double *x, size_t n, double *z)
+{
+    for (size_t j = 0; j < P; j++) {
+        double m = 0, ss = 0;
+        for (size_t i = 0; i < n; i++)
+            m += x[i * P + j];
+        m /= (double)n;
+        for (size_t i = 0; i < n; i++)
+            ss += (x[i * P + j] - m) * (x[i * P + j] - m);
+        double sd = sqrt(ss / (double)n);
+        for (size_t i = 0; i < n; i++)
+            z[i * P + j] = (x[i * P + j] - m) / sd;
+    }
+}
+
+static size_t nonzeros(const double *beta, uint32_t K)
+{
+    size_t c = 0;
+    for (size_t i = 0; i < K * (size_t)P; i++)
+        c += beta[i] != 0;
+    return c;
+}
+
+/* KKT of the elastic net at every λ of a path, with gradients computed here from scratch. */
+static void check_kkt(const double *x, size_t n, const uint32_t *y, uint32_t K, double alpha,
+                      const double *lam, uint32_t L, const double *beta, const double *beta0,
+                      double tol)
+{
+    double *z = malloc(n * P * sizeof *z), *pr = malloc(n * K * sizeof *pr);
+    assert_non_null(z);
+    assert_non_null(pr);
+    standardize(x, n, z);
+    for (uint32_t l = 0; l < L; l++) {
+        const double *b = beta + (size_t)l * K * P, *b0 = beta0 + (size_t)l * K;
+        for (size_t i = 0; i < n; i++) {
+            double mx = -INFINITY, s = 0;
+            for (uint32_t k = 0; k < K; k++) {
+                double e = b0[k];
+                for (size_t j = 0; j < P; j++)
+                    e += b[k * P + j] * z[i * P + j];
+                pr[i * K + k] = e;
+                if (e > mx)
+                    mx = e;
+            }
+            for (uint32_t k = 0; k < K; k++)
+                s += pr[i * K + k] = exp(pr[i * K + k] - mx);
+            for (uint32_t k = 0; k < K; k++)
+                pr[i * K + k] /= s;
+        }
+        double s0 = 0;
+        for (uint32_t k = 0; k < K; k++) {
+            double gi = 0;
+            for (size_t i = 0; i < n; i++)
+                gi += (y[i] == k) - pr[i * K + k];
+            tu_assert_near(gi / (double)n, 0, tol);
+            s0 += b0[k];
+            for (size_t j = 0; j < P; j++) {
+                double g = 0, bk = b[k * P + j];
+                for (size_t i = 0; i < n; i++)
+                    g += z[i * P + j] * ((y[i] == k) - pr[i * K + k]);
+                g /= (double)n;
+                if (bk != 0) {
+                    double s = bk > 0 ? 1 : -1;
+                    tu_assert_near(g - lam[l] * (1 - alpha) * bk - lam[l] * alpha * s, 0, tol);
+                } else {
+                    assert_true(fabs(g) <= lam[l] * alpha + tol);
+                }
+            }
+        }
+        tu_assert_near(s0, 0, 1e-12);
+    }
+    free(z);
+    free(pr);
+}
+
+static void test_kkt(void **state)
+{
+    (void)state;
+    enum { N = 120, K = 3, L = 12 };
+    static const double alphas[] = {0.05, 0.3, 0.7, 1.0};
+    double *x = malloc(N * P * sizeof *x), *beta = malloc(L * K * P * sizeof *beta);
+    double beta0[L * K], lam[L];
+    uint32_t y[N];
+    uint8_t conv[L];
+    affect_error err;
+    assert_non_null(x);
+    assert_non_null(beta);
+    synth(N, K, 3, 1.0, 11, x, y);
+    for (size_t a = 0; a < sizeof alphas / sizeof *alphas; a++) {
+        affect_rmlr_options o;
+        affect_rmlr_options_default(&o);
+        o.lambda_min_ratio = 0.01;
+        o.tol = 1e-13; /* tight, so the KKT conditions hold to 1e-6 */
+        assert_int_equal(affect_rmlr_fit_path(x, N, P, y, K, alphas[a], NULL, L, &o, lam, beta,
+                                              beta0, conv, &err),
+                         AFFECT_OK);
+        for (uint32_t l = 0; l < L; l++)
+            assert_int_equal(conv[l], 1);
+        /* the path is log-spaced from λ_max down to λ_max / 100 */
+        tu_assert_near(lam[L - 1] / lam[0], 0.01, 1e-12);
+        tu_assert_near(lam[1] / lam[0], pow(0.01, 1.0 / (L - 1)), 1e-12);
+        check_kkt(x, N, y, K, alphas[a], lam, L, beta, beta0, 2e-6);
+        /* all zero at λ_max, and a little below it something enters */
+        assert_int_equal(nonzeros(beta, K), 0);
+        assert_true(nonzeros(beta + (size_t)(L - 1) * K * P, K) > 0);
+    }
+    /* given λ values (α = 0.5, one of them far from the path) */
+    double given[3] = {0.2, 0.05, 0.003};
+    affect_rmlr_options o;
+    affect_rmlr_options_default(&o);
+    o.tol = 1e-13;
+    assert_int_equal(
+        affect_rmlr_fit_path(x, N, P, y, K, 0.5, given, 3, &o, lam, beta, beta0, NULL, &err),
+        AFFECT_OK);
+    for (int l = 0; l < 3; l++)
+        assert_true(lam[l] == given[l]);
+    check_kkt(x, N, y, K, 0.5, lam, 3, beta, beta0, 2e-6);
+    free(x);
+    free(beta);
+}
+
+static void test_lasso_path(void **state)
+{
+    (void)state;
+    enum { N = 150, K = 4, L = 40 };
+    double *x = malloc(N * P * sizeof *x), *beta = malloc(L * K * P * sizeof *beta);
+    double lam[L];
+    uint32_t y[N];
+    affect_error err;
+    assert_non_null(x);
+    assert_non_null(beta);
+    synth(N, K, 3, 1.5, 5, x, y);
+    assert_int_equal(
+        affect_rmlr_fit_path(x, N, P, y, K, 1.0, NULL, L, NULL, lam, beta, NULL, NULL, &err),
+        AFFECT_OK);
+    size_t prev = 0, drops = 0, nz[L];
+    for (uint32_t l = 0; l < L; l++) {
+        nz[l] = nonzeros(beta + (size_t)l * K * P, K);
+        if (l > 0 && lam[l] >= lam[l - 1])
+            fail_msg("path not decreasing at %u", l);
+        if (nz[l] < prev)
+            drops += prev - nz[l];
+        prev = nz[l];
+    }
+    assert_int_equal(nz[0], 0);
+    assert_true(nz[1] >= 1 && nz[1] <= 8); /* the first step adds a few */
+    assert_true(nz[L / 2] > nz[L / 4]);
+    assert_true(nz[L - 1] > nz[L / 2]);
+    assert_true(nz[L - 1] >= 60);
+    assert_true(drops <= 6); /* roughly monotone */
+    /* λ_max is the smallest λ with all zero: a hair below it, something is non-zero */
+    double below[2] = {lam[0] * (1 + 1e-9), lam[0] * (1 - 1e-3)};
+    assert_int_equal(
+        affect_rmlr_fit_path(x, N, P, y, K, 1.0, below, 2, NULL, NULL, beta, NULL, NULL, &err),
+        AFFECT_OK);
+    assert_int_equal(nonzeros(beta, K), 0);
+    assert_int_equal(nonzeros(beta + K * P, K), 1);
+    free(x);
+    free(beta);
+}
+
+static void small_options(affect_rmlr_options *o, const double *alphas, uint32_t n_alpha)
+{
+    affect_rmlr_options_default(o);
+    o->alphas = alphas;
+    o->n_alpha = n_alpha;
+    o->n_lambda = 15;
+    o->lambda_min_ratio = 0.01;
+    o->folds = 4;
+    o->seed = 42;
+}
+
+static void test_recovery(void **state)
+{
+    (void)state;
+    enum { N = 150, K = 3 };
+    static const double alphas[] = {0.5, 1.0};
+    double *x = malloc(N * P * sizeof *x);
+    uint32_t y[N];
+    affect_error err;
+    affect_rmlr_options o;
+    affect_rmlr *m;
+    assert_non_null(x);
+    synth(N, K, 3, 2.0, 99, x, y);
+    small_options(&o, alphas, 2);
+    assert_int_equal(affect_rmlr_cv(x, N, P, y, K, &o, &m, &err), AFFECT_OK);
+    const double *beta = affect_rmlr_beta(m);
+    size_t others = 0;
+    for (size_t j = 0; j < P; j++) {
+        bool any = false;
+        for (uint32_t k = 0; k < K; k++)
+            any = any || beta[k * P + j] != 0;
+        if (j < 3)
+            assert_true(any);
+        else
+            others += any;
+    }
+    assert_true(others <= 6);
+    /* feature k carries class k: its coefficient for k is the largest positive one */
+    for (uint32_t k = 0; k < K; k++) {
+        for (size_t j = 0; j < P; j++)
+            if (j != k)
+                assert_true(beta[k * P + k] > beta[k * P + j]);
+        assert_true(beta[k * P + k] > 0);
+    }
+    assert_true(affect_rmlr_cv_error(m) < 0.25);
+    assert_true(affect_rmlr_converged(m));
+    assert_int_equal(affect_rmlr_n_classes(m), K);
+    assert_int_equal(affect_rmlr_n_features(m), P);
+    assert_int_equal(affect_rmlr_n_train(m), N);
+    uint32_t L;
+    const double *lam = affect_rmlr_lambdas(m, &L);
+    assert_int_equal(L, 15);
+    assert_true(affect_rmlr_lambda(m) == lam[affect_rmlr_lambda_index(m)]);
+    assert_true(affect_rmlr_cv_errors(m)[affect_rmlr_lambda_index(m)] == affect_rmlr_cv_error(m));
+    /* the choice is the smallest error, the largest λ among ties (of the chosen α) */
+    for (uint32_t l = 0; l < L; l++) {
+        assert_true(affect_rmlr_cv_errors(m)[l] >= affect_rmlr_cv_error(m));
+        if (l < affect_rmlr_lambda_index(m))
+            assert_true(affect_rmlr_cv_errors(m)[l] > affect_rmlr_cv_error(m));
+    }
+    assert_true(affect_rmlr_alpha(m) == 0.5 || affect_rmlr_alpha(m) == 1.0);
+    /* intercepts centred; means and sds of the training data */
+    const double *b0 = affect_rmlr_intercepts(m);
+    tu_assert_near(b0[0] + b0[1] + b0[2], 0, 1e-12);
+    double mean0 = 0;
+    for (size_t i = 0; i < N; i++)
+        mean0 += x[i * P];
+    tu_assert_near(affect_rmlr_means(m)[0], mean0 / N, 1e-12);
+    assert_true(affect_rmlr_sds(m)[5] > 4 && affect_rmlr_sds(m)[5] < 8); /* scale 6 */
+    /* prediction: training accuracy is high, probabilities sum to 1 */
+    size_t right = 0;
+    for (size_t i = 0; i < N; i++) {
+        double pr[K];
+        uint32_t c = affect_rmlr_predict(m, x + i * P, pr);
+        right += c == y[i];
+        tu_assert_near(pr[0] + pr[1] + pr[2], 1, 1e-12);
+        assert_true(pr[c] >= pr[0] && pr[c] >= pr[1] && pr[c] >= pr[2]);
+        assert_int_equal(affect_rmlr_predict(m, x + i * P, NULL), c);
+    }
+    assert_true(right >= 0.8 * N);
+    affect_rmlr_free(m);
+    free(x);
+}
+
+static void test_constant_feature(void **state)
+{
+    (void)state;
+    enum { N = 60, K = 2 };
+    double *x = malloc(N * P * sizeof *x), beta[3 * K * P], lam[3];
+    uint32_t y[N];
+    affect_error err;
+    assert_non_null(x);
+    synth(N, K, 2, 2.0, 3, x, y);
+    for (size_t i = 0; i < N; i++)
+        x[i * P + 4] = 0.1; /* a constant that is not exactly representable */
+    assert_int_equal(
+        affect_rmlr_fit_path(x, N, P, y, K, 0.2, NULL, 3, NULL, lam, beta, NULL, NULL, &err),
+        AFFECT_OK);
+    for (int l = 0; l < 3; l++)
+        for (uint32_t k = 0; k < K; k++)
+            assert_true(beta[(l * K + k) * P + 4] == 0);
+    assert_true(nonzeros(beta + 2 * K * P, K) > 10);
+    free(x);
+}
+
+static void test_determinism(void **state)
+{
+    (void)state;
+    enum { N = 60, K = 3 };
+    static const double alphas[] = {0.3, 1.0};
+    double *x = malloc(N * P * sizeof *x);
+    uint32_t y[N];
+    affect_error err;
+    affect_rmlr_options o;
+    affect_rmlr *m1, *m2, *m3;
+    affect_bw w1, w2, w3;
+    assert_non_null(x);
+    synth(N, K, 3, 1.0, 8, x, y);
+    small_options(&o, alphas, 2);
+    assert_int_equal(affect_rmlr_cv(x, N, P, y, K, &o, &m1, &err), AFFECT_OK);
+    assert_int_equal(affect_rmlr_cv(x, N, P, y, K, &o, &m2, &err), AFFECT_OK);
+    o.seed = 43;
+    assert_int_equal(affect_rmlr_cv(x, N, P, y, K, &o, &m3, &err), AFFECT_OK);
+    affect_bw_init(&w1);
+    affect_bw_init(&w2);
+    affect_bw_init(&w3);
+    affect_rmlr_encode(m1, &w1);
+    affect_rmlr_encode(m2, &w2);
+    affect_rmlr_encode(m3, &w3);
+    assert_false(w1.failed || w2.failed || w3.failed);
+    assert_int_equal(w1.len, w2.len);
+    assert_memory_equal(w1.data, w2.data, w1.len);
+    /* another seed, other folds: the cross-validated errors differ somewhere */
+    assert_int_equal(w1.len, w3.len);
+    assert_memory_not_equal(affect_rmlr_cv_errors(m1), affect_rmlr_cv_errors(m3),
+                            15 * sizeof(double));
+    affect_bw_free(&w1);
+    affect_bw_free(&w2);
+    affect_bw_free(&w3);
+    affect_rmlr_free(m1);
+    affect_rmlr_free(m2);
+    affect_rmlr_free(m3);
+    free(x);
+}
+
+#define EXPECT_ERR(call, status, message)                                                          \
+    do {                                                                                           \
+        affect_error_clear(&err);                                                                  \
+        assert_int_equal((call), (status));                                                        \
+        assert_string_equal(err.msg, (message));                                                   \
+    } while (0)
+
+static void test_errors(void **state)
+{
+    (void)state;
+    enum { N = 20, K = 2 };
+    double x[N * P], lam[2] = {0.1, -1}, beta[K * P];
+    uint32_t y[N];
+    affect_error err;
+    affect_rmlr_options o;
+    affect_rmlr *m = (affect_rmlr *)&err;
+    synth(N, K, 2, 1.0, 1, x, y);
+
+#define FIT(n_, p_, y_, K_, a_, l_, L_, o_)                                                        \
+    affect_rmlr_fit_path(x, n_, p_, y_, K_, a_, l_, L_, o_, NULL, beta, NULL, NULL, &err)
+    EXPECT_ERR(FIT(0, P, y, K, 1, NULL, 2, NULL), AFFECT_ERR_INVALID, "need at least 1 sample");
+    EXPECT_ERR(FIT(N, 0, y, K, 1, NULL, 2, NULL), AFFECT_ERR_INVALID, "need at least 1 feature");
+    EXPECT_ERR(FIT(N, 2000000, y, K, 1, NULL, 2, NULL), AFFECT_ERR_RANGE,
+               "too many features: 2000000 (at most 1048576)");
+    EXPECT_ERR(FIT((size_t)1 << 40, P, y, K, 1, NULL, 2, NULL), AFFECT_ERR_RANGE,
+               "too many samples: 1099511627776");
+    EXPECT_ERR(FIT(N, P, y, 1, 1, NULL, 2, NULL), AFFECT_ERR_INVALID,
+               "need at least 2 classes, got 1");
+    EXPECT_ERR(FIT(N, P, y, 300, 1, NULL, 2, NULL), AFFECT_ERR_INVALID,
+               "at most 256 classes, got 300");
+    EXPECT_ERR(FIT(N, P, y, K, 1.5, NULL, 2, NULL), AFFECT_ERR_INVALID,
+               "alpha must be in [0, 1], got 1.5");
+    EXPECT_ERR(FIT(N, P, y, K, NAN, NULL, 2, NULL), AFFECT_ERR_INVALID,
+               "alpha must be in [0, 1], got nan");
+    EXPECT_ERR(FIT(N, P, y, K, 1, NULL, 0, NULL), AFFECT_ERR_INVALID, "need at least 1 lambda");
+    EXPECT_ERR(FIT(N, P, y, K, 1, NULL, 2000000, NULL), AFFECT_ERR_RANGE,
+               "too many lambdas: 2000000 (at most 1048576)");
+    EXPECT_ERR(FIT(N, P, y, K, 1, lam, 2, NULL), AFFECT_ERR_INVALID,
+               "lambda 1 = -1 is not a positive finite number");
+    affect_rmlr_options_default(&o);
+    o.lambda_min_ratio = 2;
+    EXPECT_ERR(FIT(N, P, y, K, 1, NULL, 2, &o), AFFECT_ERR_INVALID,
+               "lambda_min_ratio must be in (0, 1), or 0 for automatic, got 2");
+    affect_rmlr_options_default(&o);
+    o.max_iter = 0;
+    EXPECT_ERR(FIT(N, P, y, K, 1, NULL, 2, &o), AFFECT_ERR_INVALID, "max_iter must be at least 1");
+    affect_rmlr_options_default(&o);
+    o.tol = 0;
+    EXPECT_ERR(FIT(N, P, y, K, 1, NULL, 2, &o), AFFECT_ERR_INVALID,
+               "tol must be a positive finite number, got 0");
+    y[5] = 7;
+    EXPECT_ERR(FIT(N, P, y, 3, 1, NULL, 2, NULL), AFFECT_ERR_INVALID,
+               "sample 5: class 7 out of range 0 .. 2");
+    y[5] = 1;
+    x[3 * P + 17] = INFINITY;
+    EXPECT_ERR(FIT(N, P, y, K, 1, NULL, 2, NULL), AFFECT_ERR_INVALID,
+               "sample 3, feature 17 is not finite");
+    x[3 * P + 17] = 0;
+    EXPECT_ERR(FIT(N, P, y, 3, 1, NULL, 2, NULL), AFFECT_ERR_INVALID, "class 2 has no sample");
+
+    /* cross-validation */
+    EXPECT_ERR(affect_rmlr_cv(x, N, P, y, 1, NULL, &m, &err), AFFECT_ERR_INVALID,
+               "need at least 2 classes, got 1");
+    assert_null(m);
+    static const double bad_alphas[] = {0.5, 1, 0.2, 1.5};
+    affect_rmlr_options_default(&o);
+    o.n_lambda = 0;
+    EXPECT_ERR(affect_rmlr_cv(x, N, P, y, K, &o, &m, &err), AFFECT_ERR_INVALID,
+               "n_lambda must be at least 1");
+    o.n_lambda = 2000000;
+    EXPECT_ERR(affect_rmlr_cv(x, N, P, y, K, &o, &m, &err), AFFECT_ERR_RANGE,
+               "too many lambdas: 2000000 (at most 1048576)");
+    affect_rmlr_options_default(&o);
+    o.alphas = bad_alphas;
+    o.n_alpha = 0;
+    EXPECT_ERR(affect_rmlr_cv(x, N, P, y, K, &o, &m, &err), AFFECT_ERR_INVALID,
+               "need at least 1 alpha");
+    o.n_alpha = 4;
+    EXPECT_ERR(affect_rmlr_cv(x, N, P, y, K, &o, &m, &err), AFFECT_ERR_INVALID,
+               "alpha 3 = 1.5 is not in [0, 1]");
+    affect_rmlr_options_default(&o);
+    o.folds = 1;
+    EXPECT_ERR(affect_rmlr_cv(x, N, P, y, K, &o, &m, &err), AFFECT_ERR_INVALID,
+               "need at least 2 folds, got 1");
+    y[0] = 2;
+    EXPECT_ERR(affect_rmlr_cv(x, N, P, y, 3, NULL, &m, &err), AFFECT_ERR_INVALID,
+               "class 2 has 1 sample (cross-validation needs at least 2)");
+    assert_null(m);
+#undef FIT
+}
+
+/* A small model for the encoding tests. */
+static affect_rmlr *small_model(void)
+{
+    enum { N = 40, K = 3 };
+    static const double alphas[] = {0.5};
+    double x[N * P];
+    uint32_t y[N];
+    affect_error err;
+    affect_rmlr_options o;
+    affect_rmlr *m;
+    synth(N, K, 3, 2.0, 21, x, y);
+    affect_rmlr_options_default(&o);
+    o.alphas = alphas;
+    o.n_alpha = 1;
+    o.n_lambda = 5;
+    o.folds = 3;
+    assert_int_equal(affect_rmlr_cv(x, N, P, y, K, &o, &m, &err), AFFECT_OK);
+    return m;
+}
+
+static void test_round_trip(void **state)
+{
+    (void)state;
+    affect_rmlr *m = small_model(), *m2;
+    affect_bw w, w2;
+    affect_br r;
+    affect_error err;
+    affect_bw_init(&w);
+    affect_bw_init(&w2);
+    affect_rmlr_encode(m, &w);
+    assert_int_equal(w.len, 38 + 8 * (2 * 5 + 2 * P + 3 + 3 * P));
+    affect_br_init(&r, w.data, w.len);
+    assert_int_equal(affect_rmlr_decode(&r, &m2, &err), AFFECT_OK);
+    assert_int_equal(r.off, w.len);
+    affect_rmlr_encode(m2, &w2);
+    assert_int_equal(w2.len, w.len);
+    assert_memory_equal(w.data, w2.data, w.len);
+    assert_memory_equal(affect_rmlr_beta(m), affect_rmlr_beta(m2), 3 * P * sizeof(double));
+    assert_true(affect_rmlr_alpha(m2) == 0.5);
+    assert_true(affect_rmlr_lambda(m2) == affect_rmlr_lambda(m));
+    double xs[P];
+    for (size_t j = 0; j < P; j++)
+        xs[j] = (double)j;
+    double p1[3], p2[3];
+    assert_int_equal(affect_rmlr_predict(m, xs, p1), affect_rmlr_predict(m2, xs, p2));
+    assert_memory_equal(p1, p2, sizeof p1);
+    affect_bw_free(&w);
+    affect_bw_free(&w2);
+    affect_rmlr_free(m);
+    affect_rmlr_free(m2);
+}
+
+static void put_u32(unsigned char *p, uint32_t v)
+{
+    for (int i = 0; i < 4; i++)
+        p[i] = (unsigned char)(v >> (8 * i));
+}
+
+static void put_f64(unsigned char *p, double d)
+{
+    uint64_t u;
+    memcpy(&u, &d, sizeof u);
+    for (int i = 0; i < 8; i++)
+        p[i] = (unsigned char)(u >> (8 * i));
+}
+
+/* Decodes a copy of w's bytes (size bytes of it) and expects the message. */
+static void expect_decode(const affect_bw *w, size_t size, void (*edit)(unsigned char *),
+                          const char *message)
+{
+    unsigned char *b = malloc(w->len);
+    affect_rmlr *m = (affect_rmlr *)b;
+    affect_br r;
+    affect_error err;
+    assert_non_null(b);
+    memcpy(b, w->data, w->len);
+    if (edit)
+        edit(b);
+    affect_br_init(&r, b, size);
+    affect_error_clear(&err);
+    assert_int_equal(affect_rmlr_decode(&r, &m, &err), AFFECT_ERR_FORMAT);
+    assert_null(m);
+    if (message)
+        assert_string_equal(err.msg, message);
+    free(b);
+}
+
+static void e_version(unsigned char *b)
+{
+    b[0] = 2;
+}
+static void e_classes(unsigned char *b)
+{
+    put_u32(b + 1, 1);
+}
+static void e_features(unsigned char *b)
+{
+    put_u32(b + 5, 0);
+}
+static void e_samples(unsigned char *b)
+{
+    put_u32(b + 9, 1);
+}
+static void e_lcount(unsigned char *b)
+{
+    put_u32(b + 13, 0);
+}
+static void e_lindex(unsigned char *b)
+{
+    put_u32(b + 17, 5);
+}
+static void e_conv(unsigned char *b)
+{
+    b[21] = 2;
+}
+static void e_alpha(unsigned char *b)
+{
+    put_f64(b + 22, 2);
+}
+static void e_cverr(unsigned char *b)
+{
+    put_f64(b + 30, NAN);
+}
+static void e_lambda(unsigned char *b)
+{
+    put_f64(b + 38 + 8 * 3, -1);
+}
+static void e_cverrs(unsigned char *b)
+{
+    put_f64(b + 78 + 8 * 4, 2);
+}
+static void e_mean(unsigned char *b)
+{
+    put_f64(b + 118 + 8 * 2, INFINITY);
+}
+static void e_sd(unsigned char *b)
+{
+    put_f64(b + 118 + 8 * P + 8, -1);
+}
+static void e_b0(unsigned char *b)
+{
+    put_f64(b + 118 + 16 * P + 16, NAN);
+}
+static void e_beta(unsigned char *b)
+{
+    put_f64(b + 118 + 16 * P + 24 + 8 * 50, NAN);
+}
+
+static void test_corrupt(void **state)
+{
+    (void)state;
+    affect_rmlr *m = small_model();
+    affect_bw w;
+    affect_bw_init(&w);
+    affect_rmlr_encode(m, &w);
+    /* every truncation fails */
+    for (size_t s = 0; s < w.len; s++)
+        expect_decode(&w, s, NULL, NULL);
+    expect_decode(&w, 0, NULL, "RMLR: truncated in the version (offset 0)");
+    expect_decode(&w, 3, NULL, "RMLR: truncated in the class count (offset 1)");
+    expect_decode(&w, 21, NULL, "RMLR: truncated in the converged flag (offset 21)");
+    expect_decode(&w, 29, NULL, "RMLR: truncated in alpha (offset 22)");
+    expect_decode(&w, 40, NULL, "RMLR: truncated in the lambdas (offset 38)");
+    expect_decode(&w, 80, NULL, "RMLR: truncated in the cross-validation errors (offset 78)");
+    expect_decode(&w, 118 + 8 * P, NULL, "RMLR: truncated in the standard deviations (offset 334)");
+    expect_decode(&w, 118 + 16 * P + 8, NULL, "RMLR: truncated in the intercepts (offset 550)");
+    expect_decode(&w, w.len - 1, NULL, "RMLR: truncated in the coefficients (offset 574)");
+    expect_decode(&w, w.len, e_version,
+                  "RMLR: unknown format version 2 at offset 0 (this build "
+                  "reads 1)");
+    expect_decode(&w, w.len, e_classes, "RMLR: class count 1 out of range 2 .. 256 (offset 1)");
+    expect_decode(&w, w.len, e_features,
+                  "RMLR: feature count 0 out of range 1 .. 1048576 (offset 5)");
+    expect_decode(&w, w.len, e_samples, "RMLR: sample count 1 below the class count 3 (offset 9)");
+    expect_decode(&w, w.len, e_lcount,
+                  "RMLR: lambda count 0 out of range 1 .. 1048576 (offset 13)");
+    expect_decode(&w, w.len, e_lindex,
+                  "RMLR: lambda index 5 not below the lambda count 5 (offset 17)");
+    expect_decode(&w, w.len, e_conv, "RMLR: converged flag 2 is not 0 or 1 (offset 21)");
+    expect_decode(&w, w.len, e_alpha, "RMLR: alpha = 2 is not in [0, 1] (offset 22)");
+    expect_decode(&w, w.len, e_cverr,
+                  "RMLR: cross-validation error nan is not in [0, 1] (offset 30)");
+    expect_decode(&w, w.len, e_lambda,
+                  "RMLR: lambda 3 = -1 is not a positive finite number (offset 62)");
+    expect_decode(&w, w.len, e_cverrs,
+                  "RMLR: cross-validation error 2 is not in [0, 1] (offset 110)");
+    expect_decode(&w, w.len, e_mean, "RMLR: non-finite value in the means (offset 134)");
+    expect_decode(&w, w.len, e_sd,
+                  "RMLR: standard deviation -1 is not a non-negative finite number (offset 342)");
+    expect_decode(&w, w.len, e_b0, "RMLR: non-finite value in the intercepts (offset 566)");
+    expect_decode(&w, w.len, e_beta, "RMLR: non-finite value in the coefficients (offset 974)");
+    affect_bw_free(&w);
+    affect_rmlr_free(m);
+}
+
+/* ---- out of memory ---- */
+
+typedef struct oom_ctx {
+    double x[30 * 5];
+    uint32_t y[30];
+    affect_rmlr *m;
+    affect_bw w;
+    double beta[4 * 3 * 5];
+} oom_ctx;
+
+static affect_status oom_cv(void *ctx, affect_error *err)
+{
+    oom_ctx *c = ctx;
+    static const double alphas[] = {0.5, 1.0};
+    affect_rmlr_options o;
+    affect_rmlr_options_default(&o);
+    o.alphas = alphas;
+    o.n_alpha = 2;
+    o.n_lambda = 4;
+    o.folds = 3;
+    return affect_rmlr_cv(c->x, 30, 5, c->y, 3, &o, &c->m, err);
+}
+
+static void oom_model_finish(void *ctx, affect_status st)
+{
+    oom_ctx *c = ctx;
+    if (st == AFFECT_OK)
+        assert_non_null(c->m);
+    else
+        assert_null(c->m);
+    affect_rmlr_free(c->m);
+    c->m = NULL;
+}
+
+static affect_status oom_path(void *ctx, affect_error *err)
+{
+    oom_ctx *c = ctx;
+    return affect_rmlr_fit_path(c->x, 30, 5, c->y, 3, 0.5, NULL, 4, NULL, NULL, c->beta, NULL, NULL,
+                                err);
+}
+
+static affect_status oom_encode(void *ctx, affect_error *err)
+{
+    oom_ctx *c = ctx;
+    affect_bw_init(&c->w);
+    affect_rmlr_encode(c->m, &c->w);
+    return c->w.failed ? affect_nomem(err) : AFFECT_OK;
+}
+
+static void oom_encode_finish(void *ctx, affect_status st)
+{
+    oom_ctx *c = ctx;
+    (void)st;
+    affect_bw_free(&c->w);
+}
+
+static affect_status oom_decode(void *ctx, affect_error *err)
+{
+    oom_ctx *c = ctx;
+    affect_br r;
+    affect_br_init(&r, c->w.data, c->w.len);
+    return affect_rmlr_decode(&r, &c->m, err);
+}
+
+static void test_out_of_memory(void **state)
+{
+    (void)state;
+    oom_ctx c;
+    affect_error err;
+    memset(&c, 0, sizeof c);
+    affect_rng r;
+    affect_rng_seed(&r, 77);
+    for (size_t i = 0; i < 30; i++) {
+        c.y[i] = (uint32_t)(i % 3);
+        for (size_t j = 0; j < 5; j++)
+            c.x[i * 5 + j] = affect_rng_normal(&r) + (j == c.y[i] ? 1.5 : 0);
+    }
+    assert_true(tu_oom_sweep(oom_cv, &c, oom_model_finish, NULL) >= 10);
+    assert_true(tu_oom_sweep(oom_path, &c, NULL, NULL) >= 4);
+    assert_int_equal(oom_cv(&c, &err), AFFECT_OK);
+    affect_rmlr *m = c.m;
+    assert_true(tu_oom_sweep(oom_encode, &c, oom_encode_finish, NULL) >= 1);
+    affect_bw_init(&c.w);
+    affect_rmlr_encode(m, &c.w);
+    c.m = NULL;
+    assert_true(tu_oom_sweep(oom_decode, &c, oom_model_finish, NULL) == 2);
+    affect_bw_free(&c.w);
+    affect_rmlr_free(m);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_kkt),           cmocka_unit_test(test_lasso_path),
+        cmocka_unit_test(test_recovery),      cmocka_unit_test(test_constant_feature),
+        cmocka_unit_test(test_determinism),   cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_round_trip),    cmocka_unit_test(test_corrupt),
+        cmocka_unit_test(test_out_of_memory),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
