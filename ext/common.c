@@ -167,6 +167,44 @@ void ax_result_text(sqlite3_context *ctx, char *text, size_t len)
     sqlite3_result_text64(ctx, text, len, sqlite3_free, SQLITE_UTF8);
 }
 
+void ax_copy_name(char *dst, size_t size, const char *name)
+{
+    size_t len = strlen(name);
+    if (len >= size)
+        len = size - 1;
+    memcpy(dst, name, len);
+    dst[len] = '\0';
+}
+
+void ax_put_f32(unsigned char *p, float f)
+{
+    uint32_t u = 0x7fc00000u;
+    if (!isnan(f))
+        memcpy(&u, &f, 4);
+    for (int b = 0; b < 4; b++)
+        p[b] = (unsigned char)(u >> (8 * b));
+}
+
+float ax_get_f32(const unsigned char *p)
+{
+    uint32_t u = (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+    float f;
+    memcpy(&f, &u, 4);
+    return f;
+}
+
+void ax_result_f32(sqlite3_context *ctx, const double *v, size_t n)
+{
+    unsigned char *out = sqlite3_malloc64(n ? 4 * (sqlite3_uint64)n : 1);
+    if (!out) {
+        sqlite3_result_error_nomem(ctx);
+        return;
+    }
+    for (size_t i = 0; i < n; i++)
+        ax_put_f32(out + 4 * i, (float)v[i]);
+    sqlite3_result_blob64(ctx, out, 4 * (sqlite3_uint64)n, sqlite3_free);
+}
+
 void ax_result_json(sqlite3_context *ctx, char *text, size_t len)
 {
     sqlite3_result_text64(ctx, text, len, sqlite3_free, SQLITE_UTF8);

@@ -64,6 +64,15 @@ void ax_result_motion(sqlite3_context *ctx, const affect_motion *m);
 void ax_result_text(sqlite3_context *ctx, char *text, size_t len);
 /* The same, marked as JSON (subtype 'J'), so json_object() nests it. */
 void ax_result_json(sqlite3_context *ctx, char *text, size_t len);
+/* float32 vectors (little-endian, the sqlite-vec convention): one value in or out, and n doubles
+ * as a BLOB result. A NaN is always written as the quiet NaN 0x7fc00000, so equal vectors are
+ * byte-identical. */
+/* name into dst[size], cut to fit (the name field of a function's user-data struct, which
+ * AX_NAME reads). */
+void ax_copy_name(char *dst, size_t size, const char *name);
+void ax_put_f32(unsigned char *p, float f);
+float ax_get_f32(const unsigned char *p);
+void ax_result_f32(sqlite3_context *ctx, const double *v, size_t n);
 
 /* Finishes a text buffer built by the core and sets it as a JSON result (SQLITE_NOMEM if any
  * append failed). */

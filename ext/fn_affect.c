@@ -419,9 +419,7 @@ ax_cls_fn *ax_cls_fn_new(const char *name)
     if (!fn)
         return NULL;
     memset(fn, 0, sizeof *fn);
-    size_t len = strlen(name);
-    memcpy(fn->name, name, len < sizeof fn->name ? len + 1 : sizeof fn->name);
-    fn->name[sizeof fn->name - 1] = '\0';
+    ax_copy_name(fn->name, sizeof fn->name, name);
     return fn;
 }
 
@@ -614,31 +612,13 @@ void ax_affect_scores(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     affect_free(b.block);
 }
 
-/* n doubles as little-endian float32 (the vector convention of laban_vector). */
-static void result_f32(sqlite3_context *ctx, const double *v, size_t n)
-{
-    unsigned char *out = sqlite3_malloc64(n ? 4 * (sqlite3_uint64)n : 1);
-    if (!out) {
-        sqlite3_result_error_nomem(ctx);
-        return;
-    }
-    for (size_t i = 0; i < n; i++) {
-        float f = (float)v[i];
-        uint32_t u;
-        memcpy(&u, &f, sizeof u);
-        for (int b = 0; b < 4; b++)
-            out[4 * i + (size_t)b] = (unsigned char)(u >> (8 * b));
-    }
-    sqlite3_result_blob64(ctx, out, 4 * (sqlite3_uint64)n, sqlite3_free);
-}
-
 void ax_fisher_score(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 {
     (void)argc;
     const affect_classifier *c;
     eval_buf b;
     if (evaluate(ctx, argv, false, true, &c, &b) == AX_OK)
-        result_f32(ctx, b.o.fisher, affect_classifier_dim(c));
+        ax_result_f32(ctx, b.o.fisher, affect_classifier_dim(c));
     affect_free(b.block);
 }
 
@@ -648,7 +628,7 @@ void ax_affect_embed(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     const affect_classifier *c;
     eval_buf b;
     if (evaluate(ctx, argv, false, false, &c, &b) == AX_OK)
-        result_f32(ctx, b.o.embed, affect_spca_dims(affect_classifier_spca(c)));
+        ax_result_f32(ctx, b.o.embed, affect_spca_dims(affect_classifier_spca(c)));
     affect_free(b.block);
 }
 

@@ -39,6 +39,7 @@
 
 #include <inttypes.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -70,9 +71,7 @@ ax_gen_fn *ax_gen_fn_new(const char *name)
     if (!fn)
         return NULL;
     memset(fn, 0, sizeof *fn);
-    size_t len = strlen(name);
-    memcpy(fn->name, name, len < sizeof fn->name ? len + 1 : sizeof fn->name);
-    fn->name[sizeof fn->name - 1] = '\0';
+    ax_copy_name(fn->name, sizeof fn->name, name);
     return fn;
 }
 
@@ -139,6 +138,24 @@ static void db_error(sqlite3_context *ctx, const char *what)
         ax_errorf(ctx, "%s: %s", what, sqlite3_errmsg(db));
 }
 
+/* A statement from a formatted SQL text, or NULL with the error reported as "<what>: …". */
+static sqlite3_stmt *prepare(sqlite3_context *ctx, const char *what, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    char *sql = sqlite3_vmprintf(fmt, ap);
+    va_end(ap);
+    sqlite3_stmt *st = NULL;
+    if (!sql || sqlite3_prepare_v2(sqlite3_context_db_handle(ctx), sql, -1, &st, NULL) !=
+                    SQLITE_OK) {
+        sqlite3_finalize(st);
+        st = NULL;
+        db_error(ctx, what);
+    }
+    sqlite3_free(sql);
+    return st;
+}
+
 /* The index's _info values content, motion and generation; "not a laban table" otherwise. */
 static ax_arg index_info(sqlite3_context *ctx, gen_index *ix)
 {
@@ -191,16 +208,11 @@ static ax_arg index_info(sqlite3_context *ctx, gen_index *ix)
 /* The labelled rows: ids, vectors (NaN kept for now), labels. */
 static ax_arg index_rows(sqlite3_context *ctx, gen_index *ix)
 {
-    sqlite3 *db = sqlite3_context_db_handle(ctx);
-    char *sql = sqlite3_mprintf("SELECT id, CAST(label AS TEXT), vector FROM \"%w_data\" "
-                                "WHERE label IS NOT NULL ORDER BY id", ix->name);
-    sqlite3_stmt *st = NULL;
-    if (!sql || sqlite3_prepare_v2(db, sql, -1, &st, NULL) != SQLITE_OK) {
-        sqlite3_free(sql);
-        db_error(ctx, "reading the index");
+    sqlite3_stmt *st = prepare(ctx, "reading the index",
+                               "SELECT id, CAST(label AS TEXT), vector FROM \"%w_data\" "
+                               "WHERE label IS NOT NULL ORDER BY id", ix->name);
+    if (!st)
         return AX_ERROR;
-    }
-    sqlite3_free(sql);
     uint32_t cap = 0;
     ax_arg r = AX_ERROR;
     int rc;
@@ -229,13 +241,8 @@ static ax_arg index_rows(sqlite3_context *ctx, gen_index *ix)
             goto done;
         }
         ix->ids[ix->n] = sqlite3_column_int64(st, 0);
-        for (int j = 0; j < N_COMP; j++) {
-            uint32_t u = (uint32_t)v[4 * j] | (uint32_t)v[4 * j + 1] << 8 |
-                         (uint32_t)v[4 * j + 2] << 16 | (uint32_t)v[4 * j + 3] << 24;
-            float f;
-            memcpy(&f, &u, sizeof f);
-            ix->x[(size_t)ix->n * N_COMP + (size_t)j] = f;
-        }
+        for (int j = 0; j < N_COMP; j++)
+            ix->x[(size_t)ix->n * N_COMP + (size_t)j] = ax_get_f32(v + 4 * j);
         ix->labels[ix->n] = affect_strndup(label, strlen(label));
         if (!ix->labels[ix->n]) {
             sqlite3_result_error_nomem(ctx);
@@ -699,17 +706,12 @@ static ax_arg find_source(sqlite3_context *ctx, const gen_index *ix, const gen_o
     uint64_t h = affect_fnv1a64(data, n);
     sqlite3_int64 hash = h <= (uint64_t)INT64_MAX ? (sqlite3_int64)h
                                                   : -(sqlite3_int64)(UINT64_MAX - h) - 1;
-    sqlite3 *db = sqlite3_context_db_handle(ctx);
-    char *sql = sqlite3_mprintf("SELECT CAST(label AS TEXT) FROM \"%w_data\" WHERE msize = ?1 "
-                                "AND mhash = ?2 AND label IS NOT NULL ORDER BY id LIMIT 1",
-                                ix->name);
-    sqlite3_stmt *st = NULL;
-    if (!sql || sqlite3_prepare_v2(db, sql, -1, &st, NULL) != SQLITE_OK) {
-        sqlite3_free(sql);
-        db_error(ctx, "reading the index");
+    sqlite3_stmt *st = prepare(ctx, "reading the index",
+                               "SELECT CAST(label AS TEXT) FROM \"%w_data\" WHERE msize = ?1 "
+                               "AND mhash = ?2 AND label IS NOT NULL ORDER BY id LIMIT 1",
+                               ix->name);
+    if (!st)
         return AX_ERROR;
-    }
-    sqlite3_free(sql);
     sqlite3_bind_int64(st, 1, (sqlite3_int64)n);
     sqlite3_bind_int64(st, 2, hash);
     if (sqlite3_step(st) == SQLITE_ROW && sqlite3_column_text(st, 0)) {
@@ -778,23 +780,18 @@ static ax_arg find_neighbours(sqlite3_context *ctx, const gen_index *ix, const g
                               sqlite3_value *desired, const char *target, const char *comps,
                               neighbours *nb)
 {
-    sqlite3 *db = sqlite3_context_db_handle(ctx);
     nb->n = 0;
     nb->by_k = o->k > 0;
     nb->nearest_only = false;
     for (int pass = 0; pass < 2 && nb->n == 0; pass++) {
         bool by_k = o->k > 0 || pass == 1;
-        char *sql = sqlite3_mprintf("SELECT rowid, distance FROM \"%w\" WHERE query = ?1 AND "
-                                    "label = ?2 AND components = ?3 AND %s = ?4 "
-                                    "ORDER BY distance, rowid",
-                                    ix->name, by_k ? "k" : "radius");
-        sqlite3_stmt *st = NULL;
-        if (!sql || sqlite3_prepare_v2(db, sql, -1, &st, NULL) != SQLITE_OK) {
-            sqlite3_free(sql);
-            db_error(ctx, "the neighbour search");
+        sqlite3_stmt *st = prepare(ctx, "the neighbour search",
+                                   "SELECT rowid, distance FROM \"%w\" WHERE query = ?1 AND "
+                                   "label = ?2 AND components = ?3 AND %s = ?4 "
+                                   "ORDER BY distance, rowid",
+                                   ix->name, by_k ? "k" : "radius");
+        if (!st)
             return AX_ERROR;
-        }
-        sqlite3_free(sql);
         sqlite3_bind_value(st, 1, desired);
         sqlite3_bind_text(st, 2, target, -1, SQLITE_STATIC);
         sqlite3_bind_text(st, 3, comps, -1, SQLITE_STATIC);
@@ -822,16 +819,11 @@ static ax_arg find_neighbours(sqlite3_context *ctx, const gen_index *ix, const g
 static ax_arg load_neighbours(sqlite3_context *ctx, const gen_index *ix, const neighbours *nb,
                               affect_motion **out)
 {
-    sqlite3 *db = sqlite3_context_db_handle(ctx);
-    char *sql = sqlite3_mprintf("SELECT \"%w\" FROM \"%w\" WHERE rowid = ?1", ix->motion,
-                                ix->content);
-    sqlite3_stmt *st = NULL;
-    if (!sql || sqlite3_prepare_v2(db, sql, -1, &st, NULL) != SQLITE_OK) {
-        sqlite3_free(sql);
-        db_error(ctx, "reading the content table");
+    sqlite3_stmt *st = prepare(ctx, "reading the content table",
+                               "SELECT \"%w\" FROM \"%w\" WHERE rowid = ?1", ix->motion,
+                               ix->content);
+    if (!st)
         return AX_ERROR;
-    }
-    sqlite3_free(sql);
     ax_arg r = AX_OK;
     for (uint32_t i = 0; i < nb->n && r == AX_OK; i++) {
         sqlite3_reset(st);

@@ -312,19 +312,7 @@ void ax_laban_vector(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     double v[AFFECT_LABAN_N];
     if (!all_components(ctx, argc, argv, &c, v))
         return;
-    unsigned char *blob = sqlite3_malloc(AFFECT_LABAN_N * 4);
-    if (!blob) {
-        sqlite3_result_error_nomem(ctx);
-    } else {
-        for (int i = 0; i < AFFECT_LABAN_N; i++) {
-            float f = (float)v[i];
-            uint32_t u;
-            memcpy(&u, &f, 4);
-            for (int b = 0; b < 4; b++)
-                blob[i * 4 + b] = (unsigned char)(u >> (8 * b));
-        }
-        sqlite3_result_blob(ctx, blob, AFFECT_LABAN_N * 4, sqlite3_free);
-    }
+    ax_result_f32(ctx, v, AFFECT_LABAN_N);
     call_free(&c);
 }
 

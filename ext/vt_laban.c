@@ -283,22 +283,6 @@ static float lab_to_float(double v)
     return fabs(v) <= FLT_MAX ? (float)v : NAN; /* NaN, ±inf and overflow are missing */
 }
 
-static void lab_put_f32(unsigned char *p, float f)
-{
-    uint32_t u = 0x7fc00000u; /* one NaN for every missing value: byte-identical vectors */
-    if (!isnan(f))
-        memcpy(&u, &f, 4);
-    for (int b = 0; b < 4; b++)
-        p[b] = (unsigned char)(u >> (8 * b));
-}
-
-static float lab_get_f32(const unsigned char *p)
-{
-    uint32_t u = (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
-    float f;
-    memcpy(&f, &u, 4);
-    return f;
-}
 
 /* 64-bit FNV-1a, stored as the signed integer with the same bits. */
 static sqlite3_int64 lab_fnv1a(const unsigned char *p, size_t n)
@@ -522,7 +506,7 @@ static int lab_cache_load(lab_vtab *vt, sqlite3_int64 generation, char **err, la
             goto done;
         c->ids[i] = id;
         for (int j = 0; j < LAB_N; j++)
-            c->raw[i * LAB_N + j] = lab_get_f32(vec + 4 * j);
+            c->raw[i * LAB_N + j] = ax_get_f32(vec + 4 * j);
         c->n++;
     }
     if (rc != SQLITE_DONE) {
@@ -1030,7 +1014,7 @@ static int lab_store_row(lab_vtab *vt, sqlite3_stmt *ins, sqlite3_int64 id, sqli
     }
     unsigned char blob[LAB_VECTOR_BYTES];
     for (int j = 0; j < LAB_N; j++)
-        lab_put_f32(blob + 4 * j, v[j]);
+        ax_put_f32(blob + 4 * j, v[j]);
     int rc;
     if ((rc = sqlite3_bind_int64(ins, 1, id)) != SQLITE_OK ||
         (rc = sqlite3_bind_value(ins, 2, label)) != SQLITE_OK ||
