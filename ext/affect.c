@@ -113,6 +113,7 @@ static const ax_function functions[] = {
     {"motion_slice", 3, false, ax_motion_slice},
     {"motion_resample", 2, false, ax_motion_resample},
     {"motion_select", 2, false, ax_motion_select},
+    {"motion_dtw", 2, false, ax_motion_dtw},
     {"motion_roles", 1, true, ax_motion_roles},
     {"motion_roles", 2, true, ax_motion_roles},
     {"motion_normalize", 1, false, ax_motion_normalize},

@@ -7,6 +7,8 @@
  *   laban_salient(index_name [, options])  → JSON: per label the salient Laban components
  *                                            (elastic-net multinomial logistic regression),
  *                                            and per pair of labels the discriminative set
+ *   motion_dtw(a, b)                        → REAL: DTW distance of two motions of one skeleton
+ *                                            (affect_dtw_distance), to judge generated motions
  *
  * How it works: index_name names a `laban` virtual table (vt_laban.c). Its shadow tables give
  * the labelled Laban vectors (`<index>_data`) and the content table (`<index>_info`). The
@@ -991,4 +993,22 @@ void ax_affect_generate(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 void ax_affect_generate_explain(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 {
     run_generation(ctx, argc, argv, true);
+}
+
+/* ---- motion_dtw ---- */
+
+void ax_motion_dtw(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    (void)argc;
+    affect_motion *a = NULL, *b = NULL;
+    if (ax_arg_motion(ctx, argv, 0, &a) == AX_OK && ax_arg_motion(ctx, argv, 1, &b) == AX_OK) {
+        double d;
+        affect_error err;
+        if (affect_dtw_distance(a, b, &d, &err))
+            ax_error(ctx, &err);
+        else
+            sqlite3_result_double(ctx, d);
+    }
+    affect_motion_free(a);
+    affect_motion_free(b);
 }

@@ -5,7 +5,7 @@
  *
  * Usage:
  *     affect_generate_options opt;
- *     affect_generate_options_default(&opt);     // 12 states, n_d = 0, 6 Hz, s = 1
+ *     affect_generate_options_default(&opt);     // 12 states, n_d = 0, 3 Hz, s = 1
  *     affect_generate_report rep;
  *     affect_motion *sad = NULL;
  *     if (affect_generate(neutral, neighbours, 5, &opt, &sad, &rep, &err) == AFFECT_OK) {
@@ -52,6 +52,13 @@ void affect_generate_options_default(affect_generate_options *opt)
     opt->tol = 1e-4;
     opt->reg = 1e-4;
     opt->up_axis = 1;
+    opt->clock = NULL;
+}
+
+/* The caller's clock, or 0 without one. */
+static double now(const affect_generate_options *opt)
+{
+    return opt->clock ? opt->clock() : 0.0;
 }
 
 /* Rewrites a failure message as "what: message", or "what index: message" when index ≥ 0
@@ -217,6 +224,7 @@ affect_status affect_generate(const affect_motion *desired, const affect_motion 
     int32_t *path = NULL;
     affect_motion *m = NULL;
     uint32_t n_seqs = used + opt->copies, dim = 0, frames = 0;
+    double t0 = now(opt), t1 = 0, t2 = 0, t3 = 0;
 
     if ((st = make_features(desired, opt->up_axis, &f, err)) != AFFECT_OK)
         goto done;
@@ -248,6 +256,7 @@ affect_status affect_generate(const affect_motion *desired, const affect_motion 
         seqs[used + c].n_frames = T;
     }
 
+    t1 = now(opt);
     affect_hmm_config cfg;
     affect_hmm_config_default(&cfg);
     cfg.n_states = N;
@@ -267,12 +276,14 @@ affect_status affect_generate(const affect_motion *desired, const affect_motion 
     }
     if ((st = affect_hmm_train(&cfg, seqs, n_seqs, &h, err)) != AFFECT_OK)
         goto done;
+    t2 = now(opt);
     if (opt->covariance_scale != 1.0 &&
         (st = scaled_model(h, opt->covariance_scale, &hs, err)) != AFFECT_OK)
         goto done;
     double logprob = 0;
     if ((st = affect_hmm_viterbi(hs ? hs : h, xd, T, path, &logprob, err)) != AFFECT_OK)
         goto done;
+    t3 = now(opt);
 
     /* state means along the path, filtered column by column, in place in xd */
     const double *means = affect_hmm_means(h);
@@ -324,6 +335,10 @@ affect_status affect_generate(const affect_motion *desired, const affect_motion 
         rep->viterbi_logprob = logprob;
         rep->path = path;
         rep->n_frames = T;
+        rep->t_features = t1 - t0;
+        rep->t_train = t2 - t1;
+        rep->t_viterbi = t3 - t2;
+        rep->t_render = now(opt) - t3;
         path = NULL;
     }
     *out = m;

@@ -177,6 +177,14 @@ static void test_copies_and_scale(void **state)
     affect_motion_free(d);
 }
 
+/* A clock that ticks once per reading, so each stage lasts exactly 1 "second" when the
+ * stages read it once at each boundary. */
+static double ticks;
+static double tick_clock(void)
+{
+    return ticks += 1.0;
+}
+
 static void test_single_neighbour_and_no_filter(void **state)
 {
     (void)state;
@@ -188,6 +196,19 @@ static void test_single_neighbour_and_no_filter(void **state)
     affect_generate_report rep;
     affect_motion *g = generate(d, &nb, 1, &opt, &rep);
     assert_int_equal(rep.neighbours_used, 1);
+    /* no clock: no stage times */
+    assert_true(rep.t_features == 0 && rep.t_train == 0 && rep.t_viterbi == 0 &&
+                rep.t_render == 0);
+    affect_free(rep.path);
+    /* with a clock: five readings, one per stage boundary, and the same motion */
+    opt.clock = tick_clock;
+    ticks = 0;
+    affect_motion *g2 = generate(d, &nb, 1, &opt, &rep);
+    assert_true(ticks == 5);
+    assert_true(rep.t_features == 1 && rep.t_train == 1 && rep.t_viterbi == 1 &&
+                rep.t_render == 1);
+    assert_memory_equal(g->pos, g2->pos, (size_t)d->n_frames * d->n_joints * 3 * sizeof(float));
+    affect_motion_free(g2);
     /* unfiltered: every frame is a state mean, de-normalized; equal states give equal frames */
     for (uint32_t t = 1; t < rep.n_frames; t++)
         if (rep.path[t] == rep.path[t - 1])

@@ -99,3 +99,31 @@ SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad', 
 SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad', '{"copies":5000,"k":1,"components":["TimeAll"]}');
 -- error: affect_generate: copies must be at most 1000, got 5000
 -- oom: skip
+
+-- ---- motion_dtw: the DTW distance that judges generated motions ----
+SELECT 'motion_dtw is deterministic and direct-use', count(*) = 1 FROM pragma_function_list
+ WHERE name = 'motion_dtw' AND narg = 2 AND (flags & 0x000000800) <> 0;
+
+SELECT 'zero to itself, symmetric, positive between different motions',
+       motion_dtw(a.motion, a.motion) = 0
+   AND motion_dtw(a.motion, b.motion) = motion_dtw(b.motion, a.motion)
+   AND motion_dtw(a.motion, b.motion) > 0
+  FROM motions AS a, motions AS b WHERE a.id = 1 AND b.id = 2;
+
+SELECT 'a generated motion keeps more of its path with copies = 2 than with 0',
+       motion_dtw(affect_generate('idx', m.motion, 'sad', '{"components":["TimeAll"],"k":2,"copies":2}'), m.motion)
+     < motion_dtw(affect_generate('idx', m.motion, 'sad', '{"components":["TimeAll"],"k":2,"copies":0}'), m.motion)
+  FROM motions AS m WHERE m.id = 1;
+-- oom: skip
+
+SELECT 'NULL in, NULL out', motion_dtw(NULL, motion) IS NULL AND motion_dtw(motion, NULL) IS NULL
+  FROM motions WHERE id = 1;
+
+SELECT motion_dtw(x'00', motion) FROM motions WHERE id = 1;
+-- error: motion_dtw: argument 1 is not a valid motion: truncated: 1 bytes is shorter than the 32-byte header
+
+SELECT motion_dtw(motion, 'text') FROM motions WHERE id = 1;
+-- error: motion_dtw: argument 2 must be a motion BLOB, got text
+
+SELECT motion_dtw(motion, motion_select(motion, '["Hips","Spine"]')) FROM motions WHERE id = 1;
+-- error: motion_dtw: the motions have different joint names

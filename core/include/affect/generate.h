@@ -67,6 +67,10 @@ typedef struct affect_generate_options {
     double tol;              /* relative log-likelihood change to stop (default 1e-4) */
     double reg;              /* covariance diagonal floor, in normalized units² (1e-4) */
     int up_axis;             /* 0 = x, 1 = y (default), 2 = z */
+    /* Optional clock (seconds, monotonic) for the report's stage times; NULL (default) = not
+     * timed. The core has no clock of its own: a benchmark passes one. It never changes the
+     * result. */
+    double (*clock)(void);
 } affect_generate_options;
 
 void affect_generate_options_default(affect_generate_options *opt);
@@ -79,6 +83,10 @@ typedef struct affect_generate_report {
     double viterbi_logprob;   /* log-probability of the path S (under the scaled model) */
     int32_t *path;            /* n_frames states S_t; the caller frees it with affect_free */
     uint32_t n_frames;        /* entries of path */
+    /* Stage times in seconds, measured with opt->clock (all 0 without one): observations of
+     * the desired motion and the neighbours, Baum–Welch training, Viterbi (with the covariance
+     * scaling), and rendering (state means, low-pass filter, de-normalization). */
+    double t_features, t_train, t_viterbi, t_render;
 } affect_generate_report;
 
 /* Generates *out (free with affect_motion_free) from desired and the neighbours (opt NULL =
