@@ -504,7 +504,10 @@ done:
 
 static const char *const gen_keys[] = {"copies",     "states", "epsilon",   "k",
                                        "components", "source_label", "classifier",
-                                       "cutoff_hz",  "covariance_scale", "seed", NULL};
+                                       "cutoff_hz",  "covariance_scale", "seed",
+                                       "render",     "keep_path", NULL};
+/* In the order of affect_generate_render. */
+static const char *const render_names[] = {"steps", "linear", NULL};
 
 typedef struct gen_opts {
     affect_generate_options g;
@@ -555,6 +558,7 @@ static ax_arg read_gen_options(sqlite3_context *ctx, int argc, sqlite3_value **a
     affect_generate_options_default(&o->g);
     o->epsilon = 0.1;
     double seed = (double)o->g.seed;
+    int render = (int)o->g.render;
     if (ax_opts_parse(ctx, argc, argv, 3, gen_keys, opts) != AX_OK)
         return AX_ERROR;
     if (ax_opt_u32(ctx, opts, "copies", &o->g.copies) ||
@@ -565,9 +569,12 @@ static ax_arg read_gen_options(sqlite3_context *ctx, int argc, sqlite3_value **a
         ax_opt_string(ctx, opts, "classifier", &o->classifier_hex) ||
         ax_opt_number(ctx, opts, "cutoff_hz", &o->g.cutoff_hz) ||
         ax_opt_number(ctx, opts, "covariance_scale", &o->g.covariance_scale) ||
-        ax_opt_whole(ctx, opts, "seed", 9007199254740992.0, &seed))
+        ax_opt_whole(ctx, opts, "seed", 9007199254740992.0, &seed) ||
+        ax_opt_enum(ctx, opts, "render", render_names, &render) ||
+        ax_opt_bool(ctx, opts, "keep_path", &o->g.keep_path))
         return AX_ERROR;
     o->g.seed = (uint64_t)seed;
+    o->g.render = (affect_generate_render)render;
     if (!(o->epsilon > 0) || !(o->epsilon <= 1)) {
         ax_errorf(ctx, "option \"epsilon\" must be in (0, 1] (a fraction of the distance to the "
                        "furthest target motion)");

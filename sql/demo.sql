@@ -119,6 +119,52 @@ SELECT emotion AS style, group_concat(label || ' ' || n, ', ') AS recognized_as
          GROUP BY emotion, label ORDER BY emotion, n DESC, label)
  GROUP BY emotion;
 
+-- ---- generation (SCIENCE.md §5): a motion made angry, happy or sad ----
+-- The source is a normal "bye" (neutral "wave" on the synthetic corpus); its own content is
+-- left out of the generation corpus, so the real recording of that content in the target
+-- emotion can serve as ground truth.
+DROP TABLE IF EXISTS gen_source;
+CREATE TABLE gen_source AS
+SELECT id, name, content, emotion, motion FROM indexed
+ WHERE content IN ('bye', 'wave') AND emotion IN ('normal', 'neutral') ORDER BY name LIMIT 1;
+DROP TABLE IF EXISTS gen_laban;
+DROP TABLE IF EXISTS gen_corpus;
+CREATE TABLE gen_corpus(id INTEGER PRIMARY KEY, name TEXT, content TEXT, emotion TEXT, motion BLOB);
+INSERT INTO gen_corpus SELECT id, name, content, emotion, motion FROM indexed
+ WHERE content <> (SELECT content FROM gen_source);
+CREATE VIRTUAL TABLE gen_laban USING laban(content=gen_corpus, motion=motion, label=emotion);
+DROP TABLE IF EXISTS generated;
+CREATE TABLE generated(id INTEGER PRIMARY KEY, source_id INTEGER, target TEXT, motion BLOB,
+                       explain TEXT, truth_id INTEGER);
+INSERT INTO generated(source_id, target, motion, explain, truth_id)
+SELECT s.id, t.value,
+       affect_generate('gen_laban', s.motion, t.value, json_object('source_label', s.emotion)),
+       affect_generate_explain('gen_laban', s.motion, t.value, json_object('source_label', s.emotion)),
+       (SELECT id FROM indexed WHERE content = s.content AND emotion = t.value ORDER BY name LIMIT 1)
+  FROM gen_source AS s, json_each('["angry","happy","sad"]') AS t
+ WHERE t.value IN (SELECT emotion FROM gen_corpus);
+
+.print
+.print '== generation: the source made angry, happy, sad (affect_generate; its content left out of the corpus) =='
+SELECT s.name AS source, g.target,
+       json_array_length(json_extract(g.explain, '$.components.used')) AS components,
+       (SELECT group_concat(c.name, ' ') FROM json_each(g.explain, '$.neighbours.rows') AS n
+          JOIN gen_corpus AS c ON c.id = json_extract(n.value, '$.rowid')) AS neighbours
+  FROM generated AS g JOIN gen_source AS s ON s.id = g.source_id ORDER BY g.target;
+
+.print
+.print '== generated vs source vs the real recording in the target emotion =='
+SELECT g.target, printf('%.4g / %.4g / %.4g', laban_weight(s.motion), laban_weight(g.motion),
+                        laban_weight(r.motion)) AS "WeightAll src / gen / real",
+       printf('%.4g / %.4g / %.4g', laban_time(s.motion), laban_time(g.motion),
+              laban_time(r.motion)) AS "TimeAll src / gen / real",
+       printf('%.3f -> %.3f', motion_dtw(s.motion, r.motion), motion_dtw(g.motion, r.motion))
+           AS "DTW to real: src -> gen",
+       affect_classify(c.model, g.motion) AS recognized
+  FROM generated AS g JOIN gen_source AS s ON s.id = g.source_id
+  JOIN indexed AS r ON r.id = g.truth_id, classifiers AS c
+ ORDER BY g.target;
+
 -- ---- the HTML page ----
 .headers off
 .mode list
@@ -156,6 +202,23 @@ SELECT '<h3>' || content || '</h3>' || group_concat(
          ORDER BY content, CASE emotion WHEN 'normal' THEN 0 WHEN 'happy' THEN 1
                                         WHEN 'sad' THEN 2 ELSE 3 END)
  GROUP BY content ORDER BY content;
+SELECT '<h2>Generation: the source, the generated motion, the real recording (SCIENCE.md §5)</h2>'
+    || '<p><code>affect_generate(''gen_laban'', motion, target, json_object(''source_label'', emotion))</code>'
+    || ' over a laban index that leaves the source''s content out; right: the actor''s own '
+    || 'recording of that content in the target emotion (ground truth, not used).</p>';
+SELECT '<h3>' || s.name || ' → ' || g.target || '</h3>'
+    || '<figure>' || motion_svg(s.motion, json_object('frames', 6, 'size', 110, 'view', 'front',
+                                 'title', 'source · ' || s.emotion))
+    || '<figcaption>source: ' || s.name || '</figcaption></figure>'
+    || '<figure>' || motion_svg(g.motion, json_object('frames', 6, 'size', 110, 'view', 'front',
+                                 'title', 'generated · ' || g.target))
+    || '<figcaption>generated (recognized: ' || affect_classify(c.model, g.motion) || ')</figcaption></figure>'
+    || coalesce('<figure>' || motion_svg(r.motion, json_object('frames', 6, 'size', 110, 'view', 'front',
+                                 'title', 'real · ' || g.target))
+                || '<figcaption>real: ' || r.name || '</figcaption></figure>', '')
+  FROM generated AS g JOIN gen_source AS s ON s.id = g.source_id
+  LEFT JOIN indexed AS r ON r.id = g.truth_id, classifiers AS c
+ ORDER BY g.target;
 SELECT '<h2>Laban Weight and Time by emotion (thesis Fig. 5.1)</h2><p>Each point is a motion of the '
     || 'indexed source; crosses show each emotion''s mean ± 1 sd (log axes). Drawn by '
     || '<code>laban_plot(laban_weight(motion), laban_time(motion), emotion, …)</code>.</p>'

@@ -38,6 +38,7 @@
 #include "affect/features.h"
 #include "affect/hmm.h"
 #include "affect/laban.h"
+#include "affect/roles.h"
 
 void affect_generate_options_default(affect_generate_options *opt)
 {
@@ -53,6 +54,94 @@ void affect_generate_options_default(affect_generate_options *opt)
     opt->reg = 1e-4;
     opt->up_axis = 1;
     opt->clock = NULL;
+    opt->render = AFFECT_GENERATE_STEPS;
+    opt->keep_path = true;
+}
+
+/* The output rows before filtering: with AFFECT_GENERATE_STEPS the mean of state path[t] at
+ * every frame t; with AFFECT_GENERATE_LINEAR each run of equal states puts its state's mean at
+ * the run's centre frame (a real-valued time) and the frames between two consecutive centres
+ * are interpolated linearly (before the first centre and after the last, the first and last
+ * means are held). */
+static void render_path(const double *means, uint32_t dim, const int32_t *path, uint32_t T,
+                        affect_generate_render mode, double *out)
+{
+    if (mode == AFFECT_GENERATE_STEPS) {
+        for (uint32_t t = 0; t < T; t++)
+            memcpy(out + (size_t)t * dim, means + (size_t)path[t] * dim, (size_t)dim * sizeof *out);
+        return;
+    }
+    /* runs: [s, e) of equal states; the previous run's centre and state are carried along */
+    double prev_c = -1.0;
+    int32_t prev_s = -1;
+    uint32_t t = 0, s = 0;
+    while (s < T) {
+        uint32_t e = s + 1;
+        while (e < T && path[e] == path[s])
+            e++;
+        double c = 0.5 * (double)(s + e - 1);
+        const double *mu = means + (size_t)path[s] * dim;
+        if (prev_s < 0) {
+            for (; (double)t <= c; t++) /* before the first centre: hold */
+                memcpy(out + (size_t)t * dim, mu, (size_t)dim * sizeof *out);
+        } else {
+            const double *mp = means + (size_t)prev_s * dim;
+            for (; (double)t <= c; t++) {
+                double u = ((double)t - prev_c) / (c - prev_c);
+                for (uint32_t k = 0; k < dim; k++)
+                    out[(size_t)t * dim + k] = mp[k] + u * (mu[k] - mp[k]);
+            }
+        }
+        prev_c = c;
+        prev_s = path[s];
+        s = e;
+    }
+    for (; t < T; t++) /* after the last centre: hold */
+        memcpy(out + (size_t)t * dim, means + (size_t)prev_s * dim, (size_t)dim * sizeof *out);
+}
+
+/* The feature index of the root among the observation's joints (desired's joints in its
+ * order): the pelvis role, as the normalization uses, else joint 0 (so on skeletons whose
+ * first joint is a fixed origin, such as the corpus's joint_Root, the travelling hips). */
+static uint32_t root_index(const affect_motion *desired)
+{
+    affect_roles roles;
+    affect_roles_resolve(desired, &roles);
+    int32_t r = roles.joint[AFFECT_ROLE_PELVIS];
+    return r >= 0 && (uint32_t)r < desired->n_joints ? (uint32_t)r : 0;
+}
+
+/* Subtracts, frame by frame, the root's two horizontal coordinates (the axes other than up)
+ * from every joint's (x: T rows of 3 J); saves them in path (T × 2) when path is not NULL. */
+static void remove_root_path(double *x, uint32_t T, uint32_t J, uint32_t root, int up,
+                             double *path)
+{
+    int a0 = up == 0 ? 1 : 0, a1 = up == 2 ? 1 : 2;
+    for (uint32_t t = 0; t < T; t++) {
+        double *row = x + (size_t)t * J * 3;
+        double h0 = row[root * 3 + (uint32_t)a0], h1 = row[root * 3 + (uint32_t)a1];
+        if (path) {
+            path[(size_t)t * 2] = h0;
+            path[(size_t)t * 2 + 1] = h1;
+        }
+        for (uint32_t j = 0; j < J; j++) {
+            row[j * 3 + (uint32_t)a0] -= h0;
+            row[j * 3 + (uint32_t)a1] -= h1;
+        }
+    }
+}
+
+/* Adds path (T × 2) back to every joint's horizontal coordinates. */
+static void add_root_path(double *x, uint32_t T, uint32_t J, int up, const double *path)
+{
+    int a0 = up == 0 ? 1 : 0, a1 = up == 2 ? 1 : 2;
+    for (uint32_t t = 0; t < T; t++) {
+        double *row = x + (size_t)t * J * 3;
+        for (uint32_t j = 0; j < J; j++) {
+            row[j * 3 + (uint32_t)a0] += path[(size_t)t * 2];
+            row[j * 3 + (uint32_t)a1] += path[(size_t)t * 2 + 1];
+        }
+    }
 }
 
 /* The caller's clock, or 0 without one. */
@@ -218,7 +307,7 @@ affect_status affect_generate(const affect_motion *desired, const affect_motion 
                            T, N);
 
     affect_features *f = NULL;
-    double *xd = NULL, **xs = NULL, *scratch = NULL, *pts = NULL;
+    double *xd = NULL, **xs = NULL, *scratch = NULL, *pts = NULL, *root_path = NULL;
     affect_hmm_seq *seqs = NULL;
     affect_hmm *h = NULL, *hs = NULL;
     int32_t *path = NULL;
@@ -236,10 +325,15 @@ affect_status affect_generate(const affect_motion *desired, const affect_motion 
     xs = affect_calloc(used, sizeof *xs);
     seqs = affect_malloc_array(n_seqs, sizeof *seqs);
     path = affect_malloc_array(T, sizeof *path);
-    if (!xs || !seqs || !path) {
+    if (opt->keep_path)
+        root_path = affect_malloc_array((size_t)T * 2, sizeof *root_path);
+    if (!xs || !seqs || !path || (opt->keep_path && !root_path)) {
         st = affect_nomem(err);
         goto done;
     }
+    uint32_t root = root_index(desired), J = desired->n_joints;
+    if (opt->keep_path)
+        remove_root_path(xd, T, J, root, opt->up_axis, root_path);
     for (uint32_t i = 0, k = 0; i < n_neighbours; i++) {
         if (!same_joint_names(desired, neighbours[i]))
             continue;
@@ -247,6 +341,8 @@ affect_status affect_generate(const affect_motion *desired, const affect_motion 
             st = prefixed(err, st, "neighbour", i);
             goto done;
         }
+        if (opt->keep_path)
+            remove_root_path(xs[k], frames, J, root, opt->up_axis, NULL);
         seqs[k].x = xs[k];
         seqs[k].n_frames = frames;
         k++;
@@ -287,8 +383,7 @@ affect_status affect_generate(const affect_motion *desired, const affect_motion 
 
     /* state means along the path, filtered column by column, in place in xd */
     const double *means = affect_hmm_means(h);
-    for (uint32_t t = 0; t < T; t++)
-        memcpy(xd + (size_t)t * dim, means + (size_t)path[t] * dim, (size_t)dim * sizeof *xd);
+    render_path(means, dim, path, T, opt->render, xd);
     if (opt->cutoff_hz > 0 && opt->cutoff_hz < desired->fps / 2 && T >= 2) {
         size_t n_scratch;
         if (!affect_add_size(T, 18, &n_scratch)) {
@@ -304,6 +399,9 @@ affect_status affect_generate(const affect_motion *desired, const affect_motion 
             affect_lowpass(xd + c, T, dim, desired->fps, opt->cutoff_hz, scratch, xd + c);
     }
 
+    if (opt->keep_path)
+        add_root_path(xd, T, J, opt->up_axis, root_path);
+
     /* back to the desired motion's position, heading and scale, on its skeleton */
     affect_normalize_transform tf;
     if ((st = affect_generate_transform(desired, opt->up_axis, &tf, err)) != AFFECT_OK) {
@@ -312,7 +410,6 @@ affect_status affect_generate(const affect_motion *desired, const affect_motion 
     }
     if ((st = affect_motion_clone(desired, &m, err)) != AFFECT_OK)
         goto done;
-    uint32_t J = desired->n_joints;
     pts = affect_malloc_array((size_t)J * 3, sizeof *pts);
     if (!pts) {
         st = affect_nomem(err);
@@ -346,6 +443,7 @@ affect_status affect_generate(const affect_motion *desired, const affect_motion 
 done:
     affect_motion_free(m);
     affect_free(pts);
+    affect_free(root_path);
     affect_free(scratch);
     affect_free(path);
     affect_hmm_free(hs);

@@ -193,6 +193,7 @@ static void test_single_neighbour_and_no_filter(void **state)
     affect_generate_options opt;
     affect_generate_options_default(&opt);
     opt.cutoff_hz = 0;
+    opt.keep_path = false; /* every output frame is exactly a state mean */
     affect_generate_report rep;
     affect_motion *g = generate(d, &nb, 1, &opt, &rep);
     assert_int_equal(rep.neighbours_used, 1);
@@ -209,6 +210,46 @@ static void test_single_neighbour_and_no_filter(void **state)
                 rep.t_render == 1);
     assert_memory_equal(g->pos, g2->pos, (size_t)d->n_frames * d->n_joints * 3 * sizeof(float));
     affect_motion_free(g2);
+    /* linear rendering, unfiltered: the same path; at each run's centre frame (odd-length
+     * runs) the frame equals the step output (the state mean), and between the centres of two
+     * runs every frame lies on the segment between the two means */
+    opt.clock = NULL;
+    opt.render = AFFECT_GENERATE_LINEAR;
+    affect_generate_report rl;
+    affect_motion *gl = generate(d, &nb, 1, &opt, &rl);
+    assert_memory_equal(rl.path, rep.path, (size_t)rl.n_frames * sizeof *rl.path);
+    uint32_t runs = 0, checked = 0;
+    size_t row = (size_t)d->n_joints * 3;
+    double prev_c = -1;
+    uint32_t prev_s = 0;
+    for (uint32_t s = 0; s < rl.n_frames;) {
+        uint32_t e = s + 1;
+        while (e < rl.n_frames && rl.path[e] == rl.path[s])
+            e++;
+        double c = 0.5 * (double)(s + e - 1);
+        if ((e - s) % 2 == 1) {
+            uint32_t ci = (s + e - 1) / 2;
+            for (size_t i = 0; i < row; i++)
+                assert_float_equal(gl->pos[ci * row + i], g->pos[ci * row + i], 1e-5);
+            checked++;
+        }
+        if (runs > 0) /* a frame strictly between the two centres, against the two means */
+            for (uint32_t t = (uint32_t)prev_c + 1; (double)t < c; t++) {
+                double u = ((double)t - prev_c) / (c - prev_c);
+                for (size_t i = 0; i < row; i++) {
+                    double want = g->pos[prev_s * row + i] +
+                                  u * (g->pos[s * row + i] - g->pos[prev_s * row + i]);
+                    assert_float_equal(gl->pos[t * row + i], want, 1e-4);
+                }
+            }
+        prev_c = c;
+        prev_s = s;
+        runs++;
+        s = e;
+    }
+    assert_true(runs >= 3 && checked >= 1);
+    affect_free(rl.path);
+    affect_motion_free(gl);
     /* unfiltered: every frame is a state mean, de-normalized; equal states give equal frames */
     for (uint32_t t = 1; t < rep.n_frames; t++)
         if (rep.path[t] == rep.path[t - 1])
@@ -217,6 +258,78 @@ static void test_single_neighbour_and_no_filter(void **state)
     affect_free(rep.path);
     affect_motion_free(g);
     affect_motion_free(nb);
+    affect_motion_free(d);
+}
+
+/* m with a fixed origin joint "joint_Root" put before its joints (the corpus's layout: its
+ * first joint stays at 0 and the hips carry the travel). */
+static affect_motion *with_origin(const affect_motion *m)
+{
+    affect_motion *o = NULL;
+    affect_error err;
+    assert_int_equal(affect_motion_create(m->n_frames, m->n_joints + 1, m->fps, &o, &err),
+                     AFFECT_OK);
+    memcpy(o->unit, m->unit, sizeof o->unit);
+    assert_int_equal(affect_motion_set_name(o, 0, "joint_Root", 10, &err), AFFECT_OK);
+    for (uint32_t j = 0; j < m->n_joints; j++) {
+        assert_int_equal(affect_motion_set_name(o, j + 1, m->names[j], strlen(m->names[j]), &err),
+                         AFFECT_OK);
+        o->parents[j + 1] = m->parents[j] + 1; /* the old root hangs from joint_Root */
+    }
+    for (uint32_t t = 0; t < m->n_frames; t++)
+        memcpy(affect_motion_at(o, t, 1), affect_motion_at(m, t, 0),
+               (size_t)m->n_joints * 3 * sizeof(float));
+    affect_motion_free((affect_motion *)m);
+    return o;
+}
+
+/* keep_path: a walk generated from standing neighbours (knocks) keeps its own horizontal root
+ * path exactly, and its posture comes from the model; without it the standing neighbours pull
+ * the walk back toward the start. */
+static void test_keep_path(void **state)
+{
+    (void)state;
+    affect_motion *d = synth("walk", "neutral", 2, 30);
+    affect_motion *nb[2] = {synth("knock", "sad", 3, 30), synth("knock", "sad", 4, 30)};
+    affect_generate_options opt;
+    affect_generate_options_default(&opt);
+    assert_true(opt.keep_path);
+    affect_motion *g = generate(d, nb, 2, &opt, NULL);
+    double worst = 0, travel = 0;
+    for (uint32_t t = 0; t < d->n_frames; t++) {
+        const float *a = affect_motion_at(d, t, 0), *b = affect_motion_at(g, t, 0);
+        worst = fmax(worst, fmax(fabs(a[0] - b[0]), fabs(a[2] - b[2])));
+        const float *a0 = affect_motion_at(d, 0, 0);
+        travel = fmax(travel, hypot(a[0] - a0[0], a[2] - a0[2]));
+    }
+    assert_true(travel > 1.0); /* the walk travels more than a metre */
+    assert_true(worst < 1e-4);  /* and the output's root follows it (float32 rounding) */
+    /* the posture is not the walk's: the hands are the knocks' (no copies of the walk) */
+    double dk = dtw(g, d);
+    assert_true(dk > 0.05);
+    opt.keep_path = false;
+    affect_motion *g0 = generate(d, nb, 2, &opt, NULL);
+    const float *end_d = affect_motion_at(d, d->n_frames - 1, 0),
+                *end_g = affect_motion_at(g0, d->n_frames - 1, 0);
+    assert_true(hypot(end_d[0] - end_g[0], end_d[2] - end_g[2]) > 0.5); /* left the path */
+    assert_true(dtw(g0, d) > dk);
+    affect_motion_free(g0);
+    affect_motion_free(g);
+
+    /* with a fixed origin as joint 0, the path kept is the pelvis role's (the hips') */
+    d = with_origin(d);
+    nb[0] = with_origin(nb[0]);
+    nb[1] = with_origin(nb[1]);
+    opt.keep_path = true;
+    g = generate(d, nb, 2, &opt, NULL);
+    worst = 0;
+    for (uint32_t t = 0; t < d->n_frames; t++) {
+        const float *a = affect_motion_at(d, t, 1), *b = affect_motion_at(g, t, 1);
+        worst = fmax(worst, fmax(fabs(a[0] - b[0]), fabs(a[2] - b[2])));
+    }
+    assert_true(worst < 1e-4);
+    affect_motion_free(g);
+    free_all(nb, 2);
     affect_motion_free(d);
 }
 
@@ -557,6 +670,7 @@ int main(void)
         cmocka_unit_test(test_emotion_transfer),
         cmocka_unit_test(test_copies_and_scale),
         cmocka_unit_test(test_single_neighbour_and_no_filter),
+        cmocka_unit_test(test_keep_path),
         cmocka_unit_test(test_determinism),
         cmocka_unit_test(test_denormalize_round_trip),
         cmocka_unit_test(test_excluded_skeletons),

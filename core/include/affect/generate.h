@@ -9,6 +9,14 @@
  * frame's horizontal root position and heading removed, positions divided by the right arm
  * length when the right_shoulder and right_hand roles resolve in x_d); each neighbour gets the
  * same definition, normalized by its own first frame. Up axis: opt->up_axis.
+ * With opt->keep_path (the default), the root's (the pelvis role's, else joint 0's)
+ * horizontal position at each frame is then
+ * subtracted from every joint of that frame (of x_d and of every neighbour alike), so the HMM
+ * models postures about a travelling root, and x_d's own horizontal root path is added back
+ * to the output frame by frame (unfiltered): a walk stays a walk along its own path, and a
+ * neighbour that travels (or stands still) does not drag the output off it. Without it the
+ * observations are the positions relative to the first frame, as the thesis's (hand and arm
+ * movements, no travel).
  *
  * Skeletons. A neighbour is used only when its joint names are exactly those of x_d (the same
  * set, any order); any other neighbour is EXCLUDED — never mapped by roles, never mixed — and
@@ -26,7 +34,11 @@
  * −½ d²_Σ(x, μ) / s − (m/2) log s + const, so s weighs the emission term against the
  * transitions by 1/s — s > 1 lets the path follow x_d more loosely (fewer state changes,
  * stronger affect), s < 1 more tightly; s = 1 is the trained model. Output frame t is the mean
- * of state S_t, low-pass filtered coordinate by coordinate (affect_lowpass: zero-lag
+ * of state S_t (opt->render = AFFECT_GENERATE_STEPS, the thesis's), or, with
+ * AFFECT_GENERATE_LINEAR, each run of equal states of S contributes its mean at the run's
+ * centre frame (real-valued) and frames between two centres are linear between the two means
+ * (the first and last means held before the first and after the last centre), so that the
+ * output has no jumps between state means; then it is low-pass filtered coordinate by coordinate (affect_lowpass: zero-lag
  * Butterworth at opt->cutoff_hz for x_d's fps; not filtered when the cut-off is 0, at or above
  * the Nyquist frequency, or the output has one frame), then de-normalized by the inverse of
  * x_d's normalization transform: p = origin + Rᵀ (scale · p'). The result has x_d's joint
@@ -57,6 +69,12 @@ extern "C" {
 
 #define AFFECT_GENERATE_MAX_COPIES 1000u
 
+/* How the output is drawn from the Viterbi path S (before the low-pass filter). */
+typedef enum affect_generate_render {
+    AFFECT_GENERATE_STEPS = 0, /* the thesis's: frame t is the mean of state S_t */
+    AFFECT_GENERATE_LINEAR = 1 /* state means at the centres of S's runs, linear in between */
+} affect_generate_render;
+
 typedef struct affect_generate_options {
     uint32_t states;         /* HMM states N (default 12) */
     uint32_t copies;         /* n_d copies of x_d added to the training set (default 0) */
@@ -67,6 +85,8 @@ typedef struct affect_generate_options {
     double tol;              /* relative log-likelihood change to stop (default 1e-4) */
     double reg;              /* covariance diagonal floor, in normalized units² (1e-4) */
     int up_axis;             /* 0 = x, 1 = y (default), 2 = z */
+    affect_generate_render render; /* AFFECT_GENERATE_STEPS (default) or _LINEAR */
+    bool keep_path;          /* keep x_d's horizontal root path (default true; see above) */
     /* Optional clock (seconds, monotonic) for the report's stage times; NULL (default) = not
      * timed. The core has no clock of its own: a benchmark passes one. It never changes the
      * result. */
