@@ -1,7 +1,8 @@
 /*
  * test_rmlr.c — elastic-net multinomial logistic regression: the KKT conditions of the
- * solution, the lasso path, recovery of the informative features, determinism, errors, the
- * encoding (round trip, truncation, corruption) and out-of-memory handling.
+ * solution, the lasso path, recovery of the informative features, determinism (also across
+ * thread counts), errors, the encoding (round trip, truncation, corruption), out-of-memory
+ * handling (with 1 and 2 threads) and the column-mean imputation of missing values.
  */
 #include <stdio.h>
 #include <string.h>
@@ -341,6 +342,54 @@ static void test_determinism(void **state)
     free(x);
 }
 
+/* affect_rmlr_cv's encoding into w (initialised here). */
+static void cv_encode(const double *x, size_t n, const uint32_t *y, uint32_t K,
+                      const affect_rmlr_options *o, affect_bw *w)
+{
+    affect_rmlr *m;
+    affect_error err;
+    assert_int_equal(affect_rmlr_cv(x, n, P, y, K, o, &m, &err), AFFECT_OK);
+    affect_bw_init(w);
+    affect_rmlr_encode(m, w);
+    assert_false(w->failed);
+    affect_rmlr_free(m);
+}
+
+static void test_threads(void **state)
+{
+    (void)state;
+    enum { N = 45, K = 3 };
+    /* α values of very different costs, so the workers finish them out of order */
+    static const double alphas[] = {0.05, 1.0, 0.0, 0.6};
+    double *x = malloc(N * P * sizeof *x);
+    uint32_t y[N];
+    affect_rmlr_options o;
+    affect_bw w1, wt;
+    assert_non_null(x);
+    synth(N, K, 3, 1.0, 8, x, y);
+    small_options(&o, alphas, 4);
+    cv_encode(x, N, y, K, &o, &w1);
+    static const uint32_t threads[] = {2, 3, 64}; /* 64: one thread per α */
+    for (size_t t = 0; t < sizeof threads / sizeof *threads; t++) {
+        o.threads = threads[t];
+        cv_encode(x, N, y, K, &o, &wt);
+        assert_int_equal(wt.len, w1.len);
+        assert_memory_equal(wt.data, w1.data, w1.len);
+        affect_bw_free(&wt);
+    }
+    affect_bw_free(&w1);
+    /* one α: one worker whatever the option */
+    small_options(&o, alphas + 3, 1);
+    cv_encode(x, N, y, K, &o, &w1);
+    o.threads = 2;
+    cv_encode(x, N, y, K, &o, &wt);
+    assert_int_equal(wt.len, w1.len);
+    assert_memory_equal(wt.data, w1.data, w1.len);
+    affect_bw_free(&w1);
+    affect_bw_free(&wt);
+    free(x);
+}
+
 #define EXPECT_ERR(call, status, message)                                                          \
     do {                                                                                           \
         affect_error_clear(&err);                                                                  \
@@ -425,6 +474,16 @@ static void test_errors(void **state)
     o.folds = 1;
     EXPECT_ERR(affect_rmlr_cv(x, N, P, y, K, &o, &m, &err), AFFECT_ERR_INVALID,
                "need at least 2 folds, got 1");
+    affect_rmlr_options_default(&o);
+    o.threads = 0;
+    EXPECT_ERR(affect_rmlr_cv(x, N, P, y, K, &o, &m, &err), AFFECT_ERR_INVALID,
+               "threads must be from 1 to 64, got 0");
+    o.threads = 65;
+    EXPECT_ERR(affect_rmlr_cv(x, N, P, y, K, &o, &m, &err), AFFECT_ERR_INVALID,
+               "threads must be from 1 to 64, got 65");
+    assert_null(m);
+    o.threads = 0; /* not an option of the path: ignored there */
+    assert_int_equal(FIT(N, P, y, K, 1, NULL, 2, &o), AFFECT_OK);
     y[0] = 2;
     EXPECT_ERR(affect_rmlr_cv(x, N, P, y, 3, NULL, &m, &err), AFFECT_ERR_INVALID,
                "class 2 has 1 sample (cross-validation needs at least 2)");
@@ -635,6 +694,7 @@ typedef struct oom_ctx {
     affect_rmlr *m;
     affect_bw w;
     double beta[4 * 3 * 5];
+    uint32_t threads;
 } oom_ctx;
 
 static affect_status oom_cv(void *ctx, affect_error *err)
@@ -647,6 +707,7 @@ static affect_status oom_cv(void *ctx, affect_error *err)
     o.n_alpha = 2;
     o.n_lambda = 4;
     o.folds = 3;
+    o.threads = c->threads;
     return affect_rmlr_cv(c->x, 30, 5, c->y, 3, &o, &c->m, err);
 }
 
@@ -704,7 +765,15 @@ static void test_out_of_memory(void **state)
         for (size_t j = 0; j < 5; j++)
             c.x[i * 5 + j] = affect_rng_normal(&r) + (j == c.y[i] ? 1.5 : 0);
     }
-    assert_true(tu_oom_sweep(oom_cv, &c, oom_model_finish, NULL) >= 10);
+    c.threads = 1;
+    long allocs1 = tu_oom_sweep(oom_cv, &c, oom_model_finish, NULL);
+    /* with 2 threads every allocation still happens on the calling thread, before the other
+     * starts: one more fitter (2 blocks) and the thread handles */
+    c.threads = 2;
+    long allocs2 = tu_oom_sweep(oom_cv, &c, oom_model_finish, NULL);
+    assert_true(allocs1 >= 10);
+    assert_int_equal(allocs2, allocs1 + 3);
+    c.threads = 1;
     assert_true(tu_oom_sweep(oom_path, &c, NULL, NULL) >= 4);
     assert_int_equal(oom_cv(&c, &err), AFFECT_OK);
     affect_rmlr *m = c.m;
@@ -717,6 +786,32 @@ static void test_out_of_memory(void **state)
     affect_rmlr_free(m);
 }
 
+static void test_impute(void **state)
+{
+    (void)state;
+    /* 4 × 4: missing values in rows 1 and 3 of column 0, everywhere in column 1, infinities in
+     * column 2, none in column 3 */
+    double x[4 * 4] = {0.1, NAN, INFINITY,  -0.0, NAN, NAN, 0.5,  2.0,
+                       0.2, NAN, -INFINITY, 3.0,  NAN, NAN, 0.25, 4.5};
+    const double mean0 = (0.1 + 0.2) / 2, mean2 = (0.5 + 0.25) / 2;
+    const double want[4 * 4] = {0.1, 0, mean2, -0.0, mean0, 0, 0.5,  2.0,
+                                0.2, 0, mean2, 3.0,  mean0, 0, 0.25, 4.5};
+    affect_impute_column_means(x, 4, 4);
+    assert_memory_equal(x, want, sizeof x); /* exact bits: -0.0 kept, the means in row order */
+    /* the sum in row order, divided by the count */
+    double y[5] = {0.1, 0.2, NAN, 0.3, NAN};
+    affect_impute_column_means(y, 5, 1);
+    assert_true(y[2] == (0.1 + 0.2 + 0.3) / 3 && y[4] == y[2] && y[0] == 0.1);
+    /* nothing to do */
+    affect_impute_column_means(NULL, 0, 3);
+    affect_impute_column_means(x, 4, 0);
+    assert_memory_equal(x, want, sizeof x);
+    /* one row: its missing values become 0 */
+    double z[3] = {NAN, 7, -INFINITY};
+    affect_impute_column_means(z, 1, 3);
+    assert_true(z[0] == 0 && z[1] == 7 && z[2] == 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -724,7 +819,8 @@ int main(void)
         cmocka_unit_test(test_recovery),      cmocka_unit_test(test_constant_feature),
         cmocka_unit_test(test_determinism),   cmocka_unit_test(test_errors),
         cmocka_unit_test(test_round_trip),    cmocka_unit_test(test_corrupt),
-        cmocka_unit_test(test_out_of_memory),
+        cmocka_unit_test(test_out_of_memory), cmocka_unit_test(test_threads),
+        cmocka_unit_test(test_impute),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

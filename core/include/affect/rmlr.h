@@ -32,7 +32,8 @@
  * reported as not converged (a flag, not an error). The criterion is on the objective's
  * scale, as glmnet's; the tests check the KKT conditions to 2e-6 with tol = 1e-13.
  *
- * Everything is deterministic: fixed orders, plain loops, no BLAS, the folds seeded.
+ * Everything is deterministic: fixed orders, plain loops, no BLAS, the folds seeded; the
+ * result of affect_rmlr_cv is the same bytes whatever its number of threads.
  */
 #ifndef AFFECT_RMLR_H
 #define AFFECT_RMLR_H
@@ -53,6 +54,8 @@ extern "C" {
 #define AFFECT_RMLR_MAX_SAMPLES 4294967295u
 /* Number of α in the default grid 0.05, 0.10, …, 1.00. */
 #define AFFECT_RMLR_DEFAULT_N_ALPHA 20u
+/* Threads of affect_rmlr_cv at most. */
+#define AFFECT_RMLR_MAX_THREADS 64u
 /* Version of the encoding written by affect_rmlr_encode. */
 #define AFFECT_RMLR_FORMAT_VERSION 1u
 
@@ -65,6 +68,8 @@ typedef struct affect_rmlr_options {
     uint64_t seed;           /* for the folds (0) */
     uint32_t max_iter;       /* coordinate-descent passes per λ at most (10000) */
     double tol;              /* convergence threshold (1e-7; see above) */
+    uint32_t threads;        /* affect_rmlr_cv: α values cross-validated at once, each in its
+                                own thread (1; 1 .. AFFECT_RMLR_MAX_THREADS = 64) */
 } affect_rmlr_options;
 
 /* The defaults above (alphas NULL, n_alpha 20). */
@@ -75,10 +80,10 @@ typedef struct affect_rmlr affect_rmlr; /* opaque: the chosen fit */
 /* Fits the whole path for one α on x (n × p, row-major) with classes y[i] in 0 .. K−1, every
  * class present. lambdas: n_lambda given values (positive, finite; warm starts follow the given
  * order, so give them decreasing), or NULL for the automatic path of n_lambda values. o supplies
- * lambda_min_ratio, max_iter and tol (NULL = defaults; its n_lambda, alphas, folds and seed are
- * not used). Outputs, each optional (NULL): lambda_out (n_lambda), beta_out (n_lambda × K × p:
- * for path index l, class k, feature j at [(l·K + k)·p + j]), beta0_out (n_lambda × K),
- * converged_out (n_lambda: 1 converged, 0 gave up after max_iter passes).
+ * lambda_min_ratio, max_iter and tol (NULL = defaults; its n_lambda, alphas, folds, seed and
+ * threads are not used). Outputs, each optional (NULL): lambda_out (n_lambda), beta_out
+ * (n_lambda × K × p: for path index l, class k, feature j at [(l·K + k)·p + j]), beta0_out
+ * (n_lambda × K), converged_out (n_lambda: 1 converged, 0 gave up after max_iter passes).
  * Errors (AFFECT_ERR_INVALID unless said), in the order checked: "need at least 1 sample",
  * "need at least 1 feature", "too many features: 2000000 (at most 1048576)" (RANGE), "too many
  * samples: …" (RANGE), "need at least 2 classes, got 1", "at most 256 classes, got 300",
@@ -100,12 +105,22 @@ affect_status affect_rmlr_fit_path(const double *x, size_t n, size_t p, const ui
  * smallest class). The error of (α, λ) is the number misclassified over all folds divided by n;
  * the smallest wins, ties going to the larger λ (sparser), then the larger α. The refit follows
  * the same path from λ_max down to the chosen λ. *out is NULL on failure.
+ * Threads: the α values are independent, and with o->threads = T > 1 they are cross-validated
+ * T at a time: the calling thread and T − 1 C11 threads each take the next α (in grid order)
+ * until none is left, and run its folds along its path with a fitter of their own; each α's
+ * miss counts go to its own row, so every α computes exactly what it computes alone and the
+ * model is the same bytes as with 1 thread. Everything is allocated on the calling thread
+ * before the others start (T fitters of the data's size), so the workers allocate nothing and
+ * cannot fail, and the allocator installed with affect_set_allocator is only ever called from
+ * the calling thread; a thread that cannot be created (or a lock that cannot be) leaves its
+ * share to the calling thread. More threads than α values are not started. The refit runs on the
+ * calling thread.
  * Errors: those of affect_rmlr_fit_path for the data, then "class 2 has 1 sample
  * (cross-validation needs at least 2)", and the options' (AFFECT_ERR_INVALID): "n_lambda must
  * be at least 1", "too many lambdas: …" (RANGE), "lambda_min_ratio must be in (0, 1), or 0 for
  * automatic, got 2", "need at least 1 alpha", "alpha 3 = 1.5 is not in [0, 1]", "need at
- * least 2 folds, got 1", "max_iter must be at least 1", "tol must be a positive finite number,
- * got 0"; AFFECT_ERR_NOMEM. */
+ * least 2 folds, got 1", "threads must be from 1 to 64, got 0", "max_iter must be at least
+ * 1", "tol must be a positive finite number, got 0"; AFFECT_ERR_NOMEM. */
 affect_status affect_rmlr_cv(const double *x, size_t n, size_t p, const uint32_t *y, uint32_t K,
                              const affect_rmlr_options *o, affect_rmlr **out, affect_error *err);
 
@@ -137,6 +152,12 @@ const double *affect_rmlr_sds(const affect_rmlr *m);
 /* The most probable class of x (p raw, unstandardized values; a tie goes to the smallest
  * class); probs (K values, optional) receives the probabilities. x is not checked. */
 uint32_t affect_rmlr_predict(const affect_rmlr *m, const double *x, double *probs);
+
+/* Missing values: replaces every non-finite value (NaN, ±∞) of x (n × p, row-major) by the
+ * mean of the finite values of its column (their sum in row order divided by their count), or
+ * by 0 when the column has none; finite values are left as they are. For Laban vectors whose
+ * components could not be computed, before affect_rmlr_cv (which refuses non-finite values). */
+void affect_impute_column_means(double *x, size_t n, size_t p);
 
 /* ---- serialisation ----
  * Layout, version 1 (little-endian, through affect/bytes.h), offsets relative to the start:
