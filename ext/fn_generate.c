@@ -64,6 +64,7 @@ struct ax_gen_fn {
     char *index;   /* the cached fit's index, generation and seed */
     sqlite3_int64 generation;
     uint64_t seed;
+    uint32_t folds;
     affect_rmlr *fit;
 };
 
@@ -281,41 +282,22 @@ done:
     return r;
 }
 
-/* Missing components (NaN) become the component's mean over the rows that have it (0 when no
- * row has it). */
-static void impute(gen_index *ix)
-{
-    for (int j = 0; j < N_COMP; j++) {
-        double s = 0.0;
-        uint32_t c = 0;
-        for (uint32_t i = 0; i < ix->n; i++) {
-            double v = ix->x[(size_t)i * N_COMP + (size_t)j];
-            if (isfinite(v)) {
-                s += v;
-                c++;
-            }
-        }
-        double mean = c ? s / c : 0.0;
-        for (uint32_t i = 0; i < ix->n; i++)
-            if (!isfinite(ix->x[(size_t)i * N_COMP + (size_t)j]))
-                ix->x[(size_t)i * N_COMP + (size_t)j] = mean;
-    }
-}
-
 static ax_arg index_load(sqlite3_context *ctx, const char *name, gen_index *ix)
 {
     memset(ix, 0, sizeof *ix);
     ix->name = name;
     if (index_info(ctx, ix) != AX_OK || index_rows(ctx, ix) != AX_OK)
         return AX_ERROR;
-    impute(ix);
+    /* missing components: the component's mean (0 when no row has it) */
+    affect_impute_column_means(ix->x, ix->n, N_COMP);
     return AX_OK;
 }
 
 /* ---- the RMLR fit, cached ---- */
 
-/* The persisted fit of the index, if its generation and seed are current; NULL otherwise. */
-static affect_rmlr *stored_fit(sqlite3 *db, const gen_index *ix, uint64_t seed)
+/* The persisted fit of the index, if its generation, seed and folds are current; NULL
+ * otherwise. */
+static affect_rmlr *stored_fit(sqlite3 *db, const gen_index *ix, uint64_t seed, uint32_t folds)
 {
     char *sql = sqlite3_mprintf("SELECT (SELECT value FROM \"%w_info\" WHERE key = 'rmlr'), "
                                 "(SELECT value FROM \"%w_info\" WHERE key = 'rmlr_generation')",
@@ -325,8 +307,8 @@ static affect_rmlr *stored_fit(sqlite3 *db, const gen_index *ix, uint64_t seed)
     if (sql && sqlite3_prepare_v2(db, sql, -1, &st, NULL) == SQLITE_OK &&
         sqlite3_step(st) == SQLITE_ROW && sqlite3_column_type(st, 0) == SQLITE_BLOB) {
         char expect[64];
-        sqlite3_snprintf(sizeof expect, expect, "%lld:%llu", (long long)ix->generation,
-                         (unsigned long long)seed);
+        sqlite3_snprintf(sizeof expect, expect, "%lld:%llu:%u", (long long)ix->generation,
+                         (unsigned long long)seed, folds);
         const char *got = (const char *)sqlite3_column_text(st, 1);
         if (got && strcmp(got, expect) == 0) {
             affect_br r;
@@ -343,7 +325,8 @@ static affect_rmlr *stored_fit(sqlite3 *db, const gen_index *ix, uint64_t seed)
 
 /* Stores the fit in the index's _info table; failures (read-only database, busy) are ignored:
  * the fit stays cached in memory. */
-static void store_fit(sqlite3 *db, const gen_index *ix, uint64_t seed, const affect_rmlr *fit)
+static void store_fit(sqlite3 *db, const gen_index *ix, uint64_t seed, uint32_t folds,
+                      const affect_rmlr *fit)
 {
     affect_bw w;
     affect_bw_init(&w);
@@ -354,8 +337,8 @@ static void store_fit(sqlite3 *db, const gen_index *ix, uint64_t seed, const aff
     sqlite3_stmt *st = NULL;
     if (!w.failed && sql && sqlite3_prepare_v2(db, sql, -1, &st, NULL) == SQLITE_OK) {
         char gen[64];
-        sqlite3_snprintf(sizeof gen, gen, "%lld:%llu", (long long)ix->generation,
-                         (unsigned long long)seed);
+        sqlite3_snprintf(sizeof gen, gen, "%lld:%llu:%u", (long long)ix->generation,
+                         (unsigned long long)seed, folds);
         sqlite3_bind_blob64(st, 1, w.data, w.len, SQLITE_STATIC);
         sqlite3_bind_text(st, 2, gen, -1, SQLITE_TRANSIENT);
         sqlite3_step(st);
@@ -365,12 +348,13 @@ static void store_fit(sqlite3 *db, const gen_index *ix, uint64_t seed, const aff
     affect_bw_free(&w);
 }
 
-/* The index's RMLR fit: from this function's cache, the index's _info, or fitted now. */
+/* The index's RMLR fit: from this function's cache, the index's _info, or fitted now (the
+ * α grid in `threads` threads; the fit does not depend on it). */
 static ax_arg rmlr_fit(sqlite3_context *ctx, const gen_index *ix, uint64_t seed,
-                       uint32_t folds, const affect_rmlr **out)
+                       uint32_t folds, uint32_t threads, const affect_rmlr **out)
 {
     ax_gen_fn *fn = sqlite3_user_data(ctx);
-    if (fn->fit && fn->generation == ix->generation && fn->seed == seed &&
+    if (fn->fit && fn->generation == ix->generation && fn->seed == seed && fn->folds == folds &&
         strcmp(fn->index, ix->name) == 0) {
         *out = fn->fit;
         return AX_OK;
@@ -382,12 +366,13 @@ static ax_arg rmlr_fit(sqlite3_context *ctx, const gen_index *ix, uint64_t seed,
         return AX_ERROR;
     }
     sqlite3 *db = sqlite3_context_db_handle(ctx);
-    affect_rmlr *fit = stored_fit(db, ix, seed);
+    affect_rmlr *fit = stored_fit(db, ix, seed, folds);
     if (!fit) {
         affect_rmlr_options o;
         affect_rmlr_options_default(&o);
         o.seed = seed;
         o.folds = folds;
+        o.threads = threads;
         o.lambda_min_ratio = 0.01; /* the weakly penalized end of the path converges slowly
                                       and is never chosen on these data */
         affect_error err;
@@ -398,7 +383,7 @@ static ax_arg rmlr_fit(sqlite3_context *ctx, const gen_index *ix, uint64_t seed,
                 ax_errorf(ctx, "salient components of \"%s\": %s", ix->name, err.msg);
             return AX_ERROR;
         }
-        store_fit(db, ix, seed, fit);
+        store_fit(db, ix, seed, folds, fit);
     }
     fn->index = sqlite3_mprintf("%s", ix->name);
     if (!fn->index) {
@@ -409,6 +394,7 @@ static ax_arg rmlr_fit(sqlite3_context *ctx, const gen_index *ix, uint64_t seed,
     fn->fit = fit;
     fn->generation = ix->generation;
     fn->seed = seed;
+    fn->folds = folds;
     *out = fit;
     return AX_OK;
 }
@@ -436,7 +422,17 @@ static void put_components(affect_strbuf *sb, const bool on[N_COMP], bool want)
 
 /* ---- laban_salient ---- */
 
-static const char *const salient_keys[] = {"seed", "folds", NULL};
+/* The "threads" option's range (the RMLR fit's). */
+static ax_arg check_threads(sqlite3_context *ctx, uint32_t threads)
+{
+    if (threads >= 1 && threads <= AFFECT_RMLR_MAX_THREADS)
+        return AX_OK;
+    ax_errorf(ctx, "option \"threads\" must be from 1 to %u, got %u", AFFECT_RMLR_MAX_THREADS,
+              threads);
+    return AX_ERROR;
+}
+
+static const char *const salient_keys[] = {"seed", "folds", "threads", NULL};
 
 void ax_laban_salient(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 {
@@ -447,15 +443,15 @@ void ax_laban_salient(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         return;
     ax_opts opts;
     double seed = 1;
-    uint32_t folds = 10;
+    uint32_t folds = 10, threads = 1;
     if (ax_opts_parse(ctx, argc, argv, 1, salient_keys, &opts) != AX_OK)
         return;
     gen_index ix;
     memset(&ix, 0, sizeof ix);
     const affect_rmlr *fit;
     if (ax_opt_whole(ctx, &opts, "seed", 9007199254740992.0, &seed) ||
-        ax_opt_u32(ctx, &opts, "folds", &folds) || index_load(ctx, name, &ix) ||
-        rmlr_fit(ctx, &ix, (uint64_t)seed, folds, &fit))
+        ax_opt_u32(ctx, &opts, "folds", &folds) || ax_opt_u32(ctx, &opts, "threads", &threads) ||
+        check_threads(ctx, threads) || index_load(ctx, name, &ix) || rmlr_fit(ctx, &ix, (uint64_t)seed, folds, threads, &fit))
         goto done;
     affect_strbuf sb;
     affect_strbuf_init(&sb);
@@ -505,7 +501,7 @@ done:
 static const char *const gen_keys[] = {"copies",     "states", "epsilon",   "k",
                                        "components", "source_label", "classifier",
                                        "cutoff_hz",  "covariance_scale", "seed",
-                                       "render",     "keep_path", NULL};
+                                       "render",     "keep_path", "threads", NULL};
 /* In the order of affect_generate_render. */
 static const char *const render_names[] = {"steps", "linear", NULL};
 
@@ -513,6 +509,7 @@ typedef struct gen_opts {
     affect_generate_options g;
     double epsilon;
     uint32_t k;              /* 0: by epsilon */
+    uint32_t threads;        /* for the RMLR fit when it is not cached (1) */
     bool auto_components;
     bool use[N_COMP];        /* the components asked for (not auto) */
     const char *source_label;
@@ -557,6 +554,7 @@ static ax_arg read_gen_options(sqlite3_context *ctx, int argc, sqlite3_value **a
     memset(o, 0, sizeof *o);
     affect_generate_options_default(&o->g);
     o->epsilon = 0.1;
+    o->threads = 1;
     double seed = (double)o->g.seed;
     int render = (int)o->g.render;
     if (ax_opts_parse(ctx, argc, argv, 3, gen_keys, opts) != AX_OK)
@@ -571,7 +569,8 @@ static ax_arg read_gen_options(sqlite3_context *ctx, int argc, sqlite3_value **a
         ax_opt_number(ctx, opts, "covariance_scale", &o->g.covariance_scale) ||
         ax_opt_whole(ctx, opts, "seed", 9007199254740992.0, &seed) ||
         ax_opt_enum(ctx, opts, "render", render_names, &render) ||
-        ax_opt_bool(ctx, opts, "keep_path", &o->g.keep_path))
+        ax_opt_bool(ctx, opts, "keep_path", &o->g.keep_path) ||
+        ax_opt_u32(ctx, opts, "threads", &o->threads) || check_threads(ctx, o->threads))
         return AX_ERROR;
     o->g.seed = (uint64_t)seed;
     o->g.render = (affect_generate_render)render;
@@ -747,7 +746,7 @@ static ax_arg choose_components(sqlite3_context *ctx, const gen_index *ix, const
         memcpy(cc->use, o->use, sizeof cc->use);
         return AX_OK;
     }
-    if (rmlr_fit(ctx, ix, o->g.seed, 10, &cc->fit) != AX_OK)
+    if (rmlr_fit(ctx, ix, o->g.seed, 10, o->threads, &cc->fit) != AX_OK)
         return AX_ERROR;
     salient_of(cc->fit, (uint32_t)target, cc->sal_t);
     if (src->cls >= 0)
@@ -913,6 +912,11 @@ static void explain_json(sqlite3_context *ctx, const gen_index *ix, const gen_op
                          rep->neighbours_used, rep->excluded, o->g.states, o->g.copies,
                          rep->iterations);
     affect_strbuf_double(&sb, rep->loglik);
+    affect_strbuf_printf(&sb, "},\"output\":{\"render\":\"%s\",\"keep_path\":%s,\"cutoff_hz\":",
+                         render_names[o->g.render], o->g.keep_path ? "true" : "false");
+    affect_strbuf_double(&sb, o->g.cutoff_hz);
+    affect_strbuf_puts(&sb, ",\"covariance_scale\":");
+    affect_strbuf_double(&sb, o->g.covariance_scale);
     affect_strbuf_puts(&sb, "},\"viterbi\":{\"logprob\":");
     affect_strbuf_double(&sb, rep->viterbi_logprob);
     affect_strbuf_puts(&sb, ",\"path\":[");

@@ -44,7 +44,7 @@ import sys
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-MODULE = os.path.join(ROOT, "build", "affect")
+MODULE = os.environ.get("AFFECT_MODULE", os.path.join(ROOT, "build", "affect"))
 CONTENTS = ["bow", "bye", "byebye", "dash", "guide", "run", "walk", "walk-back", "walk-left",
             "walk-right"]
 EMOTIONS = ["angry", "happy", "normal", "sad"]

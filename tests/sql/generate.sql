@@ -161,3 +161,25 @@ SELECT motion_dtw(motion, 'text') FROM motions WHERE id = 1;
 
 SELECT motion_dtw(motion, motion_select(motion, '["Hips","Spine"]')) FROM motions WHERE id = 1;
 -- error: motion_dtw: the motions have different joint names
+
+SELECT 'explain reports how the output was drawn',
+       json_extract(e, '$.output') = '{"render":"linear","keep_path":false,"cutoff_hz":2,"covariance_scale":1}'
+  FROM (SELECT affect_generate_explain('idx', motion, 'sad',
+          '{"components":["TimeAll"],"k":2,"render":"linear","keep_path":false,"cutoff_hz":2}') AS e
+          FROM motions WHERE id = 1);
+-- oom: skip
+
+-- ---- laban_salient: folds are part of the cache key; threads change only the time ----
+CREATE TABLE fits AS SELECT 'threads 2' AS k, laban_salient('idx', '{"folds":5,"threads":2}') AS s;
+INSERT INTO idx(idx) VALUES('rebuild');
+INSERT INTO fits SELECT 'threads 1', laban_salient('idx', '{"folds":5}');
+
+SELECT 'the fit with 2 threads is the fit with 1, and the stored key names the folds',
+       (SELECT s FROM fits WHERE k = 'threads 2') = (SELECT s FROM fits WHERE k = 'threads 1')
+   AND (SELECT value FROM idx_info WHERE key = 'rmlr_generation') LIKE '%:1:5';
+
+SELECT laban_salient('idx', '{"threads":0}');
+-- error: laban_salient: option "threads" must be from 1 to 64, got 0
+
+SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad', '{"threads":65}');
+-- error: affect_generate: option "threads" must be from 1 to 64, got 65

@@ -59,9 +59,23 @@ grep -q "wrote demo.html" summary.txt || fail "demo page"
 grep -q '</html>' demo.html || fail "demo.html is incomplete"
 grep -q "Laban nearest neighbours" summary.txt || fail "demo: nearest neighbours"
 grep -q "Laban Weight vs Time" demo.html || fail "demo: the Weight vs Time figure"
+grep -q "generated vs source vs the real recording" summary.txt || fail "demo: generation summary"
+[ "$(q "SELECT count(*) FROM generated WHERE motion_frames(motion) > 0")" = 3 ] ||
+    fail "demo: three generated motions"
+grep -q "Generation: the source, the generated motion, the real recording" demo.html ||
+    fail "demo: generation film strips"
 if [ -n "$corpus" ] && [ -d "$corpus" ]; then
     q < "$src/sql/laban_corpus.sql" > laban.md
     [ "$(grep -c '^| ' laban.md)" = 13 ] || fail "sql/laban_corpus.sql: the table has $(grep -c '^| ' laban.md) lines"
     grep -q "angry > sad on WeightAll in 11 of 11 contents" laban.md || fail "sql/laban_corpus.sql: ordering line"
+    # the generation evaluation's smoke run (two contents), with Debian's Python
+    if /usr/bin/python3 -c 'import sqlite3; sqlite3.connect(":memory:").enable_load_extension' 2>/dev/null; then
+        OPENBLAS_NUM_THREADS=1 AFFECT_MODULE="$module" /usr/bin/python3 "$src/sql/generate_eval.py" demo.db --quick > gen.md ||
+            fail "sql/generate_eval.py --quick"
+        grep -q '^| steps, copies 0 | ' gen.md || fail "sql/generate_eval.py: the results table"
+        grep -q '^| sad | ' gen.md || fail "sql/generate_eval.py: the Laban shift table"
+    else
+        echo "SKIP: /usr/bin/python3 cannot load extensions: sql/generate_eval.py not run"
+    fi
 fi
 echo "scripts: 1 passed, 0 failed"
