@@ -5,10 +5,15 @@
  *
  * With repeat 0 it calibrates: it doubles the passes until they take CALIBRATE_SECONDS, then
  * scales them so that one run takes about TARGET_RUN_SECONDS (at most MAX_REPEAT passes).
+ *
+ * For latency distributions (one time per request rather than per run), bench_summarize gives
+ * the median, mean, fastest and slowest of n times. bench_read_file reads a whole file (the
+ * corpus benchmarks' BVH files).
  */
 #ifndef AFFECT_BENCHUTIL_H
 #define AFFECT_BENCHUTIL_H
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <time.h>
 
@@ -70,6 +75,49 @@ static inline int bench_measure(int (*pass)(void *arg), void *arg, unsigned repe
     r->max = t[RUNS - 1];
     r->repeat = repeat;
     return 0;
+}
+
+/* The median (the mean of the two middle values when n is even), mean, fastest and slowest of
+ * v[0..n-1], n >= 1; v is sorted in place. */
+typedef struct bench_summary {
+    double median, mean, min, max;
+} bench_summary;
+
+static inline bench_summary bench_summarize(double *v, size_t n)
+{
+    qsort(v, n, sizeof v[0], cmp_double);
+    double sum = 0;
+    for (size_t i = 0; i < n; i++)
+        sum += v[i];
+    bench_summary s = {n % 2 ? v[n / 2] : (v[n / 2 - 1] + v[n / 2]) / 2, sum / (double)n, v[0],
+                       v[n - 1]};
+    return s;
+}
+
+/* The bytes of the file at path plus a terminating NUL (*len: the file's size), or NULL when
+ * it cannot be read (errno says why). Free with free(). */
+static inline char *bench_read_file(const char *path, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    char *buf = NULL;
+    long size = -1;
+    if (fseek(f, 0, SEEK_END) == 0)
+        size = ftell(f);
+    if (size >= 0 && fseek(f, 0, SEEK_SET) == 0) {
+        buf = malloc((size_t)size + 1);
+        if (buf && fread(buf, 1, (size_t)size, f) != (size_t)size) {
+            free(buf);
+            buf = NULL;
+        }
+    }
+    fclose(f);
+    if (buf) {
+        buf[size] = '\0';
+        *len = (size_t)size;
+    }
+    return buf;
 }
 
 #endif

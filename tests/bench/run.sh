@@ -2,7 +2,8 @@
 # tests/bench/run.sh — build the benchmarks in Release and run them on one core.
 #
 # Usage: bash tests/bench/run.sh [extra arguments for the corpus benchmarks, bench_import,
-#                                   bench_laban and bench_affect, e.g. a corpus directory]
+#                                   bench_laban, bench_affect and bench_generate, e.g. a corpus
+#                                   directory]
 #
 # Configures build-bench (-DCMAKE_BUILD_TYPE=Release -DAFFECT_WERROR=ON; AFFECT_BENCH_BUILD names
 # another build directory), builds the bench targets, prints the machine (CPU, memory, OS,
@@ -12,7 +13,10 @@
 # $build/tests/bench/hmm-data, and its pomegranate peer tests/bench/hmm_peer.py on those files,
 # when /usr/bin/python3 can import pomegranate (otherwise it says the peer was skipped), then
 # bench_affect (corpus; the recognizer and its 10-fold cross-validation, a few minutes) with
-# OPENBLAS_NUM_THREADS=1, then its cross-validation again with two threads, unpinned.
+# OPENBLAS_NUM_THREADS=1, then its cross-validation again with two threads, unpinned, then
+# bench_generate (corpus and the built module; generation latency by stage and the RMLR fit,
+# about a minute) with OPENBLAS_NUM_THREADS=1, then its RMLR fit again with {"threads":2},
+# unpinned (--rmlr-only --threads 2; it says so when laban_salient has no threads option).
 # AFFECT_BENCH_ONLY="bench_hmm ..." runs only the benchmarks it names (default: all).
 # Record the output in docs/BENCHMARKS.md.
 set -euo pipefail
@@ -83,5 +87,15 @@ if want bench_affect; then
     echo
     echo "== bench_affect --cv-only --threads 2 (unpinned: both cores)"
     OPENBLAS_NUM_THREADS=1 "$build/tests/bench/bench_affect" --cv-only --threads 2 "$@"
+    echo
+fi
+
+# Generation on the corpus (loads the built module), single-threaded OpenBLAS.
+if want bench_generate; then
+    echo "== bench_generate"
+    OPENBLAS_NUM_THREADS=1 "${pin[@]}" "$build/tests/bench/bench_generate" "$@"
+    echo
+    echo "== bench_generate --rmlr-only --threads 2 (unpinned: both cores)"
+    OPENBLAS_NUM_THREADS=1 "$build/tests/bench/bench_generate" --rmlr-only --threads 2 "$@"
     echo
 fi
