@@ -469,13 +469,13 @@ static int force_refit(sqlite3 *db, const char *ix)
     return exec(db, sql);
 }
 
-/* Whether the fit of ix is stored for its current generation (seed 1). */
+/* Whether the fit of ix is stored for its current generation (seed 1, 10 folds). */
 static int stored_now(sqlite3 *db, const char *ix, bool *yes)
 {
     char sql[512];
     snprintf(sql, sizeof sql,
              "SELECT (SELECT value FROM \"%s_info\" WHERE key = 'rmlr_generation') = "
-             "(SELECT value FROM \"%s_info\" WHERE key = 'generation') || ':1' AND "
+             "(SELECT value FROM \"%s_info\" WHERE key = 'generation') || ':1:10' AND "
              "(SELECT typeof(value) FROM \"%s_info\" WHERE key = 'rmlr') = 'blob'",
              ix, ix, ix);
     sqlite3_int64 v = 0;
