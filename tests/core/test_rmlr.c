@@ -483,7 +483,7 @@ static void test_errors(void **state)
                "threads must be from 1 to 64, got 65");
     assert_null(m);
     o.threads = 0; /* not an option of the path: ignored there */
-    assert_int_equal(FIT(N, P, y, K, 1, NULL, 2, &o), AFFECT_OK);
+    assert_int_equal(FIT(N, P, y, K, 1, NULL, 1, &o), AFFECT_OK); /* beta holds one λ */
     y[0] = 2;
     EXPECT_ERR(affect_rmlr_cv(x, N, P, y, 3, NULL, &m, &err), AFFECT_ERR_INVALID,
                "class 2 has 1 sample (cross-validation needs at least 2)");
