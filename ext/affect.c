@@ -19,6 +19,7 @@
 #include "fn_hmm.h"
 #include "fn_laban.h"
 #include "fn_motion.h"
+#include "fn_skeleton.h"
 #include "vt_laban.h"
 #include "fn_plot.h"
 #include "affect/strbuf.h"
@@ -105,6 +106,11 @@ static const ax_function functions[] = {
     {"motion_from_json", 1, false, ax_motion_from_json},
     {"motion_to_json", 1, true, ax_motion_to_json},
     {"motion_to_csv", 1, false, ax_motion_to_csv},
+    {"motion_to_bvh", 1, false, ax_motion_to_bvh},
+    {"motion_to_bvh", 2, false, ax_motion_to_bvh},
+    {"motion_rigid", 1, false, ax_motion_rigid},
+    {"motion_rigid", 2, false, ax_motion_rigid},
+    {"motion_rigid", 3, false, ax_motion_rigid},
     {"motion_info", 1, true, ax_motion_info},
     {"motion_frames", 1, false, ax_motion_scalar},
     {"motion_joints", 1, false, ax_motion_scalar},
@@ -269,6 +275,11 @@ int sqlite3_affect_init(sqlite3 *db, char **err, const sqlite3_api_routines *api
     rc = ax_register_points(db);
     if (rc != SQLITE_OK) {
         *err = sqlite3_mprintf("affect: cannot register motion_points: %s", sqlite3_errmsg(db));
+        return rc;
+    }
+    rc = ax_register_angles(db);
+    if (rc != SQLITE_OK) {
+        *err = sqlite3_mprintf("affect: cannot register motion_angles: %s", sqlite3_errmsg(db));
         return rc;
     }
     rc = ax_register_laban(db);

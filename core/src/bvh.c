@@ -19,11 +19,14 @@
  *      channels of every joint; root position channels carry the global translation), and its
  *      local rotation is the product of the rotation channels in the order CHANNELS lists them
  *      (degrees). affect_fk_frame accumulates world rotations and positions in double.
+ *   4. The motion keeps the skeleton (offsets, channels, End Sites) and every frame's local
+ *      rotations (quaternions) and translations, so affect_bvh_write reproduces the file.
  * Numbers are read with affect_parse_double (locale-independent, no allocation).
  */
 #include "affect/fk.h"
 #include "affect/io.h"
 #include "affect/numparse.h"
+#include "affect/quat.h"
 #include "internal.h"
 
 #include <math.h>
@@ -432,6 +435,35 @@ static void local_transforms(const parser *ps, const double *values, double scal
     }
 }
 
+/* Stores frame f's local rotations (as quaternions) and translations in m. */
+static void keep_rotations(affect_motion *m, uint32_t f, const double *trans, const double *rot)
+{
+    size_t base = (size_t)f * m->n_joints;
+    for (uint32_t j = 0; j < m->n_joints; j++) {
+        double q[4];
+        affect_quat_from_matrix(rot + (size_t)j * 9, q);
+        float *qo = m->rot + (base + j) * 4, *to = m->trans + (base + j) * 3;
+        for (int a = 0; a < 4; a++)
+            qo[a] = (float)q[a];
+        for (int a = 0; a < 3; a++)
+            to[a] = (float)trans[(size_t)j * 3 + a];
+    }
+}
+
+/* The skeleton part of m: offsets (scaled), channels, End Sites. */
+static void keep_skeleton(const parser *ps, affect_motion *m, double scale)
+{
+    for (uint32_t i = 0; i < ps->n_joints; i++) {
+        const bvh_joint *j = &ps->joints[i];
+        affect_skel_joint *s = &m->skel[i];
+        for (int a = 0; a < 3; a++)
+            s->offset[a] = j->offset[a] * scale;
+        s->n_channels = j->n_channels;
+        memcpy(s->channel, j->channel, sizeof s->channel);
+        s->flags = j->name ? 0 : AFFECT_JOINT_END_SITE;
+    }
+}
+
 /* Reads the frame lines and runs forward kinematics into m. */
 static affect_status parse_frames(parser *ps, affect_motion *m, double scale)
 {
@@ -508,6 +540,7 @@ static affect_status parse_frames(parser *ps, affect_motion *m, double scale)
         }
         local_transforms(ps, values, scale, trans, rot);
         affect_fk_frame(nj, parents, trans, rot, scratch, affect_motion_at(m, f, 0));
+        keep_rotations(m, f, trans, rot);
     }
     skip_ws(ps);
     if (ps->p < ps->end)
@@ -586,6 +619,10 @@ affect_status affect_bvh_parse(const char *text, size_t len, const affect_bvh_op
     for (uint32_t i = 0; i < ps.n_joints; i++)
         m->parents[i] = ps.joints[i].parent;
     st = name_joints(&ps, m);
+    if (!st)
+        st = affect_motion_add_skeleton(m, true, err);
+    if (!st)
+        keep_skeleton(&ps, m, scale);
     if (!st && opt && opt->unit)
         st = affect_motion_set_unit(m, opt->unit, err);
     if (!st)

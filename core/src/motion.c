@@ -15,10 +15,23 @@
  *      then J × { 2-byte name length L (1 .. 1024), L bytes of UTF-8 name }
  *      then J × int32 parent index (−1 or 0 .. J−1, acyclic)
  *      then T × J × 3 float32 positions, frame-major
- * The decoder checks these in order: length ≥ header, magic, version, flags, sizes, each
- * name's length against the remaining bytes, the exact total length, parents, finiteness.
+ * Version 2 is the same with flags (bit 0 skeleton, bit 1 rotations, which needs bit 0) and,
+ * after the positions:
+ *      skeleton (bit 0): J × 32 bytes { 3 float64 rest offset, 1 channel count (0 .. 6),
+ *                        6 channel types (AFFECT_CH_*, the first count distinct, the rest
+ *                        zero), 1 joint flags (bit 0 End Site: a leaf without channels) }
+ *      rotations (bit 1): T × J × 4 float32 unit quaternions (w, x, y, z), frame-major, then
+ *                        T × K × 3 float32 local translations of the K joints that have a
+ *                        position channel (in joint order), frame-major
+ * The encoder writes version 1 for a motion without a skeleton (unchanged bytes) and version 2
+ * otherwise. The decoder checks these in order: length ≥ header, magic, version, flags, sizes,
+ * each name's length against the remaining bytes, the exact total length, parents, names,
+ * finiteness, then the skeleton's channels and End Sites, offsets, quaternion norms
+ * (within AFFECT_MOTION_QUAT_NORM_TOL of 1) and translations.
  */
 #include "affect/motion.h"
+#include "affect/quat.h"
+#include "affect/skeleton.h"
 #include "internal.h"
 
 #include <math.h>
@@ -148,7 +161,48 @@ void affect_motion_free(affect_motion *m)
     affect_free(m->names);
     affect_free(m->parents);
     affect_free(m->pos);
+    affect_motion_drop_skeleton(m);
     affect_free(m);
+}
+
+void affect_motion_drop_skeleton(affect_motion *m)
+{
+    affect_free(m->skel);
+    affect_free(m->rot);
+    affect_free(m->trans);
+    m->skel = NULL;
+    m->rot = NULL;
+    m->trans = NULL;
+}
+
+bool affect_skel_has_position(const affect_skel_joint *j)
+{
+    for (int c = 0; c < j->n_channels; c++)
+        if (j->channel[c] <= AFFECT_CH_ZPOS)
+            return true;
+    return false;
+}
+
+affect_status affect_motion_add_skeleton(affect_motion *m, bool rotations, affect_error *err)
+{
+    affect_motion_drop_skeleton(m);
+    size_t n = (size_t)m->n_frames * m->n_joints; /* ≤ 2^36: no overflow below */
+    m->skel = affect_calloc(m->n_joints, sizeof *m->skel);
+    if (!m->skel)
+        return affect_nomem(err);
+    if (!rotations)
+        return AFFECT_OK;
+    m->rot = affect_malloc_array(n, 4 * sizeof *m->rot);
+    m->trans = affect_calloc(n, 3 * sizeof *m->trans);
+    if (!m->rot || !m->trans) {
+        affect_motion_drop_skeleton(m);
+        return affect_nomem(err);
+    }
+    for (size_t i = 0; i < n; i++) {
+        float *q = m->rot + i * 4;
+        q[0] = 1, q[1] = q[2] = q[3] = 0;
+    }
+    return AFFECT_OK;
 }
 
 affect_status affect_motion_set_name(affect_motion *m, uint32_t j, const char *name, size_t len,
@@ -288,6 +342,75 @@ static affect_status check_finite(const affect_motion *m, affect_error *err)
     return AFFECT_OK;
 }
 
+static const char *const channel_names[AFFECT_CH_COUNT] = {
+    "Xposition", "Yposition", "Zposition", "Xrotation", "Yrotation", "Zrotation"};
+
+/* Channels in range and distinct, End Sites leaves without channels, offsets finite. */
+static affect_status check_skeleton(const affect_motion *m, affect_error *err)
+{
+    for (uint32_t j = 0; j < m->n_joints; j++) {
+        const affect_skel_joint *s = &m->skel[j];
+        if (s->n_channels > 6)
+            return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u (%.64s): %u channels (at most 6)",
+                               j, m->names[j], s->n_channels);
+        unsigned seen = 0;
+        for (int c = 0; c < s->n_channels; c++) {
+            if (s->channel[c] >= AFFECT_CH_COUNT)
+                return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u (%.64s): channel type %u unknown",
+                                   j, m->names[j], s->channel[c]);
+            if (seen & (1u << s->channel[c]))
+                return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u (%.64s): channel %s listed twice",
+                                   j, m->names[j], channel_names[s->channel[c]]);
+            seen |= 1u << s->channel[c];
+        }
+        if (s->flags & ~AFFECT_JOINT_END_SITE)
+            return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u (%.64s): unknown joint flags 0x%02x",
+                               j, m->names[j], s->flags);
+        if (s->flags & AFFECT_JOINT_END_SITE) {
+            if (s->n_channels || m->parents[j] < 0)
+                return affect_fail(err, AFFECT_ERR_FORMAT,
+                                   "joint %u (%.64s): an End Site must have a parent and no channels",
+                                   j, m->names[j]);
+            for (uint32_t k = 0; k < m->n_joints; k++)
+                if (m->parents[k] == (int32_t)j)
+                    return affect_fail(err, AFFECT_ERR_FORMAT,
+                                       "joint %u (%.64s): an End Site cannot have children", j,
+                                       m->names[j]);
+        }
+        for (int a = 0; a < 3; a++)
+            if (!isfinite(s->offset[a]))
+                return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u (%.64s): non-finite offset",
+                                   j, m->names[j]);
+    }
+    return AFFECT_OK;
+}
+
+/* Unit quaternions and finite translations. */
+static affect_status check_rotations(const affect_motion *m, affect_error *err)
+{
+    size_t n = (size_t)m->n_frames * m->n_joints;
+    if (block_has_nonfinite(m->trans, n * 3) || block_has_nonfinite(m->rot, n * 4)) {
+        for (size_t i = 0; i < n; i++)
+            for (int a = 0; a < 7; a++)
+                if (!isfinite(a < 4 ? m->rot[i * 4 + a] : m->trans[i * 3 + a - 4]))
+                    return affect_fail(err, AFFECT_ERR_FORMAT,
+                                       "non-finite %s at frame %zu, joint %zu (%.64s)",
+                                       a < 4 ? "rotation" : "translation", i / m->n_joints,
+                                       i % m->n_joints, m->names[i % m->n_joints]);
+    }
+    for (size_t i = 0; i < n; i++) {
+        const float *q = m->rot + i * 4;
+        double norm = sqrt((double)q[0] * q[0] + (double)q[1] * q[1] + (double)q[2] * q[2] +
+                           (double)q[3] * q[3]);
+        if (!(fabs(norm - 1) <= AFFECT_MOTION_QUAT_NORM_TOL))
+            return affect_fail(err, AFFECT_ERR_FORMAT,
+                               "rotation at frame %zu, joint %zu (%.64s) is not a unit quaternion "
+                               "(norm %g)",
+                               i / m->n_joints, i % m->n_joints, m->names[i % m->n_joints], norm);
+    }
+    return AFFECT_OK;
+}
+
 affect_status affect_motion_validate(const affect_motion *m, affect_error *err)
 {
     affect_status st = check_sizes(m->n_frames, m->n_joints, m->fps, err);
@@ -308,7 +431,34 @@ affect_status affect_motion_validate(const affect_motion *m, affect_error *err)
     st = check_parents(m, err);
     if (st)
         return st;
-    return check_finite(m, err);
+    st = check_finite(m, err);
+    if (st)
+        return st;
+    if ((m->rot || m->trans) && !(m->rot && m->trans && m->skel))
+        return affect_fail(err, AFFECT_ERR_INVALID, "rotations without a skeleton or translations");
+    if (m->skel)
+        st = check_skeleton(m, err);
+    if (!st && m->rot)
+        st = check_rotations(m, err);
+    return st;
+}
+
+/* Copies m's skeleton and the rotations of frames first .. first + c->n_frames − 1 into c. */
+static affect_status copy_skeleton(const affect_motion *m, uint32_t first, affect_motion *c,
+                                   affect_error *err)
+{
+    if (!m->skel)
+        return AFFECT_OK;
+    affect_status st = affect_motion_add_skeleton(c, m->rot != NULL, err);
+    if (st)
+        return st;
+    memcpy(c->skel, m->skel, (size_t)m->n_joints * sizeof *c->skel);
+    if (m->rot) {
+        size_t per = m->n_joints, n = (size_t)c->n_frames * per;
+        memcpy(c->rot, m->rot + (size_t)first * per * 4, n * 4 * sizeof *c->rot);
+        memcpy(c->trans, m->trans + (size_t)first * per * 3, n * 3 * sizeof *c->trans);
+    }
+    return AFFECT_OK;
 }
 
 affect_status affect_motion_clone(const affect_motion *m, affect_motion **out, affect_error *err)
@@ -327,6 +477,11 @@ affect_status affect_motion_clone(const affect_motion *m, affect_motion **out, a
     }
     memcpy(c->parents, m->parents, (size_t)m->n_joints * sizeof *c->parents);
     memcpy(c->pos, m->pos, (size_t)m->n_frames * m->n_joints * 3 * sizeof *c->pos);
+    st = copy_skeleton(m, 0, c, err);
+    if (st) {
+        affect_motion_free(c);
+        return st;
+    }
     *out = c;
     return AFFECT_OK;
 }
@@ -363,6 +518,15 @@ void affect_motion_bbox(const affect_motion *m, float min[3], float max[3])
 
 /* ---- BLOB ---- */
 
+/* Number of joints with a position channel (their translations are stored per frame). */
+static uint32_t count_translated(const affect_motion *m)
+{
+    uint32_t k = 0;
+    for (uint32_t j = 0; j < m->n_joints; j++)
+        k += affect_skel_has_position(&m->skel[j]);
+    return k;
+}
+
 bool affect_motion_encoded_size(const affect_motion *m, size_t *size)
 {
     size_t total = AFFECT_MOTION_HEADER_SIZE + strlen(m->unit), n;
@@ -374,17 +538,53 @@ bool affect_motion_encoded_size(const affect_motion *m, size_t *size)
     if (!affect_mul_size((size_t)m->n_frames * m->n_joints, 12, &n) ||
         !affect_add_size(total, n, &total))
         return false;
+    if (m->skel && !affect_add_size(total, (size_t)m->n_joints * AFFECT_MOTION_JOINT_SIZE, &total))
+        return false;
+    if (m->skel && m->rot) {
+        size_t per = (size_t)m->n_joints * 16 + (size_t)count_translated(m) * 12;
+        if (!affect_mul_size(m->n_frames, per, &n) || !affect_add_size(total, n, &total))
+            return false;
+    }
     *size = total;
     return true;
+}
+
+/* n floats little-endian at p; returns the end. */
+static unsigned char *put_floats(unsigned char *p, const float *v, size_t n)
+{
+    if (host_is_little_endian()) {
+        memcpy(p, v, n * 4);
+        return p + n * 4;
+    }
+    for (size_t i = 0; i < n; i++, p += 4) {
+        uint32_t u;
+        memcpy(&u, &v[i], 4);
+        put_u32(p, u);
+    }
+    return p;
+}
+
+/* n little-endian floats at p into v. */
+static void get_floats(const unsigned char *p, float *v, size_t n)
+{
+    if (host_is_little_endian()) {
+        memcpy(v, p, n * 4);
+        return;
+    }
+    for (size_t i = 0; i < n; i++, p += 4) {
+        uint32_t u = get_u32(p);
+        memcpy(&v[i], &u, 4);
+    }
 }
 
 void affect_motion_encode_into(const affect_motion *m, unsigned char *buf)
 {
     unsigned char *p = buf;
     size_t unit_len = strlen(m->unit);
+    unsigned flags = m->skel ? AFFECT_MOTION_FLAG_SKELETON | (m->rot ? AFFECT_MOTION_FLAG_ROTATIONS : 0) : 0;
     memcpy(p, AFFECT_MOTION_MAGIC, 4);
-    put_u16(p + 4, AFFECT_MOTION_VERSION);
-    put_u16(p + 6, 0);
+    put_u16(p + 4, flags ? 2 : 1);
+    put_u16(p + 6, (uint16_t)flags);
     put_u32(p + 8, m->n_frames);
     put_u32(p + 12, m->n_joints);
     put_u64(p + 16, double_to_u64(m->fps));
@@ -401,16 +601,26 @@ void affect_motion_encode_into(const affect_motion *m, unsigned char *buf)
     }
     for (uint32_t j = 0; j < m->n_joints; j++, p += 4)
         put_u32(p, (uint32_t)m->parents[j]);
-    size_t n = (size_t)m->n_frames * m->n_joints * 3;
-    if (host_is_little_endian()) {
-        memcpy(p, m->pos, n * 4);
-    } else {
-        for (size_t i = 0; i < n; i++, p += 4) {
-            uint32_t u;
-            memcpy(&u, &m->pos[i], 4);
-            put_u32(p, u);
-        }
+    size_t nj = m->n_joints, n = (size_t)m->n_frames * nj;
+    p = put_floats(p, m->pos, n * 3);
+    if (!m->skel)
+        return;
+    for (uint32_t j = 0; j < nj; j++, p += AFFECT_MOTION_JOINT_SIZE) {
+        const affect_skel_joint *s = &m->skel[j];
+        for (int a = 0; a < 3; a++)
+            put_u64(p + 8 * a, double_to_u64(s->offset[a]));
+        p[24] = s->n_channels;
+        for (int c = 0; c < 6; c++)
+            p[25 + c] = c < s->n_channels ? s->channel[c] : 0;
+        p[31] = s->flags;
     }
+    if (!m->rot)
+        return;
+    p = put_floats(p, m->rot, n * 4);
+    for (uint32_t t = 0; t < m->n_frames; t++)
+        for (uint32_t j = 0; j < nj; j++)
+            if (affect_skel_has_position(&m->skel[j]))
+                p = put_floats(p, m->trans + ((size_t)t * nj + j) * 3, 3);
 }
 
 affect_status affect_motion_encode(const affect_motion *m, unsigned char **out, size_t *size,
@@ -441,7 +651,9 @@ affect_status affect_motion_decode(const unsigned char *data, size_t size, affec
         return affect_fail(err, AFFECT_ERR_FORMAT, "unknown format version %u (this build reads 1 .. %u)",
                            version, AFFECT_MOTION_VERSION);
     uint16_t flags = get_u16(data + 6);
-    if (flags != 0)
+    if (version == 1 ? flags != 0
+                     : (flags & ~(AFFECT_MOTION_FLAG_SKELETON | AFFECT_MOTION_FLAG_ROTATIONS)) ||
+                           flags == AFFECT_MOTION_FLAG_ROTATIONS)
         return affect_fail(err, AFFECT_ERR_FORMAT, "unknown flags 0x%04x (offset 6)", flags);
     uint32_t n_frames = get_u32(data + 8), n_joints = get_u32(data + 12);
     double fps = u64_to_double(get_u64(data + 16));
@@ -481,6 +693,23 @@ affect_status affect_motion_decode(const unsigned char *data, size_t size, affec
     }
     size_t n_vals = (size_t)n_frames * n_joints * 3; /* ≤ 2^24 · 2^12 · 3: no overflow */
     size_t expect = off + (size_t)n_joints * 4 + n_vals * 4;
+    size_t skel_off = expect, n_translated = 0;
+    if (flags & AFFECT_MOTION_FLAG_SKELETON) {
+        if (size < skel_off || size - skel_off < (size_t)n_joints * AFFECT_MOTION_JOINT_SIZE)
+            return affect_fail(err, AFFECT_ERR_FORMAT,
+                               "truncated: %zu bytes, the skeleton part needs %zu from offset %zu",
+                               size, (size_t)n_joints * AFFECT_MOTION_JOINT_SIZE, skel_off);
+        for (uint32_t j = 0; j < n_joints; j++) {
+            const unsigned char *q = data + skel_off + (size_t)j * AFFECT_MOTION_JOINT_SIZE;
+            bool pos = false;
+            for (int c = 0; c < q[24] && c < 6; c++)
+                pos |= q[25 + c] <= AFFECT_CH_ZPOS;
+            n_translated += pos;
+        }
+        expect += (size_t)n_joints * AFFECT_MOTION_JOINT_SIZE;
+        if (flags & AFFECT_MOTION_FLAG_ROTATIONS) /* ≤ 2^36 · 28 bytes: no overflow */
+            expect += (size_t)n_frames * ((size_t)n_joints * 16 + n_translated * 12);
+    }
     if (size != expect)
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "%s: %zu bytes, expected %zu for %u frames x %u joints",
@@ -503,19 +732,55 @@ affect_status affect_motion_decode(const unsigned char *data, size_t size, affec
     }
     for (uint32_t j = 0; j < n_joints; j++, off += 4)
         m->parents[j] = (int32_t)get_u32(data + off);
-    if (host_is_little_endian()) {
-        memcpy(m->pos, data + off, n_vals * 4);
-    } else {
-        for (size_t i = 0; i < n_vals; i++, off += 4) {
-            uint32_t u = get_u32(data + off);
-            memcpy(&m->pos[i], &u, 4);
+    get_floats(data + off, m->pos, n_vals);
+    off += n_vals * 4;
+    if (flags & AFFECT_MOTION_FLAG_SKELETON) {
+        st = affect_motion_add_skeleton(m, (flags & AFFECT_MOTION_FLAG_ROTATIONS) != 0, err);
+        if (st)
+            goto fail;
+        for (uint32_t j = 0; j < n_joints; j++, off += AFFECT_MOTION_JOINT_SIZE) {
+            affect_skel_joint *s = &m->skel[j];
+            for (int a = 0; a < 3; a++)
+                s->offset[a] = u64_to_double(get_u64(data + off + 8 * a));
+            s->n_channels = data[off + 24];
+            for (int c = 0; c < 6; c++) {
+                s->channel[c] = data[off + 25 + c];
+                if (c >= s->n_channels && s->channel[c] != 0) {
+                    st = affect_fail(err, AFFECT_ERR_FORMAT,
+                                     "joint %u: unused channel byte %d is not zero (offset %zu)",
+                                     j, c, off + 25 + c);
+                    goto fail;
+                }
+            }
+            s->flags = data[off + 31];
         }
+    }
+    if (flags & AFFECT_MOTION_FLAG_ROTATIONS) {
+        size_t nq = (size_t)n_frames * n_joints;
+        get_floats(data + off, m->rot, nq * 4);
+        off += nq * 16;
+        for (uint32_t t = 0; t < n_frames; t++)
+            for (uint32_t j = 0; j < n_joints; j++) {
+                float *tr = m->trans + ((size_t)t * n_joints + j) * 3;
+                const affect_skel_joint *s = &m->skel[j];
+                if (s->n_channels <= 6 && affect_skel_has_position(s)) {
+                    get_floats(data + off, tr, 3);
+                    off += 12;
+                } else {
+                    for (int a = 0; a < 3; a++)
+                        tr[a] = (float)s->offset[a];
+                }
+            }
     }
     st = check_names_unique(m, err);
     if (!st)
         st = check_parents(m, err);
     if (!st)
         st = check_finite(m, err);
+    if (!st && m->skel)
+        st = check_skeleton(m, err);
+    if (!st && m->rot)
+        st = check_rotations(m, err);
     if (st)
         goto fail;
     *out = m;
@@ -547,6 +812,18 @@ static affect_status like(const affect_motion *m, uint32_t n_frames, double fps,
     return AFFECT_OK;
 }
 
+/* The two source frames around position src (in source frames) and the weight of the second. */
+static void resample_source(uint32_t n_frames, double src, uint32_t *i0, uint32_t *i1, double *w)
+{
+    *i0 = (uint32_t)floor(src);
+    if (*i0 >= n_frames - 1)
+        *i0 = n_frames - 1;
+    *w = src - *i0;
+    *i1 = *i0 + 1 < n_frames ? *i0 + 1 : *i0;
+    if (*i1 == *i0)
+        *w = 0.0;
+}
+
 affect_status affect_motion_slice(const affect_motion *m, int64_t first, int64_t last,
                                   affect_motion **out, affect_error *err)
 {
@@ -568,8 +845,43 @@ affect_status affect_motion_slice(const affect_motion *m, int64_t first, int64_t
         return st;
     size_t per = (size_t)m->n_joints * 3;
     memcpy(c->pos, m->pos + (size_t)f * per, (size_t)(l - f + 1) * per * sizeof *c->pos);
+    st = copy_skeleton(m, (uint32_t)f, c, err);
+    if (st) {
+        affect_motion_free(c);
+        return st;
+    }
     *out = c;
     return AFFECT_OK;
+}
+
+/* Rotations and translations of c (c->n_frames frames at c->fps) interpolated from m's, then
+ * the positions by forward kinematics. */
+static affect_status resample_rotations(const affect_motion *m, affect_motion *c,
+                                        affect_error *err)
+{
+    affect_status st = affect_motion_add_skeleton(c, true, err);
+    if (st)
+        return st;
+    uint32_t nj = m->n_joints;
+    memcpy(c->skel, m->skel, (size_t)nj * sizeof *c->skel);
+    for (uint32_t k = 0; k < c->n_frames; k++) {
+        double src = (double)k * m->fps / c->fps, w;
+        uint32_t i0, i1;
+        resample_source(m->n_frames, src, &i0, &i1, &w);
+        for (uint32_t j = 0; j < nj; j++) {
+            const float *qa = m->rot + ((size_t)i0 * nj + j) * 4, *qb = m->rot + ((size_t)i1 * nj + j) * 4;
+            double a[4] = {qa[0], qa[1], qa[2], qa[3]}, b[4] = {qb[0], qb[1], qb[2], qb[3]}, r[4];
+            affect_quat_slerp(a, b, w, r);
+            float *qo = c->rot + ((size_t)k * nj + j) * 4;
+            for (int i = 0; i < 4; i++)
+                qo[i] = (float)r[i];
+            const float *ta = m->trans + ((size_t)i0 * nj + j) * 3, *tb = m->trans + ((size_t)i1 * nj + j) * 3;
+            float *to = c->trans + ((size_t)k * nj + j) * 3;
+            for (int i = 0; i < 3; i++)
+                to[i] = (float)((1.0 - w) * ta[i] + w * tb[i]);
+        }
+    }
+    return affect_motion_fk(c, err);
 }
 
 affect_status affect_motion_resample(const affect_motion *m, double fps, affect_motion **out,
@@ -587,16 +899,20 @@ affect_status affect_motion_resample(const affect_motion *m, double fps, affect_
     affect_status st = like(m, (uint32_t)frames, fps, &c, err);
     if (st)
         return st;
+    if (m->rot) {
+        st = resample_rotations(m, c, err);
+        if (st) {
+            affect_motion_free(c);
+            return st;
+        }
+        *out = c;
+        return AFFECT_OK;
+    }
     size_t per = (size_t)m->n_joints * 3;
     for (uint32_t k = 0; k < c->n_frames; k++) {
-        double src = (double)k * m->fps / fps; /* position in source frames */
-        uint32_t i0 = (uint32_t)floor(src);
-        if (i0 >= m->n_frames - 1)
-            i0 = m->n_frames - 1;
-        double w = src - i0;
-        uint32_t i1 = i0 + 1 < m->n_frames ? i0 + 1 : i0;
-        if (i1 == i0)
-            w = 0.0;
+        double src = (double)k * m->fps / fps, w; /* position in source frames */
+        uint32_t i0, i1;
+        resample_source(m->n_frames, src, &i0, &i1, &w);
         const float *a = m->pos + (size_t)i0 * per, *b = m->pos + (size_t)i1 * per;
         float *o = c->pos + (size_t)k * per;
         for (size_t i = 0; i < per; i++)

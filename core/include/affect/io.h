@@ -26,6 +26,26 @@ typedef struct affect_bvh_options {
 affect_status affect_bvh_parse(const char *text, size_t len, const affect_bvh_options *opt,
                                affect_motion **out, affect_error *err);
 
+typedef struct affect_bvh_write_options {
+    int order[3];          /* rotation channel order for every joint; order[0] < 0 (default)
+                              keeps each joint's own channels */
+    double frame_time;     /* seconds per frame; 0 (default) = 1 / fps */
+    int precision;         /* decimals of every number, 1 .. 9 (default 6) */
+    const char *root_name; /* name written for the first root, or NULL (default) */
+} affect_bvh_write_options;
+
+void affect_bvh_write_options_default(affect_bvh_write_options *opt);
+
+/* BVH text of a skeletal motion (m->rot set: imported from BVH, or from affect_motion_ik).
+ * The hierarchy lists the joints depth first from each root (children in joint order), with
+ * the skeleton's offsets and channels; End Sites as End Site blocks. Each frame line holds the
+ * channels' values: translations, and Euler angles (degrees) of the local rotations in each
+ * joint's channel order, continuous from frame to frame (angles move by whole turns and
+ * switch to the equivalent solution so that no angle jumps). White space and braces in joint
+ * names become '_'. Numbers are fixed-point with trailing zeros removed. */
+affect_status affect_bvh_write(const affect_motion *m, const affect_bvh_write_options *opt,
+                               char **out, size_t *len, affect_error *err);
+
 typedef struct affect_csv_options {
     char delimiter;    /* ',' (default), ';', '\t' or ' ' */
     int header;        /* −1 detect (default), 0 no header row, 1 header row */

@@ -7,6 +7,12 @@
  * Every joint name is a NUL-terminated string, unique within the motion. Parent indices form a
  * forest (no cycles); they need not precede their children.
  *
+ * A motion may also carry a skeleton (docs/FORMATS.md, version 2): per joint its rest offset
+ * from the parent and its BVH channel list, and, per frame, every joint's local rotation (a
+ * unit quaternion) and local translation. Positions stay the primary data that every analysis
+ * reads; when rotations are present the positions are their forward kinematics (the importers
+ * and editors keep the two consistent, affect/skeleton.h recomputes one from the other).
+ *
  * The binary form (the "motion BLOB", docs/FORMATS.md) is produced by affect_motion_encode and
  * checked field by field by affect_motion_decode.
  */
@@ -27,8 +33,34 @@ extern "C" {
 
 /* BLOB layout constants (docs/FORMATS.md). */
 #define AFFECT_MOTION_MAGIC "AFMO"
-#define AFFECT_MOTION_VERSION 1u
+#define AFFECT_MOTION_VERSION 2u
 #define AFFECT_MOTION_HEADER_SIZE 32u
+#define AFFECT_MOTION_FLAG_SKELETON 1u  /* version 2: the skeleton part follows the positions */
+#define AFFECT_MOTION_FLAG_ROTATIONS 2u /* version 2: then rotations and translations */
+#define AFFECT_MOTION_JOINT_SIZE 32u    /* bytes of one joint in the skeleton part */
+/* decoded quaternions must have a norm within this of 1 */
+#define AFFECT_MOTION_QUAT_NORM_TOL 1e-3
+
+/* Channel types of a skeleton joint, as BVH names them. */
+enum {
+    AFFECT_CH_XPOS,
+    AFFECT_CH_YPOS,
+    AFFECT_CH_ZPOS,
+    AFFECT_CH_XROT,
+    AFFECT_CH_YROT,
+    AFFECT_CH_ZROT,
+    AFFECT_CH_COUNT
+};
+#define AFFECT_JOINT_END_SITE 1u /* affect_skel_joint.flags: a BVH End Site (a leaf, no channels) */
+
+/* One joint of a skeleton: its rest offset from its parent (in the parent's frame; for a root,
+ * its rest position) and the channels it has in BVH, in file order. */
+typedef struct affect_skel_joint {
+    double offset[3];
+    uint8_t n_channels;                /* 0 .. 6 */
+    uint8_t channel[6];                /* AFFECT_CH_*, distinct */
+    uint8_t flags;                     /* AFFECT_JOINT_END_SITE */
+} affect_skel_joint;
 
 typedef struct affect_motion {
     uint32_t n_frames;
@@ -38,12 +70,26 @@ typedef struct affect_motion {
     char **names;                          /* n_joints strings */
     int32_t *parents;                      /* n_joints entries */
     float *pos;                            /* n_frames * n_joints * 3 */
+    affect_skel_joint *skel;               /* NULL, or n_joints entries */
+    float *rot;   /* NULL, or n_frames * n_joints * 4 local rotations (w, x, y, z); needs skel */
+    float *trans; /* with rot: n_frames * n_joints * 3 local translations (the offset, or the
+                   * position channels' values for joints that have them) */
 } affect_motion;
 
 /* Allocates a motion with zeroed positions, parents all −1 and names "j0", "j1", ….
  * Checks the sizes against the limits above and fps > 0, finite, ≤ AFFECT_MOTION_MAX_FPS. */
 affect_status affect_motion_create(uint32_t n_frames, uint32_t n_joints, double fps,
                                    affect_motion **out, affect_error *err);
+
+/* Gives m a skeleton (offsets zero, no channels) and, when rotations is true, identity
+ * rotations and zero translations; any skeleton it had is replaced. */
+affect_status affect_motion_add_skeleton(affect_motion *m, bool rotations, affect_error *err);
+
+/* Removes the skeleton, rotations and translations (positions stay). */
+void affect_motion_drop_skeleton(affect_motion *m);
+
+/* True when joint j of the skeleton has at least one position channel. */
+bool affect_skel_has_position(const affect_skel_joint *j);
 
 /* Frees a motion and everything it owns; NULL is allowed. */
 void affect_motion_free(affect_motion *m);
@@ -56,7 +102,8 @@ affect_status affect_motion_set_name(affect_motion *m, uint32_t j, const char *n
 affect_status affect_motion_set_unit(affect_motion *m, const char *unit, affect_error *err);
 
 /* Checks the invariants above: names non-empty, free of NUL and unique; parents in range and
- * acyclic; every coordinate finite (the message names the frame and joint). */
+ * acyclic; every coordinate finite (the message names the frame and joint); the skeleton's
+ * channels, End Sites, finite offsets, unit quaternions and finite translations. */
 affect_status affect_motion_validate(const affect_motion *m, affect_error *err);
 
 /* Deep copy. */
@@ -83,7 +130,9 @@ void affect_motion_bbox(const affect_motion *m, float min[3], float max[3]);
 /* Size in bytes of the encoded form; false if it would overflow size_t. */
 bool affect_motion_encoded_size(const affect_motion *m, size_t *size);
 
-/* Encodes into a new buffer of *size bytes (free with affect_free). */
+/* Encodes into a new buffer of *size bytes (free with affect_free). A motion without a
+ * skeleton is written as version 1, byte for byte as before version 2 existed; one with a
+ * skeleton as version 2. */
 affect_status affect_motion_encode(const affect_motion *m, unsigned char **out, size_t *size,
                                    affect_error *err);
 
@@ -96,17 +145,21 @@ affect_status affect_motion_decode(const unsigned char *data, size_t size, affec
 
 /* ---- editing; each returns a new motion ---- */
 
-/* Frames first..last inclusive, 0-based; negative values count from the end (−1 = last). */
+/* Frames first..last inclusive, 0-based; negative values count from the end (−1 = last).
+ * Keeps the skeleton and the rotations of those frames. */
 affect_status affect_motion_slice(const affect_motion *m, int64_t first, int64_t last,
                                   affect_motion **out, affect_error *err);
 
 /* Linear interpolation to a new frame rate. The result keeps the time span: it has
- * floor((T − 1) · fps / m->fps + 1e-9) + 1 frames, frame k at time k / fps. */
+ * floor((T − 1) · fps / m->fps + 1e-9) + 1 frames, frame k at time k / fps. With rotations,
+ * they are interpolated by slerp and translations linearly, and the positions are their
+ * forward kinematics (so the result stays rigid). */
 affect_status affect_motion_resample(const affect_motion *m, double fps, affect_motion **out,
                                      affect_error *err);
 
 /* The joints named, in the order given (duplicates and unknown names are errors). A joint's
- * parent becomes its nearest selected ancestor, or −1. */
+ * parent becomes its nearest selected ancestor, or −1. The skeleton and rotations are dropped
+ * (the selected joints' offsets no longer describe their positions). */
 affect_status affect_motion_select(const affect_motion *m, const char *const *names,
                                    uint32_t n_names, affect_motion **out, affect_error *err);
 

@@ -1,0 +1,112 @@
+/*
+ * affect/skeleton.h — skeletal motions: forward kinematics from stored rotations, the rigid
+ * projection of position-only motions (constant bone lengths), inverse kinematics (local joint
+ * rotations from positions) and joint angles.
+ *
+ * Usage:
+ *   affect_motion *rigid, *skeletal;
+ *   affect_rigid_options ro;  affect_rigid_options_default(&ro);
+ *   affect_motion_rigid(m, &ro, &rigid, &err);        // bones of constant length
+ *   affect_ik_options io;     affect_ik_options_default(&io);
+ *   affect_motion_ik(m, &io, &skeletal, &err);        // skeleton + rotations, FK positions
+ *
+ * Bones and free links: the link from a joint to its parent is a bone (constant length) unless
+ * it is free: the parent is a root that never moves (a fixed origin such as the corpus's
+ * joint_Root, whose child carries the global translation), or the motion's skeleton gives the
+ * joint position channels whose values leave its offset by more than AFFECT_FREE_LINK_REL of
+ * the offset's length (the corpus's Hips), or the caller names it.
+ */
+#ifndef AFFECT_SKELETON_H
+#define AFFECT_SKELETON_H
+
+#include "affect/motion.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define AFFECT_FREE_LINK_REL 1e-3
+
+/* Joints in an order where every parent precedes its children (order has n_joints entries). */
+affect_status affect_motion_topo_order(const affect_motion *m, uint32_t *order, affect_error *err);
+
+/* Recomputes the positions from the skeleton, rotations and translations (forward kinematics
+ * in double precision). Joints with a position channel use their per-frame translation, the
+ * others their offset. Needs m->rot. */
+affect_status affect_motion_fk(affect_motion *m, affect_error *err);
+
+/* Largest distance (in the motion's unit) between m's positions and the forward kinematics of
+ * its rotations over every frame and joint, with the frame and joint where it occurs. */
+affect_status affect_motion_fk_error(const affect_motion *m, double *max_dist, uint32_t *frame,
+                                     uint32_t *joint, affect_error *err);
+
+/* Marks free links (see above); free_link has n_joints entries, false for roots. */
+affect_status affect_motion_free_links(const affect_motion *m, bool *free_link,
+                                       affect_error *err);
+
+/* Bone-length variation: over the bones (links that are not free), the largest
+ * (max − min) / max of a bone's length over the frames (0 for a bone of length 0). *worst is
+ * the joint at the bone's lower end, −1 when there is no bone. */
+affect_status affect_motion_bone_variation(const affect_motion *m, double *variation,
+                                           int32_t *worst, affect_error *err);
+
+/* Largest extent of the first frame's bounding box (a body size for tolerances), > 0. */
+double affect_motion_body_size(const affect_motion *m);
+
+typedef enum affect_rigid_lengths {
+    AFFECT_RIGID_MEDIAN,    /* each bone's median length over the frames (default) */
+    AFFECT_RIGID_FIRST,     /* its length in the first frame */
+    AFFECT_RIGID_REFERENCE  /* the median length in a reference motion with the same joints */
+} affect_rigid_lengths;
+
+typedef struct affect_rigid_options {
+    affect_rigid_lengths lengths;
+    const affect_motion *reference; /* for AFFECT_RIGID_REFERENCE */
+    uint32_t max_sweeps;            /* coordinate-descent sweeps per frame (default 200) */
+    double tolerance;               /* stop when no joint moves more than this × body size
+                                       (default 1e-9) */
+    const bool *free_link;          /* n_joints flags, or NULL to detect them */
+} affect_rigid_options;
+
+void affect_rigid_options_default(affect_rigid_options *opt);
+
+/* The motion nearest to m (least sum of squared joint displacements, frame by frame) whose
+ * bones keep the chosen lengths: per frame, exact block coordinate descent over the bone
+ * directions (a bone's optimal direction given the others has a closed form: its whole
+ * subtree moves rigidly) and the translation of each rigid part, started from m's own bone
+ * directions. Joints, names, parents and fps are m's; no skeleton. Needs a tree (some joint
+ * with a parent). */
+affect_status affect_motion_rigid(const affect_motion *m, const affect_rigid_options *opt,
+                                  affect_motion **out, affect_error *err);
+
+typedef struct affect_ik_options {
+    uint32_t rest_frame;          /* the frame whose rigid pose is the rest pose (default 0) */
+    int order[3];                 /* rotation channel order (default ZXY: {2, 0, 1}) */
+    affect_rigid_options rigid;   /* how the positions are first made rigid */
+} affect_ik_options;
+
+void affect_ik_options_default(affect_ik_options *opt);
+
+/* Inverse kinematics: a skeletal motion for m's positions. The positions are made rigid
+ * (affect_motion_rigid); the rest skeleton is the rest frame's rigid pose (offsets = bone
+ * vectors, rest rotations the identity); per frame and joint the local rotation turns the rest
+ * offsets of its bone children onto their current directions: for one child the smallest
+ * rotation from the previous frame's (so twist stays continuous and never flips), for several
+ * the best-fit rotation (Horn's quaternion method) continued from the previous frame when the
+ * children are collinear. Roots and free links get position channels. Leaves named
+ * "<parent>_end" become End Sites. The result's positions are the forward kinematics of its
+ * rotations. */
+affect_status affect_motion_ik(const affect_motion *m, const affect_ik_options *opt,
+                               affect_motion **out, affect_error *err);
+
+/* Euler angles (degrees, continuous with prev when not NULL, see affect_quat_to_euler_deg) and
+ * angular speed (rad/s; central difference of the rotations, one-sided at the ends) of joint j
+ * at frame t. Needs m->rot. */
+void affect_motion_joint_angles(const affect_motion *m, uint32_t t, uint32_t j,
+                                const int order[3], const double *prev, double q[4],
+                                double deg[3], double *speed);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,303 @@
+/*
+ * vt_angles.c — motion_angles, a table-valued function listing every joint's local rotation:
+ *
+ *   SELECT frame, name, rx, ry, rz, speed FROM motion_angles(:motion);
+ *   SELECT name, max(speed) FROM motion_angles(:motion, '{"order":"XYZ"}') GROUP BY name;
+ *
+ * Columns: frame, joint, name, the unit quaternion (qw, qx, qy, qz), the Euler order, the
+ * angles about X, Y and Z in degrees (rx, ry, rz: R = product of the axis rotations in `order`,
+ * continuous from frame to frame), and the angular speed in radians per second (central
+ * difference of the rotations). Rotations are the stored ones (a motion imported from BVH) or
+ * come from inverse kinematics (affect_motion_ik) for motions with positions only; the options
+ * are motion_to_bvh's: order, rotations, rest_frame, lengths, free. The default order is each
+ * joint's own BVH channel order when it has three rotation channels, else ZXY.
+ *
+ * How it works: an eponymous-only virtual table with the schema
+ *   CREATE TABLE x(frame INTEGER, joint INTEGER, name TEXT, qw REAL, qx REAL, qy REAL, qz REAL,
+ *                  "order" TEXT, rx REAL, ry REAL, rz REAL, speed REAL,
+ *                  motion HIDDEN, options HIDDEN)
+ * xBestIndex needs an equality constraint on motion (idxNum bit 1) and takes one on options
+ * (bit 2); rows run frame-major, rowid = frame × joints + joint. A NULL motion gives no rows.
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "fn_skeleton.h"
+#include "affect/quat.h"
+
+enum {
+    COL_FRAME, COL_JOINT, COL_NAME, COL_QW, COL_QX, COL_QY, COL_QZ, COL_ORDER, COL_RX, COL_RY,
+    COL_RZ, COL_SPEED, COL_MOTION, COL_OPTIONS
+};
+
+typedef struct angles_cursor {
+    sqlite3_vtab_cursor base;
+    affect_motion *m, *sk;   /* the argument and its skeletal form (may be the same) */
+    int *orders;             /* per joint, 3 axes */
+    double *prev;            /* per joint, the Euler angles of the last frame computed */
+    sqlite3_int64 row, n_rows;
+    double q[4], deg[3], speed;
+} angles_cursor;
+
+static int angles_connect(sqlite3 *db, void *aux, int argc, const char *const *argv,
+                          sqlite3_vtab **out, char **err)
+{
+    int rc = sqlite3_declare_vtab(db, "CREATE TABLE x(frame INTEGER, joint INTEGER, name TEXT, "
+                                      "qw REAL, qx REAL, qy REAL, qz REAL, \"order\" TEXT, rx REAL, "
+                                      "ry REAL, rz REAL, speed REAL, motion HIDDEN, options HIDDEN)");
+    if (rc != SQLITE_OK)
+        return rc;
+    sqlite3_vtab *vt = sqlite3_malloc(sizeof *vt);
+    if (!vt)
+        return SQLITE_NOMEM;
+    memset(vt, 0, sizeof *vt);
+    sqlite3_vtab_config(db, SQLITE_VTAB_INNOCUOUS);
+    *out = vt;
+    return SQLITE_OK;
+}
+
+static int angles_disconnect(sqlite3_vtab *vt)
+{
+    sqlite3_free(vt);
+    return SQLITE_OK;
+}
+
+static int angles_open(sqlite3_vtab *vt, sqlite3_vtab_cursor **out)
+{
+    angles_cursor *c = sqlite3_malloc(sizeof *c);
+    if (!c)
+        return SQLITE_NOMEM;
+    memset(c, 0, sizeof *c);
+    *out = &c->base;
+    return SQLITE_OK;
+}
+
+static void angles_reset(angles_cursor *c)
+{
+    if (c->sk != c->m)
+        affect_motion_free(c->sk);
+    affect_motion_free(c->m);
+    sqlite3_free(c->orders);
+    sqlite3_free(c->prev);
+    c->m = c->sk = NULL;
+    c->orders = NULL;
+    c->prev = NULL;
+    c->row = c->n_rows = 0;
+}
+
+static int angles_close(sqlite3_vtab_cursor *cur)
+{
+    angles_reset((angles_cursor *)cur);
+    sqlite3_free(cur);
+    return SQLITE_OK;
+}
+
+static int vtab_error(sqlite3_vtab *vt, const affect_error *err)
+{
+    if (err->status == AFFECT_ERR_NOMEM)
+        return SQLITE_NOMEM;
+    sqlite3_free(vt->zErrMsg);
+    vt->zErrMsg = sqlite3_mprintf("motion_angles: %s", err->msg);
+    return vt->zErrMsg ? SQLITE_ERROR : SQLITE_NOMEM;
+}
+
+/* Computes the current row's values (rows are visited in order, so prev holds frame t − 1). */
+static void angles_compute(angles_cursor *c)
+{
+    if (c->row >= c->n_rows)
+        return;
+    uint32_t nj = c->sk->n_joints, t = (uint32_t)(c->row / nj), j = (uint32_t)(c->row % nj);
+    double *prev = c->prev + (size_t)j * 3;
+    affect_motion_joint_angles(c->sk, t, j, c->orders + (size_t)j * 3, t ? prev : NULL, c->q,
+                               c->deg, &c->speed);
+    memcpy(prev, c->deg, sizeof c->deg);
+}
+
+/* Per joint: its own order when it has three rotation channels and no order was asked. */
+static void joint_orders(const affect_motion *sk, const ax_skel_opts *so, int *orders)
+{
+    for (uint32_t j = 0; j < sk->n_joints; j++) {
+        int *o = orders + (size_t)j * 3, k = 0;
+        memcpy(o, so->ik.order, 3 * sizeof *o);
+        if (so->order_given)
+            continue;
+        const affect_skel_joint *s = &sk->skel[j];
+        int own[3];
+        for (int ch = 0; ch < s->n_channels && k < 3; ch++)
+            if (s->channel[ch] >= AFFECT_CH_XROT)
+                own[k++] = s->channel[ch] - AFFECT_CH_XROT;
+        if (k == 3)
+            memcpy(o, own, sizeof own);
+    }
+}
+
+static const char *const angle_keys[] = {"order", "rotations", "rest_frame", "lengths", "free", NULL};
+
+static int angles_filter(sqlite3_vtab_cursor *cur, int idx_num, const char *idx_str, int argc,
+                         sqlite3_value **argv)
+{
+    angles_cursor *c = (angles_cursor *)cur;
+    angles_reset(c);
+    affect_error err;
+    if (argc < 1 || sqlite3_value_type(argv[0]) == SQLITE_NULL)
+        return SQLITE_OK;
+    if (sqlite3_value_type(argv[0]) != SQLITE_BLOB) {
+        affect_fail(&err, AFFECT_ERR_INVALID, "the argument must be a motion BLOB, got %s",
+                    ax_type_name(argv[0]));
+        return vtab_error(cur->pVtab, &err);
+    }
+    const char *text = NULL;
+    size_t len = 0;
+    if ((idx_num & 2) && argc > 1 && sqlite3_value_type(argv[1]) != SQLITE_NULL) {
+        if (sqlite3_value_type(argv[1]) != SQLITE_TEXT) {
+            affect_fail(&err, AFFECT_ERR_INVALID, "options must be a JSON object as text, got %s",
+                        ax_type_name(argv[1]));
+            return vtab_error(cur->pVtab, &err);
+        }
+        text = (const char *)sqlite3_value_text(argv[1]);
+        if (!text)
+            return SQLITE_NOMEM;
+        len = (size_t)sqlite3_value_bytes(argv[1]);
+    }
+    const unsigned char *data = sqlite3_value_blob(argv[0]);
+    int n = sqlite3_value_bytes(argv[0]);
+    if (!data && n > 0)
+        return SQLITE_NOMEM;
+    if (affect_motion_decode(data, (size_t)n, &c->m, &err)) {
+        if (err.status != AFFECT_ERR_NOMEM) {
+            char msg[AFFECT_ERROR_MSG_MAX];
+            memcpy(msg, err.msg, sizeof msg);
+            affect_fail(&err, AFFECT_ERR_FORMAT, "the argument is not a valid motion: %.200s", msg);
+        }
+        return vtab_error(cur->pVtab, &err);
+    }
+    ax_skel_opts so;
+    if (ax_skel_opts_parse(text, len, angle_keys, c->m, &so, &err))
+        return vtab_error(cur->pVtab, &err);
+    affect_status st = ax_skeletal(c->m, &so, &c->sk, &err);
+    if (!st) {
+        size_t nj = c->sk->n_joints;
+        c->orders = sqlite3_malloc64(nj * 3 * sizeof *c->orders);
+        c->prev = sqlite3_malloc64(nj * 3 * sizeof *c->prev);
+        if (!c->orders || !c->prev)
+            st = affect_nomem(&err);
+        else
+            joint_orders(c->sk, &so, c->orders);
+    }
+    ax_skel_opts_free(&so);
+    if (st)
+        return vtab_error(cur->pVtab, &err);
+    c->n_rows = (sqlite3_int64)c->sk->n_frames * c->sk->n_joints;
+    angles_compute(c);
+    return SQLITE_OK;
+}
+
+static int angles_next(sqlite3_vtab_cursor *cur)
+{
+    angles_cursor *c = (angles_cursor *)cur;
+    c->row++;
+    angles_compute(c);
+    return SQLITE_OK;
+}
+
+static int angles_eof(sqlite3_vtab_cursor *cur)
+{
+    angles_cursor *c = (angles_cursor *)cur;
+    return c->row >= c->n_rows;
+}
+
+static int angles_column(sqlite3_vtab_cursor *cur, sqlite3_context *ctx, int col)
+{
+    angles_cursor *c = (angles_cursor *)cur;
+    uint32_t nj = c->sk->n_joints;
+    uint32_t frame = (uint32_t)(c->row / nj), joint = (uint32_t)(c->row % nj);
+    char order[4];
+    switch (col) {
+    case COL_FRAME: sqlite3_result_int64(ctx, frame); break;
+    case COL_JOINT: sqlite3_result_int64(ctx, joint); break;
+    case COL_NAME: sqlite3_result_text(ctx, c->sk->names[joint], -1, SQLITE_TRANSIENT); break;
+    case COL_QW: case COL_QX: case COL_QY: case COL_QZ:
+        sqlite3_result_double(ctx, c->q[col - COL_QW]);
+        break;
+    case COL_ORDER:
+        affect_euler_order_name(c->orders + (size_t)joint * 3, order);
+        sqlite3_result_text(ctx, order, 3, SQLITE_TRANSIENT);
+        break;
+    case COL_RX: case COL_RY: case COL_RZ: { /* deg[k] is about axis orders[k] */
+        const int *o = c->orders + (size_t)joint * 3;
+        int axis = col - COL_RX;
+        for (int k = 0; k < 3; k++)
+            if (o[k] == axis)
+                sqlite3_result_double(ctx, c->deg[k]);
+        break;
+    }
+    case COL_SPEED: sqlite3_result_double(ctx, c->speed); break;
+    default: sqlite3_result_null(ctx); break; /* the hidden argument columns */
+    }
+    return SQLITE_OK;
+}
+
+static int angles_rowid(sqlite3_vtab_cursor *cur, sqlite3_int64 *rowid)
+{
+    *rowid = ((angles_cursor *)cur)->row;
+    return SQLITE_OK;
+}
+
+static int angles_best_index(sqlite3_vtab *vt, sqlite3_index_info *info)
+{
+    int motion = -1, options = -1, seen = 0;
+    for (int i = 0; i < info->nConstraint; i++) {
+        const struct sqlite3_index_constraint *k = &info->aConstraint[i];
+        if (k->iColumn != COL_MOTION && k->iColumn != COL_OPTIONS)
+            continue;
+        if (k->iColumn == COL_MOTION)
+            seen = 1;
+        if (!k->usable || k->op != SQLITE_INDEX_CONSTRAINT_EQ) {
+            if (k->iColumn == COL_OPTIONS)
+                return SQLITE_CONSTRAINT;
+            continue;
+        }
+        if (k->iColumn == COL_MOTION)
+            motion = i;
+        else
+            options = i;
+    }
+    if (motion < 0) {
+        if (seen)
+            return SQLITE_CONSTRAINT;
+        sqlite3_free(vt->zErrMsg);
+        vt->zErrMsg = sqlite3_mprintf("motion_angles: a motion argument is required, as in "
+                                      "SELECT * FROM motion_angles(:motion)");
+        return vt->zErrMsg ? SQLITE_ERROR : SQLITE_NOMEM;
+    }
+    info->aConstraintUsage[motion].argvIndex = 1;
+    info->aConstraintUsage[motion].omit = 1;
+    info->idxNum = 1;
+    if (options >= 0) {
+        info->aConstraintUsage[options].argvIndex = 2;
+        info->aConstraintUsage[options].omit = 1;
+        info->idxNum |= 2;
+    }
+    info->estimatedCost = 1000.0;
+    info->estimatedRows = 10000;
+    return SQLITE_OK;
+}
+
+static sqlite3_module angles_module = {
+    .iVersion = 0,
+    .xConnect = angles_connect,
+    .xBestIndex = angles_best_index,
+    .xDisconnect = angles_disconnect,
+    .xOpen = angles_open,
+    .xClose = angles_close,
+    .xFilter = angles_filter,
+    .xNext = angles_next,
+    .xEof = angles_eof,
+    .xColumn = angles_column,
+    .xRowid = angles_rowid,
+};
+
+int ax_register_angles(sqlite3 *db)
+{
+    return sqlite3_create_module(db, "motion_angles", &angles_module, NULL);
+}
