@@ -11,6 +11,7 @@
 
 #include "affect/io.h"
 #include "affect/normalize.h"
+#include "affect/skeleton.h"
 #include "affect/strbuf.h"
 #include "affect/svg.h"
 #include "affect/synth.h"
@@ -186,11 +187,29 @@ void ax_motion_info(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     put_floats(&sb, lo, 3);
     affect_strbuf_puts(&sb, ",\"max\":");
     put_floats(&sb, hi, 3);
-    affect_strbuf_puts(&sb, "}}");
+    affect_strbuf_puts(&sb, "}");
+    affect_strbuf_printf(&sb, ",\"skeleton\":%s,\"rotations\":%s",
+                         m->skel ? "true" : "false", m->rot ? "true" : "false");
+    double variation;
+    int32_t worst;
+    affect_error err;
+    affect_status st = affect_motion_bone_variation(m, &variation, &worst, &err);
+    if (!st && worst >= 0) {
+        affect_strbuf_puts(&sb, ",\"bone_variation\":");
+        affect_strbuf_double(&sb, variation);
+        affect_strbuf_puts(&sb, ",\"bone_variation_joint\":");
+        affect_strbuf_json_string(&sb, m->names[worst]);
+    } else if (!st) {
+        affect_strbuf_puts(&sb, ",\"bone_variation\":null,\"bone_variation_joint\":null");
+    }
+    affect_strbuf_putc(&sb, '}');
     char *text = NULL;
     size_t len = 0;
-    affect_error err;
-    finish_text(ctx, affect_strbuf_finish(&sb, &text, &len, &err), &text, &len, &err, true);
+    if (!st)
+        st = affect_strbuf_finish(&sb, &text, &len, &err);
+    else
+        affect_strbuf_free(&sb);
+    finish_text(ctx, st, &text, &len, &err, true);
     affect_motion_free(m);
 }
 

@@ -6,8 +6,10 @@
  * frame's lateral vector (left − right) and e the unit axis that should carry it (x for y-up
  * and z-up data, y for x-up data), the rotation turns h onto e; both lie in the plane
  * perpendicular to u, so it is a rotation by the signed angle between them about u.
+ * A skeletal motion's roots turn and move with it, so its rotations stay consistent.
  */
 #include "affect/normalize.h"
+#include "affect/quat.h"
 
 #include <math.h>
 #include <string.h>
@@ -100,6 +102,49 @@ affect_status affect_normalize_transform_compute(const affect_motion *m, const a
     return AFFECT_OK;
 }
 
+/* The same transform on the skeleton: roots' translations and offsets move, turn and scale,
+ * roots' rotations turn, every other offset and translation scales, so the forward kinematics
+ * of the result are the transformed positions. */
+static void transform_skeleton(affect_motion *m, const affect_normalize_transform *tf)
+{
+    const double *r = tf->rot;
+    double inv = 1.0 / tf->scale, qr[4];
+    affect_quat_from_matrix(r, qr);
+    uint32_t nj = m->n_joints;
+    for (uint32_t j = 0; j < nj; j++) {
+        double *o = m->skel[j].offset;
+        if (m->parents[j] < 0) {
+            double x = o[0] - tf->origin[0], y = o[1] - tf->origin[1], z = o[2] - tf->origin[2];
+            o[0] = (r[0] * x + r[1] * y + r[2] * z) * inv;
+            o[1] = (r[3] * x + r[4] * y + r[5] * z) * inv;
+            o[2] = (r[6] * x + r[7] * y + r[8] * z) * inv;
+        } else {
+            o[0] *= inv, o[1] *= inv, o[2] *= inv;
+        }
+    }
+    if (!m->rot)
+        return;
+    for (uint32_t t = 0; t < m->n_frames; t++)
+        for (uint32_t j = 0; j < nj; j++) {
+            float *tr = m->trans + ((size_t)t * nj + j) * 3;
+            if (m->parents[j] >= 0) {
+                for (int a = 0; a < 3; a++)
+                    tr[a] = (float)(tr[a] * inv);
+                continue;
+            }
+            double x = (double)tr[0] - tf->origin[0], y = (double)tr[1] - tf->origin[1],
+                   z = (double)tr[2] - tf->origin[2];
+            tr[0] = (float)((r[0] * x + r[1] * y + r[2] * z) * inv);
+            tr[1] = (float)((r[3] * x + r[4] * y + r[5] * z) * inv);
+            tr[2] = (float)((r[6] * x + r[7] * y + r[8] * z) * inv);
+            float *qf = m->rot + ((size_t)t * nj + j) * 4;
+            double q[4] = {qf[0], qf[1], qf[2], qf[3]};
+            affect_quat_mul(qr, q, q);
+            for (int a = 0; a < 4; a++)
+                qf[a] = (float)q[a];
+        }
+}
+
 void affect_normalize_apply(affect_motion *m, const affect_normalize_transform *tf)
 {
     size_t n = (size_t)m->n_frames * m->n_joints;
@@ -115,6 +160,8 @@ void affect_normalize_apply(affect_motion *m, const affect_normalize_transform *
     }
     if (tf->scale != 1.0)
         memcpy(m->unit, "arm", 4);
+    if (m->skel)
+        transform_skeleton(m, tf);
 }
 
 affect_status affect_motion_normalize(const affect_motion *m, const affect_roles *roles,

@@ -3,8 +3,10 @@
  *
  * Euler angles: for R = Ra(α) · Rb(β) · Rc(γ) with (a, b, c) a permutation of the axes and
  * e = +1 for the cyclic orders (XYZ, YZX, ZXY), −1 for the others,
- *   β = asin(e · R[a][c]),  α = atan2(−e · R[b][c], R[c][c]),  γ = atan2(−e · R[a][b], R[a][a]);
- * at gimbal lock (cos β ≈ 0) only α ± γ is defined: γ = 0 and α = atan2(e · R[c][b], R[b][b]).
+ *   β = atan2(e · R[a][c], hypot(R[a][a], R[a][b])),
+ *   α = atan2(−e · R[b][c], R[c][c]),  γ = atan2(−e · R[a][b], R[a][a]);
+ * at gimbal lock (cos β ≈ 0) only α + e · sign(β) · γ = atan2(e · R[c][b], R[b][b]) is defined:
+ * γ is kept at the previous frame's value (or 0) and α takes the rest.
  * The other solution of the same rotation is (α + 180°, 180° − β, γ + 180°).
  */
 #include "affect/quat.h"
@@ -14,8 +16,8 @@
 
 #define PI 3.14159265358979323846
 #define DEG (180.0 / PI)
-/* |sin β| above this is gimbal lock (cos β below 1.4e-5): α and γ are then not separable */
-#define GIMBAL_LOCK_SIN (1.0 - 1e-10)
+/* cos β below this is gimbal lock: α and γ are then not separable */
+#define GIMBAL_LOCK_COS 1e-9
 
 void affect_quat_mul(const double a[4], const double b[4], double r[4])
 {
@@ -174,22 +176,19 @@ void affect_quat_to_euler_deg(const double q[4], const int order[3], const doubl
     int a = order[0], b = order[1], c = order[2];
     double e = (b - a + 3) % 3 == 1 ? 1.0 : -1.0;
     double s = e * r[a * 3 + c];
-    if (s > 1)
-        s = 1;
-    if (s < -1)
-        s = -1;
-    double al, be = asin(s) * DEG, ga;
-    if (fabs(s) > GIMBAL_LOCK_SIN) {
-        al = atan2(e * r[c * 3 + b], r[b * 3 + b]) * DEG;
-        ga = 0;
+    double cb = hypot(r[a * 3 + a], r[a * 3 + b]); /* cos β, well conditioned near the lock */
+    double al, be = atan2(s, cb) * DEG, ga;
+    if (cb < GIMBAL_LOCK_COS) {
+        /* only α + e·sign(β)·γ is defined: keep γ (the previous frame's, or 0) */
+        double combined = atan2(e * r[c * 3 + b], r[b * 3 + b]) * DEG;
+        ga = prev ? prev[2] : 0;
+        al = combined - e * (s > 0 ? 1 : -1) * ga;
     } else {
         al = atan2(-e * r[b * 3 + c], r[c * 3 + c]) * DEG;
         ga = atan2(-e * r[a * 3 + b], r[a * 3 + a]) * DEG;
     }
-    if (al <= -180)
-        al += 360;
-    if (ga <= -180)
-        ga += 360;
+    al = unwrap(al, 0);
+    ga = unwrap(ga, 0);
     deg[0] = al, deg[1] = be, deg[2] = ga;
     if (!prev)
         return;

@@ -27,6 +27,8 @@
 /* bones shorter than this × body size carry no direction */
 #define BONE_MIN_REL 1e-9
 #define JACOBI_MAX_SWEEPS 50
+/* float steps either way that rounding a rigid joint may take to keep its bone's length */
+#define ROUND_STEPS 1
 
 void affect_rigid_options_default(affect_rigid_options *opt)
 {
@@ -265,12 +267,22 @@ affect_status affect_motion_free_links(const affect_motion *m, bool *free_link,
 {
     uint32_t nj = m->n_joints;
     double tol = 1e-6 * affect_motion_body_size(m);
+    uint32_t *n_children = affect_calloc(nj, sizeof *n_children);
+    if (!n_children)
+        return affect_nomem(err);
+    for (uint32_t j = 0; j < nj; j++)
+        if (m->parents[j] >= 0)
+            n_children[m->parents[j]]++;
     for (uint32_t j = 0; j < nj; j++) {
         free_link[j] = false;
         int32_t p = m->parents[j];
         if (p < 0)
             continue;
-        if (m->parents[p] < 0) { /* a root that never moves is a fixed origin */
+        if (m->parents[p] < 0 && n_children[p] == 1 && n_children[j] >= 2) {
+            free_link[j] = true; /* a reference root above the real pelvis */
+            continue;
+        }
+        if (m->parents[p] < 0 && m->n_frames > 1) { /* a root that never moves: a fixed origin */
             const float *p0 = affect_motion_at(m, 0, (uint32_t)p);
             bool fixed = true;
             for (uint32_t t = 1; t < m->n_frames && fixed; t++) {
@@ -278,7 +290,7 @@ affect_status affect_motion_free_links(const affect_motion *m, bool *free_link,
                 double d[3] = {(double)pt[0] - p0[0], (double)pt[1] - p0[1], (double)pt[2] - p0[2]};
                 fixed = norm3(d) <= tol;
             }
-            if (fixed && m->n_frames > 1) {
+            if (fixed) {
                 free_link[j] = true;
                 continue;
             }
@@ -293,7 +305,7 @@ affect_status affect_motion_free_links(const affect_motion *m, bool *free_link,
             }
         }
     }
-    (void)err;
+    affect_free(n_children);
     return AFFECT_OK;
 }
 
@@ -455,7 +467,7 @@ static affect_status rigid_plan_make(const affect_motion *m, const affect_rigid_
 {
     memset(p, 0, sizeof *p);
     uint32_t n = m->n_joints;
-    bool tree = false;
+    bool tree = n == 1;
     for (uint32_t j = 0; j < n; j++)
         tree |= m->parents[j] >= 0;
     if (!tree)
@@ -592,6 +604,50 @@ static affect_status rigid_positions(const affect_motion *m, const affect_rigid_
     return AFFECT_OK;
 }
 
+/* Rounds one frame of rigid positions (doubles) to float32, parents first, choosing for every
+ * bone's lower joint among the float neighbours of its exact position (the nearest float and
+ * up to ROUND_STEPS steps either way on each axis) the one whose distance to the already rounded parent is
+ * closest to the bone's length: rounding alone would leave length errors of a few float steps
+ * (2e-6 relative on a 10 cm bone 1.7 m from the origin); the chosen joint moves at most
+ * ROUND_STEPS float steps further than nearest rounding. */
+static void round_rigid_frame(const affect_motion *m, const rigid_plan *pl, const double *p,
+                              float *o)
+{
+    for (uint32_t i = 0; i < m->n_joints; i++) {
+        uint32_t j = pl->order[i];
+        int32_t par = m->parents[j];
+        const double *x = p + (size_t)j * 3;
+        float *y = o + (size_t)j * 3;
+        for (int a = 0; a < 3; a++)
+            y[a] = (float)x[a];
+        if (par < 0 || pl->free_link[j])
+            continue;
+        const float *yp = o + (size_t)par * 3;
+        float cand[3][2 * ROUND_STEPS + 1], best[3];
+        for (int a = 0; a < 3; a++) {
+            cand[a][ROUND_STEPS] = y[a];
+            for (int k = 1; k <= ROUND_STEPS; k++) {
+                cand[a][ROUND_STEPS - k] = nextafterf(cand[a][ROUND_STEPS - k + 1], -INFINITY);
+                cand[a][ROUND_STEPS + k] = nextafterf(cand[a][ROUND_STEPS + k - 1], INFINITY);
+            }
+        }
+        double best_err = INFINITY, best_move = INFINITY;
+        const int w = 2 * ROUND_STEPS + 1;
+        for (int c = 0; c < w * w * w; c++) {
+            float v[3] = {cand[0][c % w], cand[1][(c / w) % w], cand[2][c / (w * w)]};
+            double d[3] = {(double)v[0] - yp[0], (double)v[1] - yp[1], (double)v[2] - yp[2]};
+            double e = fabs(norm3(d) - pl->len[j]);
+            double mv = fabs(v[0] - x[0]) + fabs(v[1] - x[1]) + fabs(v[2] - x[2]);
+            if (e < best_err || (e == best_err && mv < best_move)) {
+                best_err = e;
+                best_move = mv;
+                memcpy(best, v, sizeof best);
+            }
+        }
+        memcpy(y, best, sizeof best);
+    }
+}
+
 affect_status affect_motion_rigid(const affect_motion *m, const affect_rigid_options *opt,
                                   affect_motion **out, affect_error *err)
 {
@@ -610,8 +666,9 @@ affect_status affect_motion_rigid(const affect_motion *m, const affect_rigid_opt
         st = affect_motion_clone(m, &c, err);
     if (!st) {
         affect_motion_drop_skeleton(c);
-        for (size_t i = 0; i < nv; i++)
-            c->pos[i] = (float)pos[i];
+        size_t per = (size_t)m->n_joints * 3;
+        for (uint32_t t = 0; t < m->n_frames; t++)
+            round_rigid_frame(m, &pl, pos + t * per, c->pos + t * per);
         *out = c;
     }
     rigid_plan_free(&pl);

@@ -42,7 +42,8 @@ affect_status affect_normalize_transform_compute(const affect_motion *m, const a
                                                  affect_error *err);
 
 /* Applies tf to every position of m in place (out = in allowed) and sets the unit to "arm"
- * when tf->scale != 1 came from the arm length. */
+ * when tf->scale != 1 came from the arm length. A skeleton and rotations are transformed
+ * with them (roots turn and move, offsets and translations scale). */
 void affect_normalize_apply(affect_motion *m, const affect_normalize_transform *tf);
 
 /* Returns a normalized copy of m. */

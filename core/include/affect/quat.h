@@ -5,7 +5,7 @@
  *   double q[4];                      // (w, x, y, z), w first
  *   int order[3] = {2, 0, 1};         // ZXY: R = Rz(a0) · Rx(a1) · Ry(a2), BVH's convention
  *   affect_quat_from_euler_deg(order, deg, q);
- *   affect_quat_to_euler_deg(q, order, NULL, deg);  // back, in (−180, 180] for a0 and a2
+ *   affect_quat_to_euler_deg(q, order, NULL, deg);  // back, in [−180, 180) for a0 and a2
  *
  * Quaternions act on column vectors as the rotation matrices of affect/fk.h: the matrix of
  * affect_quat_to_matrix(q) equals that of the same rotation built from Euler angles there.
@@ -51,7 +51,8 @@ void affect_quat_between(const double a[3], const double b[3], double q[4]);
 void affect_quat_from_euler_deg(const int order[3], const double deg[3], double q[4]);
 
 /* Euler angles (degrees) of q in the given order: deg[1] in [−90, 90], deg[0] and deg[2] in
- * (−180, 180]. At gimbal lock (|deg[1]| = 90) deg[2] is 0. When prev is not NULL the solution
+ * [−180, 180). At gimbal lock (|deg[1]| = 90) deg[2] is prev's (0 without prev) and deg[0]
+ * takes the rest of the rotation. When prev is not NULL the solution
  * closest to prev is chosen among the two equivalent ones and each angle is moved by whole
  * turns to within 180° of prev (continuous curves for animation tools). */
 void affect_quat_to_euler_deg(const double q[4], const int order[3], const double prev[3],

@@ -11,8 +11,9 @@
  *   affect_motion_ik(m, &io, &skeletal, &err);        // skeleton + rotations, FK positions
  *
  * Bones and free links: the link from a joint to its parent is a bone (constant length) unless
- * it is free: the parent is a root that never moves (a fixed origin such as the corpus's
- * joint_Root, whose child carries the global translation), or the motion's skeleton gives the
+ * it is free: the parent is a reference root (a root whose only child branches, such as the
+ * corpus's joint_Root above Hips, whose link carries the global translation), or a root that
+ * never moves (a fixed origin), or the motion's skeleton gives the
  * joint position channels whose values leave its offset by more than AFFECT_FREE_LINK_REL of
  * the offset's length (the corpus's Hips), or the caller names it.
  */
@@ -74,8 +75,8 @@ void affect_rigid_options_default(affect_rigid_options *opt);
  * bones keep the chosen lengths: per frame, exact block coordinate descent over the bone
  * directions (a bone's optimal direction given the others has a closed form: its whole
  * subtree moves rigidly) and the translation of each rigid part, started from m's own bone
- * directions. Joints, names, parents and fps are m's; no skeleton. Needs a tree (some joint
- * with a parent). */
+ * directions. Joints, names, parents and fps are m's; no skeleton. Needs a skeleton: one
+ * joint, or some joint with a parent. */
 affect_status affect_motion_rigid(const affect_motion *m, const affect_rigid_options *opt,
                                   affect_motion **out, affect_error *err);
 
