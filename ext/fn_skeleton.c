@@ -74,6 +74,7 @@ static affect_status skel_opt(const affect_json_doc *doc, const affect_json_node
 {
     static const char *const sources[] = {"auto", "stored", "ik", NULL};
     static const char *const lengths[] = {"median", "first", NULL};
+    static const char *const siblings[] = {"auto", "rotate", "translate", NULL};
     const char *key = n->key;
     double v = 0;
     int k = 0;
@@ -84,6 +85,9 @@ static affect_status skel_opt(const affect_json_doc *doc, const affect_json_node
     } else if (strcmp(key, "lengths") == 0) {
         if (!(st = opt_choice(n, key, lengths, &k, err)))
             so->ik.rigid.lengths = k ? AFFECT_RIGID_FIRST : AFFECT_RIGID_MEDIAN;
+    } else if (strcmp(key, "siblings") == 0) {
+        if (!(st = opt_choice(n, key, siblings, &k, err)))
+            so->ik.siblings = (affect_ik_siblings)k;
     } else if (strcmp(key, "rest_frame") == 0) {
         if (!(st = opt_whole(n, key, 0, (double)m->n_frames - 1, &v, err)))
             so->ik.rest_frame = (uint32_t)v;
@@ -221,7 +225,7 @@ static ax_arg opts_text(sqlite3_context *ctx, int argc, sqlite3_value **argv, in
 }
 
 static const char *const bvh_keys[] = {"order", "frame_time", "precision", "root", "rotations",
-                                       "rest_frame", "lengths", "free", NULL};
+                                       "rest_frame", "lengths", "free", "siblings", NULL};
 
 void ax_motion_to_bvh(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 {
@@ -250,11 +254,12 @@ void ax_motion_to_bvh(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     affect_motion_free(m);
 }
 
-static const char *const rigid_keys[] = {"lengths", "free", "sweeps", "tolerance", NULL};
+static const char *const rigid_keys[] = {"model", "lengths", "free", "sweeps", "tolerance", NULL};
 
 void ax_motion_rigid(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 {
     static const char *const lengths[] = {"median", "first", "reference", NULL};
+    static const char *const models[] = {"bones", "skeleton", NULL};
     affect_motion *m = NULL, *ref = NULL, *out = NULL;
     if (ax_arg_motion(ctx, argv, 0, &m) != AX_OK)
         return;
@@ -265,11 +270,12 @@ void ax_motion_rigid(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     }
     affect_rigid_options ro;
     affect_rigid_options_default(&ro);
-    int which = 0;
+    int which = 0, model = 0;
     double sweeps = ro.max_sweeps, tol = ro.tolerance;
     bool *free_link = NULL;
     affect_error err;
     if (ax_opt_enum(ctx, &opts, "lengths", lengths, &which) ||
+        ax_opt_enum(ctx, &opts, "model", models, &model) ||
         ax_opt_number(ctx, &opts, "sweeps", &sweeps) || ax_opt_number(ctx, &opts, "tolerance", &tol))
         goto done;
     if (sweeps != floor(sweeps) || sweeps < 1 || sweeps > 100000) {
@@ -283,6 +289,7 @@ void ax_motion_rigid(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     ro.max_sweeps = (uint32_t)sweeps;
     ro.tolerance = tol;
     ro.lengths = (affect_rigid_lengths)which;
+    ro.model = (affect_rigid_model)model;
     if (argc > 2) {
         ax_arg a = ax_arg_motion(ctx, argv, 2, &ref);
         if (a == AX_ERROR)

@@ -22,6 +22,7 @@ typedef struct ax_skel_opts {
 
 /* Parses a JSON options object (text may be NULL: defaults) whose keys must be in allowed.
  * Keys: rotations ("auto" | "stored" | "ik"), rest_frame, lengths ("median" | "first"),
+ * siblings ("auto" | "rotate" | "translate"),
  * free (joint names), order ("ZXY", …), frame_time, precision, root. */
 affect_status ax_skel_opts_parse(const char *text, size_t len, const char *const *allowed,
                                  const affect_motion *m, ax_skel_opts *so, affect_error *err);

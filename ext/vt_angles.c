@@ -131,7 +131,8 @@ static void joint_orders(const affect_motion *sk, const ax_skel_opts *so, int *o
     }
 }
 
-static const char *const angle_keys[] = {"order", "rotations", "rest_frame", "lengths", "free", NULL};
+static const char *const angle_keys[] = {"order", "rotations", "rest_frame", "lengths", "free",
+                                         "siblings", NULL};
 
 static int angles_filter(sqlite3_vtab_cursor *cur, int idx_num, const char *idx_str, int argc,
                          sqlite3_value **argv)

@@ -410,6 +410,7 @@ affect_status affect_generate(const affect_motion *desired, const affect_motion 
     }
     if ((st = affect_motion_clone(desired, &m, err)) != AFFECT_OK)
         goto done;
+    affect_motion_drop_skeleton(m); /* new positions: the desired motion's rotations no longer apply */
     pts = affect_malloc_array((size_t)J * 3, sizeof *pts);
     if (!pts) {
         st = affect_nomem(err);

@@ -29,9 +29,15 @@
 #define JACOBI_MAX_SWEEPS 50
 /* float steps either way that rounding a rigid joint may take to keep its bone's length */
 #define ROUND_STEPS 1
+/* rounds of the generalized Procrustes mean of a sibling group's rest offsets */
+#define IK_SHAPE_ROUNDS 3
+/* with siblings "auto", a sibling group whose best fit misses a position by more than this ×
+ * body size gets position channels */
+#define IK_SIBLING_TOL_REL 1e-3
 
 void affect_rigid_options_default(affect_rigid_options *opt)
 {
+    opt->model = AFFECT_RIGID_BONES;
     opt->lengths = AFFECT_RIGID_MEDIAN;
     opt->reference = NULL;
     opt->max_sweeps = 200;
@@ -42,6 +48,7 @@ void affect_rigid_options_default(affect_rigid_options *opt)
 void affect_ik_options_default(affect_ik_options *opt)
 {
     opt->rest_frame = 0;
+    opt->siblings = AFFECT_IK_SIBLINGS_AUTO;
     opt->order[0] = 2, opt->order[1] = 0, opt->order[2] = 1;
     affect_rigid_options_default(&opt->rigid);
 }
@@ -656,6 +663,13 @@ affect_status affect_motion_rigid(const affect_motion *m, const affect_rigid_opt
         affect_rigid_options_default(&def);
         opt = &def;
     }
+    if (opt->model == AFFECT_RIGID_SKELETON) {
+        affect_ik_options io;
+        affect_ik_options_default(&io);
+        io.rigid = *opt;
+        io.rigid.model = AFFECT_RIGID_BONES;
+        return affect_motion_ik(m, &io, out, err);
+    }
     size_t nv = (size_t)m->n_frames * m->n_joints * 3;
     double *pos = affect_malloc_array(nv, sizeof *pos);
     affect_motion *c = NULL;
@@ -756,6 +770,10 @@ static bool horn(const double *r, const double *b, uint32_t n, double q[4])
 
 typedef struct ik_work {
     double *g;           /* rigid positions, T × J × 3 */
+    double *shape, *acc; /* a sibling group's mean shape and its running sum (J × 3 each) */
+    uint32_t *kids;      /* a joint's bone children (J) */
+    bool *moved;         /* joints placed by a translation channel: roots, free links, and
+                            with AFFECT_IK_SIBLINGS_TRANSLATE the children of sibling groups */
     double *prevq;       /* previous frame's local rotation per joint, J × 4 */
     double *wrot, *fpos; /* this frame's world rotations (J × 4) and FK positions (J × 3) */
     double *r, *b;       /* rest and current child vectors of one joint (J × 3 each) */
@@ -806,9 +824,69 @@ static void ik_joint(const affect_motion *out, const rigid_plan *pl, const doubl
     affect_quat_normalize(q);
 }
 
-/* The skeleton of the IK result: offsets from the rest frame's rigid pose, channels. */
-static void ik_skeleton(const affect_motion *m, const rigid_plan *pl, const affect_ik_options *opt,
-                        const double *rest, affect_motion *out)
+/* The rest offsets of every joint's bone children when it has several: their mean shape over
+ * the frames (generalized Procrustes: each frame's child vectors turned onto the current shape
+ * by the best-fit rotation, averaged, rescaled to the bone lengths; a few rounds), turned to
+ * the rest frame's orientation. One frame's configuration would fit the others badly wherever
+ * the siblings' angles vary (positions averaged or synthesized rather than captured). */
+static void ik_mean_shapes(const affect_motion *m, const rigid_plan *pl, const double *g,
+                           double min_len, ik_work *w, affect_motion *out)
+{
+    uint32_t nj = m->n_joints;
+    size_t nv = (size_t)nj * 3;
+    for (uint32_t j = 0; j < nj; j++) {
+        uint32_t n = 0;
+        for (uint32_t k = pl->ch.start[j]; k < pl->ch.start[j + 1]; k++) {
+            uint32_t c = pl->ch.list[k];
+            if (!pl->free_link[c] && norm3(out->skel[c].offset) > min_len)
+                w->kids[n++] = c;
+        }
+        if (n < 2)
+            continue;
+        for (uint32_t i = 0; i < n; i++)
+            memcpy(w->shape + (size_t)i * 3, out->skel[w->kids[i]].offset, 3 * sizeof(double));
+        for (int round = 0; round < IK_SHAPE_ROUNDS; round++) {
+            memset(w->acc, 0, (size_t)n * 3 * sizeof *w->acc);
+            uint32_t used = 0;
+            for (uint32_t t = 0; t < m->n_frames; t++) {
+                const double *gt = g + t * nv;
+                for (uint32_t i = 0; i < n; i++)
+                    for (int a = 0; a < 3; a++)
+                        w->b[i * 3 + a] = gt[(size_t)w->kids[i] * 3 + a] - gt[(size_t)j * 3 + a];
+                double q[4], inv[4], v[3];
+                if (!horn(w->shape, w->b, n, q))
+                    continue;
+                qconj(q, inv);
+                for (uint32_t i = 0; i < n; i++) {
+                    affect_quat_rotate(inv, w->b + (size_t)i * 3, v);
+                    for (int a = 0; a < 3; a++)
+                        w->acc[i * 3 + a] += v[a];
+                }
+                used++;
+            }
+            if (!used)
+                break;
+            for (uint32_t i = 0; i < n; i++) {
+                double len = norm3(out->skel[w->kids[i]].offset), na = norm3(w->acc + (size_t)i * 3);
+                if (na > 0)
+                    for (int a = 0; a < 3; a++)
+                        w->shape[i * 3 + a] = w->acc[i * 3 + a] * len / na;
+            }
+        }
+        /* turn the shape onto the rest frame's configuration */
+        double q[4];
+        for (uint32_t i = 0; i < n; i++)
+            memcpy(w->b + (size_t)i * 3, out->skel[w->kids[i]].offset, 3 * sizeof(double));
+        if (!horn(w->shape, w->b, n, q))
+            continue;
+        for (uint32_t i = 0; i < n; i++)
+            affect_quat_rotate(q, w->shape + (size_t)i * 3, out->skel[w->kids[i]].offset);
+    }
+}
+
+/* Offsets from the rest frame's rigid pose; leaves named "<parent>_end" become End Sites. */
+static void ik_offsets(const affect_motion *m, const rigid_plan *pl, const double *rest,
+                       affect_motion *out)
 {
     for (uint32_t j = 0; j < m->n_joints; j++) {
         affect_skel_joint *s = &out->skel[j];
@@ -818,12 +896,88 @@ static void ik_skeleton(const affect_motion *m, const rigid_plan *pl, const affe
         bool leaf = pl->ch.start[j] == pl->ch.start[j + 1];
         size_t lp = p >= 0 ? strlen(m->names[p]) : 0;
         if (leaf && p >= 0 && !pl->free_link[j] && strlen(m->names[j]) == lp + 4 &&
-            strncmp(m->names[j], m->names[p], lp) == 0 && strcmp(m->names[j] + lp, "_end") == 0) {
+            strncmp(m->names[j], m->names[p], lp) == 0 && strcmp(m->names[j] + lp, "_end") == 0)
             s->flags = AFFECT_JOINT_END_SITE;
+    }
+}
+
+/* The bone children of j (not free, offset longer than min_len) into w->kids; their count. */
+static uint32_t bone_children(const rigid_plan *pl, const affect_motion *out, uint32_t j,
+                              double min_len, uint32_t *kids)
+{
+    uint32_t n = 0;
+    for (uint32_t k = pl->ch.start[j]; k < pl->ch.start[j + 1]; k++) {
+        uint32_t c = pl->ch.list[k];
+        if (!pl->free_link[c] && norm3(out->skel[c].offset) > min_len)
+            kids[n++] = c;
+    }
+    return n;
+}
+
+/* Largest distance over the frames between a sibling group's rigid positions and its rest
+ * offsets turned by the best-fit rotation (the shape is in w->shape). */
+static double group_residual(const affect_motion *m, const double *g, uint32_t j, uint32_t n,
+                             ik_work *w)
+{
+    size_t nv = (size_t)m->n_joints * 3;
+    double worst = 0;
+    for (uint32_t t = 0; t < m->n_frames; t++) {
+        const double *gt = g + t * nv;
+        for (uint32_t i = 0; i < n; i++)
+            for (int a = 0; a < 3; a++)
+                w->b[i * 3 + a] = gt[(size_t)w->kids[i] * 3 + a] - gt[(size_t)j * 3 + a];
+        double q[4], v[3];
+        if (!horn(w->shape, w->b, n, q))
             continue;
+        for (uint32_t i = 0; i < n; i++) {
+            affect_quat_rotate(q, w->shape + (size_t)i * 3, v);
+            for (int a = 0; a < 3; a++)
+                v[a] -= w->b[i * 3 + a];
+            worst = fmax(worst, norm3(v));
         }
+    }
+    return worst;
+}
+
+/* Which joints get position channels: roots and free links; the bone children of a joint
+ * with several when asked (AFFECT_IK_SIBLINGS_TRANSLATE), or when rotations alone would miss
+ * their positions by more than IK_SIBLING_TOL_REL of the body size (AFFECT_IK_SIBLINGS_AUTO).
+ * End Sites never (they have no channels). */
+static void ik_mark_moved(const affect_motion *m, const rigid_plan *pl, const affect_ik_options *opt,
+                          const double *g, double min_len, ik_work *w, const affect_motion *out)
+{
+    double tol = IK_SIBLING_TOL_REL * affect_motion_body_size(m);
+    for (uint32_t j = 0; j < m->n_joints; j++)
+        w->moved[j] = m->parents[j] < 0 || pl->free_link[j];
+    if (opt->siblings == AFFECT_IK_SIBLINGS_ROTATE)
+        return;
+    for (uint32_t j = 0; j < m->n_joints; j++) {
+        uint32_t n = bone_children(pl, out, j, min_len, w->kids);
+        if (n < 2)
+            continue;
+        if (opt->siblings == AFFECT_IK_SIBLINGS_AUTO) {
+            for (uint32_t i = 0; i < n; i++)
+                memcpy(w->shape + (size_t)i * 3, out->skel[w->kids[i]].offset, 3 * sizeof(double));
+            if (group_residual(m, g, j, n, w) <= tol)
+                continue;
+        }
+        for (uint32_t i = 0; i < n; i++)
+            if (!(out->skel[w->kids[i]].flags & AFFECT_JOINT_END_SITE))
+                w->moved[w->kids[i]] = true;
+    }
+}
+
+/* Channels: position channels for the joints placed by translation, rotations for every joint
+ * that is not an End Site. */
+static void ik_channels(const affect_motion *m, const affect_ik_options *opt, const bool *moved,
+                        affect_motion *out)
+{
+    for (uint32_t j = 0; j < m->n_joints; j++) {
+        affect_skel_joint *s = &out->skel[j];
+        if (s->flags & AFFECT_JOINT_END_SITE)
+            continue;
         int c = 0;
-        if (p < 0 || pl->free_link[j])
+        if (moved[j])
             for (int a = 0; a < 3; a++)
                 s->channel[c++] = (uint8_t)(AFFECT_CH_XPOS + a);
         for (int a = 0; a < 3; a++)
@@ -854,10 +1008,14 @@ affect_status affect_motion_ik(const affect_motion *m, const affect_ik_options *
                               {(void **)&w.wrot, (size_t)nj * 4, sizeof(double)},
                               {(void **)&w.fpos, nv, sizeof(double)},
                               {(void **)&w.r, nv, sizeof(double)},
-                              {(void **)&w.b, nv, sizeof(double)}};
+                              {(void **)&w.b, nv, sizeof(double)},
+                              {(void **)&w.shape, nv, sizeof(double)},
+                              {(void **)&w.acc, nv, sizeof(double)},
+                              {(void **)&w.kids, nj, sizeof(uint32_t)},
+                              {(void **)&w.moved, nj, sizeof(bool)}};
     affect_status st;
     w.g = affect_malloc_array((size_t)m->n_frames * nv, sizeof *w.g);
-    block = affect_ws_alloc(parts, 5);
+    block = affect_ws_alloc(parts, 9);
     if (!w.g || !block) {
         st = affect_nomem(err);
         goto done;
@@ -865,10 +1023,13 @@ affect_status affect_motion_ik(const affect_motion *m, const affect_ik_options *
     if ((st = rigid_positions(m, &opt->rigid, &pl, w.g, err)) ||
         (st = affect_motion_clone(m, &c, err)) || (st = affect_motion_add_skeleton(c, true, err)))
         goto done;
-    ik_skeleton(m, &pl, opt, w.g + (size_t)opt->rest_frame * nv, c);
+    double min_len = BONE_MIN_REL * affect_motion_body_size(m);
+    ik_offsets(m, &pl, w.g + (size_t)opt->rest_frame * nv, c);
+    ik_mean_shapes(m, &pl, w.g, min_len, &w, c);
+    ik_mark_moved(m, &pl, opt, w.g, min_len, &w, c);
+    ik_channels(m, opt, w.moved, c);
     for (uint32_t j = 0; j < nj; j++)
         w.prevq[j * 4] = 1, w.prevq[j * 4 + 1] = w.prevq[j * 4 + 2] = w.prevq[j * 4 + 3] = 0;
-    double min_len = BONE_MIN_REL * affect_motion_body_size(m);
     for (uint32_t t = 0; t < m->n_frames; t++) {
         const double *g = w.g + t * nv;
         for (uint32_t i = 0; i < nj; i++) {
@@ -878,7 +1039,7 @@ affect_status affect_motion_ik(const affect_motion *m, const affect_ik_options *
             float *tr = c->trans + ((size_t)t * nj + j) * 3;
             if (p >= 0)
                 qconj(w.wrot + (size_t)p * 4, inv);
-            if (p < 0 || pl.free_link[j]) { /* translated: its own rigid position */
+            if (p < 0 || w.moved[j]) { /* translated: its own rigid position */
                 double v[3];
                 for (int a = 0; a < 3; a++) {
                     w.fpos[(size_t)j * 3 + a] = g[(size_t)j * 3 + a];

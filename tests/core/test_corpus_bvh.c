@@ -4,7 +4,8 @@
  *   - with stored rotations: BVH → motion → BVH → motion reproduces every position within
  *     1e-4 of the unit (cm);
  *   - through inverse kinematics: a position-only copy → BVH → motion equals the rigid
- *     projection of the copy within 0.5 % of the body height, and the rigid projection keeps
+ *     projection of the copy within 0.5 % of the body height with rotation channels only
+ *     (position channels on joint_Root and Hips alone), and the rigid projection keeps
  *     every bone's length within the float32 resolution at its distance from the origin.
  * Prints the largest errors found. Skips with a message when ../shared is absent.
  */
@@ -96,6 +97,12 @@ static void check_file(const char *path, const char *name, totals *tot)
     affect_motion_drop_skeleton(pos);
     assert_int_equal(affect_motion_rigid(pos, NULL, &rigid, &err), AFFECT_OK);
     assert_int_equal(affect_motion_ik(pos, NULL, &ik, &err), AFFECT_OK);
+    /* captured motion: a rotation-only skeleton below joint_Root and Hips (siblings "auto") */
+    uint32_t translated = 0;
+    for (uint32_t j = 0; j < ik->n_joints; j++)
+        translated += affect_skel_has_position(&ik->skel[j]);
+    if (translated != 2)
+        fail_msg("%s: %u joints with position channels after IK, expected 2", name, translated);
     assert_int_equal(affect_bvh_write(ik, NULL, &out2, &n2, &err), AFFECT_OK);
     assert_int_equal(affect_bvh_parse(out2, n2, NULL, &back2, &err), AFFECT_OK);
     double rel = max_dist(back2, rigid) / height(m);

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "testutil.h"
+#include "affect/skeleton.h"
 #include "affect/features.h"
 #include "affect/generate.h"
 #include "affect/laban.h"
@@ -359,6 +360,27 @@ static void test_determinism(void **state)
     affect_motion_free(d);
 }
 
+/* A desired motion with joint rotations (imported from BVH, here from IK): the output has new
+ * positions, so it must not carry the desired motion's rotations (they would describe the
+ * source, and motion_to_bvh would refuse them). */
+static void test_output_drops_source_rotations(void **state)
+{
+    (void)state;
+    affect_motion *pos = synth("bow", "neutral", 5, 30), *d = NULL;
+    assert_int_equal(affect_motion_ik(pos, NULL, &d, NULL), AFFECT_OK);
+    assert_non_null(d->rot);
+    affect_motion *nb[2] = {synth("bow", "angry", 6, 30), synth("bow", "angry", 7, 30)};
+    affect_generate_options opt;
+    affect_generate_options_default(&opt);
+    affect_motion *g = generate(d, nb, 2, &opt, NULL);
+    assert_null(g->skel);
+    assert_null(g->rot);
+    affect_motion_free(g);
+    free_all(nb, 2);
+    affect_motion_free(d);
+    affect_motion_free(pos);
+}
+
 /* p' = R (p − o) / s computed here in double, then inverted: the original within 1e-9; and
  * the transform is exactly the one the observations use. */
 static void test_denormalize_round_trip(void **state)
@@ -672,6 +694,7 @@ int main(void)
         cmocka_unit_test(test_single_neighbour_and_no_filter),
         cmocka_unit_test(test_keep_path),
         cmocka_unit_test(test_determinism),
+        cmocka_unit_test(test_output_drops_source_rotations),
         cmocka_unit_test(test_denormalize_round_trip),
         cmocka_unit_test(test_excluded_skeletons),
         cmocka_unit_test(test_dtw),

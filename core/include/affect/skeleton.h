@@ -60,7 +60,14 @@ typedef enum affect_rigid_lengths {
     AFFECT_RIGID_REFERENCE  /* the median length in a reference motion with the same joints */
 } affect_rigid_lengths;
 
+typedef enum affect_rigid_model {
+    AFFECT_RIGID_BONES,   /* constant bone lengths (default) */
+    AFFECT_RIGID_SKELETON /* what a skeleton with rotation channels only (below its roots) can
+                             play: the forward kinematics of affect_motion_ik, rotations kept */
+} affect_rigid_model;
+
 typedef struct affect_rigid_options {
+    affect_rigid_model model;
     affect_rigid_lengths lengths;
     const affect_motion *reference; /* for AFFECT_RIGID_REFERENCE */
     uint32_t max_sweeps;            /* coordinate-descent sweeps per frame (default 200) */
@@ -76,12 +83,27 @@ void affect_rigid_options_default(affect_rigid_options *opt);
  * directions (a bone's optimal direction given the others has a closed form: its whole
  * subtree moves rigidly) and the translation of each rigid part, started from m's own bone
  * directions. Joints, names, parents and fps are m's; no skeleton. Needs a skeleton: one
- * joint, or some joint with a parent. */
+ * joint, or some joint with a parent. With AFFECT_RIGID_SKELETON the result is
+ * affect_motion_ik's (default IK options, these lengths): a skeletal motion that BVH export
+ * reproduces exactly, a little further from m where sibling bones change their angles. */
 affect_status affect_motion_rigid(const affect_motion *m, const affect_rigid_options *opt,
                                   affect_motion **out, affect_error *err);
 
+typedef enum affect_ik_siblings {
+    AFFECT_IK_SIBLINGS_AUTO,     /* (default) rotations only where they reproduce a sibling
+                                    group within 1e-3 of the body size over every frame (captured
+                                    motions), TRANSLATE for the groups where they do not
+                                    (averaged or synthesized poses whose sibling angles vary) */
+    AFFECT_IK_SIBLINGS_ROTATE,   /* a joint's children are one rigid body with it: rotation
+                                    channels only below the roots and free links */
+    AFFECT_IK_SIBLINGS_TRANSLATE /* the children of a joint with several get position channels
+                                    too (their offsets keep the bone's length but follow the
+                                    positions): every position is reproduced */
+} affect_ik_siblings;
+
 typedef struct affect_ik_options {
     uint32_t rest_frame;          /* the frame whose rigid pose is the rest pose (default 0) */
+    affect_ik_siblings siblings;  /* see above */
     int order[3];                 /* rotation channel order (default ZXY: {2, 0, 1}) */
     affect_rigid_options rigid;   /* how the positions are first made rigid */
 } affect_ik_options;
@@ -90,7 +112,9 @@ void affect_ik_options_default(affect_ik_options *opt);
 
 /* Inverse kinematics: a skeletal motion for m's positions. The positions are made rigid
  * (affect_motion_rigid); the rest skeleton is the rest frame's rigid pose (offsets = bone
- * vectors, rest rotations the identity); per frame and joint the local rotation turns the rest
+ * vectors, rest rotations the identity), except that the offsets of a joint's several bone
+ * children are their mean shape over all frames (generalized Procrustes, turned to the rest
+ * frame's orientation), since the siblings' angles need not be constant; per frame and joint the local rotation turns the rest
  * offsets of its bone children onto their current directions: for one child the smallest
  * rotation from the previous frame's (so twist stays continuous and never flips), for several
  * the best-fit rotation (Horn's quaternion method) continued from the previous frame when the
