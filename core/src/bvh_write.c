@@ -241,6 +241,48 @@ static int rotation_order(const uint8_t *ch, int n, int order[3])
     return n_rot;
 }
 
+/* Angle (degrees) of the rotation q about axis a alone. */
+static double axis_angle_deg(const double q[4], int a)
+{
+    return 2 * atan2(q[1 + a], q[0]) * (180.0 / 3.14159265358979323846);
+}
+
+static double unwrap_deg(double x, double ref)
+{
+    return x - 360.0 * floor((x - ref) / 360.0 + 0.5);
+}
+
+/* Euler angles of q for a joint with n_rot rotation channels (order[0 .. n_rot) their axes).
+ * Three: affect_quat_to_euler_deg. Fewer: the rotation is R_a(α) (· R_b(β)), and the general
+ * decomposition would spread rounding onto the missing axis (or pick the solution with a half
+ * turn there, β beyond ±90°), so: α from the column b of R, which R_b leaves alone,
+ * α = atan2(e · R[c][b], R[b][b]); then β is the angle of R_a(−α) · q about b. */
+static void joint_euler(const double q[4], const int order[3], int n_rot, const double *prev,
+                        double deg[3])
+{
+    if (n_rot == 3) {
+        affect_quat_to_euler_deg(q, order, prev, deg);
+        return;
+    }
+    int a = order[0];
+    deg[1] = deg[2] = 0;
+    if (n_rot == 1) {
+        deg[0] = axis_angle_deg(q, a);
+    } else {
+        int b = order[1], c = order[2];
+        double r[9], e = (b - a + 3) % 3 == 1 ? 1.0 : -1.0;
+        affect_quat_to_matrix(q, r);
+        double al = atan2(e * r[c * 3 + b], r[b * 3 + b]);
+        double qa[4] = {cos(al / 2), 0, 0, 0}, rest[4];
+        qa[1 + a] = -sin(al / 2); /* R_a(−α) */
+        affect_quat_mul(qa, q, rest);
+        deg[0] = al * (180.0 / 3.14159265358979323846);
+        deg[1] = axis_angle_deg(rest, b);
+    }
+    for (int k = 0; k < n_rot; k++)
+        deg[k] = prev ? unwrap_deg(deg[k], prev[k]) : unwrap_deg(deg[k], 0);
+}
+
 static affect_status write_frames(writer *w, affect_error *err)
 {
     const affect_motion *m = w->m;
@@ -266,7 +308,7 @@ static affect_status write_frames(writer *w, affect_error *err)
                 const float *qf = m->rot + ((size_t)t * nj + j) * 4;
                 q[0] = qf[0], q[1] = qf[1], q[2] = qf[2], q[3] = qf[3];
                 affect_quat_normalize(q);
-                affect_quat_to_euler_deg(q, order, t ? prev + (size_t)j * 3 : NULL, deg);
+                joint_euler(q, order, n_rot, t ? prev + (size_t)j * 3 : NULL, deg);
                 memcpy(prev + (size_t)j * 3, deg, sizeof deg);
             }
             const float *tr = m->trans + ((size_t)t * nj + j) * 3;

@@ -15,7 +15,7 @@
  *      then J × { 2-byte name length L (1 .. 1024), L bytes of UTF-8 name }
  *      then J × int32 parent index (−1 or 0 .. J−1, acyclic)
  *      then T × J × 3 float32 positions, frame-major
- * Version 2 is the same with flags (bit 0 skeleton, bit 1 rotations, which needs bit 0) and,
+ * Version 2 is the same with flags (bit 0 skeleton, always set; bit 1 rotations) and,
  * after the positions:
  *      skeleton (bit 0): J × 32 bytes { 3 float64 rest offset, 1 channel count (0 .. 6),
  *                        6 channel types (AFFECT_CH_*, the first count distinct, the rest
@@ -651,9 +651,10 @@ affect_status affect_motion_decode(const unsigned char *data, size_t size, affec
         return affect_fail(err, AFFECT_ERR_FORMAT, "unknown format version %u (this build reads 1 .. %u)",
                            version, AFFECT_MOTION_VERSION);
     uint16_t flags = get_u16(data + 6);
+    /* version 2 exists for the skeleton: without it the encoder writes version 1 */
     if (version == 1 ? flags != 0
                      : (flags & ~(AFFECT_MOTION_FLAG_SKELETON | AFFECT_MOTION_FLAG_ROTATIONS)) ||
-                           flags == AFFECT_MOTION_FLAG_ROTATIONS)
+                           !(flags & AFFECT_MOTION_FLAG_SKELETON))
         return affect_fail(err, AFFECT_ERR_FORMAT, "unknown flags 0x%04x (offset 6)", flags);
     uint32_t n_frames = get_u32(data + 8), n_joints = get_u32(data + 12);
     double fps = u64_to_double(get_u64(data + 16));

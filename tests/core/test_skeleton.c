@@ -482,6 +482,34 @@ static void test_writer_text_and_options(void **state)
     affect_motion_free(m);
 }
 
+/* Joints with one or two rotation channels (fuzz_motion_v2 found both): the angle about the
+ * missing axis must not be dropped after a general decomposition. A middle angle beyond ±90°,
+ * and one next to it with a long child bone. */
+static void test_fewer_rotation_channels(void **state)
+{
+    static const char *const cases[] = {
+        "HIERARCHY\nROOT a\n{\n OFFSET 0 0 0\n CHANNELS 2 Zrotation Xrotation\n End Site\n {\n"
+        "  OFFSET 0 0 1\n }\n}\nMOTION\nFrames: 2\nFrame Time: 0.1\n0 120\n10 -150\n",
+        "HIERARCHY\nROOT a\n{\n OFFSET 0 0 0\n CHANNELS 2 Zrotation Yrotation\n End Site\n {\n"
+        "  OFFSET 0 0 400\n }\n}\nMOTION\nFrames: 2\nFrame Time: 0.1\n30 -89.9999\n30 89.9999\n",
+        "HIERARCHY\nROOT a\n{\n OFFSET 0 0 0\n CHANNELS 1 Yrotation\n End Site\n {\n"
+        "  OFFSET 0 0 10\n }\n}\nMOTION\nFrames: 3\nFrame Time: 0.1\n170\n-170\n-10\n",
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        affect_motion *m = NULL, *back = NULL;
+        char *text = NULL;
+        size_t len;
+        assert_int_equal(affect_bvh_parse(cases[i], strlen(cases[i]), NULL, &m, NULL), AFFECT_OK);
+        assert_int_equal(affect_bvh_write(m, NULL, &text, &len, NULL), AFFECT_OK);
+        assert_int_equal(affect_bvh_parse(text, len, NULL, &back, NULL), AFFECT_OK);
+        if (max_dist(back, m) > 1e-4)
+            fail_msg("case %zu: re-imported positions differ by %g:\n%s", i, max_dist(back, m), text);
+        affect_free(text);
+        affect_motion_free(back);
+        affect_motion_free(m);
+    }
+}
+
 /* ---- out of memory ---- */
 
 typedef struct oom_ctx {
@@ -533,6 +561,7 @@ int main(void)
         cmocka_unit_test(test_ik_recovers_rigid_motion),
         cmocka_unit_test(test_gimbal_lock_and_small_motions),
         cmocka_unit_test(test_writer_text_and_options),
+        cmocka_unit_test(test_fewer_rotation_channels),
         cmocka_unit_test(test_out_of_memory),
     };
     return cmocka_run_group_tests_name("skeleton", tests, NULL, NULL);
