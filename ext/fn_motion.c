@@ -66,7 +66,52 @@ done:
     ax_opts_free(&opts);
 }
 
-static const char *const csv_keys[] = {"header", "delimiter", "unit", NULL};
+static const char *const csv_keys[] = {"header", "delimiter", "unit", "parents", NULL};
+
+/* The "parents" option: one item per joint, a parent's index, its name, or null / −1 for a
+ * root. */
+static ax_arg set_parents(sqlite3_context *ctx, const ax_opts *opts, affect_motion *m)
+{
+    const affect_json_node *n = ax_opt(opts, "parents");
+    if (!n)
+        return AX_OK;
+    if (n->type != AFFECT_JSON_ARRAY || n->count != m->n_joints) {
+        ax_errorf(ctx, "option \"parents\" must be an array of %u parents (an index, a joint name, or "
+                  "null for a root)", m->n_joints);
+        return AX_ERROR;
+    }
+    int32_t *parents = sqlite3_malloc64((sqlite3_uint64)m->n_joints * sizeof *parents);
+    if (!parents) {
+        sqlite3_result_error_nomem(ctx);
+        return AX_ERROR;
+    }
+    uint32_t i = 0;
+    ax_arg rc = AX_OK;
+    for (const affect_json_node *e = affect_json_first(opts->doc, n); e && !rc;
+         e = affect_json_next_sibling(opts->doc, e), i++) {
+        if (e->type == AFFECT_JSON_NULL)
+            parents[i] = -1;
+        else if (e->type == AFFECT_JSON_STRING)
+            parents[i] = affect_motion_find_joint(m, e->str);
+        else if (e->type == AFFECT_JSON_NUMBER && e->num == floor(e->num) && e->num >= -1 &&
+                 e->num < m->n_joints)
+            parents[i] = (int32_t)e->num;
+        else
+            parents[i] = -2;
+        if (parents[i] == -2 || (e->type == AFFECT_JSON_STRING && parents[i] < 0)) {
+            ax_errorf(ctx, "option \"parents\": item %u is not a joint index (-1 .. %u), a joint name "
+                      "or null", i, m->n_joints - 1);
+            rc = AX_ERROR;
+        }
+    }
+    affect_error err;
+    if (!rc && affect_motion_set_parents(m, parents, &err)) {
+        ax_errorf(ctx, "option \"parents\": %s", err.msg);
+        rc = AX_ERROR;
+    }
+    sqlite3_free(parents);
+    return rc;
+}
 
 void ax_motion_from_csv(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 {
@@ -101,8 +146,14 @@ void ax_motion_from_csv(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         }
         co.delimiter = delim[0];
     }
-    finish_motion(ctx, affect_csv_parse(text, len, fps, &co, &m, &err), &m, &err);
+    if (affect_csv_parse(text, len, fps, &co, &m, &err)) {
+        ax_error(ctx, &err);
+        goto done;
+    }
+    if (set_parents(ctx, &opts, m) == AX_OK)
+        ax_result_motion(ctx, m);
 done:
+    affect_motion_free(m);
     ax_opts_free(&opts);
 }
 

@@ -309,6 +309,19 @@ static affect_status check_parents(const affect_motion *m, affect_error *err)
     return AFFECT_OK;
 }
 
+affect_status affect_motion_set_parents(affect_motion *m, const int32_t *parents, affect_error *err)
+{
+    int32_t *old = m->parents;
+    affect_motion probe = *m;
+    probe.parents = (int32_t *)parents;
+    affect_status st = check_parents(&probe, err);
+    if (st)
+        return st;
+    memcpy(old, parents, (size_t)m->n_joints * sizeof *old);
+    affect_motion_drop_skeleton(m);
+    return AFFECT_OK;
+}
+
 /* True when a block of floats holds an infinity or NaN: the exponent bits all set. Written
  * without branches or early exits so the compiler vectorizes it (decode spends most of its
  * time here). */

@@ -15,6 +15,7 @@
  */
 #include "affect/skeleton.h"
 #include "affect/quat.h"
+#include "affect/roles.h"
 #include "internal.h"
 
 #include <math.h>
@@ -273,34 +274,22 @@ affect_status affect_motion_free_links(const affect_motion *m, bool *free_link,
                                        affect_error *err)
 {
     uint32_t nj = m->n_joints;
-    double tol = 1e-6 * affect_motion_body_size(m);
     uint32_t *n_children = affect_calloc(nj, sizeof *n_children);
     if (!n_children)
         return affect_nomem(err);
     for (uint32_t j = 0; j < nj; j++)
         if (m->parents[j] >= 0)
             n_children[m->parents[j]]++;
+    affect_roles roles;
+    affect_roles_resolve(m, &roles);
     for (uint32_t j = 0; j < nj; j++) {
         free_link[j] = false;
         int32_t p = m->parents[j];
         if (p < 0)
             continue;
-        if (m->parents[p] < 0 && n_children[p] == 1 && n_children[j] >= 2) {
-            free_link[j] = true; /* a reference root above the real pelvis */
+        if (m->parents[p] < 0 && n_children[p] == 1 && (int32_t)j == roles.joint[AFFECT_ROLE_PELVIS]) {
+            free_link[j] = true; /* a reference root above the pelvis */
             continue;
-        }
-        if (m->parents[p] < 0 && m->n_frames > 1) { /* a root that never moves: a fixed origin */
-            const float *p0 = affect_motion_at(m, 0, (uint32_t)p);
-            bool fixed = true;
-            for (uint32_t t = 1; t < m->n_frames && fixed; t++) {
-                const float *pt = affect_motion_at(m, t, (uint32_t)p);
-                double d[3] = {(double)pt[0] - p0[0], (double)pt[1] - p0[1], (double)pt[2] - p0[2]};
-                fixed = norm3(d) <= tol;
-            }
-            if (fixed) {
-                free_link[j] = true;
-                continue;
-            }
         }
         if (m->skel && m->rot && affect_skel_has_position(&m->skel[j])) {
             const double *o = m->skel[j].offset;

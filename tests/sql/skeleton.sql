@@ -223,6 +223,37 @@ SELECT 'resampling by slerp keeps the bones rigid',
   FROM t WHERE name = 'small';
 -- oom: skip
 
+SELECT 'a CSV motion with parents given exports through IK',
+       motion_to_bvh(motion_from_csv('a.x,a.y,a.z,b.x,b.y,b.z,c.x,c.y,c.z
+0,0,0,0,1,0,1,1,0
+0,0,0,0,1,0,0,1,1
+0,0,0,0,1,0,-1,1,0', 30, '{"parents":[null,"a",1]}')) LIKE 'HIERARCHY
+ROOT a
+{
+	OFFSET 0 0 0
+	CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
+	JOINT b
+	{
+		OFFSET 0 1 0
+		CHANNELS 3 Zrotation Xrotation Yrotation
+		JOINT c
+		{
+			OFFSET 1 0 0
+%Frames: 3
+%';
+
+SELECT motion_from_csv('a.x,a.y,a.z,b.x,b.y,b.z
+0,0,0,0,1,0', 30, '{"parents":[1,0]}');
+-- error: motion_from_csv: option "parents": joint 0: parent indices form a cycle
+
+SELECT motion_from_csv('a.x,a.y,a.z,b.x,b.y,b.z
+0,0,0,0,1,0', 30, '{"parents":["z",null]}');
+-- error: motion_from_csv: option "parents": item 0 is not a joint index (-1 .. 1), a joint name or null
+
+SELECT motion_from_csv('a.x,a.y,a.z,b.x,b.y,b.z
+0,0,0,0,1,0', 30, '{"parents":[-1]}');
+-- error: motion_from_csv: option "parents" must be an array of 2 parents (an index, a joint name, or null for a root)
+
 -- ---- errors ----
 SELECT motion_to_bvh(motion_from_csv('a.x,a.y,a.z,b.x,b.y,b.z
 0,0,0,1,1,1', 30));

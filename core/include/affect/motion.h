@@ -98,6 +98,10 @@ void affect_motion_free(affect_motion *m);
 affect_status affect_motion_set_name(affect_motion *m, uint32_t j, const char *name, size_t len,
                                      affect_error *err);
 
+/* Replaces the parent indices (n_joints entries, −1 for a root) after checking them (in range,
+ * acyclic); m is unchanged on error. Drops any skeleton (it described the old hierarchy). */
+affect_status affect_motion_set_parents(affect_motion *m, const int32_t *parents, affect_error *err);
+
 /* Sets the unit string; it must be at most AFFECT_MOTION_UNIT_MAX bytes of [A-Za-z0-9_.-]. */
 affect_status affect_motion_set_unit(affect_motion *m, const char *unit, affect_error *err);
 

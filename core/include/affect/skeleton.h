@@ -11,9 +11,9 @@
  *   affect_motion_ik(m, &io, &skeletal, &err);        // skeleton + rotations, FK positions
  *
  * Bones and free links: the link from a joint to its parent is a bone (constant length) unless
- * it is free: the parent is a reference root (a root whose only child branches, such as the
- * corpus's joint_Root above Hips, whose link carries the global translation), or a root that
- * never moves (a fixed origin), or the motion's skeleton gives the
+ * it is free: the parent is a reference root (a root whose only child is the pelvis role, such
+ * as the corpus's joint_Root above Hips, whose link carries the global translation), or the
+ * motion's skeleton gives the
  * joint position channels whose values leave its offset by more than AFFECT_FREE_LINK_REL of
  * the offset's length (the corpus's Hips), or the caller names it.
  */
