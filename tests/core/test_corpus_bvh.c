@@ -23,18 +23,6 @@
 #define STORED_TOL 1e-4     /* cm */
 #define IK_TOL_REL 0.005    /* of the body height */
 
-static double max_dist(const affect_motion *a, const affect_motion *b)
-{
-    double worst = 0;
-    for (uint32_t t = 0; t < a->n_frames; t++)
-        for (uint32_t j = 0; j < a->n_joints; j++) {
-            const float *p = affect_motion_at(a, t, j), *q = affect_motion_at(b, t, j);
-            double d[3] = {(double)p[0] - q[0], (double)p[1] - q[1], (double)p[2] - q[2]};
-            worst = fmax(worst, sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
-        }
-    return worst;
-}
-
 /* Vertical extent (y up) of the first frame. */
 static double height(const affect_motion *m)
 {
@@ -85,7 +73,7 @@ static void check_file(const char *path, const char *name, totals *tot)
     assert_int_equal(affect_bvh_write(m, NULL, &out, &n, &err), AFFECT_OK);
     if (affect_bvh_parse(out, n, NULL, &back, &err))
         fail_msg("%s: the exported BVH does not parse: %s", name, err.msg);
-    double d = max_dist(back, m);
+    double d = tu_max_dist(back, m);
     if (d > tot->stored) {
         tot->stored = d;
         snprintf(tot->worst_stored, sizeof tot->worst_stored, "%s", name);
@@ -105,7 +93,7 @@ static void check_file(const char *path, const char *name, totals *tot)
         fail_msg("%s: %u joints with position channels after IK, expected 2", name, translated);
     assert_int_equal(affect_bvh_write(ik, NULL, &out2, &n2, &err), AFFECT_OK);
     assert_int_equal(affect_bvh_parse(out2, n2, NULL, &back2, &err), AFFECT_OK);
-    double rel = max_dist(back2, rigid) / height(m);
+    double rel = tu_max_dist(back2, rigid) / height(m);
     if (rel > tot->ik_rel) {
         tot->ik_rel = rel;
         snprintf(tot->worst_ik, sizeof tot->worst_ik, "%s", name);

@@ -336,18 +336,6 @@ static affect_motion *random_skeletal(uint32_t frames)
     return m;
 }
 
-static double max_dist(const affect_motion *a, const affect_motion *b)
-{
-    double worst = 0;
-    for (uint32_t t = 0; t < a->n_frames; t++)
-        for (uint32_t j = 0; j < a->n_joints; j++) {
-            const float *p = affect_motion_at(a, t, j), *q = affect_motion_at(b, t, j);
-            double d[3] = {(double)p[0] - q[0], (double)p[1] - q[1], (double)p[2] - q[2]};
-            worst = fmax(worst, sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
-        }
-    return worst;
-}
-
 static void test_ik_recovers_rigid_motion(void **state)
 {
     affect_motion *m = random_skeletal(200), *pos = NULL, *ik = NULL;
@@ -355,8 +343,8 @@ static void test_ik_recovers_rigid_motion(void **state)
     affect_motion_drop_skeleton(pos);
     assert_int_equal(affect_motion_ik(pos, NULL, &ik, NULL), AFFECT_OK);
     assert_non_null(ik->rot);
-    if (max_dist(ik, m) > 1e-5)
-        fail_msg("IK positions differ from the input by %g", max_dist(ik, m));
+    if (tu_max_dist(ik, m) > 1e-5)
+        fail_msg("IK positions differ from the input by %g", tu_max_dist(ik, m));
     double fk_err;
     uint32_t f, j;
     assert_int_equal(affect_motion_fk_error(ik, &fk_err, &f, &j, NULL), AFFECT_OK);
@@ -389,8 +377,8 @@ static void test_ik_recovers_rigid_motion(void **state)
         affect_motion *back = NULL;
         assert_int_equal(affect_bvh_write(ik, &wo, &text, &len, NULL), AFFECT_OK);
         assert_int_equal(affect_bvh_parse(text, len, NULL, &back, NULL), AFFECT_OK);
-        if (max_dist(back, ik) > 1e-5)
-            fail_msg("order %d: re-imported positions differ by %g", o, max_dist(back, ik));
+        if (tu_max_dist(back, ik) > 1e-5)
+            fail_msg("order %d: re-imported positions differ by %g", o, tu_max_dist(back, ik));
         affect_free(text);
         affect_motion_free(back);
     }
@@ -416,7 +404,7 @@ static void test_gimbal_lock_and_small_motions(void **state)
     size_t len;
     assert_int_equal(affect_bvh_write(m, NULL, &text, &len, NULL), AFFECT_OK);
     assert_int_equal(affect_bvh_parse(text, len, NULL, &back, NULL), AFFECT_OK);
-    assert_true(max_dist(back, m) < 1e-5);
+    assert_true(tu_max_dist(back, m) < 1e-5);
     affect_free(text);
     affect_motion_free(back);
     /* one frame */
@@ -424,10 +412,10 @@ static void test_gimbal_lock_and_small_motions(void **state)
     assert_int_equal(affect_motion_slice(m, 2, 2, &one, NULL), AFFECT_OK);
     affect_motion_drop_skeleton(one);
     assert_int_equal(affect_motion_ik(one, NULL, &ik, NULL), AFFECT_OK);
-    assert_true(max_dist(ik, one) < 1e-5);
+    assert_true(tu_max_dist(ik, one) < 1e-5);
     assert_int_equal(affect_bvh_write(ik, NULL, &text, &len, NULL), AFFECT_OK);
     assert_int_equal(affect_bvh_parse(text, len, NULL, &back, NULL), AFFECT_OK);
-    assert_true(max_dist(back, one) < 1e-5);
+    assert_true(tu_max_dist(back, one) < 1e-5);
     affect_free(text);
     affect_motion_free(back);
     affect_motion_free(ik);
@@ -480,7 +468,7 @@ static void test_writer_text_and_options(void **state)
     assert_non_null(strstr(text, "\tCHANNELS 6 Xposition Yposition Zposition Xrotation Yrotation Zrotation\n"));
     assert_int_equal(affect_bvh_parse(text, len, NULL, &back, NULL), AFFECT_OK);
     tu_assert_near(back->fps, 50, 1e-9);
-    assert_true(max_dist(back, m) < 1e-2);
+    assert_true(tu_max_dist(back, m) < 1e-2);
     affect_free(text);
     affect_motion_free(back);
     affect_error err;
@@ -513,8 +501,8 @@ static void test_fewer_rotation_channels(void **state)
         assert_int_equal(affect_bvh_parse(cases[i], strlen(cases[i]), NULL, &m, NULL), AFFECT_OK);
         assert_int_equal(affect_bvh_write(m, NULL, &text, &len, NULL), AFFECT_OK);
         assert_int_equal(affect_bvh_parse(text, len, NULL, &back, NULL), AFFECT_OK);
-        if (max_dist(back, m) > 1e-4)
-            fail_msg("case %zu: re-imported positions differ by %g:\n%s", i, max_dist(back, m), text);
+        if (tu_max_dist(back, m) > 1e-4)
+            fail_msg("case %zu: re-imported positions differ by %g:\n%s", i, tu_max_dist(back, m), text);
         affect_free(text);
         affect_motion_free(back);
         affect_motion_free(m);

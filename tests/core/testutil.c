@@ -48,6 +48,18 @@ const char *tu_corpus_dir(void)
     return dir;
 }
 
+double tu_max_dist(const affect_motion *a, const affect_motion *b)
+{
+    double worst = 0;
+    for (uint32_t t = 0; t < a->n_frames; t++)
+        for (uint32_t j = 0; j < a->n_joints; j++) {
+            const float *p = affect_motion_at(a, t, j), *q = affect_motion_at(b, t, j);
+            double d[3] = {(double)p[0] - q[0], (double)p[1] - q[1], (double)p[2] - q[2]};
+            worst = fmax(worst, sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
+        }
+    return worst;
+}
+
 /* ---- text and SVG ---- */
 
 size_t tu_count(const char *s, const char *needle)

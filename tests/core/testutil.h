@@ -32,6 +32,10 @@ const char *tu_corpus_dir(void);
             fail_msg("%s = %.9g, expected %.9g (tolerance %g)", #a, tu_a_, tu_b_, (double)(tol)); \
     } while (0)
 
+/* Largest Euclidean distance between the positions of two motions of the same size, over every
+ * frame and joint. */
+double tu_max_dist(const affect_motion *a, const affect_motion *b);
+
 /* ---- text and SVG ---- */
 
 /* Number of non-overlapping occurrences of needle (not empty) in s. */
