@@ -165,6 +165,8 @@ void affect_quat_from_euler_deg(const int order[3], const double deg[3], double 
 /* x moved by whole turns to within 180° of ref. */
 static double unwrap(double x, double ref)
 {
+    if (fabs(x - ref) < 180) /* nothing to move (and no floor, a tenth of export time) */
+        return x;
     return x - 360.0 * floor((x - ref) / 360.0 + 0.5);
 }
 
@@ -176,7 +178,9 @@ void affect_quat_to_euler_deg(const double q[4], const int order[3], const doubl
     int a = order[0], b = order[1], c = order[2];
     double e = (b - a + 3) % 3 == 1 ? 1.0 : -1.0;
     double s = e * r[a * 3 + c];
-    double cb = hypot(r[a * 3 + a], r[a * 3 + b]); /* cos β, well conditioned near the lock */
+    /* cos β, well conditioned near the lock (entries of a rotation matrix: no overflow, so
+     * sqrt rather than the slower hypot) */
+    double cb = sqrt(r[a * 3 + a] * r[a * 3 + a] + r[a * 3 + b] * r[a * 3 + b]);
     double al, be = atan2(s, cb) * DEG, ga;
     if (cb < GIMBAL_LOCK_COS) {
         /* only α + e·sign(β)·γ is defined: keep γ (the previous frame's, or 0) */

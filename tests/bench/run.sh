@@ -2,16 +2,18 @@
 # tests/bench/run.sh — build the benchmarks in Release and run them on one core.
 #
 # Usage: bash tests/bench/run.sh [extra arguments for the corpus benchmarks, bench_import,
-#                                   bench_laban, bench_affect and bench_generate, e.g. a corpus
-#                                   directory]
+#                                   bench_laban, bench_skeleton, bench_affect and
+#                                   bench_generate, e.g. a corpus directory]
 #
 # Configures build-bench (-DCMAKE_BUILD_TYPE=Release -DAFFECT_WERROR=ON; AFFECT_BENCH_BUILD names
 # another build directory), builds the bench targets, prints the machine (CPU, memory, OS,
 # compiler, flags) and runs each benchmark pinned to CPU 0 with taskset when it is available:
-# bench_import and bench_laban (corpus), then bench_knn (the built module, no arguments), then
-# bench_hmm with OPENBLAS_NUM_THREADS=1, which writes its data and models to
-# $build/tests/bench/hmm-data, and its pomegranate peer tests/bench/hmm_peer.py on those files,
-# when /usr/bin/python3 can import pomegranate (otherwise it says the peer was skipped), then
+# bench_import, bench_laban and bench_skeleton (corpus; bench_skeleton reads bandai-namco-1
+# and bandai-namco-2-dev unless given directories, about 2 minutes), then bench_knn (the
+# built module, no arguments), then bench_hmm with OPENBLAS_NUM_THREADS=1, which writes its
+# data and models to $build/tests/bench/hmm-data, and its pomegranate peer
+# tests/bench/hmm_peer.py on those files, when /usr/bin/python3 can import pomegranate
+# (otherwise it says the peer was skipped), then
 # bench_affect (corpus; the recognizer and its 10-fold cross-validation, a few minutes) with
 # OPENBLAS_NUM_THREADS=1, then its cross-validation again with two threads, unpinned, then
 # bench_generate (corpus and the built module; generation latency by stage and the RMLR fit,
@@ -48,7 +50,7 @@ echo
 only="${AFFECT_BENCH_ONLY:-}"
 want() { [[ -z "$only" || " $only " == *" $1 "* ]]; }
 
-for bench in bench_import bench_laban; do
+for bench in bench_import bench_laban bench_skeleton; do
     want "$bench" || continue
     echo "== $bench"
     "${pin[@]}" "$build/tests/bench/$bench" "$@"
