@@ -358,44 +358,58 @@ static affect_status check_finite(const affect_motion *m, affect_error *err)
 static const char *const channel_names[AFFECT_CH_COUNT] = {
     "Xposition", "Yposition", "Zposition", "Xrotation", "Yrotation", "Zrotation"};
 
+/* One joint of check_skeleton. */
+static affect_status check_skeleton_joint(const affect_motion *m, uint32_t j, bool has_child,
+                                          affect_error *err)
+{
+    const affect_skel_joint *s = &m->skel[j];
+    if (s->n_channels > 6)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u (%.64s): %u channels (at most 6)",
+                           j, m->names[j], s->n_channels);
+    unsigned seen = 0;
+    for (int c = 0; c < s->n_channels; c++) {
+        if (s->channel[c] >= AFFECT_CH_COUNT)
+            return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u (%.64s): channel type %u unknown",
+                               j, m->names[j], s->channel[c]);
+        if (seen & (1u << s->channel[c]))
+            return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u (%.64s): channel %s listed twice",
+                               j, m->names[j], channel_names[s->channel[c]]);
+        seen |= 1u << s->channel[c];
+    }
+    if (s->flags & ~AFFECT_JOINT_END_SITE)
+        return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u (%.64s): unknown joint flags 0x%02x",
+                           j, m->names[j], s->flags);
+    if (s->flags & AFFECT_JOINT_END_SITE) {
+        if (s->n_channels || m->parents[j] < 0)
+            return affect_fail(err, AFFECT_ERR_FORMAT,
+                               "joint %u (%.64s): an End Site must have a parent and no channels",
+                               j, m->names[j]);
+        if (has_child)
+            return affect_fail(err, AFFECT_ERR_FORMAT,
+                               "joint %u (%.64s): an End Site cannot have children", j,
+                               m->names[j]);
+    }
+    for (int a = 0; a < 3; a++)
+        if (!isfinite(s->offset[a]))
+            return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u (%.64s): non-finite offset",
+                               j, m->names[j]);
+    return AFFECT_OK;
+}
+
 /* Channels in range and distinct, End Sites leaves without channels, offsets finite. */
 static affect_status check_skeleton(const affect_motion *m, affect_error *err)
 {
-    for (uint32_t j = 0; j < m->n_joints; j++) {
-        const affect_skel_joint *s = &m->skel[j];
-        if (s->n_channels > 6)
-            return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u (%.64s): %u channels (at most 6)",
-                               j, m->names[j], s->n_channels);
-        unsigned seen = 0;
-        for (int c = 0; c < s->n_channels; c++) {
-            if (s->channel[c] >= AFFECT_CH_COUNT)
-                return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u (%.64s): channel type %u unknown",
-                                   j, m->names[j], s->channel[c]);
-            if (seen & (1u << s->channel[c]))
-                return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u (%.64s): channel %s listed twice",
-                                   j, m->names[j], channel_names[s->channel[c]]);
-            seen |= 1u << s->channel[c];
-        }
-        if (s->flags & ~AFFECT_JOINT_END_SITE)
-            return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u (%.64s): unknown joint flags 0x%02x",
-                               j, m->names[j], s->flags);
-        if (s->flags & AFFECT_JOINT_END_SITE) {
-            if (s->n_channels || m->parents[j] < 0)
-                return affect_fail(err, AFFECT_ERR_FORMAT,
-                                   "joint %u (%.64s): an End Site must have a parent and no channels",
-                                   j, m->names[j]);
-            for (uint32_t k = 0; k < m->n_joints; k++)
-                if (m->parents[k] == (int32_t)j)
-                    return affect_fail(err, AFFECT_ERR_FORMAT,
-                                       "joint %u (%.64s): an End Site cannot have children", j,
-                                       m->names[j]);
-        }
-        for (int a = 0; a < 3; a++)
-            if (!isfinite(s->offset[a]))
-                return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u (%.64s): non-finite offset",
-                                   j, m->names[j]);
-    }
-    return AFFECT_OK;
+    bool *has_child = affect_calloc(m->n_joints, sizeof *has_child);
+    if (!has_child)
+        return affect_nomem(err);
+    for (uint32_t j = 0; j < m->n_joints; j++)
+        if (m->parents[j] >= 0)
+            has_child[m->parents[j]] = true;
+    affect_status st = AFFECT_OK;
+    for (uint32_t j = 0; j < m->n_joints && !st; j++)
+        st = check_skeleton_joint(m, j, has_child[j], err);
+    affect_free(has_child);
+    return st;
 }
 
 /* Unit quaternions and finite translations. */
