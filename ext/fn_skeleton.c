@@ -135,8 +135,7 @@ affect_status ax_skel_opts_parse(const char *text, size_t len, const char *const
         memcpy(msg, err->msg, sizeof msg);
         return affect_fail(err, AFFECT_ERR_INVALID, "options are not valid JSON: %.200s", msg);
     }
-    /* the doc must outlive so: root_name points into it, so it is kept on so via free_link's
-     * neighbour below */
+    /* root_name points into the document until it is copied at the end */
     const affect_json_node *root = affect_json_root(doc);
     affect_status st = AFFECT_OK;
     if (root->type != AFFECT_JSON_OBJECT) {
