@@ -3,8 +3,10 @@
  *
  * How it works: every part's position series (a joint, or a centroid) is differentiated by
  * central differences and low-pass filtered three times (velocity, acceleration, jerk). The
- * Effort components reduce those series; affect_laban_vector computes the six parts' kinematics
- * once and derives all 21 Effort values from them. Shape components use the raw positions:
+ * Effort components reduce those series; affect_laban_vector computes the six parts' velocity
+ * and acceleration once, all 18 channels interleaved and filtered in one lockstep pass (the
+ * same bits as affect_lowpass per channel), and derives all 21 Effort values from them; its
+ * hull areas are bounded per frame first, and only frames that can beat the best get a hull. Shape components use the raw positions:
  * Directional projects the hand path on its two principal axes (LAPACKE_dsyev on the 3 × 3
  * covariance), Shaping and Flow take convex hulls per frame (hull.c).
  *
@@ -39,6 +41,8 @@ static const char *const all_parts[6] = {"torso", "head", "left_hand", "right_ha
 
 #define MIN_FRAMES 4 /* Effort and Directional need differences of differences */
 #define PAD_MAX 9    /* odd-reflection padding of the filter */
+#define HULL_GRID_STEPS 1073741824.0 /* hull.c's grid: 2^30 steps over the longest side */
+#define AREA_BOUND_SLACK 1e-6        /* relative widening of the hull area bound */
 
 int affect_laban_index(const char *name)
 {
@@ -100,6 +104,25 @@ static void biquad_pass(double *s, size_t len, double b0, double b1, double b2, 
         s[i] = y;
     }
 }
+/* Second-order Butterworth low-pass coefficients (bilinear transform) for the zero-lag filter:
+ * y_t = b0 x_t + b1 x_{t-1} + b2 x_{t-2} − a1 y_{t-1} − a2 y_{t-2}. */
+typedef struct butter_coef {
+    double b0, b1, b2, a1, a2;
+} butter_coef;
+
+static butter_coef butterworth(double fps, double cutoff_hz)
+{
+    double k = tan(3.14159265358979323846 * cutoff_hz / fps);
+    double norm = 1.0 / (1.0 + sqrt(2.0) * k + k * k);
+    butter_coef c;
+    c.b0 = k * k * norm;
+    c.b1 = 2.0 * c.b0;
+    c.b2 = c.b0;
+    c.a1 = 2.0 * (k * k - 1.0) * norm;
+    c.a2 = (1.0 - sqrt(2.0) * k + k * k) * norm;
+    return c;
+}
+
 
 void affect_lowpass(const double *x, size_t n, size_t stride, double fps, double cutoff_hz,
                     double *scratch, double *out)
@@ -110,10 +133,8 @@ void affect_lowpass(const double *x, size_t n, size_t stride, double fps, double
                 out[i * stride] = x[i * stride];
         return;
     }
-    double k = tan(3.14159265358979323846 * cutoff_hz / fps);
-    double norm = 1.0 / (1.0 + sqrt(2.0) * k + k * k);
-    double b0 = k * k * norm, b1 = 2.0 * b0, b2 = b0;
-    double a1 = 2.0 * (k * k - 1.0) * norm, a2 = (1.0 - sqrt(2.0) * k + k * k) * norm;
+    butter_coef bc = butterworth(fps, cutoff_hz);
+    double b0 = bc.b0, b1 = bc.b1, b2 = bc.b2, a1 = bc.a1, a2 = bc.a2;
     size_t pad = n - 1 < PAD_MAX ? n - 1 : PAD_MAX;
     size_t len = n + 2 * pad;
     double first = x[0], last = x[(n - 1) * stride];
@@ -269,15 +290,36 @@ static double dist3(const double *a, const double *b)
     return norm3(d);
 }
 
+/* The series the Effort reductions read: part k's velocity and acceleration at frame t are
+ * vel[k] + t·stride and acc[k] + t·stride (3 doubles each), so the reductions run on the
+ * kinematics of affect_kinematics_compute (stride 3) and on the frame-interleaved series of
+ * affect_laban_vector (stride 3 × parts) alike, with the same arithmetic. */
+typedef struct effort_series {
+    uint32_t n_frames, n_parts;
+    size_t stride;
+    double fps;
+    const double *vel[6], *acc[6];
+} effort_series;
+
+static effort_series series_of(const affect_kinematics *ks, uint32_t n)
+{
+    effort_series s = {ks[0].n_frames, n, 3, ks[0].fps, {NULL}, {NULL}};
+    for (uint32_t k = 0; k < n; k++) {
+        s.vel[k] = ks[k].vel;
+        s.acc[k] = ks[k].acc;
+    }
+    return s;
+}
+
 /* max over frames of Σ_k f(x_k(t)), x = vel with f = ‖·‖² (Weight Q1) or acc with f = ‖·‖
  * (Time Q1). */
-static double peak_sum(const affect_kinematics *ks, uint32_t n, bool of_acc)
+static double peak_sum(const effort_series *s, bool of_acc)
 {
     double best = 0;
-    for (uint32_t t = 0; t < ks[0].n_frames; t++) {
+    for (uint32_t t = 0; t < s->n_frames; t++) {
         double sum = 0;
-        for (uint32_t k = 0; k < n; k++) {
-            const double *x = (of_acc ? ks[k].acc : ks[k].vel) + (size_t)t * 3;
+        for (uint32_t k = 0; k < s->n_parts; k++) {
+            const double *x = (of_acc ? s->acc[k] : s->vel[k]) + (size_t)t * s->stride;
             double sq = x[0] * x[0] + x[1] * x[1] + x[2] * x[2];
             sum += of_acc ? sqrt(sq) : sq;
         }
@@ -287,19 +329,20 @@ static double peak_sum(const affect_kinematics *ks, uint32_t n, bool of_acc)
     return best;
 }
 
-static double weight_q1(const affect_kinematics *ks, uint32_t n)
+static double weight_q1(const effort_series *s)
 {
-    return peak_sum(ks, n, false);
+    return peak_sum(s, false);
 }
 
-static double weight_q2(const affect_kinematics *ks, uint32_t n)
+static double weight_q2(const effort_series *s)
 {
     double best = 0;
-    for (uint32_t t = 1; t < ks[0].n_frames; t++) {
+    for (uint32_t t = 1; t < s->n_frames; t++) {
         double d = 0;
-        for (uint32_t k = 0; k < n; k++) {
-            double drop = (norm3(ks[k].vel + (size_t)(t - 1) * 3) - norm3(ks[k].vel + (size_t)t * 3)) *
-                          ks[k].fps;
+        for (uint32_t k = 0; k < s->n_parts; k++) {
+            double drop = (norm3(s->vel[k] + (size_t)(t - 1) * s->stride) -
+                           norm3(s->vel[k] + (size_t)t * s->stride)) *
+                          s->fps;
             if (drop > 0)
                 d += drop;
         }
@@ -309,21 +352,151 @@ static double weight_q2(const affect_kinematics *ks, uint32_t n)
     return best;
 }
 
-static double time_q1(const affect_kinematics *ks, uint32_t n)
+static double time_q1(const effort_series *s)
 {
-    return peak_sum(ks, n, true);
+    return peak_sum(s, true);
 }
 
 /* Σ_k Σ_{t≥1} ‖x_k(t) − x_k(t−1)‖ · fps for x = vel (Time Q2) or acc (Flow). */
-static double accumulated(const affect_kinematics *ks, uint32_t n, bool of_acc)
+static double accumulated(const effort_series *s, bool of_acc)
 {
     double sum = 0;
-    for (uint32_t k = 0; k < n; k++) {
-        const double *x = of_acc ? ks[k].acc : ks[k].vel;
-        for (uint32_t t = 1; t < ks[k].n_frames; t++)
-            sum += dist3(x + (size_t)t * 3, x + (size_t)(t - 1) * 3) * ks[k].fps;
+    for (uint32_t k = 0; k < s->n_parts; k++) {
+        const double *x = of_acc ? s->acc[k] : s->vel[k];
+        for (uint32_t t = 1; t < s->n_frames; t++)
+            sum += dist3(x + (size_t)t * s->stride, x + (size_t)(t - 1) * s->stride) * s->fps;
     }
     return sum;
+}
+
+/* The same series restricted to part k alone. */
+static effort_series series_part(const effort_series *s, uint32_t k)
+{
+    effort_series one = *s;
+    one.n_parts = 1;
+    one.vel[0] = s->vel[k];
+    one.acc[0] = s->acc[k];
+    return one;
+}
+
+/* ---- the six parts' kinematics at once (affect_laban_vector) ---- */
+
+#define MAX_CHANNELS 18 /* six parts × three axes */
+
+/* affect_lowpass of c channels interleaved frame by frame (value of channel j at frame i in
+ * x[i·c + j]), in place; x has PAD_MAX rows of room before frame 0 and after frame n − 1 for the
+ * padding. Each channel gets exactly affect_lowpass's arithmetic (the same padding, the same
+ * two passes, the same operations in the same order), so the results are the same bits; the
+ * channels only run in lockstep, which overlaps the filter recursions whose latency bounds a
+ * single channel (and lets the compiler vectorise across channels). */
+static void lowpass_channels(double *x, size_t n, size_t c, double fps, double cutoff_hz)
+{
+    if (n < 2 || !(cutoff_hz < fps / 2.0) || !(cutoff_hz > 0))
+        return;
+    butter_coef bc = butterworth(fps, cutoff_hz);
+    double b0 = bc.b0, b1 = bc.b1, b2 = bc.b2, a1 = bc.a1, a2 = bc.a2;
+    size_t pad = n - 1 < PAD_MAX ? n - 1 : PAD_MAX;
+    size_t len = n + 2 * pad;
+    double *s = x - pad * c; /* row i of the padded series: s + i·c */
+    for (size_t i = 0; i < pad; i++)
+        for (size_t j = 0; j < c; j++) {
+            s[i * c + j] = 2.0 * x[j] - x[(pad - i) * c + j];
+            s[(pad + n + i) * c + j] = 2.0 * x[(n - 1) * c + j] - x[(n - 2 - i) * c + j];
+        }
+    double tau = 1.0 - (a1 + 2.0 * a2) / (1.0 + a1 + a2);
+    double z1[MAX_CHANNELS], z2[MAX_CHANNELS];
+    for (int pass = 0; pass < 2; pass++) {
+        bool backward = pass == 1;
+        /* biquad_pass's start from the steady state of the line through the first two inputs */
+        const double *r0 = backward ? s + (len - 1) * c : s, *r1 = backward ? s + (len - 2) * c
+                                                                            : s + c;
+        for (size_t j = 0; j < c; j++) {
+            double x0 = r0[j], x1 = r1[j];
+            double d = x1 - x0;
+            double y0 = x0 - d * tau, y1 = x1 - d * tau;
+            z1[j] = y0 - b0 * x0;
+            z2[j] = y1 - b0 * x1 - b1 * x0 + a1 * y0;
+        }
+        for (size_t i = 0; i < len; i++) {
+            double *row = s + (backward ? len - 1 - i : i) * c;
+            for (size_t j = 0; j < c; j++) {
+                double xi = row[j];
+                double y = b0 * xi + z1[j];
+                z1[j] = b1 * xi - a1 * y + z2[j];
+                z2[j] = b2 * xi - a2 * y;
+                row[j] = y;
+            }
+        }
+    }
+}
+
+/* gradient3 of c interleaved channels (n ≥ 2): d[t] from x[t ± 1], the same arithmetic. */
+static void gradient_channels(const double *x, size_t n, size_t c, double fps, double *d)
+{
+    for (size_t j = 0; j < c; j++) {
+        d[j] = (x[c + j] - x[j]) * fps;
+        d[(n - 1) * c + j] = (x[(n - 1) * c + j] - x[(n - 2) * c + j]) * fps;
+    }
+    for (size_t t = 1; t + 1 < n; t++)
+        for (size_t j = 0; j < c; j++)
+            d[t * c + j] = (x[(t + 1) * c + j] - x[(t - 1) * c + j]) * fps * 0.5;
+}
+
+/* Velocity and acceleration of the parts k with have[k] (as affect_kinematics_compute computes
+ * them, to the bit; the jerk, which no component of the vector uses, is skipped) in one block
+ * (*block, freed by the caller), all parts' channels interleaved frame by frame so that one
+ * pass filters them all; s->vel[k] and s->acc[k] point at part k's series (stride 3 × the
+ * number of parts present). m->n_frames ≥ 2. */
+static affect_status vector_kinematics(const affect_motion *m, const affect_part *parts,
+                                       const bool have[6], const affect_laban_options *opt,
+                                       double **block, effort_series *s, affect_error *err)
+{
+    size_t n = m->n_frames, c = 0, rows, pos_len, len, total;
+    uint32_t slot[6];
+    for (int k = 0; k < 6; k++)
+        if (have[k]) {
+            slot[k] = (uint32_t)(c / 3);
+            c += 3;
+        }
+    if (!affect_mul_size(n, c, &pos_len) || !affect_add_size(n, 2 * PAD_MAX, &rows) ||
+        !affect_mul_size(rows, c, &len) || !affect_mul_size(len, 2, &total) ||
+        !affect_add_size(total, pos_len, &total))
+        return affect_fail(err, AFFECT_ERR_RANGE, "motion too long");
+    double *b = affect_malloc_array(total, sizeof *b);
+    if (!b)
+        return affect_nomem(err);
+    double *pos = b, *vel = b + pos_len + PAD_MAX * c, *acc = vel + len;
+    for (size_t t = 0; t < n; t++) {
+        double *row = pos + t * c;
+        for (int k = 0; k < 6; k++) {
+            if (!have[k])
+                continue;
+            const affect_part *part = &parts[k];
+            double inv = 1.0 / part->n_joints, p3[3] = {0, 0, 0};
+            for (uint32_t i = 0; i < part->n_joints; i++) {
+                const float *p = affect_motion_at(m, (uint32_t)t, (uint32_t)part->joints[i]);
+                p3[0] += p[0], p3[1] += p[1], p3[2] += p[2];
+            }
+            for (int a = 0; a < 3; a++)
+                row[3 * slot[k] + (size_t)a] = part->n_joints == 1 ? p3[a] : p3[a] * inv;
+        }
+    }
+    gradient_channels(pos, n, c, m->fps, vel);
+    lowpass_channels(vel, n, c, m->fps, opt->cutoff_hz);
+    gradient_channels(vel, n, c, m->fps, acc);
+    lowpass_channels(acc, n, c, m->fps, opt->cutoff_hz);
+    memset(s, 0, sizeof *s);
+    s->n_frames = (uint32_t)n;
+    s->n_parts = (uint32_t)(c / 3);
+    s->stride = c;
+    s->fps = m->fps;
+    for (int k = 0; k < 6; k++)
+        if (have[k]) {
+            s->vel[k] = vel + 3 * (size_t)slot[k];
+            s->acc[k] = acc + 3 * (size_t)slot[k];
+        }
+    *block = b;
+    return AFFECT_OK;
 }
 
 static double space_q2(const affect_kinematics *ks, uint32_t n, double max_ratio)
@@ -424,15 +597,16 @@ typedef enum effort_kind { WEIGHT_Q1, WEIGHT_Q2, TIME_Q1, TIME_Q2, FLOW, SPACE_Q
 static double effort_value(const affect_motion *m, const affect_kinematics *ks, uint32_t n,
                            effort_kind kind, const affect_laban_options *opt)
 {
+    effort_series s = series_of(ks, n);
     switch (kind) {
-    case WEIGHT_Q1: return weight_q1(ks, n);
-    case WEIGHT_Q2: return weight_q2(ks, n);
-    case TIME_Q1: return time_q1(ks, n);
+    case WEIGHT_Q1: return weight_q1(&s);
+    case WEIGHT_Q2: return weight_q2(&s);
+    case TIME_Q1: return time_q1(&s);
     case TIME_Q2: {
-        double v = accumulated(ks, n, false);
+        double v = accumulated(&s, false);
         return opt->time_per_second ? v / affect_motion_duration(m) : v;
     }
-    case FLOW: return accumulated(ks, n, true);
+    case FLOW: return accumulated(&s, true);
     case SPACE_Q1: return space_q1(&ks[0], &ks[1]);
     default: return space_q2(ks, n, opt->max_ratio);
     }
@@ -581,6 +755,42 @@ static uint32_t body_joints(const affect_motion *m, int32_t pelvis, int32_t *out
     return n;
 }
 
+/* An upper bound of what affect_hull_area_2d returns for frame t's joints projected on axes
+ * (a, b): the area of their bounding octagon (the box cut by the four diagonal lines x ± y =
+ * const through the extreme points, which contains the hull), widened for hull.c's grid (each
+ * point moves by at most half a step, len / 2^30, per axis: the area grows by at most
+ * step · (w_a + w_b) + step²; twice that is used) and for rounding (a relative 1e-6, far
+ * beyond the few units of 2^-53 of either side). Positions are finite (validated). */
+static double area_bound_2d(const affect_motion *m, uint32_t t, const int32_t *joints,
+                            uint32_t nb, int a, int b)
+{
+    if (nb < 3)
+        return 0;
+    const float *p0 = affect_motion_at(m, t, (uint32_t)joints[0]);
+    double x0 = p0[a], x1 = x0, y0 = p0[b], y1 = y0, u0 = x0 + y0, u1 = u0, w0 = x0 - y0,
+           w1 = w0;
+    for (uint32_t i = 1; i < nb; i++) {
+        const float *p = affect_motion_at(m, t, (uint32_t)joints[i]);
+        double x = p[a], y = p[b], u = x + y, w = x - y;
+        x0 = x < x0 ? x : x0;
+        x1 = x > x1 ? x : x1;
+        y0 = y < y0 ? y : y0;
+        y1 = y > y1 ? y : y1;
+        u0 = u < u0 ? u : u0;
+        u1 = u > u1 ? u : u1;
+        w0 = w < w0 ? w : w0;
+        w1 = w > w1 ? w : w1;
+    }
+    double wa = x1 - x0, wb = y1 - y0;
+    /* the corner triangles cut off the box (legs ≥ 0 up to rounding; they do not overlap,
+     * each cut passing through a point of the set) */
+    double c1 = u0 - (x0 + y0), c2 = (x1 + y1) - u1, c3 = (x1 - y0) - w1, c4 = w0 - (x0 - y1);
+    c1 = c1 > 0 ? c1 : 0, c2 = c2 > 0 ? c2 : 0, c3 = c3 > 0 ? c3 : 0, c4 = c4 > 0 ? c4 : 0;
+    double oct = wa * wb - 0.5 * (c1 * c1 + c2 * c2 + c3 * c3 + c4 * c4);
+    double step = (wa > wb ? wa : wb) / HULL_GRID_STEPS;
+    return (oct + 2.0 * step * (wa + wb) + 4.0 * step * step) * (1.0 + AREA_BOUND_SLACK);
+}
+
 affect_status affect_laban_shape_shaping(const affect_motion *m, const affect_roles *roles,
                                          const affect_laban_options *opt, double out[3],
                                          affect_error *err)
@@ -636,7 +846,19 @@ affect_status affect_laban_shape_shaping(const affect_motion *m, const affect_ro
         sagittal = fmax(sagittal, fabs(d[0] * fwd[0] + d[1] * fwd[1] + d[2] * fwd[2]));
     }
     uint32_t nb = body_joints(m, roles->joint[AFFECT_ROLE_PELVIS], joints);
+    /* the largest hull area: every frame's area is bounded first (area_bound_2d); the frame
+     * of the largest bound is taken first, then only the frames whose bound exceeds the best
+     * area so far (the others cannot change the maximum, so the result is the same) */
+    double *bound = pos; /* the torso's positions are no longer needed */
+    uint32_t first = 0;
     for (uint32_t t = 0; t < n; t++) {
+        bound[t] = area_bound_2d(m, t, joints, nb, a, b);
+        first = bound[t] > bound[first] ? t : first;
+    }
+    for (uint32_t k = 0; k <= n; k++) {
+        uint32_t t = k == 0 ? first : k - 1;
+        if ((k > 0 && t == first) || !(bound[t] > horizontal))
+            continue;
         for (uint32_t i = 0; i < nb; i++) {
             const float *p = affect_motion_at(m, t, (uint32_t)joints[i]);
             xy[2 * i] = p[a];
@@ -742,11 +964,11 @@ affect_status affect_laban_vector(const affect_motion *m, const affect_roles *ro
     for (int i = 0; i < AFFECT_LABAN_N; i++)
         out[i] = NAN;
 
-    /* Effort: the six parts' kinematics once */
+    /* Effort: the six parts' velocities and accelerations in one block, filtered together */
     affect_part parts[6];
-    affect_kinematics ks[6];
-    bool have[6];
-    memset(ks, 0, sizeof ks);
+    effort_series es;
+    double *kin = NULL;
+    bool have[6] = {false, false, false, false, false, false};
     uint32_t n_have = 0;
     if (m->n_frames < MIN_FRAMES) {
         st = soft(affect_fail(err, AFFECT_ERR_RANGE,
@@ -755,7 +977,6 @@ affect_status affect_laban_vector(const affect_motion *m, const affect_roles *ro
                   opt, out, IDX_VERTICAL);
         if (st)
             return st;
-        memset(have, 0, sizeof have);
     } else {
         for (int k = 0; k < 6; k++) {
             st = affect_part_resolve(m, roles, all_parts[k], &parts[k], err);
@@ -763,25 +984,26 @@ affect_status affect_laban_vector(const affect_motion *m, const affect_roles *ro
             if (st && !(opt->missing_null && st == AFFECT_ERR_MISSING))
                 goto done;
             st = AFFECT_OK;
-            if (have[k]) {
-                st = affect_kinematics_compute(m, &parts[k], opt, &ks[k], err);
-                if (st)
-                    goto done;
-                n_have++;
-            }
+            n_have += have[k];
+        }
+        if (n_have > 0) {
+            st = vector_kinematics(m, parts, have, opt, &kin, &es, err);
+            if (st)
+                goto done;
         }
     }
-    for (int k = 0; k < 6; k++) {
+    for (uint32_t k = 0; k < 6; k++) {
         if (!have[k])
             continue;
-        out[IDX_WEIGHT + 1 + k] = weight_q1(&ks[k], 1);
-        out[IDX_TIME + 1 + k] = time_q1(&ks[k], 1);
-        out[IDX_FLOW + 1 + k] = accumulated(&ks[k], 1, true);
+        effort_series one = series_part(&es, k);
+        out[IDX_WEIGHT + 1 + k] = weight_q1(&one);
+        out[IDX_TIME + 1 + k] = time_q1(&one);
+        out[IDX_FLOW + 1 + k] = accumulated(&one, true);
     }
     if (n_have == 6) {
-        out[IDX_WEIGHT] = weight_q1(ks, 6);
-        out[IDX_TIME] = time_q1(ks, 6);
-        out[IDX_FLOW] = accumulated(ks, 6, true);
+        out[IDX_WEIGHT] = weight_q1(&es);
+        out[IDX_TIME] = time_q1(&es);
+        out[IDX_FLOW] = accumulated(&es, true);
     }
 
     /* Shape */
@@ -812,6 +1034,6 @@ affect_status affect_laban_vector(const affect_motion *m, const affect_roles *ro
             goto done;
     }
 done:
-    free_all(ks, 6);
+    affect_free(kin);
     return st;
 }

@@ -4,7 +4,8 @@
  * acceleration; a known speed gives a known kinetic energy; a straight path is direct (Space 1,
  * Directional 0); a circle of radius r has curvature 1/r; the shaping and flow components of a
  * rigid box; missing roles and short motions; and on motion_synth, WeightAll and TimeAll order
- * angry > neutral > sad for every action.
+ * angry > neutral > sad for every action; and the vector, bit for bit, against the same values
+ * computed component by component (every part alone, a hull area for every frame).
  */
 #include <math.h>
 #include <string.h>
@@ -277,6 +278,95 @@ static void test_synth_ordering(void **state)
         }
 }
 
+/* affect_laban_vector (one pass filtering the six parts together, hull areas bounded before
+ * they are computed) against a straightforward reference built from the per-component
+ * functions (each part's kinematics computed alone with affect_lowpass) and a hull area for
+ * every frame: the same bits, on synthetic motions with several options (filtered, another
+ * cut-off and up axis, no filtering at all, the bounding box). */
+static void reference_vector(const affect_motion *m, const affect_roles *roles,
+                             const affect_laban_options *opt, double ref[AFFECT_LABAN_N])
+{
+    affect_error err;
+    affect_part parts[6];
+    assert_int_equal(affect_parts_all(m, roles, parts, &err), AFFECT_OK);
+    for (uint32_t k = 0; k <= 6; k++) {
+        const affect_part *p = k == 0 ? parts : &parts[k - 1];
+        uint32_t n = k == 0 ? 6 : 1;
+        assert_int_equal(affect_laban_weight(m, p, n, AFFECT_LABAN_Q1, opt, &ref[k], &err),
+                         AFFECT_OK);
+        assert_int_equal(affect_laban_time(m, p, n, AFFECT_LABAN_Q1, opt, &ref[7 + k], &err),
+                         AFFECT_OK);
+        assert_int_equal(affect_laban_flow(m, p, n, opt, &ref[14 + k], &err), AFFECT_OK);
+    }
+    double shaping[3];
+    assert_int_equal(affect_laban_shape_shaping(m, roles, opt, shaping, &err), AFFECT_OK);
+    ref[21] = shaping[0];
+    ref[22] = shaping[1];
+    /* horizontal: the hull area of every frame, over the joints that are not the pelvis's
+     * ancestors */
+    int32_t pelvis = roles->joint[AFFECT_ROLE_PELVIS];
+    double xy[2 * 64], scratch[4 * 64], horizontal = 0;
+    assert_true(m->n_joints <= 64);
+    int a = (opt->up_axis + 1) % 3, b = (opt->up_axis + 2) % 3;
+    for (uint32_t t = 0; t < m->n_frames; t++) {
+        uint32_t nb = 0;
+        for (uint32_t j = 0; j < m->n_joints; j++) {
+            bool ancestor = false;
+            for (int32_t q = pelvis >= 0 ? m->parents[pelvis] : -1; q >= 0; q = m->parents[q])
+                ancestor |= q == (int32_t)j;
+            if (ancestor)
+                continue;
+            xy[2 * nb] = affect_motion_at(m, t, j)[a];
+            xy[2 * nb + 1] = affect_motion_at(m, t, j)[b];
+            nb++;
+        }
+        horizontal = fmax(horizontal, affect_hull_area_2d(xy, nb, scratch));
+    }
+    ref[23] = horizontal;
+    assert_int_equal(affect_laban_shape_flow(m, opt, &ref[24], &err), AFFECT_OK);
+    assert_int_equal(affect_laban_shape_directional(m, &parts[2], opt, &ref[25], &err),
+                     AFFECT_OK);
+    assert_int_equal(affect_laban_shape_directional(m, &parts[3], opt, &ref[26], &err),
+                     AFFECT_OK);
+}
+
+static void test_vector_matches_reference(void **state)
+{
+    static const char *const emotions[3] = {"angry", "neutral", "sad"};
+    for (int a = 0; affect_synth_actions[a]; a++)
+        for (int e = 0; e < 3; e++) {
+            affect_motion *m = NULL;
+            affect_error err;
+            assert_int_equal(affect_motion_synth(affect_synth_actions[a], emotions[e],
+                                                 (uint64_t)(a + e + 1), NULL, &m, &err),
+                             AFFECT_OK);
+            affect_roles roles;
+            affect_roles_resolve(m, &roles);
+            for (int variant = 0; variant < 4; variant++) {
+                affect_laban_options opt;
+                affect_laban_options_default(&opt);
+                if (variant == 1) {
+                    opt.cutoff_hz = 3;
+                    opt.up_axis = 2;
+                } else if (variant == 2) {
+                    opt.cutoff_hz = 20; /* above the Nyquist frequency: nothing filtered */
+                } else if (variant == 3) {
+                    opt.hull_box = true;
+                }
+                double out[AFFECT_LABAN_N], ref[AFFECT_LABAN_N];
+                if (affect_laban_vector(m, &roles, &opt, out, &err))
+                    fail_msg("%s", err.msg);
+                reference_vector(m, &roles, &opt, ref);
+                for (int i = 0; i < AFFECT_LABAN_N; i++)
+                    if (memcmp(&out[i], &ref[i], sizeof out[i]) != 0)
+                        fail_msg("%s %s variant %d: %s = %.17g, reference %.17g",
+                                 affect_synth_actions[a], emotions[e], variant,
+                                 affect_laban_names[i], out[i], ref[i]);
+            }
+            affect_motion_free(m);
+        }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -287,6 +377,7 @@ int main(void)
         cmocka_unit_test(test_hull_components),
         cmocka_unit_test(test_missing_roles_and_short_motions),
         cmocka_unit_test(test_synth_ordering),
+        cmocka_unit_test(test_vector_matches_reference),
     };
     return cmocka_run_group_tests_name("laban", tests, NULL, NULL);
 }
