@@ -412,20 +412,19 @@ static affect_status check_skeleton(const affect_motion *m, affect_error *err)
     return st;
 }
 
-/* Unit quaternions and finite translations. */
-static affect_status check_rotations(const affect_motion *m, affect_error *err)
+/* The first rotation or translation that is not finite, or the first quaternion whose norm
+ * is not within AFFECT_MOTION_QUAT_NORM_TOL of 1, as an error (the slow path of
+ * check_rotations). */
+static affect_status report_rotation(const affect_motion *m, affect_error *err)
 {
     size_t n = (size_t)m->n_frames * m->n_joints;
-    if (block_has_nonfinite(m->trans, n * 3) || block_has_nonfinite(m->rot, n * 4)) {
-        for (size_t i = 0; i < n; i++)
-            for (int a = 0; a < 7; a++)
-                if (!isfinite(a < 4 ? m->rot[i * 4 + a] : m->trans[i * 3 + a - 4]))
-                    return affect_fail(err, AFFECT_ERR_FORMAT,
-                                       "non-finite %s at frame %zu, joint %zu (%.64s)",
-                                       a < 4 ? "rotation" : "translation", i / m->n_joints,
-                                       i % m->n_joints, m->names[i % m->n_joints]);
-    }
     for (size_t i = 0; i < n; i++) {
+        size_t t = i / m->n_joints, j = i % m->n_joints;
+        for (int a = 0; a < 7; a++)
+            if (!isfinite(a < 4 ? m->rot[i * 4 + a] : m->trans[i * 3 + a - 4]))
+                return affect_fail(err, AFFECT_ERR_FORMAT,
+                                   "non-finite %s at frame %zu, joint %zu (%.64s)",
+                                   a < 4 ? "rotation" : "translation", t, j, m->names[j]);
         const float *q = m->rot + i * 4;
         double norm = sqrt((double)q[0] * q[0] + (double)q[1] * q[1] + (double)q[2] * q[2] +
                            (double)q[3] * q[3]);
@@ -433,8 +432,28 @@ static affect_status check_rotations(const affect_motion *m, affect_error *err)
             return affect_fail(err, AFFECT_ERR_FORMAT,
                                "rotation at frame %zu, joint %zu (%.64s) is not a unit quaternion "
                                "(norm %g)",
-                               i / m->n_joints, i % m->n_joints, m->names[i % m->n_joints], norm);
+                               t, j, m->names[j], norm);
     }
+    return AFFECT_OK;
+}
+
+/* Unit quaternions and finite translations. The fast pass is branch-free so it vectorises
+ * (decode spends most of its time here): squared norms in float against the squared bounds
+ * (a NaN or infinity fails both comparisons, so it also checks finiteness; float's 1e-7 is far
+ * inside the 1e-3 tolerance), and the translations' exponent bits. */
+static affect_status check_rotations(const affect_motion *m, affect_error *err)
+{
+    size_t n = (size_t)m->n_frames * m->n_joints;
+    const float lo = (float)((1 - AFFECT_MOTION_QUAT_NORM_TOL) * (1 - AFFECT_MOTION_QUAT_NORM_TOL));
+    const float hi = (float)((1 + AFFECT_MOTION_QUAT_NORM_TOL) * (1 + AFFECT_MOTION_QUAT_NORM_TOL));
+    unsigned bad = 0;
+    const float *q = m->rot;
+    for (size_t i = 0; i < n; i++, q += 4) {
+        float n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+        bad |= (unsigned)(n2 < lo) | (unsigned)(n2 > hi) | (unsigned)(n2 != n2);
+    }
+    if (bad || block_has_nonfinite(m->trans, n * 3))
+        return report_rotation(m, err);
     return AFFECT_OK;
 }
 
@@ -787,18 +806,27 @@ affect_status affect_motion_decode(const unsigned char *data, size_t size, affec
         size_t nq = (size_t)n_frames * n_joints;
         get_floats(data + off, m->rot, nq * 4);
         off += nq * 16;
-        for (uint32_t t = 0; t < n_frames; t++)
+        /* per joint once: stored translations, or the offset (as float) for every frame */
+        float *rest = m->trans; /* frame 0's row holds each joint's fallback until it is read */
+        uint8_t moving[AFFECT_MOTION_MAX_JOINTS];
+        for (uint32_t j = 0; j < n_joints; j++) {
+            const affect_skel_joint *s = &m->skel[j];
+            moving[j] = s->n_channels <= 6 && affect_skel_has_position(s);
+            for (int a = 0; a < 3; a++)
+                rest[(size_t)j * 3 + a] = (float)s->offset[a];
+        }
+        for (uint32_t t = n_frames; t-- > 0;) { /* backwards: frame 0's fallbacks are read last */
+            float *row = m->trans + (size_t)t * n_joints * 3;
+            const unsigned char *src = data + off + (size_t)t * n_translated * 12;
             for (uint32_t j = 0; j < n_joints; j++) {
-                float *tr = m->trans + ((size_t)t * n_joints + j) * 3;
-                const affect_skel_joint *s = &m->skel[j];
-                if (s->n_channels <= 6 && affect_skel_has_position(s)) {
-                    get_floats(data + off, tr, 3);
-                    off += 12;
-                } else {
-                    for (int a = 0; a < 3; a++)
-                        tr[a] = (float)s->offset[a];
+                if (moving[j]) {
+                    get_floats(src, row + (size_t)j * 3, 3);
+                    src += 12;
+                } else if (t) {
+                    memcpy(row + (size_t)j * 3, rest + (size_t)j * 3, 3 * sizeof *row);
                 }
             }
+        }
     }
     st = check_names_unique(m, err);
     if (!st)

@@ -376,15 +376,6 @@ static double median_of(const double *v, uint32_t n, double *lo, double *hi)
     return s[n / 2];
 }
 
-/* CPU seconds of this process: next to the wall time it shows how much of the core another
- * process took (on a quiet core they are equal; OpenBLAS runs one thread). */
-static double cpu_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
-}
-
 static double peak_rss_mb(void)
 {
     struct rusage ru;

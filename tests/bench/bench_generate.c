@@ -200,15 +200,6 @@ typedef struct rmlr_result {
     char *threads_note;
 } rmlr_result;
 
-/* CPU seconds of this process: next to the wall time it shows how much of the core another
- * process took. */
-static double cpu_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
-}
-
 static void print_load(const char *when)
 {
     double la[3];

@@ -31,7 +31,6 @@
 #include "affect/io.h"
 #include "affect/motion.h"
 
-#include <dirent.h>
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -68,41 +67,6 @@ static volatile uint64_t g_sink;
 
 
 
-static int cmp_name(const void *a, const void *b)
-{
-    return strcmp(((const item *)a)->name, ((const item *)b)->name);
-}
-
-static char *read_file(const char *path, size_t *len)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return NULL;
-    char *buf = NULL;
-    long size = -1;
-    if (fseek(f, 0, SEEK_END) == 0)
-        size = ftell(f);
-    if (size >= 0 && fseek(f, 0, SEEK_SET) == 0) {
-        buf = malloc((size_t)size + 1);
-        if (buf && fread(buf, 1, (size_t)size, f) != (size_t)size) {
-            free(buf);
-            buf = NULL;
-        }
-    }
-    fclose(f);
-    if (buf) {
-        buf[size] = '\0';
-        *len = (size_t)size;
-    }
-    return buf;
-}
-
-static bool has_suffix(const char *s, const char *suffix)
-{
-    size_t n = strlen(s), k = strlen(suffix);
-    return n >= k && strcmp(s + n - k, suffix) == 0;
-}
-
 static void free_corpus(corpus *c)
 {
     for (size_t i = 0; i < c->n; i++) {
@@ -113,48 +77,40 @@ static void free_corpus(corpus *c)
     free(c->items);
 }
 
-/* Reads every *.bvh of dir; 1 when dir cannot be opened, 2 on any other error. */
+/* Reads every *.bvh of dir, sorted by name; 1 when dir cannot be opened, 2 on any other
+ * error. */
 static int load_corpus(const char *dir, corpus *c)
 {
-    DIR *d = opendir(dir);
-    if (!d)
-        return 1;
-    int rc = 0;
-    struct dirent *e;
+    char **names;
+    size_t n;
+    int rc = bench_list_files(dir, ".bvh", &names, &n);
+    if (rc)
+        return rc;
+    c->items = calloc(n ? n : 1, sizeof *c->items);
+    c->cap = n;
     char path[4096];
-    while (!rc && (e = readdir(d)) != NULL) {
-        if (!has_suffix(e->d_name, ".bvh"))
+    for (size_t i = 0; i < n; i++) {
+        if (!rc && !c->items)
+            rc = 2;
+        if (rc) {
+            free(names[i]);
             continue;
-        if (c->n == c->cap) {
-            size_t cap = c->cap ? 2 * c->cap : 256;
-            item *grown = realloc(c->items, cap * sizeof *grown);
-            if (!grown) {
-                rc = 2;
-                break;
-            }
-            c->items = grown;
-            c->cap = cap;
         }
         item *it = &c->items[c->n];
-        memset(it, 0, sizeof *it);
-        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
-        it->name = malloc(strlen(e->d_name) + 1);
-        it->text = read_file(path, &it->text_len);
-        if (it->name)
-            strcpy(it->name, e->d_name);
-        if (!it->name || !it->text) {
+        snprintf(path, sizeof path, "%s/%s", dir, names[i]);
+        it->name = names[i];
+        it->text = bench_read_file(path, &it->text_len);
+        if (!it->text) {
             fprintf(stderr, "cannot read %s: %s\n", path, strerror(errno));
             free(it->name);
-            free(it->text);
+            it->name = NULL;
             rc = 2;
-            break;
+            continue;
         }
         c->text_bytes += it->text_len;
         c->n++;
     }
-    closedir(d);
-    if (!rc)
-        qsort(c->items, c->n, sizeof *c->items, cmp_name);
+    free(names);
     return rc;
 }
 

@@ -53,7 +53,6 @@
 #include "affect/motion.h"
 #include "affect/skeleton.h"
 
-#include <dirent.h>
 #include <errno.h>
 #include <math.h>
 #include <sched.h>
@@ -116,17 +115,6 @@ typedef struct corpus {
 /* Values the timed loops write so the compiler cannot drop their work. */
 static volatile uint64_t g_sink;
 
-static int cmp_name(const void *a, const void *b)
-{
-    return strcmp(((const item *)a)->name, ((const item *)b)->name);
-}
-
-static bool has_suffix(const char *s, const char *suffix)
-{
-    size_t n = strlen(s), k = strlen(suffix);
-    return n >= k && strcmp(s + n - k, suffix) == 0;
-}
-
 static void free_corpus(corpus *c)
 {
     for (size_t i = 0; i < c->n; i++) {
@@ -160,48 +148,40 @@ static void corpus_tag(const char *dir, char *tag, size_t cap)
     tag[k] = '\0';
 }
 
-/* Reads every *.bvh of dir; 1 when dir cannot be opened, 2 on any other error. */
+/* Reads every *.bvh of dir, sorted by name; 1 when dir cannot be opened, 2 on any other
+ * error. */
 static int load_corpus(const char *dir, corpus *c)
 {
-    DIR *d = opendir(dir);
-    if (!d)
-        return 1;
-    int rc = 0;
-    struct dirent *e;
+    char **names;
+    size_t n;
+    int rc = bench_list_files(dir, ".bvh", &names, &n);
+    if (rc)
+        return rc;
+    c->items = calloc(n ? n : 1, sizeof *c->items);
+    c->cap = n;
     char path[4096];
-    while (!rc && (e = readdir(d)) != NULL) {
-        if (!has_suffix(e->d_name, ".bvh"))
+    for (size_t i = 0; i < n; i++) {
+        if (!rc && !c->items)
+            rc = 2;
+        if (rc) {
+            free(names[i]);
             continue;
-        if (c->n == c->cap) {
-            size_t cap = c->cap ? 2 * c->cap : 256;
-            item *grown = realloc(c->items, cap * sizeof *grown);
-            if (!grown) {
-                rc = 2;
-                break;
-            }
-            c->items = grown;
-            c->cap = cap;
         }
         item *it = &c->items[c->n];
-        memset(it, 0, sizeof *it);
-        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
-        it->name = malloc(strlen(e->d_name) + 1);
+        snprintf(path, sizeof path, "%s/%s", dir, names[i]);
+        it->name = names[i];
         it->text = bench_read_file(path, &it->text_len);
-        if (it->name)
-            strcpy(it->name, e->d_name);
-        if (!it->name || !it->text) {
+        if (!it->text) {
             fprintf(stderr, "cannot read %s: %s\n", path, strerror(errno));
             free(it->name);
-            free(it->text);
+            it->name = NULL;
             rc = 2;
-            break;
+            continue;
         }
         c->text_bytes += it->text_len;
         c->n++;
     }
-    closedir(d);
-    if (!rc)
-        qsort(c->items, c->n, sizeof *c->items, cmp_name);
+    free(names);
     return rc;
 }
 
@@ -424,82 +404,42 @@ static int k_ik(const corpus *c)
 
 typedef int (*kernel_fn)(const corpus *c);
 
-static double cpu_now(void)
+/* A kernel and its corpus, as bench_measure's pass argument. */
+typedef struct kernel_run {
+    kernel_fn fn;
+    const corpus *c;
+} kernel_run;
+
+static int kernel_pass(void *arg)
 {
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+    const kernel_run *k = arg;
+    return k->fn(k->c);
 }
 
-/* One kernel's measurement: the wall-clock runs as bench_measure reports them, the median of
- * the same runs' CPU time, and the CPU time over the wall time summed over the runs (below 1
- * when the process waited: other jobs on its core, or the kernel). */
-typedef struct timing {
-    result r;
-    double cpu_median;
-    double busy;
-} timing;
-
 /* bench_measure (benchutil.h: a warm-up pass, calibration when repeat is 0, RUNS runs of
- * repeat passes), also reading CLOCK_PROCESS_CPUTIME_ID around every run. */
-static int measure(const corpus *c, kernel_fn fn, unsigned repeat, timing *tm)
+ * repeat passes, wall and CPU time of each run). */
+static int measure(const corpus *c, kernel_fn fn, unsigned repeat, result *tm)
 {
-    if (fn(c))
-        return 1;
-    if (repeat == 0) {
-        unsigned k = 1;
-        double t;
-        for (;;) {
-            double t0 = now();
-            for (unsigned i = 0; i < k; i++)
-                if (fn(c))
-                    return 1;
-            t = now() - t0;
-            if (t >= CALIBRATE_SECONDS || k >= MAX_REPEAT)
-                break;
-            k *= 2;
-        }
-        double want = t > 0 ? k * TARGET_RUN_SECONDS / t : MAX_REPEAT;
-        repeat = want < 1 ? 1 : want > MAX_REPEAT ? MAX_REPEAT : (unsigned)(want + 0.5);
-    }
-    double wall[RUNS], cpu[RUNS], sum_wall = 0, sum_cpu = 0;
-    for (int run = 0; run < RUNS; run++) {
-        double w0 = now(), c0 = cpu_now();
-        for (unsigned k = 0; k < repeat; k++)
-            if (fn(c))
-                return 1;
-        cpu[run] = cpu_now() - c0;
-        wall[run] = now() - w0;
-        sum_wall += wall[run];
-        sum_cpu += cpu[run];
-    }
-    qsort(wall, RUNS, sizeof wall[0], cmp_double);
-    qsort(cpu, RUNS, sizeof cpu[0], cmp_double);
-    tm->r.median = wall[RUNS / 2];
-    tm->r.min = wall[0];
-    tm->r.max = wall[RUNS - 1];
-    tm->r.repeat = repeat;
-    tm->cpu_median = cpu[RUNS / 2];
-    tm->busy = sum_wall > 0 ? sum_cpu / sum_wall : 1;
-    return 0;
+    kernel_run k = {fn, c};
+    return bench_measure(kernel_pass, &k, repeat, tm);
 }
 
 /* seconds per pass over the corpus: wall clock (the median run) and CPU time */
-static double per_pass(const timing *t)
+static double per_pass(const result *t)
 {
-    return t->r.median / t->r.repeat;
+    return t->median / t->repeat;
 }
 
-static double per_pass_cpu(const timing *t)
+static double per_pass_cpu(const result *t)
 {
-    return t->cpu_median / t->r.repeat;
+    return t->cpu_median / t->repeat;
 }
 
 /* bytes > 0: a text kernel (MB/s); otherwise joint-frames/s by CPU time in the last column */
-static void row(const char *name, const timing *t, double bytes, double frames, double jf)
+static void row(const char *name, const result *t, double bytes, double frames, double jf)
 {
     double s = per_pass(t), sc = per_pass_cpu(t);
-    printf("%-11s %6u %8.4f %8.4f %8.4f", name, t->r.repeat, t->r.median, t->r.min, t->r.max);
+    printf("%-11s %6u %8.4f %8.4f %8.4f", name, t->repeat, t->median, t->min, t->max);
     if (bytes > 0)
         printf(" %8.1f", bytes / s / 1e6);
     else
@@ -513,7 +453,7 @@ static void row(const char *name, const timing *t, double bytes, double frames, 
 
 /* After a goal line: a warning when the core was shared during the measurement (the verdict
  * is on wall time; says what CPU time gives). */
-static void shared_note(const timing *t, bool met_by_cpu)
+static void shared_note(const result *t, bool met_by_cpu)
 {
     if (t->busy < 0.95)
         printf("  warning: the process ran only %.0f%% of the wall time (the core was shared); by "
@@ -593,7 +533,7 @@ static int run_corpus(const char *dir, unsigned repeat, int only, verdict *v)
     if (!rc)
         rc = prepare(&c);
     double prep_s = now() - t0;
-    timing r[K_COUNT];
+    result r[K_COUNT];
     bool done[K_COUNT] = {false};
     for (int k = 0; k < K_COUNT && !rc; k++) {
         if (only >= 0 && k != only)

@@ -7,14 +7,17 @@
  * scales them so that one run takes about TARGET_RUN_SECONDS (at most MAX_REPEAT passes).
  *
  * For latency distributions (one time per request rather than per run), bench_summarize gives
- * the median, mean, fastest and slowest of n times. bench_read_file reads a whole file (the
- * corpus benchmarks' BVH files).
+ * the median, mean, fastest and slowest of n times. bench_read_file reads a whole file and
+ * bench_list_files lists a folder's files by suffix, sorted (the corpus benchmarks' BVH files).
+ * Each run's process CPU time is read too (a shared machine slows a run without it waiting).
  */
 #ifndef AFFECT_BENCHUTIL_H
 #define AFFECT_BENCHUTIL_H
 
+#include <dirent.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <time.h>
 
 #define RUNS 5
@@ -23,14 +26,24 @@
 #define MAX_REPEAT 100000
 
 typedef struct result {
-    double median, min, max; /* seconds per run */
+    double median, min, max; /* seconds per run (wall clock) */
     unsigned repeat;         /* passes over the data set per run */
+    double cpu_median;       /* the median run's process CPU time, seconds */
+    double busy;             /* CPU time over wall time summed over the runs: below 1 when the
+                                process waited (other jobs on its core) */
 } result;
 
 static inline double now(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+}
+
+static inline double cpu_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
     return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
 }
 
@@ -61,18 +74,24 @@ static inline int bench_measure(int (*pass)(void *arg), void *arg, unsigned repe
         double want = t > 0 ? k * TARGET_RUN_SECONDS / t : MAX_REPEAT;
         repeat = want < 1 ? 1 : want > MAX_REPEAT ? MAX_REPEAT : (unsigned)(want + 0.5);
     }
-    double t[RUNS];
+    double t[RUNS], cpu[RUNS], sum_wall = 0, sum_cpu = 0;
     for (int run = 0; run < RUNS; run++) {
-        double t0 = now();
+        double t0 = now(), c0 = cpu_now();
         for (unsigned k = 0; k < repeat; k++)
             if (pass(arg))
                 return 1;
+        cpu[run] = cpu_now() - c0;
         t[run] = now() - t0;
+        sum_wall += t[run];
+        sum_cpu += cpu[run];
     }
     qsort(t, RUNS, sizeof t[0], cmp_double);
+    qsort(cpu, RUNS, sizeof cpu[0], cmp_double);
     r->median = t[RUNS / 2];
     r->min = t[0];
     r->max = t[RUNS - 1];
+    r->cpu_median = cpu[RUNS / 2];
+    r->busy = sum_wall > 0 ? sum_cpu / sum_wall : 1;
     r->repeat = repeat;
     return 0;
 }
@@ -118,6 +137,50 @@ static inline char *bench_read_file(const char *path, size_t *len)
         *len = (size_t)size;
     }
     return buf;
+}
+
+static inline int bench_cmp_string(const void *a, const void *b)
+{
+    return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+/* The names of the files in dir ending with suffix, sorted (bytewise), in *names (*n of them;
+ * free each and the array). Returns 0, 1 when dir cannot be opened, 2 when out of memory. */
+static inline int bench_list_files(const char *dir, const char *suffix, char ***names, size_t *n)
+{
+    *names = NULL;
+    *n = 0;
+    DIR *d = opendir(dir);
+    if (!d)
+        return 1;
+    size_t cap = 0, k = strlen(suffix);
+    int rc = 0;
+    struct dirent *e;
+    while (!rc && (e = readdir(d)) != NULL) {
+        size_t len = strlen(e->d_name);
+        if (len < k || strcmp(e->d_name + len - k, suffix) != 0)
+            continue;
+        if (*n == cap) {
+            cap = cap ? 2 * cap : 256;
+            char **grown = realloc(*names, cap * sizeof *grown);
+            if (!grown) {
+                rc = 2;
+                break;
+            }
+            *names = grown;
+        }
+        (*names)[*n] = malloc(len + 1);
+        if (!(*names)[*n]) {
+            rc = 2;
+            break;
+        }
+        memcpy((*names)[*n], e->d_name, len + 1);
+        (*n)++;
+    }
+    closedir(d);
+    if (!rc)
+        qsort(*names, *n, sizeof **names, bench_cmp_string);
+    return rc;
 }
 
 #endif
