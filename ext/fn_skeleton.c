@@ -11,10 +11,6 @@
 
 #include "affect/quat.h"
 
-/* Stored rotations may differ from the positions by float rounding; more than this × body size
- * means they do not describe the positions (a BLOB edited by hand) and are not used. */
-#define STORED_FK_TOL_REL 1e-4
-
 static affect_status opt_whole(const affect_json_node *n, const char *key, double lo, double hi,
                                double *out, affect_error *err)
 {
@@ -81,7 +77,7 @@ static affect_status skel_opt(const affect_json_doc *doc, const affect_json_node
     affect_status st = AFFECT_OK;
     if (strcmp(key, "rotations") == 0) {
         if (!(st = opt_choice(n, key, sources, &k, err)))
-            so->rotations = (ax_rotation_source)k;
+            so->rotations = (affect_rotation_source)k;
     } else if (strcmp(key, "lengths") == 0) {
         if (!(st = opt_choice(n, key, lengths, &k, err)))
             so->ik.rigid.lengths = k ? AFFECT_RIGID_FIRST : AFFECT_RIGID_MEDIAN;
@@ -185,26 +181,11 @@ void ax_skel_opts_free(ax_skel_opts *so)
 affect_status ax_skeletal(affect_motion *m, const ax_skel_opts *so, affect_motion **out,
                           affect_error *err)
 {
-    if (m->rot && so->rotations != AX_ROT_IK) {
-        double dist;
-        uint32_t frame, joint;
-        affect_status st = affect_motion_fk_error(m, &dist, &frame, &joint, err);
-        if (st)
-            return st;
-        if (dist <= STORED_FK_TOL_REL * affect_motion_body_size(m)) {
-            *out = m;
-            return AFFECT_OK;
-        }
-        return affect_fail(err, AFFECT_ERR_INVALID,
-                           "the stored rotations do not reproduce the positions (joint %u \"%.64s\", "
-                           "frame %u: %g apart); use {\"rotations\":\"ik\"} to rebuild them",
-                           joint, m->names[joint], frame, dist);
-    }
-    if (so->rotations == AX_ROT_STORED)
-        return affect_fail(err, AFFECT_ERR_INVALID,
-                           "the motion has no stored rotations (it was not imported from BVH); use "
-                           "{\"rotations\":\"auto\"} or \"ik\"");
-    return affect_motion_ik(m, &so->ik, out, err);
+    affect_motion *made = NULL;
+    affect_status st = affect_motion_skeletal(m, so->rotations, &so->ik, &made, err);
+    if (!st)
+        *out = made ? made : m;
+    return st;
 }
 
 /* Options argument i as text, or NULL when absent or NULL. */

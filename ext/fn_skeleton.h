@@ -9,11 +9,9 @@
 #include "affect/io.h"
 #include "affect/skeleton.h"
 
-typedef enum ax_rotation_source { AX_ROT_AUTO, AX_ROT_STORED, AX_ROT_IK } ax_rotation_source;
-
 /* Options of the functions that need a skeletal motion. */
 typedef struct ax_skel_opts {
-    ax_rotation_source rotations;
+    affect_rotation_source rotations;
     affect_ik_options ik;
     bool order_given;              /* "order" was set */
     affect_bvh_write_options bvh;  /* motion_to_bvh's own keys */
@@ -28,8 +26,8 @@ affect_status ax_skel_opts_parse(const char *text, size_t len, const char *const
                                  const affect_motion *m, ax_skel_opts *so, affect_error *err);
 void ax_skel_opts_free(ax_skel_opts *so);
 
-/* The skeletal form of m: m itself (*out = m) when it has rotations that reproduce its
- * positions and the options allow them, else inverse kinematics (*out a new motion). */
+/* The skeletal form of m under the options (affect_motion_skeletal): m itself (*out = m) or a
+ * new motion. */
 affect_status ax_skeletal(affect_motion *m, const ax_skel_opts *so, affect_motion **out,
                           affect_error *err);
 

@@ -1069,6 +1069,31 @@ done:
     return st;
 }
 
+affect_status affect_motion_skeletal(const affect_motion *m, affect_rotation_source source,
+                                     const affect_ik_options *opt, affect_motion **made,
+                                     affect_error *err)
+{
+    *made = NULL;
+    if (m->rot && source != AFFECT_ROTATIONS_IK) {
+        double dist;
+        uint32_t frame, joint;
+        affect_status st = affect_motion_fk_error(m, &dist, &frame, &joint, err);
+        if (st)
+            return st;
+        if (dist <= AFFECT_STORED_FK_TOL_REL * affect_motion_body_size(m))
+            return AFFECT_OK;
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "the stored rotations do not reproduce the positions (joint %u \"%.64s\", "
+                           "frame %u: %g apart); use {\"rotations\":\"ik\"} to rebuild them",
+                           joint, m->names[joint], frame, dist);
+    }
+    if (source == AFFECT_ROTATIONS_STORED)
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "the motion has no stored rotations (it was not imported from BVH); use "
+                           "{\"rotations\":\"auto\"} or \"ik\"");
+    return affect_motion_ik(m, opt, made, err);
+}
+
 /* ---- angles ---- */
 
 void affect_motion_joint_angles(const affect_motion *m, uint32_t t, uint32_t j,

@@ -509,6 +509,33 @@ static void test_fewer_rotation_channels(void **state)
     }
 }
 
+/* Which rotations export and angles use: stored ones that agree with the positions, IK when
+ * asked or when there are none, and an error for stored ones that do not agree (a BLOB edited
+ * by hand) or when stored ones are demanded of a position-only motion. */
+static void test_rotation_source(void **state)
+{
+    affect_motion *m = random_skeletal(10), *made = NULL, *pos = NULL;
+    affect_error err;
+    assert_int_equal(affect_motion_skeletal(m, AFFECT_ROTATIONS_AUTO, NULL, &made, &err), AFFECT_OK);
+    assert_null(made);
+    assert_int_equal(affect_motion_skeletal(m, AFFECT_ROTATIONS_IK, NULL, &made, &err), AFFECT_OK);
+    assert_non_null(made);
+    affect_motion_free(made);
+    affect_motion_at(m, 4, 3)[1] += 0.5f;
+    assert_int_equal(affect_motion_skeletal(m, AFFECT_ROTATIONS_AUTO, NULL, &made, &err),
+                     AFFECT_ERR_INVALID);
+    assert_string_equal(err.msg, "the stored rotations do not reproduce the positions (joint 3 "
+                                 "\"Head\", frame 4: 0.5 apart); use {\"rotations\":\"ik\"} to "
+                                 "rebuild them");
+    assert_int_equal(affect_motion_clone(m, &pos, NULL), AFFECT_OK);
+    affect_motion_drop_skeleton(pos);
+    assert_int_equal(affect_motion_skeletal(pos, AFFECT_ROTATIONS_STORED, NULL, &made, &err),
+                     AFFECT_ERR_INVALID);
+    assert_null(made);
+    affect_motion_free(pos);
+    affect_motion_free(m);
+}
+
 /* ---- out of memory ---- */
 
 typedef struct oom_ctx {
@@ -563,6 +590,7 @@ int main(void)
         cmocka_unit_test(test_gimbal_lock_and_small_motions),
         cmocka_unit_test(test_writer_text_and_options),
         cmocka_unit_test(test_fewer_rotation_channels),
+        cmocka_unit_test(test_rotation_source),
         cmocka_unit_test(test_out_of_memory),
     };
     return cmocka_run_group_tests_name("skeleton", tests, NULL, NULL);

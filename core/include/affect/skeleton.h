@@ -124,6 +124,24 @@ void affect_ik_options_default(affect_ik_options *opt);
 affect_status affect_motion_ik(const affect_motion *m, const affect_ik_options *opt,
                                affect_motion **out, affect_error *err);
 
+typedef enum affect_rotation_source {
+    AFFECT_ROTATIONS_AUTO,   /* the stored rotations when there are some, else IK (default) */
+    AFFECT_ROTATIONS_STORED, /* the stored rotations; an error without them */
+    AFFECT_ROTATIONS_IK      /* inverse kinematics from the positions, even over stored ones */
+} affect_rotation_source;
+
+/* Stored rotations may differ from the positions by float rounding; more than this × the body
+ * size means they do not describe the positions (a BLOB edited by hand) and are refused. */
+#define AFFECT_STORED_FK_TOL_REL 1e-4
+
+/* The skeletal form of m for export and joint angles: m itself (*made = NULL) when its stored
+ * rotations are wanted and reproduce its positions within AFFECT_STORED_FK_TOL_REL of the body
+ * size, else affect_motion_ik's result in *made (free it). The errors say which option to use
+ * instead ({"rotations":"ik"} / "auto", the SQL options' names). */
+affect_status affect_motion_skeletal(const affect_motion *m, affect_rotation_source source,
+                                     const affect_ik_options *opt, affect_motion **made,
+                                     affect_error *err);
+
 /* Euler angles (degrees, continuous with prev when not NULL, see affect_quat_to_euler_deg) and
  * angular speed (rad/s; central difference of the rotations, one-sided at the ends) of joint j
  * at frame t. Needs m->rot. */
