@@ -148,6 +148,8 @@ static const ax_function functions[] = {
     {"laban_shape_flow", 2, false, ax_laban_shape_flow},
     {"laban", 1, true, ax_laban},
     {"laban", 2, true, ax_laban},
+    {"motion_kinematics", 1, false, ax_motion_kinematics},
+    {"motion_kinematics", 2, false, ax_motion_kinematics},
     {"laban_vector", 1, false, ax_laban_vector},
     {"laban_vector", 2, false, ax_laban_vector},
     {"laban_names", 0, true, ax_laban_names},

@@ -56,7 +56,7 @@
 
 static const char *const train_keys[] = {
     AX_SEQS_KEYS, "groups",     "score_normalization", "score_clip", "svm_c", "svm_folds",
-    "spca_dims",  "spca_kernel", "spca_sigma",          "knn_k",      "grid",  NULL};
+    "spca_dims",  "spca_kernel", "spca_sigma",          "knn_k",      "grid",  "descriptors", "descriptor_weight", "mirror", NULL};
 
 typedef struct cls_train {
     ax_seqs s; /* first: freed by ax_seqs_free's sqlite3_free … see cls_train_free */
@@ -193,12 +193,32 @@ static ax_arg opt_grid(sqlite3_context *ctx, const ax_opts *opts, cls_train *t)
     return AX_OK;
 }
 
+/* The "mirror" option: true, false or "auto". */
+static ax_arg opt_mirror(sqlite3_context *ctx, const ax_opts *opts, affect_classifier_mirror *m)
+{
+    const affect_json_node *n = ax_opt(opts, "mirror");
+    if (!n)
+        return AX_OK;
+    if (n->type == AFFECT_JSON_TRUE || n->type == AFFECT_JSON_FALSE) {
+        *m = n->type == AFFECT_JSON_TRUE ? AFFECT_MIRROR_ON : AFFECT_MIRROR_OFF;
+        return AX_OK;
+    }
+    if (n->type == AFFECT_JSON_STRING && strcmp(n->str, "auto") == 0) {
+        *m = AFFECT_MIRROR_AUTO;
+        return AX_OK;
+    }
+    ax_errorf(ctx, "option \"mirror\" must be true, false or \"auto\"");
+    return AX_ERROR;
+}
+
 /* The classifier keys of the first row's options. */
 static ax_arg read_classifier_options(sqlite3_context *ctx, const ax_opts *opts, cls_train *t)
 {
     static const char *const norms[] = {"zscore", "none", NULL};
     static const char *const kernels[] = {"linear", "rbf", NULL};
+    static const char *const descs[] = {"none", "kinematics", "laban", "all", NULL};
     affect_classifier_config *cfg = &t->cfg;
+    int desc = (int)cfg->descriptors;
     int norm = cfg->zscore ? 0 : 1, kernel = cfg->spca_kernel == AFFECT_SPCA_RBF;
     const affect_json_node *c = ax_opt(opts, "svm_c");
     if (c) {
@@ -218,8 +238,13 @@ static ax_arg read_classifier_options(sqlite3_context *ctx, const ax_opts *opts,
         ax_opt_u32(ctx, opts, "spca_dims", &cfg->spca_dims) ||
         ax_opt_enum(ctx, opts, "spca_kernel", kernels, &kernel) ||
         ax_opt_number(ctx, opts, "spca_sigma", &cfg->spca_sigma) ||
-        ax_opt_u32(ctx, opts, "knn_k", &cfg->knn_k) || opt_grid(ctx, opts, t))
+        ax_opt_u32(ctx, opts, "knn_k", &cfg->knn_k) || opt_grid(ctx, opts, t) ||
+        ax_opt_enum(ctx, opts, "descriptors", descs, &desc) ||
+        ax_opt_number(ctx, opts, "descriptor_weight", &cfg->descriptor_weight) ||
+        opt_mirror(ctx, opts, &cfg->mirror))
         return AX_ERROR;
+    cfg->descriptors = (unsigned)desc; /* the list's order is the mask's */
+    t->s.desc_mask = cfg->descriptors;
     cfg->zscore = norm == 0;
     cfg->spca_kernel = kernel ? AFFECT_SPCA_RBF : AFFECT_SPCA_LINEAR;
     cfg->hmm = t->s.cfg;
@@ -305,6 +330,9 @@ void ax_affect_train_step(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         *slot = t;
         t->s.rows++;
         affect_classifier_config_default(&t->cfg);
+        t->s.cfg = t->cfg.hmm; /* the recognizer's defaults, not the HMM's own */
+        affect_classifier_features_default(&t->s.fo);
+        t->s.preset = true;
         ax_opts opts;
         if (ax_seqs_options(ctx, argc, argv, 2, train_keys, &t->s, &opts) != AX_OK) {
             t->s.failed = true;
@@ -354,7 +382,7 @@ static void train_final(sqlite3_context *ctx, cls_train *t)
         y[i] = (uint32_t)(hit - classes);
     }
     t->cfg.hmm = t->s.cfg;
-    if (affect_classifier_train(&t->cfg, t->s.feat, t->s.seqs, y, n,
+    if (affect_classifier_train(&t->cfg, t->s.feat, t->s.seqs, t->s.desc, y, n,
                                 (const char *const *)classes, n_classes, &c, &err)) {
         ax_error(ctx, &err);
         goto done;
@@ -474,14 +502,15 @@ static ax_arg arg_classifier(sqlite3_context *ctx, sqlite3_value **argv,
 
 /* The observations of the motion in argument 1 under the classifier's definition. */
 static ax_arg arg_observations(sqlite3_context *ctx, sqlite3_value **argv,
-                               const affect_classifier *c, double **x, uint32_t *n_frames)
+                               const affect_classifier *c, double **x, uint32_t *n_frames,
+                               double **desc)
 {
     affect_motion *m = NULL;
     ax_arg r = ax_arg_motion(ctx, argv, 1, &m);
     if (r != AX_OK)
         return r;
     affect_error err;
-    if (affect_features_extract(affect_classifier_features(c), m, x, n_frames, &err)) {
+    if (affect_classifier_observe(c, m, x, n_frames, desc, &err)) {
         ax_error(ctx, &err);
         r = AX_ERROR;
     }
@@ -496,7 +525,7 @@ typedef struct eval_buf {
 } eval_buf;
 
 static affect_status eval_all(const affect_classifier *c, const double *x, uint32_t T,
-                              bool ml_only, bool want_fisher, eval_buf *b, affect_error *err)
+                              const double *desc, bool ml_only, bool want_fisher, eval_buf *b, affect_error *err)
 {
     uint32_t C = affect_classifier_n_classes(c), p = affect_spca_dims(affect_classifier_spca(c));
     size_t D = want_fisher ? affect_classifier_dim(c) : 0, pairs = (size_t)C * (C - 1) / 2;
@@ -511,26 +540,27 @@ static affect_status eval_all(const affect_classifier *c, const double *x, uint3
     b->o.decision = d + C + D;
     b->o.embed = d + C + D + pairs;
     b->o.votes = (uint32_t *)(void *)(d + doubles);
-    return affect_classifier_eval(c, x, T, ml_only, &b->o, err);
+    return affect_classifier_eval(c, x, T, desc, ml_only, &b->o, err);
 }
 
 static ax_arg evaluate(sqlite3_context *ctx, sqlite3_value **argv, bool ml_only,
                        bool want_fisher, const affect_classifier **c, eval_buf *b)
 {
-    double *x = NULL;
+    double *x = NULL, *desc = NULL;
     uint32_t T = 0;
     memset(b, 0, sizeof *b);
     ax_arg r = arg_classifier(ctx, argv, c);
     if (r == AX_OK)
-        r = arg_observations(ctx, argv, *c, &x, &T);
+        r = arg_observations(ctx, argv, *c, &x, &T, &desc);
     if (r == AX_OK) {
         affect_error err;
-        if (eval_all(*c, x, T, ml_only, want_fisher, b, &err)) {
+        if (eval_all(*c, x, T, desc, ml_only, want_fisher, b, &err)) {
             ax_error(ctx, &err);
             r = AX_ERROR;
         }
     }
     affect_free(x);
+    affect_free(desc);
     return r;
 }
 
@@ -684,10 +714,18 @@ void ax_affect_info(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         affect_strbuf_json_string(&sb, affect_classifier_label(c, k));
         affect_strbuf_printf(&sb, ":%u", count);
     }
-    affect_strbuf_printf(&sb, "},\"dimensions\":{\"observation\":%u,\"per_hmm\":%zu,"
-                              "\"fisher\":%zu,\"spca\":%u},\"hmm\":",
-                         cfg->hmm.dim, affect_classifier_part_dim(c), affect_classifier_dim(c),
-                         affect_spca_dims(sp));
+    static const char *const descs[] = {"none", "kinematics", "laban", "all"};
+    uint32_t dd = affect_descriptors_dim(cfg->descriptors);
+    affect_strbuf_printf(&sb, "},\"mirror\":%s,\"dimensions\":{\"observation\":%u,"
+                              "\"per_hmm\":%zu,\"fisher\":%zu,\"descriptors\":%u,"
+                              "\"representation\":%zu,\"spca\":%u},\"descriptors\":\"%s\","
+                              "\"descriptor_weight\":",
+                         cfg->mirror == AFFECT_MIRROR_ON ? "true" : "false", cfg->hmm.dim,
+                         affect_classifier_part_dim(c), affect_classifier_dim(c) - dd, dd,
+                         affect_classifier_dim(c), affect_spca_dims(sp),
+                         descs[cfg->descriptors & 3u]);
+    affect_strbuf_double(&sb, cfg->descriptor_weight);
+    affect_strbuf_puts(&sb, ",\"hmm\":");
     ax_json_hmm_config(&sb, &cfg->hmm);
     affect_strbuf_puts(&sb, ",\"features\":");
     ax_json_features(&sb, affect_classifier_features(c));
@@ -721,7 +759,7 @@ void ax_affect_info(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 
 static const char *const cv_keys[] = {
     AX_SEQS_KEYS, "groups",     "score_normalization", "score_clip", "svm_c",   "svm_folds",
-    "spca_dims",  "spca_kernel", "spca_sigma",          "knn_k",      "grid",    "folds",
+    "spca_dims",  "spca_kernel", "spca_sigma",          "knn_k",      "grid",    "folds",      "descriptors", "descriptor_weight", "mirror",
     "group",      "methods",     "verbose",             "threads",    NULL};
 
 typedef struct cv_state {
@@ -813,6 +851,9 @@ void ax_affect_crossval_step(sqlite3_context *ctx, int argc, sqlite3_value **arg
         *slot = s;
         s->t.s.rows++;
         affect_classifier_config_default(&s->t.cfg);
+        s->t.s.cfg = s->t.cfg.hmm; /* the recognizer's defaults, not the HMM's own */
+        affect_classifier_features_default(&s->t.s.fo);
+        s->t.s.preset = true;
         ax_opts opts;
         if (ax_seqs_options(ctx, argc, argv, 3, cv_keys, &s->t.s, &opts) != AX_OK) {
             s->t.s.failed = true;
@@ -998,7 +1039,7 @@ static void cv_final(sqlite3_context *ctx, cv_state *s)
     cfg.threads = s->threads;
     if (s->verbose)
         cfg.progress = cv_progress;
-    if (affect_crossval(&cfg, s->t.s.feat, s->t.s.seqs, y, n, (const char *const *)classes,
+    if (affect_crossval(&cfg, s->t.s.feat, s->t.s.seqs, s->t.s.desc, y, n, (const char *const *)classes,
                         n_classes, with_group ? g : NULL, n_groups, &r, &err)) {
         ax_error(ctx, &err);
         goto done;

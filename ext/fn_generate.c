@@ -649,7 +649,7 @@ static ax_arg classify_source(sqlite3_context *ctx, const char *hex, const affec
     for (size_t i = 0; i + 1 < len; i += 2)
         blob[i / 2] = (uint8_t)(hex_digit(hex[i], &bad) << 4 | hex_digit(hex[i + 1], &bad));
     affect_classifier *c = NULL;
-    double *x = NULL;
+    double *x = NULL, *desc = NULL;
     uint32_t T = 0;
     affect_error err;
     ax_arg r = AX_ERROR;
@@ -659,7 +659,7 @@ static ax_arg classify_source(sqlite3_context *ctx, const char *hex, const affec
         goto done;
     }
     if (affect_classifier_decode(blob, len / 2, &c, &err) ||
-        affect_features_extract(affect_classifier_features(c), m, &x, &T, &err)) {
+        affect_classifier_observe(c, m, &x, &T, &desc, &err)) {
         if (err.status == AFFECT_ERR_NOMEM)
             sqlite3_result_error_nomem(ctx);
         else
@@ -667,7 +667,7 @@ static ax_arg classify_source(sqlite3_context *ctx, const char *hex, const affec
         goto done;
     }
     affect_classifier_out o = {0};
-    if (affect_classifier_eval(c, x, T, false, &o, &err)) {
+    if (affect_classifier_eval(c, x, T, desc, false, &o, &err)) {
         ax_error(ctx, &err);
         goto done;
     }
@@ -680,6 +680,7 @@ static ax_arg classify_source(sqlite3_context *ctx, const char *hex, const affec
     r = AX_OK;
 done:
     affect_free(x);
+    affect_free(desc);
     affect_classifier_free(c);
     affect_free(blob);
     return r;

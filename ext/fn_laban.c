@@ -14,6 +14,7 @@
 #include "fn_laban.h"
 
 #include "affect/laban.h"
+#include "affect/summary.h"
 #include "affect/strbuf.h"
 
 /* Parsed arguments common to every laban_* function. */
@@ -314,6 +315,41 @@ void ax_laban_vector(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         return;
     ax_result_f32(ctx, v, AFFECT_LABAN_N);
     call_free(&c);
+}
+
+/* motion_kinematics(motion [, options]) → JSON object of the kinematic summary
+ * (affect/summary.h), names in affect_summary_names order; option "up". */
+void ax_motion_kinematics(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    static const char *const keys[] = {"up", NULL};
+    affect_motion *m = NULL;
+    ax_arg r = ax_arg_motion(ctx, argv, 0, &m);
+    if (r != AX_OK)
+        return;
+    ax_opts opts;
+    int up = 1;
+    if (ax_opts_parse(ctx, argc, argv, 1, keys, &opts) == AX_OK) {
+        if (ax_opt_up(ctx, &opts, &up) == AX_OK) {
+            double v[AFFECT_SUMMARY_N];
+            affect_error err;
+            if (affect_motion_summary(m, up, v, &err)) {
+                ax_error(ctx, &err);
+            } else {
+                affect_strbuf sb;
+                affect_strbuf_init(&sb);
+                for (int i = 0; i < AFFECT_SUMMARY_N; i++) {
+                    affect_strbuf_putc(&sb, i ? ',' : '{');
+                    affect_strbuf_json_string(&sb, affect_summary_names[i]);
+                    affect_strbuf_putc(&sb, ':');
+                    affect_strbuf_double(&sb, v[i]);
+                }
+                affect_strbuf_putc(&sb, '}');
+                ax_result_json_buffer(ctx, &sb);
+            }
+        }
+        ax_opts_free(&opts);
+    }
+    affect_motion_free(m);
 }
 
 void ax_laban_names(sqlite3_context *ctx, int argc, sqlite3_value **argv)

@@ -7,6 +7,8 @@
  */
 #include "seqs.h"
 
+#include "affect/summary.h"
+
 #include <inttypes.h>
 #include <math.h>
 #include <string.h>
@@ -51,6 +53,7 @@ void ax_seqs_free(ax_seqs *ts)
     for (uint32_t i = 0; i < ts->n_seqs; i++)
         affect_free((void *)ts->seqs[i].x);
     affect_free(ts->seqs);
+    affect_free(ts->desc);
     for (uint32_t i = 0; i < ts->n_joints; i++)
         affect_free(ts->joints[i]);
     affect_free(ts->joints);
@@ -105,13 +108,16 @@ ax_arg ax_seqs_options(sqlite3_context *ctx, int argc, sqlite3_value **argv, int
     static const char *const topologies[] = {"ergodic", "left-right", NULL};
     static const char *const starts[] = {"first", "learn", NULL};
     static const char *const scales[] = {"arm", "none", NULL};
-    affect_hmm_config_default(&ts->cfg);
-    affect_features_options_default(&ts->fo);
+    static const char *const frames[] = {"first", "body", NULL};
+    if (!ts->preset) { /* the caller's defaults (affect_train's) are already in place */
+        affect_hmm_config_default(&ts->cfg);
+        affect_features_options_default(&ts->fo);
+    }
     ts->opt_i = opt_i;
     if (ax_opts_parse(ctx, argc, argv, opt_i, allowed, opts) != AX_OK)
         return AX_ERROR;
     int cov = (int)ts->cfg.cov, topology = (int)ts->cfg.topology, start = ts->cfg.learn_start,
-        scale = -1;
+        scale = -1, frame = (int)ts->fo.frame;
     double seed = (double)ts->cfg.seed;
     ax_arg r = AX_ERROR;
     if (ax_opt_u32(ctx, opts, "states", &ts->cfg.n_states) ||
@@ -128,8 +134,11 @@ ax_arg ax_seqs_options(sqlite3_context *ctx, int argc, sqlite3_value **argv, int
         ax_opt_bool(ctx, opts, "normalize", &ts->fo.normalize) ||
         ax_opt_enum(ctx, opts, "scale", scales, &scale) ||
         ax_opt_up(ctx, opts, &ts->fo.up_axis) ||
-        ax_opt_bool(ctx, opts, "velocity", &ts->fo.velocity))
+        ax_opt_bool(ctx, opts, "velocity", &ts->fo.velocity) ||
+        ax_opt_enum(ctx, opts, "frame", frames, &frame) ||
+        ax_opt_bool(ctx, opts, "root", &ts->fo.root))
         goto done;
+    ts->fo.frame = frame ? AFFECT_FEATURES_FRAME_BODY : AFFECT_FEATURES_FRAME_FIRST;
     ts->cfg.cov = cov ? AFFECT_HMM_DIAG : AFFECT_HMM_FULL;
     ts->cfg.topology = topology ? AFFECT_HMM_LEFT_RIGHT : AFFECT_HMM_ERGODIC;
     ts->cfg.learn_start = start == 1;
@@ -212,9 +221,10 @@ static ax_arg first_motion(sqlite3_context *ctx, ax_seqs *ts, const affect_motio
     }
     uint32_t dim = affect_features_dim(ts->feat);
     if (dim > AFFECT_HMM_MAX_DIM) {
-        ax_errorf(ctx, "the observations would have %u dimensions (%u joints x 3%s); at most %u: "
-                       "choose fewer joints with \"joints\"", dim, ts->feat->n_joints,
-                  ts->feat->velocity ? " x 2 with velocity" : "", AFFECT_HMM_MAX_DIM);
+        ax_errorf(ctx, "the observations would have %u dimensions (%u joints x 3%s%s); at most "
+                       "%u: choose fewer joints with \"joints\"", dim, ts->feat->n_joints,
+                  ts->feat->velocity ? " x 2 with velocity" : "", ts->feat->root ? " + 4" : "",
+                  AFFECT_HMM_MAX_DIM);
         return AX_ERROR;
     }
     ts->cfg.dim = dim;
@@ -268,7 +278,24 @@ ax_arg ax_seqs_add(sqlite3_context *ctx, int argc, sqlite3_value **argv, ax_seqs
             goto done;
         }
         ts->seqs = seqs;
+        uint32_t dd = affect_descriptors_dim(ts->desc_mask);
+        if (dd) {
+            double *desc = NULL;
+            if (affect_mul_size((size_t)cap * dd, sizeof *desc, &bytes))
+                desc = affect_realloc(ts->desc, bytes);
+            if (!desc) {
+                sqlite3_result_error_nomem(ctx);
+                goto done;
+            }
+            ts->desc = desc;
+        }
         ts->cap = cap;
+    }
+    uint32_t dd = affect_descriptors_dim(ts->desc_mask);
+    if (dd && affect_descriptors(ts->desc_mask, m, ts->feat->up_axis,
+                                 ts->desc + (size_t)ts->n_seqs * dd, &err)) {
+        ax_seqs_row_error(ctx, ts, &err);
+        goto done;
     }
     if (affect_features_extract(ts->feat, m, &x, &n_frames, &err)) {
         ax_seqs_row_error(ctx, ts, &err);
@@ -344,10 +371,12 @@ void ax_json_features(affect_strbuf *sb, const affect_features *f)
     affect_strbuf_puts(sb, ",\"parents\":[");
     for (uint32_t j = 0; j < f->n_joints; j++)
         affect_strbuf_printf(sb, "%s%d", j ? "," : "", (int)f->parents[j]);
-    affect_strbuf_printf(sb, "],\"normalize\":%s,\"scale\":\"%s\",\"up\":\"%s\",\"velocity\":%s,"
-                             "\"fps\":",
+    affect_strbuf_printf(sb, "],\"frame\":\"%s\",\"normalize\":%s,\"scale\":\"%s\",\"up\":\"%s\","
+                             "\"velocity\":%s,\"root\":%s,\"fps\":",
+                         f->frame == AFFECT_FEATURES_FRAME_BODY ? "body" : "first",
                          f->normalize ? "true" : "false", f->scale_arm ? "arm" : "none",
-                         axes[f->up_axis], f->velocity ? "true" : "false");
+                         axes[f->up_axis], f->velocity ? "true" : "false",
+                         f->root ? "true" : "false");
     affect_strbuf_double(sb, f->fps);
     affect_strbuf_puts(sb, ",\"unit\":");
     if (f->unit[0])

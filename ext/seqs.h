@@ -30,13 +30,17 @@ typedef struct ax_seqs {
     affect_features *feat;   /* fixed by the first non-NULL motion */
     affect_hmm_seq *seqs;    /* observation sequences (each x owned) */
     uint32_t n_seqs, cap;
+    bool preset;             /* cfg and fo hold the caller's defaults (set before
+                                ax_seqs_options); otherwise the HMM's and observations' own */
+    unsigned desc_mask;      /* set by the caller before the rows: descriptors to compute */
+    double *desc;            /* n_seqs × affect_descriptors_dim(desc_mask), or NULL */
     uint64_t rows;           /* rows seen, NULL motions included */
 } ax_seqs;
 
 /* The HMM and observation option keys (states … seed), for building an allowed-keys list. */
 #define AX_SEQS_KEYS                                                                              \
     "states", "mixtures", "covariance", "topology", "max_jump", "start", "joints", "normalize",  \
-        "scale", "up", "velocity", "max_iter", "tol", "reg", "seed"
+        "scale", "up", "velocity", "frame", "root", "max_iter", "tol", "reg", "seed"
 
 /* Parses the first row's options (argument opt_i; keys must be in allowed) into opts and reads
  * the HMM and observation keys into ts; on AX_OK the caller frees opts. */

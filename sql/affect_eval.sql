@@ -12,10 +12,15 @@
 --   LOCO      leave one content out (10 folds; the held-out action was never seen in training).
 -- The three methods are scored on the same folds by the same classifiers (ML = the class HMM
 -- with the largest log-likelihood). Cells: mean ± sample sd of the per-fold accuracies, then
--- the pooled accuracy (correct / all motions). Configurations are listed in `configs`; the last
--- one chooses sPCA dims, RBF σ and k by nested 5-fold cross-validation inside each training
--- fold. Folds run two at a time ("threads": 2; the results do not depend on it): about 35 s
--- on the 2-core machine with OPENBLAS_NUM_THREADS=1 (OpenBLAS's own threads only compete).
+-- the pooled accuracy (correct / all motions). Configurations are listed in `configs`: first
+-- the defaults (no option: the body frame, 5 states × 1 diagonal, mirror images, kinematic
+-- summaries; chosen in docs/EVALUATION.md, "Choosing the defaults"), then the earlier rows with
+-- the observations they were published with ("frame": "first", no descriptors, no mirror
+-- images, so that their numbers still reproduce); the last one chooses sPCA dims, RBF σ and k
+-- by nested 5-fold cross-validation inside each training fold. The confusion matrices and the
+-- 7-style task use the defaults. Folds run two at a time ("threads": 2; the results do not
+-- depend on it): about a minute on the 2-core machine with OPENBLAS_NUM_THREADS=1 (OpenBLAS's
+-- own threads only compete).
 .headers off
 .mode list
 
@@ -37,10 +42,11 @@ SELECT id, name, content, emotion, motion FROM motions
 DROP TABLE IF EXISTS temp.configs;
 CREATE TEMP TABLE configs(k INTEGER, name TEXT, options TEXT);
 INSERT INTO configs VALUES
- (1, 'all joints, 5 states × 1, diagonal', '{"states":5,"mixtures":1,"covariance":"diag","velocity":true,"max_iter":20,"seed":7}'),
- (2, 'end-effectors + torso, 5 states × 2, full', '{"states":5,"mixtures":2,"joints":["pelvis","chest","head","left_hand","right_hand","left_foot","right_foot"],"velocity":true,"max_iter":20,"seed":7}'),
- (3, 'end-effectors + torso, 7 states × 4, full (the thesis''s)', '{"states":7,"mixtures":4,"joints":["pelvis","chest","head","left_hand","right_hand","left_foot","right_foot"],"velocity":true,"max_iter":20,"seed":7}'),
- (4, 'all joints, 5 states × 1, diagonal, nested grid', '{"states":5,"mixtures":1,"covariance":"diag","velocity":true,"max_iter":20,"seed":7,"grid":{"spca_dims":[1,2,3],"spca_sigma":[0.25,0.5,1,2,5,10,25],"knn_k":[1,3,5,7,9,11,13,15]}}');
+ (0, 'defaults: body frame, 5 states × 1, diagonal, mirror images, kinematic summaries', '{}'),
+ (1, 'all joints, 5 states × 1, diagonal', '{"states":5,"mixtures":1,"covariance":"diag","velocity":true,"max_iter":20,"seed":7,"frame":"first","descriptors":"none","mirror":false}'),
+ (2, 'end-effectors + torso, 5 states × 2, full', '{"states":5,"mixtures":2,"joints":["pelvis","chest","head","left_hand","right_hand","left_foot","right_foot"],"velocity":true,"max_iter":20,"seed":7,"covariance":"full","frame":"first","descriptors":"none","mirror":false}'),
+ (3, 'end-effectors + torso, 7 states × 4, full (the thesis''s)', '{"states":7,"mixtures":4,"joints":["pelvis","chest","head","left_hand","right_hand","left_foot","right_foot"],"velocity":true,"max_iter":20,"seed":7,"covariance":"full","frame":"first","descriptors":"none","mirror":false}'),
+ (4, 'all joints, 5 states × 1, diagonal, nested grid', '{"states":5,"mixtures":1,"covariance":"diag","velocity":true,"max_iter":20,"seed":7,"grid":{"spca_dims":[1,2,3],"spca_sigma":[0.25,0.5,1,2,5,10,25],"knn_k":[1,3,5,7,9,11,13,15]},"frame":"first","descriptors":"none","mirror":false}');
 
 DROP TABLE IF EXISTS temp.results;
 CREATE TEMP TABLE results AS
@@ -82,12 +88,12 @@ SELECT printf('| %s | %s | %d | %d | %d |', s.name, s.protocol, sum(s.accuracy >
 
 -- confusion matrices of the first configuration, pooled over the folds
 SELECT '';
-SELECT 'Pooled confusion matrices, ' || (SELECT name FROM configs WHERE k = 1)
+SELECT 'Pooled confusion matrices, ' || (SELECT name FROM configs WHERE k = 0)
        || ' (rows: truth; columns: predicted, in the order of the labels):';
 SELECT '';
 SELECT printf('- %s, %s: labels %s, %s', protocol, method,
               json_extract(confusion, '$.labels'), json_extract(confusion, '$.matrix'))
-  FROM results WHERE k = 1 AND fold IS NULL ORDER BY protocol, method;
+  FROM results WHERE k = 0 AND fold IS NULL ORDER BY protocol, method;
 
 -- the choices of the nested grid
 SELECT '';
@@ -102,16 +108,16 @@ DROP TABLE IF EXISTS temp.results7;
 CREATE TEMP TABLE results7 AS
 SELECT '10-fold' AS protocol, r.*
   FROM affect_crossval('eval_data7', 'motion', 'emotion',
-                       json_set((SELECT options FROM configs WHERE k = 1), '$.folds', 10,
+                       json_set((SELECT options FROM configs WHERE k = 0), '$.folds', 10,
                                 '$.threads', 2)) AS r
 UNION ALL
 SELECT 'LOCO', r.*
   FROM affect_crossval('eval_data7', 'motion', 'emotion',
-                       json_set((SELECT options FROM configs WHERE k = 1), '$.group',
+                       json_set((SELECT options FROM configs WHERE k = 0), '$.group',
                                 'content', '$.threads', 2)) AS r;
 SELECT '';
 SELECT 'Seven styles (angry, happy, sad, normal, proud, not-confident, tired; 77 motions; chance 14 %), '
-       || (SELECT name FROM configs WHERE k = 1) || ':';
+       || (SELECT name FROM configs WHERE k = 0) || ':';
 SELECT '';
 SELECT '| protocol | HMM + ML | Fisher + SVM | Fisher + sPCA + kNN |';
 SELECT '|---|---:|---:|---:|';

@@ -7,9 +7,9 @@
  *     affect_classifier_config_default(&cfg);
  *     cfg.hmm.dim = affect_features_dim(feat);
  *     affect_classifier *c;
- *     if (affect_classifier_train(&cfg, feat, seqs, y, n, labels, 4, &c, &err) == AFFECT_OK) {
+ *     if (affect_classifier_train(&cfg, feat, seqs, NULL, y, n, labels, 4, &c, &err) == AFFECT_OK) {
  *         affect_classifier_out o = {0};
- *         affect_classifier_eval(c, x, T, false, &o, &err);   (o.svm, o.knn, o.ml)
+ *         affect_classifier_eval(c, x, T, NULL, false, &o, &err);   (o.svm, o.knn, o.ml)
  *         affect_classifier_free(c);
  *     }
  *
@@ -52,8 +52,11 @@ struct affect_classifier {
     char **labels;
     affect_features *feat;
     affect_hmm **hmms;
-    size_t part; /* Fisher entries per class HMM */
-    size_t dim;  /* n_classes × part */
+    size_t part;  /* Fisher entries per class HMM */
+    size_t fdim;  /* n_classes × part: the Fisher block */
+    uint32_t ddim; /* descriptors appended after it */
+    double desc_w; /* ω, the descriptor block's factor */
+    size_t dim;   /* fdim + ddim */
     double *mean, *scale;
     affect_svm *svm;
     affect_spca *spca;
@@ -67,6 +70,11 @@ void affect_classifier_config_default(affect_classifier_config *cfg)
 {
     memset(cfg, 0, sizeof *cfg);
     affect_hmm_config_default(&cfg->hmm);
+    /* the recognizer's measured best (docs/EVALUATION.md, "Choosing the defaults") */
+    cfg->hmm.n_states = 5;
+    cfg->hmm.n_mix = 1;
+    cfg->hmm.cov = AFFECT_HMM_DIAG;
+    cfg->hmm.max_iter = 20;
     cfg->groups = AFFECT_FISHER_ALL;
     cfg->zscore = true;
     cfg->svm_c = 0.0;
@@ -77,6 +85,9 @@ void affect_classifier_config_default(affect_classifier_config *cfg)
     cfg->knn_k = 5;
     cfg->score_clip = 5.0;
     cfg->grid.folds = 5;
+    cfg->descriptors = AFFECT_DESC_KINEMATICS;
+    cfg->descriptor_weight = 0.1;
+    cfg->mirror = AFFECT_MIRROR_AUTO;
 }
 
 void affect_classifier_free(affect_classifier *c)
@@ -150,6 +161,13 @@ const char *affect_classifier_config_check(const affect_classifier_config *cfg)
         return "spca_sigma must be a positive finite number";
     if (cfg->knn_k < 1)
         return "knn_k must be at least 1";
+    if (cfg->descriptors != 0 && affect_descriptors_dim(cfg->descriptors) == 0)
+        return "descriptors must be a combination of kinematics and laban";
+    if (!(cfg->descriptor_weight > 0) || !isfinite(cfg->descriptor_weight))
+        return "descriptor_weight must be a positive finite number";
+    if (cfg->mirror != AFFECT_MIRROR_OFF && cfg->mirror != AFFECT_MIRROR_ON &&
+        cfg->mirror != AFFECT_MIRROR_AUTO)
+        return "mirror must be off, on or auto";
     const affect_classifier_grid *g = &cfg->grid;
     if (g->n_dims > AFFECT_CLASSIFIER_GRID_MAX || g->n_sigma > AFFECT_CLASSIFIER_GRID_MAX ||
         g->n_k > AFFECT_CLASSIFIER_GRID_MAX)
@@ -184,11 +202,29 @@ static affect_status prefixed(affect_error *err, affect_status status, const cha
     return affect_fail(err, status ? status : err->status, "%s: %s", head, msg);
 }
 
-/* The raw Fisher representation of x under every class HMM into f (dim), and the
- * log-likelihoods into ll (n_classes). */
-static affect_status represent(const affect_classifier *c, const double *x, uint32_t T, double *f,
-                               double *ll, affect_error *err)
+/* The sizes of the representation: the Fisher block, the descriptors and ω; false when the
+ * sizes overflow. */
+static bool set_dims(affect_classifier *c)
 {
+    c->part = affect_fisher_dim(&c->cfg.hmm, c->cfg.groups);
+    c->ddim = c->cfg.descriptors ? affect_descriptors_dim(c->cfg.descriptors) : 0;
+    c->desc_w = c->ddim ? sqrt(c->cfg.descriptor_weight * (double)c->part * c->n_classes /
+                               c->ddim)
+                        : 1.0;
+    return affect_mul_size(c->part, c->n_classes, &c->fdim) &&
+           affect_add_size(c->fdim, c->ddim, &c->dim);
+}
+
+/* The raw representation of x (and its descriptors desc) into f (dim): the Fisher scores under
+ * every class HMM, then the descriptors; the log-likelihoods into ll (n_classes). */
+static affect_status represent(const affect_classifier *c, const double *x, uint32_t T,
+                               const double *desc, double *f, double *ll, affect_error *err)
+{
+    for (uint32_t e = 0; e < c->ddim; e++) {
+        if (!isfinite(desc[e]))
+            return affect_fail(err, AFFECT_ERR_INVALID, "descriptor %u is not finite", e);
+        f[c->fdim + e] = desc[e];
+    }
     for (uint32_t k = 0; k < c->n_classes; k++) {
         if (affect_fisher_score(c->hmms[k], x, T, c->cfg.groups, f + (size_t)k * c->part, &ll[k],
                                 err))
@@ -223,21 +259,10 @@ static double clip(double v, double limit)
     return v;
 }
 
-/* Fits the normalization on the rows of f (n × dim) and applies it in place. Per dimension
- * the values are first divided by their largest magnitude a (Fisher scores of tiny
- * probabilities reach 1e200 and more, whose sums of squares would overflow): with u = f / a,
- * mean = a · mean(u) and scale = a · sd(u), and the training rows become (u − mean(u)) / sd(u).
- * A dimension that is constant over the training set (sd 0) keeps scale 1. The z-scores are
- * then limited to ±score_clip (here and in affect_classifier_eval). */
-static void fit_normalization(affect_classifier *c, double *f, uint32_t n)
+/* The z-scores of fit_normalization. */
+static void zscore_rows(affect_classifier *c, double *f, uint32_t n)
 {
     size_t D = c->dim;
-    for (size_t e = 0; e < D; e++) {
-        c->mean[e] = 0.0;
-        c->scale[e] = 1.0;
-    }
-    if (!c->cfg.zscore)
-        return;
     for (size_t e = 0; e < D; e++) {
         double a = 0.0, mu = 0.0, var = 0.0;
         for (uint32_t i = 0; i < n; i++)
@@ -263,6 +288,26 @@ static void fit_normalization(affect_classifier *c, double *f, uint32_t n)
         for (uint32_t i = 0; i < n; i++)
             f[(size_t)i * D + e] = clip((f[(size_t)i * D + e] / a - mu) / sd, c->cfg.score_clip);
     }
+}
+
+/* Fits the normalization on the rows of f (n × dim) and applies it in place. Per dimension
+ * the values are first divided by their largest magnitude a (Fisher scores of tiny
+ * probabilities reach 1e200 and more, whose sums of squares would overflow): with u = f / a,
+ * mean = a · mean(u) and scale = a · sd(u), and the training rows become (u − mean(u)) / sd(u).
+ * A dimension that is constant over the training set (sd 0) keeps scale 1. The z-scores are
+ * then limited to ±score_clip (here and in affect_classifier_eval). */
+static void fit_normalization(affect_classifier *c, double *f, uint32_t n)
+{
+    size_t D = c->dim;
+    for (size_t e = 0; e < D; e++) {
+        c->mean[e] = 0.0;
+        c->scale[e] = 1.0;
+    }
+    if (c->cfg.zscore)
+        zscore_rows(c, f, n);
+    for (uint32_t i = 0; i < n; i++)
+        for (size_t e = c->fdim; e < D; e++)
+            f[(size_t)i * D + e] *= c->desc_w;
 }
 
 /* Leave-one-out kNN accuracy over the training coordinates. */
@@ -509,11 +554,11 @@ static affect_status fit_discriminative(affect_classifier *c, const double *f, c
     return loo_knn(c, &c->report.train_acc_knn, err);
 }
 
-affect_status affect_classifier_train(const affect_classifier_config *cfg,
-                                      const affect_features *feat, const affect_hmm_seq *seqs,
-                                      const uint32_t *y, uint32_t n, const char *const *labels,
-                                      uint32_t n_classes, affect_classifier **out,
-                                      affect_error *err)
+/* Training on the given set (the mirror images already added when asked). */
+static affect_status train_on(const affect_classifier_config *cfg, const affect_features *feat,
+                              const affect_hmm_seq *seqs, const double *desc, const uint32_t *y,
+                              uint32_t n, const char *const *labels, uint32_t n_classes,
+                              affect_classifier **out, affect_error *err)
 {
     *out = NULL;
     const char *msg = affect_classifier_config_check(cfg);
@@ -530,6 +575,9 @@ affect_status affect_classifier_train(const affect_classifier_config *cfg,
         if (y[i] >= n_classes)
             return affect_fail(err, AFFECT_ERR_INVALID, "motion %u: class %u of %u classes", i,
                                y[i], n_classes);
+    if (cfg->descriptors && !desc)
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "the configuration appends descriptors but none were given");
     affect_classifier *c = alloc_classifier(n_classes);
     affect_hmm_seq *mine = affect_malloc_array(n ? n : 1, sizeof *mine);
     double *f = NULL, *ll = NULL;
@@ -561,8 +609,7 @@ affect_status affect_classifier_train(const affect_classifier_config *cfg,
     }
     if ((st = copy_features(feat, &c->feat, err)) != AFFECT_OK)
         goto done;
-    c->part = affect_fisher_dim(&cfg->hmm, cfg->groups);
-    if (!affect_mul_size(c->part, n_classes, &c->dim)) {
+    if (!set_dims(c)) {
         st = affect_nomem(err);
         goto done;
     }
@@ -580,7 +627,8 @@ affect_status affect_classifier_train(const affect_classifier_config *cfg,
         goto done;
     }
     for (uint32_t i = 0; i < n; i++)
-        if ((st = represent(c, seqs[i].x, seqs[i].n_frames, f + (size_t)i * c->dim,
+        if ((st = represent(c, seqs[i].x, seqs[i].n_frames,
+                            desc ? desc + (size_t)i * c->ddim : NULL, f + (size_t)i * c->dim,
                             ll + (size_t)i * n_classes, err)) != AFFECT_OK) {
             st = prefixed(err, 0, "motion %u", i);
             goto done;
@@ -598,7 +646,84 @@ done:
     return st;
 }
 
+affect_status affect_classifier_train(const affect_classifier_config *cfg,
+                                      const affect_features *feat, const affect_hmm_seq *seqs,
+                                      const double *desc, const uint32_t *y, uint32_t n,
+                                      const char *const *labels, uint32_t n_classes,
+                                      affect_classifier **out, affect_error *err)
+{
+    *out = NULL;
+    const char *msg = affect_classifier_config_check(cfg);
+    if (msg)
+        return affect_fail(err, AFFECT_ERR_INVALID, "%s", msg);
+    if (cfg->mirror == AFFECT_MIRROR_AUTO) { /* on when every observed joint has a partner */
+        uint32_t *partner = affect_malloc_array(feat->n_joints, sizeof *partner);
+        if (!partner)
+            return affect_nomem(err);
+        affect_error ignored;
+        affect_classifier_config on = *cfg;
+        on.mirror = affect_features_mirror_map(feat, partner, &ignored) == AFFECT_OK
+                        ? AFFECT_MIRROR_ON
+                        : AFFECT_MIRROR_OFF;
+        affect_free(partner);
+        return affect_classifier_train(&on, feat, seqs, desc, y, n, labels, n_classes, out, err);
+    }
+    if (cfg->mirror == AFFECT_MIRROR_OFF)
+        return train_on(cfg, feat, seqs, desc, y, n, labels, n_classes, out, err);
+    if (n > UINT32_MAX / 2)
+        return affect_fail(err, AFFECT_ERR_RANGE, "too many motions to mirror: %u", n);
+    if (cfg->hmm.dim != affect_features_dim(feat))
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "the HMM dimension %u is not the feature dimension %u", cfg->hmm.dim,
+                           affect_features_dim(feat));
+    if (cfg->descriptors && !desc)
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "the configuration appends descriptors but none were given");
+    uint32_t dim = affect_features_dim(feat), dd = affect_descriptors_dim(cfg->descriptors);
+    uint32_t *partner = affect_malloc_array(feat->n_joints, sizeof *partner);
+    affect_hmm_seq *all = affect_calloc(2 * (size_t)n + 1, sizeof *all);
+    uint32_t *y2 = affect_malloc_array(2 * (size_t)n + 1, sizeof *y2);
+    double *desc2 = dd ? affect_malloc_array(2 * (size_t)n * dd, sizeof *desc2) : NULL;
+    affect_status st = AFFECT_OK;
+    if (!partner || !all || !y2 || (dd && !desc2)) {
+        st = affect_nomem(err);
+        goto done;
+    }
+    if ((st = affect_features_mirror_map(feat, partner, err)) != AFFECT_OK)
+        goto done;
+    for (uint32_t i = 0; i < n; i++) {
+        size_t cells;
+        double *x = NULL;
+        if (affect_mul_size(seqs[i].n_frames, dim, &cells))
+            x = affect_malloc_array(cells ? cells : 1, sizeof *x);
+        if (!x) {
+            st = affect_nomem(err);
+            goto done;
+        }
+        affect_features_mirror(feat, partner, seqs[i].x, seqs[i].n_frames, x);
+        all[i] = seqs[i];
+        all[n + i].x = x;
+        all[n + i].n_frames = seqs[i].n_frames;
+        y2[i] = y2[n + i] = y[i];
+        if (dd) {
+            memcpy(desc2 + (size_t)i * dd, desc + (size_t)i * dd, dd * sizeof *desc2);
+            affect_descriptors_mirror(cfg->descriptors, desc + (size_t)i * dd,
+                                      desc2 + ((size_t)n + i) * dd);
+        }
+    }
+    st = train_on(cfg, feat, all, desc2, y2, 2 * n, labels, n_classes, out, err);
+done:
+    for (uint32_t i = 0; all && i < n; i++)
+        affect_free((void *)all[n + i].x);
+    affect_free(all);
+    affect_free(partner);
+    affect_free(y2);
+    affect_free(desc2);
+    return st;
+}
+
 affect_status affect_classifier_eval(const affect_classifier *c, const double *x, uint32_t T,
+                                     const double *desc,
                                      bool ml_only, affect_classifier_out *out, affect_error *err)
 {
     uint32_t C = c->n_classes;
@@ -620,11 +745,18 @@ affect_status affect_classifier_eval(const affect_classifier *c, const double *x
             st = affect_nomem(err);
             goto done;
         }
-        if ((st = represent(c, x, T, f, ll, err)) != AFFECT_OK)
+        if (c->ddim && !desc) {
+            st = affect_fail(err, AFFECT_ERR_INVALID,
+                             "the classifier appends descriptors but none were given");
+            goto done;
+        }
+        if ((st = represent(c, x, T, desc, f, ll, err)) != AFFECT_OK)
             goto done;
         if (c->cfg.zscore) /* as fit_normalization: no z-scores, no limit */
             for (size_t e = 0; e < c->dim; e++)
                 f[e] = clip((f[e] - c->mean[e]) / c->scale[e], c->cfg.score_clip);
+        for (size_t e = c->fdim; e < c->dim; e++)
+            f[e] *= c->desc_w;
         out->svm = affect_svm_predict(c->svm, f, out->decision);
         uint32_t p = affect_spca_dims(c->spca);
         double zbuf[64], *z = out->embed ? out->embed : zbuf;
@@ -644,6 +776,34 @@ done:
     if (f != out->fisher)
         affect_free(f);
     affect_free(ll);
+    return st;
+}
+
+void affect_classifier_features_default(affect_features_options *opt)
+{
+    affect_features_options_default(opt);
+    opt->frame = AFFECT_FEATURES_FRAME_BODY;
+}
+
+affect_status affect_classifier_observe(const affect_classifier *c, const affect_motion *m,
+                                        double **x, uint32_t *n_frames, double **desc,
+                                        affect_error *err)
+{
+    *x = NULL;
+    *desc = NULL;
+    affect_status st = affect_features_extract(c->feat, m, x, n_frames, err);
+    if (st || !c->ddim)
+        return st;
+    *desc = affect_malloc_array(c->ddim, sizeof **desc);
+    if (!*desc)
+        st = affect_nomem(err);
+    else
+        st = affect_descriptors(c->cfg.descriptors, m, c->feat->up_axis, *desc, err);
+    if (st) {
+        affect_free(*x);
+        affect_free(*desc);
+        *x = *desc = NULL;
+    }
     return st;
 }
 
@@ -823,6 +983,9 @@ affect_status affect_classifier_encode(const affect_classifier *c, unsigned char
     affect_bw_u8(&w, (uint8_t)cfg->spca_kernel);
     affect_bw_f64(&w, cfg->spca_sigma);
     affect_bw_u32(&w, cfg->knn_k);
+    affect_bw_u32(&w, cfg->descriptors);
+    affect_bw_f64(&w, cfg->descriptor_weight);
+    affect_bw_u8(&w, cfg->mirror == AFFECT_MIRROR_ON);
     const affect_classifier_grid *g = &cfg->grid;
     affect_bw_u32(&w, g->n_dims);
     affect_bw_u32(&w, g->n_sigma);
@@ -905,10 +1068,10 @@ static affect_status decode_head(affect_br *r, affect_classifier **out, affect_e
     if (memcmp(magic, AFFECT_CLASSIFIER_MAGIC, 4) != 0)
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "not a classifier (bad magic bytes at offset 0)");
-    if (version != AFFECT_CLASSIFIER_VERSION)
+    if (version < 1 || version > AFFECT_CLASSIFIER_VERSION)
         return affect_fail(err, AFFECT_ERR_FORMAT,
-                           "unknown classifier format version %u (this build reads 1 .. 1)",
-                           version);
+                           "unknown classifier format version %u (this build reads 1 .. %u)",
+                           version, AFFECT_CLASSIFIER_VERSION);
     if (flags != 0)
         return affect_fail(err, AFFECT_ERR_FORMAT, "unknown classifier flags %u (offset 8)",
                            flags);
@@ -932,19 +1095,23 @@ static affect_status decode_head(affect_br *r, affect_classifier **out, affect_e
     }
     affect_classifier_config *cfg = &c->cfg;
     affect_classifier_config_default(cfg);
-    uint8_t zscore, kernel;
+    uint8_t zscore, kernel, mirror = 0;
     if (!affect_br_u32(r, &cfg->groups) || !affect_br_u8(r, &zscore) ||
         !affect_br_f64(r, &cfg->score_clip) || !affect_br_f64(r, &cfg->svm_c) || !affect_br_u32(r, &cfg->svm_folds) ||
         !affect_br_u32(r, &cfg->spca_dims) || !affect_br_u8(r, &kernel) ||
         !affect_br_f64(r, &cfg->spca_sigma) || !affect_br_u32(r, &cfg->knn_k) ||
+        (version >= 2 && (!affect_br_u32(r, &cfg->descriptors) ||
+                          !affect_br_f64(r, &cfg->descriptor_weight) ||
+                          !affect_br_u8(r, &mirror))) ||
         !decode_grid(r, &cfg->grid) || !affect_br_f64(r, &c->report.grid_cv_acc) ||
         !affect_br_f64(r, &c->report.svm_c) || !affect_br_f64(r, &c->report.svm_cv_acc) ||
         !affect_br_f64(r, &c->report.train_acc_ml) ||
         !affect_br_f64(r, &c->report.train_acc_svm) ||
         !affect_br_f64(r, &c->report.train_acc_knn))
         return truncated(err, r, "the configuration");
-    if (zscore > 1 || kernel > 1)
+    if (zscore > 1 || kernel > 1 || mirror > 1)
         return invalid(err, r, "configuration");
+    cfg->mirror = mirror ? AFFECT_MIRROR_ON : AFFECT_MIRROR_OFF;
     cfg->zscore = zscore;
     cfg->spca_kernel = kernel ? AFFECT_SPCA_RBF : AFFECT_SPCA_LINEAR;
     return AFFECT_OK;
@@ -1018,11 +1185,10 @@ static affect_status decode_rest(affect_br *r, affect_classifier *c, affect_erro
     const char *msg = affect_classifier_config_check(&c->cfg);
     if (msg)
         return affect_fail(err, AFFECT_ERR_FORMAT, "invalid configuration: %s", msg);
-    c->part = affect_fisher_dim(&c->cfg.hmm, c->cfg.groups);
     uint64_t dim;
     if (!affect_br_u64(r, &dim))
         return truncated(err, r, "the normalization");
-    if (!affect_mul_size(c->part, c->n_classes, &c->dim) || dim != c->dim)
+    if (!set_dims(c) || dim != c->dim)
         return invalid(err, r, "representation dimension");
     if (!affect_br_has(r, c->dim, 16))
         return truncated(err, r, "the normalization");

@@ -7,7 +7,7 @@
  *     affect_cv_config_default(&cfg);
  *     cfg.cls.hmm.dim = affect_features_dim(feat);
  *     affect_cv_result *r;
- *     if (affect_crossval(&cfg, feat, seqs, y, n, labels, 4, NULL, 0, &r, &err) == AFFECT_OK) {
+ *     if (affect_crossval(&cfg, feat, seqs, NULL, y, n, labels, 4, NULL, 0, &r, &err) == AFFECT_OK) {
  *         ... r->mean_accuracy[AFFECT_CV_SVM] ...
  *         affect_cv_result_free(r);
  *     }
@@ -99,6 +99,7 @@ static void mean_sd(const double *v, uint32_t n, double *mean, double *sd)
 /* Scratch of one fold. */
 typedef struct fold_ws {
     affect_hmm_seq *seqs;
+    double *desc;        /* the training motions' descriptors (NULL without) */
     uint32_t *y, *map;   /* map: class → index among the present classes, or UINT32_MAX */
     const char **labels; /* present classes' names */
     uint32_t *back;      /* present index → class */
@@ -121,6 +122,8 @@ typedef struct run_ctx {
     const affect_cv_config *cfg;
     const affect_features *feat;
     const affect_hmm_seq *seqs;
+    const double *desc;
+    uint32_t ddim;
     const uint32_t *y;
     uint32_t n;
     const char *const *labels;
@@ -143,8 +146,11 @@ static affect_status run_fold(const run_ctx *rc, uint32_t fold, fold_ws *w, affe
     uint32_t n_tr = 0, present = 0;
     for (uint32_t k = 0; k < C; k++)
         w->map[k] = UINT32_MAX;
+    size_t dd = rc->ddim;
     for (uint32_t i = 0; i < n; i++)
         if (fold_of[i] != fold) {
+            if (dd)
+                memcpy(w->desc + n_tr * dd, rc->desc + i * dd, dd * sizeof *w->desc);
             w->seqs[n_tr] = seqs[i];
             w->y[n_tr++] = y[i];
             w->map[y[i]] = 0;
@@ -163,7 +169,7 @@ static affect_status run_fold(const run_ctx *rc, uint32_t fold, fold_ws *w, affe
         return affect_fail(err, AFFECT_ERR_INVALID,
                            "fold %u: the training motions have fewer than 2 classes", fold + 1);
     affect_classifier *c = NULL;
-    affect_status st = affect_classifier_train(&cfg->cls, feat, w->seqs, w->y, n_tr, w->labels,
+    affect_status st = affect_classifier_train(&cfg->cls, feat, w->seqs, w->desc, w->y, n_tr, w->labels,
                                                present, &c, err);
     if (st) {
         if (st != AFFECT_ERR_NOMEM) {
@@ -185,7 +191,8 @@ static affect_status run_fold(const run_ctx *rc, uint32_t fold, fold_ws *w, affe
         if (fold_of[i] != fold)
             continue;
         affect_classifier_out o = {0};
-        st = affect_classifier_eval(c, seqs[i].x, seqs[i].n_frames, false, &o, err);
+        st = affect_classifier_eval(c, seqs[i].x, seqs[i].n_frames,
+                                    dd ? rc->desc + i * dd : NULL, false, &o, err);
         if (st) {
             if (st != AFFECT_ERR_NOMEM) {
                 char msg[AFFECT_ERROR_MSG_MAX];
@@ -210,14 +217,18 @@ static affect_status run_fold(const run_ctx *rc, uint32_t fold, fold_ws *w, affe
 static void fold_ws_free(fold_ws *w)
 {
     affect_free(w->seqs);
+    affect_free(w->desc);
     affect_free(w->y);
     affect_free(w->map);
     affect_free(w->back);
     affect_free(w->labels);
 }
 
-static bool fold_ws_alloc(fold_ws *w, uint32_t n, uint32_t n_classes)
+static bool fold_ws_alloc(fold_ws *w, uint32_t n, uint32_t n_classes, uint32_t ddim)
 {
+    w->desc = NULL;
+    if (ddim && !(w->desc = affect_malloc_array((size_t)n * ddim, sizeof *w->desc)))
+        return false;
     w->seqs = affect_malloc_array(n ? n : 1, sizeof *w->seqs);
     w->y = affect_malloc_array(n ? n : 1, sizeof *w->y);
     w->map = affect_malloc_array(n_classes, sizeof *w->map);
@@ -275,7 +286,7 @@ static affect_status run_parallel(const run_ctx *rc, affect_error *err)
         goto done;
     }
     for (uint32_t t = 0; t < T; t++)
-        if (!fold_ws_alloc(&wk[t].w, rc->n, rc->C)) {
+        if (!fold_ws_alloc(&wk[t].w, rc->n, rc->C, rc->ddim)) {
             st = affect_nomem(err);
             goto done;
         }
@@ -338,7 +349,8 @@ static void summarize(affect_cv_result *r)
 }
 
 affect_status affect_crossval(const affect_cv_config *cfg, const affect_features *feat,
-                              const affect_hmm_seq *seqs, const uint32_t *y, uint32_t n,
+                              const affect_hmm_seq *seqs, const double *desc, const uint32_t *y,
+                              uint32_t n,
                               const char *const *labels, uint32_t n_classes,
                               const uint32_t *group, uint32_t n_groups, affect_cv_result **out,
                               affect_error *err)
@@ -362,11 +374,15 @@ affect_status affect_crossval(const affect_cv_config *cfg, const affect_features
         if (y[i] >= n_classes || (group && group[i] >= n_groups))
             return affect_fail(err, AFFECT_ERR_INVALID, "motion %u: class or group out of range",
                                i);
+    uint32_t ddim = cfg->cls.descriptors ? affect_descriptors_dim(cfg->cls.descriptors) : 0;
+    if (ddim && !desc)
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "the configuration appends descriptors but none were given");
     uint32_t *fold_of = affect_malloc_array(n ? n : 1, sizeof *fold_of);
     affect_cv_result *r = affect_calloc(1, sizeof *r);
     fold_ws w = {0};
     affect_status st = AFFECT_OK;
-    if (!fold_ws_alloc(&w, n, n_classes) || !fold_of || !r) {
+    if (!fold_ws_alloc(&w, n, n_classes, ddim) || !fold_of || !r) {
         st = affect_nomem(err);
         goto done;
     }
@@ -405,7 +421,7 @@ affect_status affect_crossval(const affect_cv_config *cfg, const affect_features
             }
         }
     }
-    run_ctx rc = {cfg, feat, seqs, y, n, labels, n_classes, fold_of, k, r};
+    run_ctx rc = {cfg, feat, seqs, desc, ddim, y, n, labels, n_classes, fold_of, k, r};
     if (cfg->threads > 1 && r->n_folds > 1) {
         st = run_parallel(&rc, err);
     } else {

@@ -22,11 +22,15 @@ void affect_features_options_default(affect_features_options *opt)
 {
     opt->joints = NULL;
     opt->n_joints = 0;
+    opt->frame = AFFECT_FEATURES_FRAME_FIRST;
     opt->normalize = true;
     opt->scale = AFFECT_FEATURES_SCALE_AUTO;
     opt->up_axis = 1;
     opt->velocity = false;
+    opt->root = false;
 }
+
+enum { ROOT_DIMS = 4 }; /* root velocity (3) and turning rate */
 
 void affect_features_free(affect_features *f)
 {
@@ -46,7 +50,7 @@ void affect_features_free(affect_features *f)
 
 uint32_t affect_features_dim(const affect_features *f)
 {
-    return f->n_joints * 3u * (f->velocity ? 2u : 1u);
+    return f->n_joints * 3u * (f->velocity ? 2u : 1u) + (f->root ? ROOT_DIMS : 0u);
 }
 
 /* An empty definition with room for n entries (names NULL, parents −1). */
@@ -99,6 +103,11 @@ affect_status affect_features_create(const affect_features_options *opt,
 {
     if (opt->up_axis < 0 || opt->up_axis > 2)
         return affect_fail(err, AFFECT_ERR_INVALID, "up axis must be x, y or z");
+    if (opt->frame != AFFECT_FEATURES_FRAME_FIRST && opt->frame != AFFECT_FEATURES_FRAME_BODY)
+        return affect_fail(err, AFFECT_ERR_INVALID, "frame must be first or body");
+    if (opt->root && opt->frame != AFFECT_FEATURES_FRAME_BODY)
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "root velocity and turning rate need the body frame");
     if (opt->joints && opt->n_joints == 0)
         return affect_fail(err, AFFECT_ERR_INVALID, "the joint list is empty");
     uint32_t n = opt->joints ? opt->n_joints : first->n_joints;
@@ -165,7 +174,9 @@ affect_status affect_features_create(const affect_features_options *opt,
         f->parents[e] = p >= 0 ? entry_of[p] : -1;
     }
     f->up_axis = opt->up_axis;
-    f->normalize = opt->normalize;
+    f->frame = opt->frame;
+    f->root = opt->root;
+    f->normalize = opt->frame == AFFECT_FEATURES_FRAME_FIRST && opt->normalize;
     f->scale_arm = opt->scale == AFFECT_FEATURES_SCALE_ARM ||
                    (opt->scale == AFFECT_FEATURES_SCALE_AUTO && arm_resolves(&roles));
     f->velocity = opt->velocity;
@@ -182,6 +193,83 @@ done:
     return st;
 }
 
+/* Positions in the body frame of every frame, and the root columns, into obs (T × dim). */
+static void body_positions(const affect_features *f, const affect_motion *m,
+                           const uint32_t *idx, uint32_t root, const double *ang, double scale,
+                           double *obs)
+{
+    uint32_t J = f->n_joints, T = m->n_frames, dim = affect_features_dim(f);
+    double inv = 1.0 / scale;
+    for (uint32_t t = 0; t < T; t++) {
+        double r[9], *row = obs + (size_t)t * dim;
+        affect_normalize_axis_rotation(f->up_axis, ang[t], r);
+        const float *o = affect_motion_at(m, t, root);
+        for (uint32_t e = 0; e < J; e++) {
+            const float *p = affect_motion_at(m, t, idx[e]);
+            double a = (double)p[0] - o[0], b = (double)p[1] - o[1], c = (double)p[2] - o[2];
+            row[e * 3 + 0] = (r[0] * a + r[1] * b + r[2] * c) * inv;
+            row[e * 3 + 1] = (r[3] * a + r[4] * b + r[5] * c) * inv;
+            row[e * 3 + 2] = (r[6] * a + r[7] * b + r[8] * c) * inv;
+        }
+        if (!f->root)
+            continue;
+        double *rc = row + dim - ROOT_DIMS;
+        if (T == 1) {
+            memset(rc, 0, ROOT_DIMS * sizeof *rc);
+            continue;
+        }
+        uint32_t ta = t > 0 ? t - 1 : 0, tb = t + 1 < T ? t + 1 : T - 1;
+        double k = m->fps / (double)(tb - ta);
+        const float *pa = affect_motion_at(m, ta, root), *pb = affect_motion_at(m, tb, root);
+        double a = ((double)pb[0] - pa[0]) * k, b = ((double)pb[1] - pa[1]) * k,
+               c = ((double)pb[2] - pa[2]) * k;
+        rc[0] = (r[0] * a + r[1] * b + r[2] * c) * inv;
+        rc[1] = (r[3] * a + r[4] * b + r[5] * c) * inv;
+        rc[2] = (r[6] * a + r[7] * b + r[8] * c) * inv;
+        rc[3] = -(ang[tb] - ang[ta]) * k; /* the heading turns opposite to its correction */
+    }
+}
+
+/* Positions in the first frame's normalized frame (tf) into obs (T × dim). */
+static void first_positions(const affect_features *f, const affect_motion *m,
+                            const uint32_t *idx, const affect_normalize_transform *tf,
+                            double *obs)
+{
+    uint32_t J = f->n_joints, T = m->n_frames, dim = affect_features_dim(f);
+    const double *r = tf->rot;
+    double inv = 1.0 / tf->scale;
+    for (uint32_t t = 0; t < T; t++) {
+        double *row = obs + (size_t)t * dim;
+        for (uint32_t e = 0; e < J; e++) {
+            const float *p = affect_motion_at(m, t, idx[e]);
+            double a = (double)p[0] - tf->origin[0], b = (double)p[1] - tf->origin[1],
+                   c = (double)p[2] - tf->origin[2];
+            row[e * 3 + 0] = (r[0] * a + r[1] * b + r[2] * c) * inv;
+            row[e * 3 + 1] = (r[3] * a + r[4] * b + r[5] * c) * inv;
+            row[e * 3 + 2] = (r[6] * a + r[7] * b + r[8] * c) * inv;
+        }
+    }
+}
+
+/* Velocities: central differences × fps of the positions already in obs. */
+static void velocities(const affect_features *f, const affect_motion *m, double *obs)
+{
+    uint32_t T = m->n_frames, dim = affect_features_dim(f);
+    size_t np = (size_t)f->n_joints * 3;
+    for (uint32_t t = 0; t < T; t++) {
+        double *v = obs + (size_t)t * dim + np;
+        if (T == 1) {
+            memset(v, 0, np * sizeof *v);
+            continue;
+        }
+        uint32_t a = t > 0 ? t - 1 : 0, b = t + 1 < T ? t + 1 : T - 1;
+        const double *pa = obs + (size_t)a * dim, *pb = obs + (size_t)b * dim;
+        double k = m->fps / (double)(b - a);
+        for (size_t i = 0; i < np; i++)
+            v[i] = (pb[i] - pa[i]) * k;
+    }
+}
+
 affect_status affect_features_extract(const affect_features *f, const affect_motion *m,
                                       double **x, uint32_t *n_frames, affect_error *err)
 {
@@ -189,12 +277,13 @@ affect_status affect_features_extract(const affect_features *f, const affect_mot
     size_t n_vals;
     if (!affect_mul_size(T, dim, &n_vals))
         return affect_fail(err, AFFECT_ERR_RANGE, "too many observations");
+    bool body = f->frame == AFFECT_FEATURES_FRAME_BODY;
     affect_roles roles;
     affect_roles_resolve(m, &roles);
     uint32_t *idx = affect_malloc_array(J, sizeof *idx);
-    double *obs = NULL;
+    double *obs = NULL, *ang = NULL;
     affect_status st = AFFECT_OK;
-    if (!idx) {
+    if (!idx || (body && !(ang = affect_malloc_array(T ? T : 1, sizeof *ang)))) {
         st = affect_nomem(err);
         goto fail;
     }
@@ -205,6 +294,13 @@ affect_status affect_features_extract(const affect_features *f, const affect_mot
     memset(&tf, 0, sizeof tf);
     tf.rot[0] = tf.rot[4] = tf.rot[8] = 1;
     tf.scale = 1;
+    if (body && !affect_normalize_headings(m, &roles, f->up_axis, ang)) {
+        st = affect_fail(err, AFFECT_ERR_MISSING,
+                         "cannot find the body frame: no left/right hip or shoulder roles "
+                         "resolve in the motion (train with {\"frame\": \"first\", "
+                         "\"normalize\": false})");
+        goto fail;
+    }
     if (f->normalize || f->scale_arm) {
         double lat[3];
         if (f->normalize && !affect_roles_lateral(m, &roles, 0, lat)) {
@@ -233,42 +329,108 @@ affect_status affect_features_extract(const affect_features *f, const affect_mot
         st = affect_nomem(err);
         goto fail;
     }
-    const double *r = tf.rot;
-    double inv = 1.0 / tf.scale;
-    for (uint32_t t = 0; t < T; t++) {
-        double *row = obs + (size_t)t * dim;
-        for (uint32_t e = 0; e < J; e++) {
-            const float *p = affect_motion_at(m, t, idx[e]);
-            double a = (double)p[0] - tf.origin[0], b = (double)p[1] - tf.origin[1],
-                   c = (double)p[2] - tf.origin[2];
-            row[e * 3 + 0] = (r[0] * a + r[1] * b + r[2] * c) * inv;
-            row[e * 3 + 1] = (r[3] * a + r[4] * b + r[5] * c) * inv;
-            row[e * 3 + 2] = (r[6] * a + r[7] * b + r[8] * c) * inv;
-        }
+    if (body) {
+        int32_t root = roles.joint[AFFECT_ROLE_PELVIS];
+        if (root < 0 || (uint32_t)root >= m->n_joints)
+            root = 0;
+        body_positions(f, m, idx, (uint32_t)root, ang, tf.scale, obs);
+    } else {
+        first_positions(f, m, idx, &tf, obs);
     }
-    if (f->velocity) {
-        size_t np = (size_t)J * 3;
-        for (uint32_t t = 0; t < T; t++) {
-            double *v = obs + (size_t)t * dim + np;
-            if (T == 1) {
-                memset(v, 0, np * sizeof *v);
-                continue;
-            }
-            uint32_t a = t > 0 ? t - 1 : 0, b = t + 1 < T ? t + 1 : T - 1;
-            const double *pa = obs + (size_t)a * dim, *pb = obs + (size_t)b * dim;
-            double k = m->fps / (double)(b - a);
-            for (size_t i = 0; i < np; i++)
-                v[i] = (pb[i] - pa[i]) * k;
-        }
-    }
+    if (f->velocity)
+        velocities(f, m, obs);
     affect_free(idx);
+    affect_free(ang);
     *x = obs;
     *n_frames = T;
     return AFFECT_OK;
 fail:
     affect_free(idx);
+    affect_free(ang);
     affect_free(obs);
     return st;
+}
+
+/* name with Left ↔ Right and the L ↔ R tokens swapped, into out (same length). */
+static void mirrored_name(const char *name, char *out)
+{
+    static const char *const words[][2] = {{"Left", "Right"}, {"left", "right"},
+                                           {"LEFT", "RIGHT"}};
+    size_t len = strlen(name), o = 0;
+    for (size_t i = 0; i < len;) {
+        bool done = false;
+        for (size_t w = 0; w < 3 && !done; w++)
+            for (int side = 0; side < 2 && !done; side++) {
+                const char *from = words[w][side], *to = words[w][!side];
+                size_t fl = strlen(from);
+                if (strncmp(name + i, from, fl) == 0) {
+                    memcpy(out + o, to, strlen(to));
+                    o += strlen(to);
+                    i += fl;
+                    done = true;
+                }
+            }
+        if (done)
+            continue;
+        char ch = name[i];
+        bool alone = (i == 0 || strchr("_.-:", name[i - 1])) &&
+                     (i + 1 == len || strchr("_.-:", name[i + 1]));
+        if (alone && (ch == 'L' || ch == 'R' || ch == 'l' || ch == 'r'))
+            ch = ch == 'L' ? 'R' : ch == 'R' ? 'L' : ch == 'l' ? 'r' : 'l';
+        out[o++] = ch;
+        i++;
+    }
+    out[o] = '\0';
+}
+
+affect_status affect_features_mirror_map(const affect_features *f, uint32_t *partner,
+                                         affect_error *err)
+{
+    if (f->frame != AFFECT_FEATURES_FRAME_BODY && !f->normalize)
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "mirroring needs the body frame or normalized positions");
+    char m[2 * AFFECT_MOTION_MAX_NAME + 1];
+    for (uint32_t e = 0; e < f->n_joints; e++) {
+        mirrored_name(f->skeleton[e], m);
+        partner[e] = UINT32_MAX;
+        for (uint32_t k = 0; k < f->n_joints; k++)
+            if (strcmp(f->skeleton[k], m) == 0)
+                partner[e] = k;
+        if (partner[e] == UINT32_MAX) {
+            char q[80], q2[80];
+            affect_json_quote(q, sizeof q, f->skeleton[e], strlen(f->skeleton[e]));
+            affect_json_quote(q2, sizeof q2, m, strlen(m));
+            return affect_fail(err, AFFECT_ERR_INVALID,
+                               "joint %s has no mirror partner (%s is not among the observed "
+                               "joints)", q, q2);
+        }
+    }
+    return AFFECT_OK;
+}
+
+void affect_features_mirror(const affect_features *f, const uint32_t *partner, const double *x,
+                            uint32_t n_frames, double *out)
+{
+    uint32_t J = f->n_joints, dim = affect_features_dim(f);
+    int lat = f->up_axis == 0 ? 1 : 0;
+    uint32_t blocks = f->velocity ? 2 : 1;
+    for (uint32_t t = 0; t < n_frames; t++) {
+        const double *r = x + (size_t)t * dim;
+        double *w = out + (size_t)t * dim;
+        for (uint32_t b = 0; b < blocks; b++)
+            for (uint32_t e = 0; e < J; e++)
+                for (int k = 0; k < 3; k++) {
+                    double v = r[(size_t)b * 3 * J + 3 * e + k];
+                    w[(size_t)b * 3 * J + 3 * partner[e] + k] = k == lat ? -v : v;
+                }
+        if (f->root) {
+            const double *rr = r + dim - ROOT_DIMS;
+            double *wr = w + dim - ROOT_DIMS;
+            for (int k = 0; k < 3; k++)
+                wr[k] = k == lat ? -rr[k] : rr[k];
+            wr[3] = -rr[3];
+        }
+    }
 }
 
 affect_status affect_features_posture_motion(const affect_features *f, const double *x,
@@ -343,7 +505,7 @@ static void put_f64(unsigned char *p, double d)
         p[i] = (unsigned char)(u >> (8 * i));
 }
 
-enum { FLAG_NORMALIZE = 1, FLAG_SCALE_ARM = 2, FLAG_VELOCITY = 4 };
+enum { FLAG_NORMALIZE = 1, FLAG_SCALE_ARM = 2, FLAG_VELOCITY = 4, FLAG_BODY = 8, FLAG_ROOT = 16 };
 
 bool affect_features_encoded_size(const affect_features *f, size_t *size)
 {
@@ -371,7 +533,9 @@ void affect_features_encode_into(const affect_features *f, unsigned char *buf)
     buf[0] = (unsigned char)f->up_axis;
     buf[1] = (unsigned char)((f->normalize ? FLAG_NORMALIZE : 0) |
                              (f->scale_arm ? FLAG_SCALE_ARM : 0) |
-                             (f->velocity ? FLAG_VELOCITY : 0));
+                             (f->velocity ? FLAG_VELOCITY : 0) |
+                             (f->frame == AFFECT_FEATURES_FRAME_BODY ? FLAG_BODY : 0) |
+                             (f->root ? FLAG_ROOT : 0));
     buf[2] = (unsigned char)unit_len;
     buf[3] = 0;
     put_u32(buf + 4, f->n_joints);
@@ -431,8 +595,16 @@ affect_status affect_features_decode(const unsigned char *data, size_t size,
     double fps = get_f64(data + 8);
     if (up > 2)
         return affect_fail(err, AFFECT_ERR_FORMAT, "up axis %d out of range (0 .. 2)", up);
-    if (flags & ~(unsigned)(FLAG_NORMALIZE | FLAG_SCALE_ARM | FLAG_VELOCITY))
+    if (flags & ~(unsigned)(FLAG_NORMALIZE | FLAG_SCALE_ARM | FLAG_VELOCITY | FLAG_BODY |
+                            FLAG_ROOT))
         return affect_fail(err, AFFECT_ERR_FORMAT, "unknown flags 0x%02x (offset 1)", flags);
+    if ((flags & FLAG_BODY) && (flags & FLAG_NORMALIZE))
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "flags 0x%02x: normalize and the body frame exclude each other "
+                           "(offset 1)", flags);
+    if ((flags & FLAG_ROOT) && !(flags & FLAG_BODY))
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "flags 0x%02x: root needs the body frame (offset 1)", flags);
     if (data[3] != 0)
         return affect_fail(err, AFFECT_ERR_FORMAT, "reserved byte 3 is not zero");
     if (n < 1 || n > AFFECT_MOTION_MAX_JOINTS)
@@ -459,6 +631,8 @@ affect_status affect_features_decode(const unsigned char *data, size_t size,
     f->normalize = (flags & FLAG_NORMALIZE) != 0;
     f->scale_arm = (flags & FLAG_SCALE_ARM) != 0;
     f->velocity = (flags & FLAG_VELOCITY) != 0;
+    f->frame = (flags & FLAG_BODY) ? AFFECT_FEATURES_FRAME_BODY : AFFECT_FEATURES_FRAME_FIRST;
+    f->root = (flags & FLAG_ROOT) != 0;
     f->fps = fps;
     affect_status st = AFFECT_OK;
     for (uint32_t j = 0; j < n && !st; j++)

@@ -29,8 +29,7 @@ static double dist3(const float *a, const float *b)
     return sqrt(dx * dx + dy * dy + dz * dz);
 }
 
-/* Rotation by angle (radians) about axis u (0, 1, 2), right-handed, row-major. */
-static void axis_rotation(int u, double angle, double r[9])
+void affect_normalize_axis_rotation(int u, double angle, double r[9])
 {
     double c = cos(angle), s = sin(angle);
     int a = (u + 1) % 3, b = (u + 2) % 3; /* (a, b, u) is a right-handed frame */
@@ -40,6 +39,39 @@ static void axis_rotation(int u, double angle, double r[9])
     r[a * 3 + b] = -s;
     r[b * 3 + a] = s;
     r[b * 3 + b] = c;
+}
+
+bool affect_normalize_heading_angle(const double lat[3], int u, double *angle)
+{
+    int a = (u + 1) % 3, b = (u + 2) % 3;
+    double ha = lat[a], hb = lat[b];
+    if (!(hypot(ha, hb) >= 1e-9))
+        return false;
+    /* target axis e: x for y-up or z-up data, y for x-up data */
+    int e = u == 0 ? 1 : 0;
+    double ea = e == a ? 1 : 0, eb = e == b ? 1 : 0;
+    /* turn h onto e: by angle(e) − angle(h), angles measured in the (a, b) plane */
+    *angle = atan2(eb, ea) - atan2(hb, ha);
+    return true;
+}
+
+bool affect_normalize_headings(const affect_motion *m, const affect_roles *roles, int up, double *ang)
+{
+    uint32_t T = m->n_frames, have = 0;
+    double last = 0.0;
+    for (uint32_t t = 0; t < T; t++) {
+        double lat[3], a;
+        if (!affect_roles_lateral(m, roles, t, lat))
+            return false;
+        if (affect_normalize_heading_angle(lat, up, &a)) {
+            if (have == 0)
+                for (uint32_t k = 0; k < t; k++)
+                    ang[k] = a;
+            last = have++ ? last + remainder(a - last, 6.28318530717958647693) : a;
+        }
+        ang[t] = last;
+    }
+    return true;
 }
 
 affect_status affect_normalize_transform_compute(const affect_motion *m, const affect_roles *roles,
@@ -69,18 +101,12 @@ affect_status affect_normalize_transform_compute(const affect_motion *m, const a
             return affect_fail(err, AFFECT_ERR_MISSING,
                                "cannot find the heading: the left/right hip and shoulder roles are "
                                "not resolved (set them with \"roles\", or \"heading\": false)");
-        int a = (u + 1) % 3, b = (u + 2) % 3;
-        double ha = lat[a], hb = lat[b];
-        if (hypot(ha, hb) < 1e-9)
+        double angle;
+        if (!affect_normalize_heading_angle(lat, u, &angle))
             return affect_fail(err, AFFECT_ERR_INVALID,
                                "cannot find the heading: left and right joints coincide "
                                "horizontally in the first frame");
-        /* target axis e: x for y-up or z-up data, y for x-up data */
-        int e = u == 0 ? 1 : 0;
-        double ea = e == a ? 1 : 0, eb = e == b ? 1 : 0;
-        /* turn h onto e: by angle(e) − angle(h), angles measured in the (a, b) plane */
-        double angle = atan2(eb, ea) - atan2(hb, ha);
-        axis_rotation(u, angle, tf->rot);
+        affect_normalize_axis_rotation(u, angle, tf->rot);
     }
 
     if (opt->scale_arm) {

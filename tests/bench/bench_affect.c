@@ -352,7 +352,10 @@ static int prepare(dataset *d)
     d->cfg.hmm.n_states = N_STATES;
     d->cfg.hmm.n_mix = N_MIX;
     d->cfg.hmm.cov = AFFECT_HMM_FULL;
+    d->cfg.hmm.max_iter = 50;
     d->cfg.hmm.seed = SEED;
+    d->cfg.descriptors = 0; /* the thesis's configuration, as documented above */
+    d->cfg.mirror = AFFECT_MIRROR_OFF;
     d->cfg.hmm.dim = d->dim;
     const char *msg = affect_classifier_config_check(&d->cfg);
     if (msg) {
@@ -405,7 +408,7 @@ static int pass_train(void *arg)
     affect_error err;
     affect_classifier_free(t->c);
     t->c = NULL;
-    if (affect_classifier_train(&t->d->cfg, t->d->feat, t->d->seqs, t->d->y, t->d->n, emotions,
+    if (affect_classifier_train(&t->d->cfg, t->d->feat, t->d->seqs, NULL, t->d->y, t->d->n, emotions,
                                 N_CLASSES, &t->c, &err)) {
         fprintf(stderr, "bench_affect: training on all motions: %s\n", err.msg);
         return 1;
@@ -419,7 +422,7 @@ static int eval_pass(thr_ctx *t, bool ml_only)
         affect_classifier_out o = {
             .loglik = t->loglik, .decision = t->dec, .embed = t->embed, .votes = t->votes};
         affect_error err;
-        if (affect_classifier_eval(t->c, t->d->seqs[i].x, t->d->seqs[i].n_frames, ml_only, &o,
+        if (affect_classifier_eval(t->c, t->d->seqs[i].x, t->d->seqs[i].n_frames, NULL, ml_only, &o,
                                    &err)) {
             fprintf(stderr, "bench_affect: eval of %s: %s\n", t->d->it[i].stem, err.msg);
             return 1;
@@ -558,7 +561,7 @@ static int bench_crossval(const dataset *d, uint32_t runs, uint32_t threads, cv_
         affect_error err;
         double c0 = cpu_now();
         clk.start = now();
-        affect_status st = affect_crossval(&cfg, d->feat, d->seqs, d->y, d->n, emotions, N_CLASSES,
+        affect_status st = affect_crossval(&cfg, d->feat, d->seqs, NULL, d->y, d->n, emotions, N_CLASSES,
                                            NULL, 0, &res[run], &err);
         t[run] = now() - clk.start;
         cpu[run] = cpu_now() - c0;
@@ -912,7 +915,7 @@ static int fold_library(const dataset *d, const uint32_t *fold_of, uint32_t fold
             seqs[n_tr] = d->seqs[i];
             y[n_tr++] = d->y[i];
         }
-    if (affect_classifier_train(&d->cfg, d->feat, seqs, y, n_tr, emotions, N_CLASSES, &c, &err)) {
+    if (affect_classifier_train(&d->cfg, d->feat, seqs, NULL, y, n_tr, emotions, N_CLASSES, &c, &err)) {
         fprintf(stderr, "bench_affect: affect_classifier_train: %s\n", err.msg);
         goto done;
     }
@@ -920,7 +923,7 @@ static int fold_library(const dataset *d, const uint32_t *fold_of, uint32_t fold
         if (fold_of[i] != fold)
             continue;
         affect_classifier_out out = {0};
-        if (affect_classifier_eval(c, d->seqs[i].x, d->seqs[i].n_frames, false, &out, &err)) {
+        if (affect_classifier_eval(c, d->seqs[i].x, d->seqs[i].n_frames, NULL, false, &out, &err)) {
             fprintf(stderr, "bench_affect: affect_classifier_eval: %s\n", err.msg);
             goto done;
         }

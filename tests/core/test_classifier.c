@@ -28,6 +28,7 @@
 #include "testutil.h"
 
 #include "affect/classifier.h"
+#include "affect/laban.h"
 #include "affect/hmm_blob.h" /* affect_fnv1a64 */
 #include "affect/synth.h"
 
@@ -113,7 +114,10 @@ static void main_config(affect_classifier_config *cfg, const affect_features *fe
     cfg->hmm.dim = affect_features_dim(feat);
     cfg->hmm.n_states = 5;
     cfg->hmm.n_mix = 1;
+    cfg->hmm.cov = AFFECT_HMM_FULL;
     cfg->hmm.max_iter = 8;
+    cfg->descriptors = 0;
+    cfg->mirror = AFFECT_MIRROR_OFF;
 }
 
 static affect_classifier *train_ok(const affect_classifier_config *cfg, const affect_features *f,
@@ -122,7 +126,7 @@ static affect_classifier *train_ok(const affect_classifier_config *cfg, const af
 {
     affect_classifier *c = NULL;
     affect_error err;
-    if (affect_classifier_train(cfg, f, seqs, y, n, labels, n_classes, &c, &err))
+    if (affect_classifier_train(cfg, f, seqs, NULL, y, n, labels, n_classes, &c, &err))
         fail_msg("train: %s", err.msg);
     assert_non_null(c);
     return c;
@@ -156,7 +160,7 @@ static void eval_ok(const affect_classifier *c, const affect_hmm_seq *s, eval_re
     r->o.decision = r->decision;
     r->o.embed = r->embed;
     r->o.votes = r->votes;
-    if (affect_classifier_eval(c, s->x, s->n_frames, false, &r->o, &err))
+    if (affect_classifier_eval(c, s->x, s->n_frames, NULL, false, &r->o, &err))
         fail_msg("eval: %s", err.msg);
 }
 
@@ -220,7 +224,10 @@ static void small_config(affect_classifier_config *cfg, const affect_features *f
     cfg->hmm.dim = affect_features_dim(f);
     cfg->hmm.n_states = 2;
     cfg->hmm.n_mix = 1;
+    cfg->hmm.cov = AFFECT_HMM_FULL;
     cfg->hmm.max_iter = 3;
+    cfg->descriptors = 0;
+    cfg->mirror = AFFECT_MIRROR_OFF;
     cfg->svm_c = 1.0;
     cfg->spca_dims = 1;
     cfg->knn_k = 1;
@@ -294,7 +301,7 @@ static void test_recognition(void **state)
         o.loglik = ll;
         affect_error err;
         assert_int_equal(
-            affect_classifier_eval(c, fx->d.seqs[i].x, fx->d.seqs[i].n_frames, true, &o, &err),
+            affect_classifier_eval(c, fx->d.seqs[i].x, fx->d.seqs[i].n_frames, NULL, true, &o, &err),
             AFFECT_OK);
         assert_int_equal(o.ml, r.o.ml);
         assert_memory_equal(ll, r.loglik, sizeof ll);
@@ -601,7 +608,7 @@ static void test_truncations(void **state)
         free(cut);
     }
     /* a few exact messages: labels "angry", "sad" end at 16 + 9 + 7 = 32; the configuration
-     * (no grid lists) is 106 bytes */
+     * (no grid lists) is 119 bytes */
     static const struct {
         size_t len;
         const char *msg;
@@ -610,10 +617,10 @@ static void test_truncations(void **state)
         {18, "truncated in the labels (offset 16)"},
         {25, "truncated in the labels (offset 25)"},
         {32, "truncated in the configuration (offset 32)"},
-        {137, "truncated in the configuration (offset 130)"},
-        {138, "truncated in the class HMMs (offset 138)"},
-        {145, "truncated in the class HMMs (offset 138)"},
-        {150, "truncated in the class HMMs (offset 146)"},
+        {150, "truncated in the configuration (offset 143)"},
+        {151, "truncated in the class HMMs (offset 151)"},
+        {158, "truncated in the class HMMs (offset 151)"},
+        {163, "truncated in the class HMMs (offset 159)"},
     };
     for (size_t k = 0; k < sizeof cuts / sizeof cuts[0]; k++) {
         unsigned char *cut = malloc(cuts[k].len + 8);
@@ -635,23 +642,28 @@ static void test_bad_fields(void **state)
     assert_non_null(b);
     /* the layout: labels at 16 ("angry" 16..24, "sad" 25..31), configuration from 32:
      * groups 32, zscore 36, score_clip 37, svm_c 45, svm_folds 53, spca_dims 57, kernel 61,
-     * sigma 62, knn_k 70, grid counts 74 .. 89 */
+     * sigma 62, knn_k 70, descriptors 74, descriptor_weight 78, mirror 86, grid counts
+     * 87 .. 102 */
     static const struct {
         size_t off;
         unsigned char value;
         const char *msg;
     } cases[] = {
         {0, 'X', MAGIC_MSG},
-        {4, 2, "unknown classifier format version 2 (this build reads 1 .. 1)"},
-        {4, 0, "unknown classifier format version 0 (this build reads 1 .. 1)"},
+        {4, 3, "unknown classifier format version 3 (this build reads 1 .. 2)"},
+        {4, 0, "unknown classifier format version 0 (this build reads 1 .. 2)"},
         {8, 1, "unknown classifier flags 1 (offset 8)"},
         {12, 1, "invalid class count 1 (offset 12)"},
         {12, 65, "invalid class count 65 (offset 12)"},
         {16, 0, "invalid label (offset 20)"},                    /* label length 0 */
         {21, 0, "invalid label (offset 25)"},                    /* a NUL inside "angry" */
-        {36, 2, "invalid configuration (offset 138)"},           /* zscore 2 */
-        {61, 7, "invalid configuration (offset 138)"},           /* kernel 7 */
-        {74, 200, "truncated in the configuration (offset 90)"}, /* 200 grid dims > 128 */
+        {36, 2, "invalid configuration (offset 151)"},            /* zscore 2 */
+        {61, 7, "invalid configuration (offset 151)"},            /* kernel 7 */
+        {86, 2, "invalid configuration (offset 151)"},            /* mirror 2 */
+        {87, 200, "truncated in the configuration (offset 103)"}, /* 200 grid dims > 128 */
+        {74, 4, "invalid configuration: descriptors must be a combination of kinematics and "
+                "laban"},
+        {85, 0xff, "invalid configuration: descriptor_weight must be a positive finite number"},
         {70, 0, "invalid configuration: knn_k must be at least 1"},
         {53, 1, "invalid configuration: svm_folds must be at least 2"},
         {32, 0,
@@ -713,6 +725,13 @@ static void test_config_check(void **state)
                 def.spca_kernel == AFFECT_SPCA_RBF && def.spca_sigma == 0.25 && def.knn_k == 5 &&
                 def.grid.folds == 5 && def.grid.n_dims == 0 && def.grid.n_sigma == 0 &&
                 def.grid.n_k == 0);
+    /* the measured best, not the thesis's */
+    assert_true(def.hmm.n_states == 5 && def.hmm.n_mix == 1 && def.hmm.cov == AFFECT_HMM_DIAG &&
+                def.hmm.max_iter == 20 && def.descriptors == AFFECT_DESC_KINEMATICS &&
+                def.descriptor_weight == 0.1 && def.mirror == AFFECT_MIRROR_AUTO);
+    affect_features_options fo;
+    affect_classifier_features_default(&fo);
+    assert_true(fo.frame == AFFECT_FEATURES_FRAME_BODY && !fo.velocity && !fo.root);
     check_msg(&def, "observation dimension must be between 1 and 4096"); /* dim unset */
     def.hmm.dim = 24;
     check_msg(&def, NULL);
@@ -775,7 +794,7 @@ static void train_fails(const affect_classifier_config *cfg, const affect_featur
 {
     affect_classifier *c = (affect_classifier *)seqs; /* must become NULL */
     affect_error err;
-    affect_status st = affect_classifier_train(cfg, f, seqs, y, n, labels, n_classes, &c, &err);
+    affect_status st = affect_classifier_train(cfg, f, seqs, NULL, y, n, labels, n_classes, &c, &err);
     if (st == AFFECT_OK)
         fail_msg("training succeeded, expected \"%s\"", msg);
     assert_int_equal(st, AFFECT_ERR_INVALID);
@@ -812,12 +831,91 @@ static void test_train_errors(void **state)
     bad.hmm.n_states = 40; /* sequences of 30 frames */
     affect_classifier *c = NULL;
     affect_error err;
-    assert_int_equal(affect_classifier_train(&bad, f, s, fx->small_y, n, SMALL_LABELS, 2, &c, &err),
+    assert_int_equal(affect_classifier_train(&bad, f, s, NULL, fx->small_y, n, SMALL_LABELS, 2, &c, &err),
                      AFFECT_ERR_INVALID);
     assert_null(c);
     const char *prefix = "training the HMM of class \"angry\": ";
     if (strncmp(err.msg, prefix, strlen(prefix)) != 0)
         fail_msg("unexpected \"%s\"", err.msg);
+}
+
+/* ---- appended descriptors ---- */
+
+/* Descriptors that carry the class decide when the sequences cannot: every motion gets the
+ * same observations, class 0 descriptors near (1, 0), class 1 near (0, 1). Without them the
+ * SVM cannot be right on both classes; with them it is, and the block's factor ω keeps two
+ * descriptors audible next to the Fisher block. The configuration survives the binary form,
+ * and evaluation asks for the descriptors. */
+static void test_descriptors(void **state)
+{
+    fixture *fx = *state;
+    const affect_features *f = fx->small_d.feat;
+    uint32_t n = fx->small_n;
+    affect_hmm_seq same[8];
+    double desc[8 * AFFECT_SUMMARY_N];
+    uint32_t dd = affect_descriptors_dim(AFFECT_DESC_KINEMATICS);
+    assert_int_equal(dd, AFFECT_SUMMARY_N);
+    assert_int_equal(affect_descriptors_dim(AFFECT_DESC_ALL), AFFECT_SUMMARY_N + AFFECT_LABAN_N);
+    assert_int_equal(affect_descriptors_dim(4), 0);
+    for (uint32_t i = 0; i < n; i++) {
+        same[i] = fx->small_seqs[0];
+        for (uint32_t e = 0; e < dd; e++)
+            desc[i * dd + e] = (e == fx->small_y[i] ? 1.0 : 0.0) + 0.01 * i + 0.001 * e;
+    }
+    affect_classifier_config cfg;
+    small_config(&cfg, f);
+    cfg.descriptors = AFFECT_DESC_KINEMATICS;
+    cfg.descriptor_weight = 0.5;
+    affect_classifier *c = NULL;
+    affect_error err;
+    assert_int_equal(affect_classifier_train(&cfg, f, same, NULL, fx->small_y, n, SMALL_LABELS, 2,
+                                             &c, &err),
+                     AFFECT_ERR_INVALID);
+    assert_string_equal(err.msg, "the configuration appends descriptors but none were given");
+    desc[3] = NAN;
+    assert_int_equal(affect_classifier_train(&cfg, f, same, desc, fx->small_y, n, SMALL_LABELS, 2,
+                                             &c, &err),
+                     AFFECT_ERR_INVALID);
+    assert_string_equal(err.msg, "motion 0: descriptor 3 is not finite");
+    desc[3] = 0.003;
+    assert_int_equal(affect_classifier_train(&cfg, f, same, desc, fx->small_y, n, SMALL_LABELS, 2,
+                                             &c, &err),
+                     AFFECT_OK);
+    assert_int_equal(affect_classifier_dim(c), 2 * affect_classifier_part_dim(c) + dd);
+    unsigned char *blob;
+    size_t size;
+    assert_int_equal(affect_classifier_encode(c, &blob, &size, &err), AFFECT_OK);
+    affect_classifier *d = NULL;
+    assert_int_equal(affect_classifier_decode(blob, size, &d, &err), AFFECT_OK);
+    assert_int_equal(affect_classifier_get_config(d)->descriptors, AFFECT_DESC_KINEMATICS);
+    assert_true(affect_classifier_get_config(d)->descriptor_weight == 0.5);
+    for (uint32_t i = 0; i < n; i++) {
+        affect_classifier_out o = {0};
+        assert_int_equal(affect_classifier_eval(d, same[i].x, same[i].n_frames, desc + i * dd,
+                                                false, &o, &err),
+                         AFFECT_OK);
+        assert_int_equal(o.svm, fx->small_y[i]);
+    }
+    affect_classifier_out o = {0};
+    assert_int_equal(affect_classifier_eval(d, same[0].x, same[0].n_frames, NULL, false, &o, &err),
+                     AFFECT_ERR_INVALID);
+    assert_string_equal(err.msg, "the classifier appends descriptors but none were given");
+    free(blob);
+    affect_classifier_free(c);
+    affect_classifier_free(d);
+    /* mirror images need a partner for every observed joint: the right hand alone has none */
+    small_config(&cfg, f);
+    cfg.mirror = AFFECT_MIRROR_ON;
+    assert_int_equal(affect_classifier_train(&cfg, f, fx->small_seqs, NULL, fx->small_y, n,
+                                             SMALL_LABELS, 2, &c, &err),
+                     AFFECT_ERR_INVALID);
+    assert_non_null(strstr(err.msg, "has no mirror partner"));
+    /* without descriptors the identical sequences carry no label information */
+    small_config(&cfg, f);
+    assert_int_equal(affect_classifier_train(&cfg, f, same, NULL, fx->small_y, n, SMALL_LABELS, 2,
+                                             &c, &err),
+                     AFFECT_ERR_INVALID);
+    assert_non_null(strstr(err.msg, "no label information"));
 }
 
 /* ---- grid search ---- */
@@ -1040,7 +1138,7 @@ typedef struct oom_ctx {
 static affect_status oom_train(void *ctx, affect_error *err)
 {
     oom_ctx *o = ctx;
-    return affect_classifier_train(o->cfg, o->fx->small_d.feat, o->seqs, o->y, o->n, SMALL_LABELS,
+    return affect_classifier_train(o->cfg, o->fx->small_d.feat, o->seqs, NULL, o->y, o->n, SMALL_LABELS,
                                    2, &o->c, err);
 }
 
@@ -1085,7 +1183,7 @@ static affect_status oom_eval(void *ctx, affect_error *err)
     oom_ctx *o = ctx;
     const affect_hmm_seq *s = &o->fx->small_seqs[1];
     affect_classifier_out out = {0}; /* nothing wanted: eval allocates its own buffers */
-    return affect_classifier_eval(o->fx->small, s->x, s->n_frames, false, &out, err);
+    return affect_classifier_eval(o->fx->small, s->x, s->n_frames, NULL, false, &out, err);
 }
 
 static void test_out_of_memory(void **state)
@@ -1135,6 +1233,7 @@ int main(void)
         cmocka_unit_test(test_determinism),
         cmocka_unit_test(test_corrupted_bytes),
         cmocka_unit_test(test_truncations),
+        cmocka_unit_test(test_descriptors),
         cmocka_unit_test(test_bad_fields),
         cmocka_unit_test(test_config_check),
         cmocka_unit_test(test_train_errors),

@@ -89,7 +89,10 @@ static void cv_config(affect_cv_config *cfg, const affect_features *f)
     cfg->cls.hmm.dim = affect_features_dim(f);
     cfg->cls.hmm.n_states = 3;
     cfg->cls.hmm.n_mix = 1;
+    cfg->cls.hmm.cov = AFFECT_HMM_FULL;
     cfg->cls.hmm.max_iter = 4;
+    cfg->cls.descriptors = 0;
+    cfg->cls.mirror = AFFECT_MIRROR_OFF;
     cfg->cls.spca_dims = 2;
     cfg->cls.knn_k = 3;
 }
@@ -101,7 +104,7 @@ static affect_cv_result *run_ok(const affect_cv_config *cfg, const affect_featur
 {
     affect_cv_result *r = NULL;
     affect_error err;
-    if (affect_crossval(cfg, f, seqs, y, n, labels, C, group, n_groups, &r, &err))
+    if (affect_crossval(cfg, f, seqs, NULL, y, n, labels, C, group, n_groups, &r, &err))
         fail_msg("crossval: %s", err.msg);
     assert_non_null(r);
     return r;
@@ -114,7 +117,7 @@ static void run_fails(const affect_cv_config *cfg, const affect_features *f,
 {
     affect_cv_result *r = (affect_cv_result *)seqs; /* must become NULL */
     affect_error err;
-    affect_status st = affect_crossval(cfg, f, seqs, y, n, labels, C, group, n_groups, &r, &err);
+    affect_status st = affect_crossval(cfg, f, seqs, NULL, y, n, labels, C, group, n_groups, &r, &err);
     if (st == AFFECT_OK)
         fail_msg("cross-validation succeeded, expected \"%s\"", msg);
     assert_int_equal(st, AFFECT_ERR_INVALID);
@@ -296,7 +299,7 @@ static void test_threads(void **state)
     cfg.progress = NULL;
     affect_cv_result *r = (affect_cv_result *)d;
     affect_error err;
-    assert_int_equal(affect_crossval(&cfg, d->feat, d->seqs, d->y, d->n, EMOTIONS, N_EMOTIONS,
+    assert_int_equal(affect_crossval(&cfg, d->feat, d->seqs, NULL, d->y, d->n, EMOTIONS, N_EMOTIONS,
                                      group, 2, &r, &err),
                      AFFECT_ERR_INVALID);
     assert_string_equal(err.msg, "fold 2: the training motions have fewer than 2 classes");
@@ -456,7 +459,7 @@ static void direct_fold(const affect_cv_config *cfg, const dataset *d, const uin
         }
     affect_classifier *c = NULL;
     affect_error err;
-    if (affect_classifier_train(&cfg->cls, d->feat, tr, ty, n, EMOTIONS, N_EMOTIONS, &c, &err))
+    if (affect_classifier_train(&cfg->cls, d->feat, tr, NULL, ty, n, EMOTIONS, N_EMOTIONS, &c, &err))
         fail_msg("train: %s", err.msg);
     affect_classifier_report rep;
     affect_classifier_get_report(c, &rep);
@@ -467,7 +470,7 @@ static void direct_fold(const affect_cv_config *cfg, const dataset *d, const uin
         if (fold_of[i] != F)
             continue;
         affect_classifier_out o = {0};
-        if (affect_classifier_eval(c, seqs[i].x, seqs[i].n_frames, false, &o, &err))
+        if (affect_classifier_eval(c, seqs[i].x, seqs[i].n_frames, NULL, false, &o, &err))
             fail_msg("eval: %s", err.msg);
         cm[AFFECT_CV_ML][d->y[i] * N_EMOTIONS + o.ml]++;
         cm[AFFECT_CV_SVM][d->y[i] * N_EMOTIONS + o.svm]++;
@@ -670,7 +673,7 @@ static void test_errors(void **state)
                      AFFECT_OK);
     x[7] = NAN; /* training (the other fold) or evaluation (its own) fails */
     affect_cv_result *r = NULL;
-    assert_int_equal(affect_crossval(&cfg, d->feat, bad, y, d->n, EMOTIONS, 4, NULL, 0, &r, &err),
+    assert_int_equal(affect_crossval(&cfg, d->feat, bad, NULL, y, d->n, EMOTIONS, 4, NULL, 0, &r, &err),
                      AFFECT_ERR_INVALID);
     assert_null(r);
     char prefix[64];
@@ -697,7 +700,7 @@ typedef struct oom_ctx {
 static affect_status oom_cv(void *ctx, affect_error *err)
 {
     oom_ctx *o = ctx;
-    return affect_crossval(o->cfg, o->d->feat, o->seqs, o->y, o->n, EMOTIONS, 2, o->g, o->n_groups,
+    return affect_crossval(o->cfg, o->d->feat, o->seqs, NULL, o->y, o->n, EMOTIONS, 2, o->g, o->n_groups,
                            &o->r, err);
 }
 

@@ -171,6 +171,147 @@ static void test_normalization_invariance(void **state)
     affect_motion_free(c);
 }
 
+/* The body frame: every frame relative to its own pelvis and heading, so a turned and shifted
+ * copy gives the same observations, and so does a copy that turns while it moves; the root
+ * columns carry the pelvis's body-frame velocity and the turning rate. */
+static unsigned char *encode(const affect_features *f, size_t *size);
+
+static void turn_frames(affect_motion *m, double rate)
+{
+    for (uint32_t t = 0; t < m->n_frames; t++) {
+        double a = rate * t, c = cos(a), s = sin(a);
+        for (uint32_t j = 0; j < m->n_joints; j++) {
+            float *p = affect_motion_at(m, t, j);
+            double x = p[0], z = p[2]; /* +a about y: (x, z) → (x c + z s, −x s + z c) */
+            p[0] = (float)(x * c + z * s);
+            p[2] = (float)(-x * s + z * c);
+        }
+    }
+}
+
+static void test_body_frame(void **state)
+{
+    affect_motion *a = make_motion(0, 0, 0), *b = make_motion(1, 5, -3), *c = make_motion(0, 0, 0);
+    turn_frames(c, 0.1);
+    affect_features_options opt;
+    affect_features_options_default(&opt);
+    opt.frame = AFFECT_FEATURES_FRAME_BODY;
+    opt.velocity = true;
+    opt.root = true;
+    affect_features *f = create(&opt, a);
+    assert_int_equal(affect_features_dim(f), 7 * 6 + 4);
+    assert_false(f->normalize);
+    assert_true(f->scale_arm);
+    uint32_t ta, tb, tc;
+    double *xa = extract(f, a, &ta), *xb = extract(f, b, &tb), *xc = extract(f, c, &tc);
+    const uint32_t D = 46;
+    const double shift[4] = {0, 1, 3, 6}, vx[4] = {20, 30, 50, 60}; /* arms, arms/s */
+    for (uint32_t t = 0; t < 4; t++) {
+        const double *r = xa + t * D;
+        tu_assert_near(r[0], 0, 1e-12); /* the pelvis is the origin */
+        tu_assert_near(r[4 * 3 + 0], (-0.5 - shift[t]) / 0.5, 1e-5); /* the right hand */
+        tu_assert_near(r[4 * 3 + 1], 0.2 / 0.5, 1e-5);
+        tu_assert_near(r[D - 4], vx[t], 1e-4); /* forward … sideways: the pelvis moves on x */
+        tu_assert_near(r[D - 3], 0, 1e-9);
+        tu_assert_near(r[D - 2], 0, 1e-9);
+        tu_assert_near(r[D - 1], 0, 1e-9); /* no turning */
+        for (uint32_t i = 0; i < D - 1; i++) {
+            tu_assert_near(xb[t * D + i], r[i], 1e-4);
+            if (i < D - 4)
+                tu_assert_near(xc[t * D + i], r[i], 1e-4);
+        }
+        tu_assert_near(xc[t * D + D - 1], 0.1 * 10.0, 1e-6); /* 0.1 rad per frame at 10 fps */
+    }
+    /* the first frame's normalization does not see through the turning copy */
+    affect_free(xc);
+    affect_features_free(f);
+    affect_features_options_default(&opt);
+    f = create(&opt, a);
+    xc = extract(f, c, &tc);
+    double *xa2 = extract(f, a, &ta);
+    assert_true(fabs(xc[3 * 21 + 4 * 3 + 2] - xa2[3 * 21 + 4 * 3 + 2]) > 0.1);
+    affect_free(xa2);
+    /* root needs the body frame */
+    affect_features *g = NULL;
+    affect_error err;
+    opt.root = true;
+    assert_int_equal(affect_features_create(&opt, a, &g, &err), AFFECT_ERR_INVALID);
+    assert_string_equal(err.msg, "root velocity and turning rate need the body frame");
+    /* the binary form keeps the frame and the root */
+    affect_features_free(f);
+    opt.frame = AFFECT_FEATURES_FRAME_BODY;
+    f = create(&opt, a);
+    size_t size;
+    unsigned char *buf = encode(f, &size);
+    assert_int_equal(buf[1], 2 | 8 | 16);
+    assert_int_equal(affect_features_decode(buf, size, &g, &err), AFFECT_OK);
+    assert_true(g->frame == AFFECT_FEATURES_FRAME_BODY && g->root && !g->normalize);
+    affect_features_free(g);
+    free(buf);
+    affect_free(xa);
+    affect_free(xb);
+    affect_free(xc);
+    affect_features_free(f);
+    affect_motion_free(a);
+    affect_motion_free(b);
+    affect_motion_free(c);
+}
+
+/* Mirror images: partners by name, the lateral axis negated, twice = the identity. */
+static void test_mirror(void **state)
+{
+    affect_motion *m = make_motion(0, 0, 0);
+    affect_features_options opt;
+    affect_features_options_default(&opt);
+    opt.frame = AFFECT_FEATURES_FRAME_BODY;
+    opt.velocity = true;
+    opt.root = true;
+    affect_features *f = create(&opt, m);
+    uint32_t partner[7];
+    affect_error err;
+    assert_int_equal(affect_features_mirror_map(f, partner, &err), AFFECT_ERR_INVALID);
+    assert_string_equal(err.msg, "joint \"UpperArm_R\" has no mirror partner (\"UpperArm_L\" is "
+                                 "not among the observed joints)");
+    affect_features_free(f);
+    const char *entries[] = {"Hips", "UpperLeg_R", "Chest", "UpperLeg_L"};
+    opt.joints = entries;
+    opt.n_joints = 4;
+    f = create(&opt, m);
+    assert_int_equal(affect_features_mirror_map(f, partner, &err), AFFECT_OK);
+    const uint32_t want[4] = {0, 3, 2, 1};
+    assert_memory_equal(partner, want, sizeof want);
+    uint32_t T;
+    double *x = extract(f, m, &T);
+    uint32_t D = affect_features_dim(f);
+    assert_int_equal(D, 4 * 6 + 4);
+    double *y = malloc(sizeof *y * T * D), *z = malloc(sizeof *z * T * D);
+    affect_features_mirror(f, partner, x, T, y);
+    affect_features_mirror(f, partner, y, T, z);
+    for (uint32_t i = 0; i < T * D; i++)
+        assert_true(z[i] == x[i]);
+    for (uint32_t t = 0; t < T; t++) {
+        const double *a = x + t * D, *b = y + t * D;
+        assert_true(b[3 * 3 + 0] == -a[1 * 3 + 0]); /* UpperLeg_L ← −UpperLeg_R on x */
+        assert_true(b[3 * 3 + 1] == a[1 * 3 + 1]);
+        assert_true(b[12 + 1 * 3 + 0] == -a[12 + 3 * 3 + 0]); /* velocities */
+        assert_true(b[D - 4] == -a[D - 4] && b[D - 3] == a[D - 3] && b[D - 1] == -a[D - 1]);
+    }
+    free(y);
+    free(z);
+    affect_free(x);
+    affect_features_free(f);
+    /* the first frame without normalization has no lateral axis to mirror */
+    affect_features_options_default(&opt);
+    opt.normalize = false;
+    opt.joints = entries;
+    opt.n_joints = 4;
+    f = create(&opt, m);
+    assert_int_equal(affect_features_mirror_map(f, partner, &err), AFFECT_ERR_INVALID);
+    assert_string_equal(err.msg, "mirroring needs the body frame or normalized positions");
+    affect_features_free(f);
+    affect_motion_free(m);
+}
+
 /* Role entries resolve per motion; the skeleton and parents come from the first motion. */
 static void test_roles_and_skeleton(void **state)
 {
@@ -382,7 +523,9 @@ static void test_binary_form(void **state)
         expect_decode_error(c, size, msg);                                                     \
     } while (0)
     CORRUPT(c[0] = 3, "up axis 3 out of range (0 .. 2)");
-    CORRUPT(c[1] = 0x17, "unknown flags 0x17 (offset 1)");
+    CORRUPT(c[1] = 0x27, "unknown flags 0x27 (offset 1)");
+    CORRUPT(c[1] = 0x0f, "flags 0x0f: normalize and the body frame exclude each other (offset 1)");
+    CORRUPT(c[1] = 0x16, "flags 0x16: root needs the body frame (offset 1)");
     CORRUPT(c[3] = 1, "reserved byte 3 is not zero");
     CORRUPT(put32(c + 4, 0), "joint count 0 out of range (1 .. 4096)");
     CORRUPT(c[15] = 0x7f; c[14] = 0xf0, "frames per second inf out of range (0 .. 100000]");
@@ -533,6 +676,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_defaults_and_raw_values),
         cmocka_unit_test(test_normalization_invariance),
+        cmocka_unit_test(test_body_frame),
+        cmocka_unit_test(test_mirror),
         cmocka_unit_test(test_roles_and_skeleton),
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_binary_form),

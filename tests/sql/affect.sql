@@ -43,17 +43,51 @@ CREATE TABLE probe AS
 SELECT seed, emotion, motion_slice(m, 30, 49) AS m FROM s
  WHERE action = 'wave' AND emotion IN ('sad', 'angry') ORDER BY seed, emotion;
 CREATE TABLE small AS
-SELECT affect_train(m, emotion, '{"states":2,"mixtures":1,"joints":["right_hand"],"max_iter":2,"svm_c":1,"spca_dims":1,"knn_k":1}') AS model
+SELECT affect_train(m, emotion, '{"states":2,"mixtures":1,"joints":["right_hand"],"max_iter":2,"svm_c":1,"spca_dims":1,"knn_k":1,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false}') AS model
   FROM probe WHERE seed <= 3;
 
-SELECT 'the small classifier: an AFCL BLOB of version 1', substr(model, 1, 8) = x'4146434C01000000'
+SELECT 'the small classifier: an AFCL BLOB of version 2', substr(model, 1, 8) = x'4146434C02000000'
    AND length(model) BETWEEN 2000 AND 4000
   FROM small;
 
 -- ---- the big classifier: 4 emotions, performers 1–4, three actions each ----
 CREATE TABLE c AS
-SELECT affect_train(m, emotion, '{"states":5,"mixtures":1,"joints":["right_hand","left_hand","head","chest"],"velocity":true,"max_iter":8}') AS model
+SELECT affect_train(m, emotion, '{"states":5,"mixtures":1,"joints":["right_hand","left_hand","head","chest"],"velocity":true,"max_iter":8,"covariance":"full","frame":"first","descriptors":"none","mirror":false}') AS model
   FROM s WHERE seed <= 4;
+
+-- ---- the defaults: the measured best (docs/EVALUATION.md, "Choosing the defaults") ----
+CREATE TABLE d AS SELECT affect_train(m, emotion) AS model FROM s WHERE seed <= 4;
+
+WITH t AS MATERIALIZED (SELECT affect_info(model) AS i FROM d)
+SELECT 'defaults: the body frame, 5 states × 1 diagonal, every motion and its mirror image, kinematic summaries at weight 0.1',
+       json_extract(i, '$.features.frame') = 'body' AND json_extract(i, '$.features.velocity') = 0
+   AND json_extract(i, '$.features.root') = 0 AND json_extract(i, '$.hmm.states') = 5
+   AND json_extract(i, '$.hmm.mixtures') = 1 AND json_extract(i, '$.hmm.covariance') = 'diag'
+   AND json_extract(i, '$.hmm.max_iter') = 20 AND json_extract(i, '$.mirror') = 1
+   AND json_extract(i, '$.training_motions') = 96
+   AND json_extract(i, '$.descriptors') = 'kinematics'
+   AND json_extract(i, '$.descriptor_weight') = 0.1
+   AND json_extract(i, '$.dimensions.descriptors') = 21
+  FROM t;
+
+SELECT 'defaults: held-out performers 5 and 6 by SVM ' || svm, svm >= 0.9
+  FROM (SELECT avg(emotion = affect_classify(model, m)) AS svm FROM s, d WHERE seed >= 5);
+-- oom: skip
+
+SELECT affect_train(m, emotion, '{"joints":["right_hand"],"mirror":true}') FROM probe;
+-- error: affect_train: joint "Hand_R" has no mirror partner ("Hand_L" is not among the observed joints)
+
+SELECT json_extract(affect_info(affect_train(m, emotion, '{"states":2,"joints":["right_hand"]}')), '$.mirror') FROM probe;
+-- expect: 0
+
+SELECT affect_train(m, emotion, '{"mirror":"yes"}') FROM probe;
+-- error: affect_train: option "mirror" must be true, false or "auto"
+
+SELECT affect_train(m, emotion, '{"descriptors":"speed"}') FROM probe;
+-- error: affect_train: option "descriptors" must be one of "none", "kinematics", "laban", "all", got "speed"
+
+SELECT affect_train(m, emotion, '{"root":true,"frame":"first"}') FROM probe;
+-- error: affect_train: row 1: root velocity and turning rate need the body frame
 
 -- ---- recognition of the unseen performers 5 and 6 ----
 SELECT 'held-out performers 5 and 6: svm ' || svm || ', knn ' || knn || ', ml ' || ml,
@@ -149,15 +183,15 @@ SELECT 'fisher_score: z-scores limited to ±5 (score_clip), and the limit is rea
 
 -- ---- determinism ----
 SELECT 'training twice gives identical BLOBs',
-       (SELECT affect_train(m, emotion, '{"states":5,"mixtures":1,"joints":["right_hand","left_hand","head","chest"],"velocity":true,"max_iter":8}')
+       (SELECT affect_train(m, emotion, '{"states":5,"mixtures":1,"joints":["right_hand","left_hand","head","chest"],"velocity":true,"max_iter":8,"covariance":"full","frame":"first","descriptors":"none","mirror":false}')
           FROM s WHERE seed <= 4) = model
   FROM c;
 -- oom: skip
 
 SELECT 'the small classifier too, and the class order does not depend on the row order',
-       (SELECT affect_train(m, emotion, '{"states":2,"mixtures":1,"joints":["right_hand"],"max_iter":2,"svm_c":1,"spca_dims":1,"knn_k":1}')
+       (SELECT affect_train(m, emotion, '{"states":2,"mixtures":1,"joints":["right_hand"],"max_iter":2,"svm_c":1,"spca_dims":1,"knn_k":1,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false}')
           FROM probe WHERE seed <= 3) = model
-   AND (SELECT json_extract(affect_info(affect_train(m, emotion, '{"states":2,"mixtures":1,"joints":["right_hand"],"max_iter":1,"svm_c":1}')), '$.classes')
+   AND (SELECT json_extract(affect_info(affect_train(m, emotion, '{"states":2,"mixtures":1,"joints":["right_hand"],"max_iter":1,"svm_c":1,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false}')), '$.classes')
           FROM (SELECT * FROM probe WHERE seed <= 2 ORDER BY emotion DESC)) = '["angry","sad"]'
   FROM small;
 -- oom: skip
@@ -165,13 +199,13 @@ SELECT 'the small classifier too, and the class order does not depend on the row
 -- ---- affect_info ----
 WITH t AS MATERIALIZED (SELECT affect_info(model) AS i FROM c)
 SELECT 'affect_info: classes, training set, dimensions, HMM configuration, features',
-       json_valid(i) AND json_extract(i, '$.format') = 1
+       json_valid(i) AND json_extract(i, '$.format') = 2
    AND json_extract(i, '$.classes') = '["angry","happy","neutral","sad"]'
    AND json_extract(i, '$.training_motions') = 48
    AND json_extract(i, '$.per_class') = '{"angry":12,"happy":12,"neutral":12,"sad":12}'
-   AND json_extract(i, '$.dimensions') = '{"observation":24,"per_hmm":1650,"fisher":6600,"spca":3}'
+   AND json_extract(i, '$.dimensions') = '{"observation":24,"per_hmm":1650,"fisher":6600,"descriptors":0,"representation":6600,"spca":3}'
    AND json_extract(i, '$.hmm') = json('{"states":5,"mixtures":1,"dim":24,"covariance":"full","topology":"ergodic","max_jump":0,"start":"first","max_iter":8,"tol":0.0001,"reg":0.0001,"seed":1}')
-   AND json_extract(i, '$.features') = json('{"joints":["right_hand","left_hand","head","chest"],"skeleton":["Hand_R","Hand_L","Head","Chest"],"parents":[3,3,3,-1],"normalize":true,"scale":"arm","up":"y","velocity":true,"fps":30,"unit":"arm","dim":24}')
+   AND json_extract(i, '$.features') = json('{"joints":["right_hand","left_hand","head","chest"],"skeleton":["Hand_R","Hand_L","Head","Chest"],"parents":[3,3,3,-1],"frame":"first","normalize":true,"scale":"arm","up":"y","velocity":true,"root":false,"fps":30,"unit":"arm","dim":24}')
   FROM t;
 
 WITH t AS MATERIALIZED (SELECT affect_info(model) AS i FROM c)
@@ -196,7 +230,7 @@ SELECT 'affect_info: the defaults (all groups, z-scores clipped at 5, C by cross
 WITH t AS MATERIALIZED (SELECT affect_info(model) AS i FROM small)
 SELECT 'affect_info of the small classifier: the options given',
        json_extract(i, '$.classes') = '["angry","sad"]' AND json_extract(i, '$.training_motions') = 6
-   AND json_extract(i, '$.dimensions') = '{"observation":3,"per_hmm":24,"fisher":48,"spca":1}'
+   AND json_extract(i, '$.dimensions') = '{"observation":3,"per_hmm":24,"fisher":48,"descriptors":0,"representation":48,"spca":1}'
    AND json_extract(i, '$.svm.C') = 1 AND json_extract(i, '$.svm.C_chosen_by') = 'option'
    AND json_type(i, '$.svm.cv_accuracy') = 'null' AND json_extract(i, '$.knn_k') = 1
    AND json_extract(i, '$.features.joints') = '["right_hand"]'
@@ -208,10 +242,10 @@ SELECT 'JSON results nest as objects', json_type(json_object('i', affect_info(mo
 
 -- options: groups, no normalization, no limit, a linear sPCA, the sPCA dims capped at C − 1
 CREATE TABLE variants AS
-SELECT 'a' AS name, affect_train(m, emotion, '{"states":2,"mixtures":1,"joints":["right_hand"],"max_iter":2,"svm_c":0.5,"groups":["transitions","means"],"score_normalization":"none","score_clip":0,"spca_kernel":"linear","spca_dims":4,"knn_k":3,"svm_folds":3}') AS model
+SELECT 'a' AS name, affect_train(m, emotion, '{"states":2,"mixtures":1,"joints":["right_hand"],"max_iter":2,"svm_c":0.5,"groups":["transitions","means"],"score_normalization":"none","score_clip":0,"spca_kernel":"linear","spca_dims":4,"knn_k":3,"svm_folds":3,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false}') AS model
   FROM probe WHERE seed <= 3
 UNION ALL
-SELECT 'b', affect_train(m, emotion, '{"states":2,"mixtures":1,"joints":["right_hand"],"max_iter":2,"groups":"all","svm_c":"auto","svm_folds":3,"spca_sigma":2}')
+SELECT 'b', affect_train(m, emotion, '{"states":2,"mixtures":1,"joints":["right_hand"],"max_iter":2,"groups":"all","svm_c":"auto","svm_folds":3,"spca_sigma":2,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false}')
   FROM probe WHERE seed <= 3;
 
 WITH t AS MATERIALIZED (SELECT affect_info(model) AS i FROM variants WHERE name = 'a')
@@ -255,7 +289,7 @@ SELECT 'numeric labels become text classes', json_extract(affect_info(model), '$
 -- ---- the grid search ----
 CREATE TABLE cvs AS SELECT action, emotion, seed, m FROM s WHERE action IN ('knock', 'wave') AND seed <= 4;
 CREATE TABLE gridc AS
-SELECT affect_train(m, emotion, '{"states":3,"mixtures":1,"joints":["right_hand","head"],"velocity":true,"max_iter":4,"svm_c":1,"grid":{"spca_dims":[1,2,3],"spca_sigma":[0.5,1],"knn_k":[1,3],"folds":4}}') AS model
+SELECT affect_train(m, emotion, '{"states":3,"mixtures":1,"joints":["right_hand","head"],"velocity":true,"max_iter":4,"svm_c":1,"grid":{"spca_dims":[1,2,3],"spca_sigma":[0.5,1],"knn_k":[1,3],"folds":4},"covariance":"full","frame":"first","descriptors":"none","mirror":false}') AS model
   FROM cvs;
 
 WITH t AS MATERIALIZED (SELECT affect_info(model) AS i FROM gridc)
@@ -319,10 +353,10 @@ SELECT * FROM affect_salience();
 -- error: affect_salience: argument 1 is required, as in SELECT * FROM affect_salience(:classifier [, top])
 
 -- ---- affect_crossval: stratified k-fold ----
-CREATE TABLE cv AS SELECT * FROM affect_crossval('cvs', 'm', 'emotion', '{"states":2,"mixtures":1,"joints":["head"],"max_iter":2,"svm_c":0.01,"folds":4,"seed":3}');
-CREATE TABLE cv_again AS SELECT * FROM affect_crossval('cvs', 'm', 'emotion', '{"states":2,"mixtures":1,"joints":["head"],"max_iter":2,"svm_c":0.01,"folds":4,"seed":3}');
-CREATE TABLE cv_seed4 AS SELECT * FROM affect_crossval('cvs', 'm', 'emotion', '{"states":2,"mixtures":1,"joints":["head"],"max_iter":2,"svm_c":0.01,"folds":4,"seed":4}');
-CREATE TABLE cv_threads AS SELECT * FROM affect_crossval('cvs', 'm', 'emotion', '{"states":2,"mixtures":1,"joints":["head"],"max_iter":2,"svm_c":0.01,"folds":4,"seed":3,"threads":2}');
+CREATE TABLE cv AS SELECT * FROM affect_crossval('cvs', 'm', 'emotion', '{"states":2,"mixtures":1,"joints":["head"],"max_iter":2,"svm_c":0.01,"folds":4,"seed":3,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false}');
+CREATE TABLE cv_again AS SELECT * FROM affect_crossval('cvs', 'm', 'emotion', '{"states":2,"mixtures":1,"joints":["head"],"max_iter":2,"svm_c":0.01,"folds":4,"seed":3,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false}');
+CREATE TABLE cv_seed4 AS SELECT * FROM affect_crossval('cvs', 'm', 'emotion', '{"states":2,"mixtures":1,"joints":["head"],"max_iter":2,"svm_c":0.01,"folds":4,"seed":4,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false}');
+CREATE TABLE cv_threads AS SELECT * FROM affect_crossval('cvs', 'm', 'emotion', '{"states":2,"mixtures":1,"joints":["head"],"max_iter":2,"svm_c":0.01,"folds":4,"seed":3,"threads":2,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false}');
 
 SELECT 'affect_crossval: 3 methods × (4 folds + a summary)', count(*) = 15
    AND sum(fold IS NULL) = 3 AND group_concat(DISTINCT method) = 'ml,svm,knn'
@@ -337,7 +371,7 @@ SELECT 'two threads give the same rows as one',
        (SELECT count(*) FROM (SELECT * FROM cv EXCEPT SELECT * FROM cv_threads)) = 0
    AND (SELECT count(*) FROM cv_threads) = 15;
 
-SELECT * FROM affect_crossval('cvs', 'm', 'emotion', '{"threads":0}');
+SELECT * FROM affect_crossval('cvs', 'm', 'emotion', '{"threads":0,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}');
 -- error: affect_crossval: affect_crossval_json: option "threads" must be from 1 to 64, got 0
 
 SELECT 'fold rows: 8 held out (2 per emotion), 24 training; accuracy from the confusion matrix: ' || method || ' ' || fold,
@@ -380,7 +414,7 @@ SELECT 'a weak configuration (the head alone, 2 states): SVM beats ML here',
        (SELECT accuracy FROM cv WHERE method = 'ml' AND fold IS NULL);
 
 -- ---- affect_crossval: leave one performer out ----
-CREATE TABLE cvg AS SELECT * FROM affect_crossval('cvs', 'm', 'emotion', '{"states":3,"mixtures":1,"joints":["right_hand","head"],"velocity":true,"max_iter":4,"group":"seed","methods":["knn","svm"]}');
+CREATE TABLE cvg AS SELECT * FROM affect_crossval('cvs', 'm', 'emotion', '{"states":3,"mixtures":1,"joints":["right_hand","head"],"velocity":true,"max_iter":4,"group":"seed","methods":["knn","svm"],"covariance":"full","frame":"first","descriptors":"none","mirror":false}');
 
 SELECT 'leave-one-group-out: one fold per performer, only the methods asked', count(*) = 2 * 5
    AND group_concat(DISTINCT method) = 'svm,knn'
@@ -424,7 +458,7 @@ SELECT affect_train(m, NULL) IS NULL FROM probe WHERE seed = 1;
 -- expect: 1
 
 SELECT 'rows whose label or motion is NULL are skipped',
-       (SELECT affect_train(x, label, '{"states":2,"mixtures":1,"joints":["right_hand"],"max_iter":2,"svm_c":1,"spca_dims":1,"knn_k":1}')
+       (SELECT affect_train(x, label, '{"states":2,"mixtures":1,"joints":["right_hand"],"max_iter":2,"svm_c":1,"spca_dims":1,"knn_k":1,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false}')
           FROM (SELECT m AS x, NULL AS label FROM probe WHERE seed = 4
                 UNION ALL SELECT NULL, 'happy'
                 UNION ALL SELECT m, emotion FROM probe WHERE seed <= 3)) = model
@@ -438,7 +472,7 @@ SELECT 'two classifiers alternating row by row (the per-function cache follows t
          WHERE p.emotion = 'sad' AND p.seed IN (1, 2) ORDER BY p.seed, v.o);
 
 -- ---- statements stopped early free the aggregate (checked for leaks in the --oom mode) ----
-SELECT seed, length(affect_train(motion_slice(m, 0, 9), emotion, '{"states":1,"mixtures":1,"joints":["head"],"max_iter":1,"svm_c":1}'))
+SELECT seed, length(affect_train(motion_slice(m, 0, 9), emotion, '{"states":1,"mixtures":1,"joints":["head"],"max_iter":1,"svm_c":1,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false}'))
   FROM probe WHERE seed <= 2 GROUP BY seed LIMIT 1;
 -- expect: 1
 
@@ -458,85 +492,85 @@ SELECT affect_train(m, '', '{"states":1}') FROM probe;
 SELECT affect_train('x', 'sad');
 -- error: affect_train: argument 1 must be a motion BLOB, got text
 
-SELECT affect_train(m, emotion, '{"svm":1}') FROM probe;
--- error: affect_train: unknown option "svm" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, max_iter, tol, reg, seed, groups, score_normalization, score_clip, svm_c, svm_folds, spca_dims, spca_kernel, spca_sigma, knn_k, grid)
+SELECT affect_train(m, emotion, '{"svm":1,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
+-- error: affect_train: unknown option "svm" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, frame, root, max_iter, tol, reg, seed, groups, score_normalization, score_clip, svm_c, svm_folds, spca_dims, spca_kernel, spca_sigma, knn_k, grid, descriptors, descriptor_weight, mirror)
 
-SELECT affect_train(m, emotion, '{"svm_c":0}') FROM probe;
+SELECT affect_train(m, emotion, '{"svm_c":0,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: option "svm_c" must be a positive number or "auto"
 
-SELECT affect_train(m, emotion, '{"svm_c":"big"}') FROM probe;
+SELECT affect_train(m, emotion, '{"svm_c":"big","covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: option "svm_c" must be a positive number or "auto"
 
-SELECT affect_train(m, emotion, '{"svm_folds":1}') FROM probe;
+SELECT affect_train(m, emotion, '{"svm_folds":1,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: svm_folds must be at least 2
 
-SELECT affect_train(m, emotion, '{"groups":[]}') FROM probe;
+SELECT affect_train(m, emotion, '{"groups":[],"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: option "groups" must be "all" or a non-empty array of group names (start, transitions, weights, means, covariances)
 
-SELECT affect_train(m, emotion, '{"groups":"means"}') FROM probe;
+SELECT affect_train(m, emotion, '{"groups":"means","covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: option "groups" must be "all" or a non-empty array of group names (start, transitions, weights, means, covariances)
 
-SELECT affect_train(m, emotion, '{"groups":["means",1]}') FROM probe;
+SELECT affect_train(m, emotion, '{"groups":["means",1],"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: option "groups" must be "all" or a non-empty array of group names (start, transitions, weights, means, covariances)
 
-SELECT affect_train(m, emotion, '{"groups":["means","variances"]}') FROM probe;
+SELECT affect_train(m, emotion, '{"groups":["means","variances"],"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: option "groups": unknown group "variances" (start, transitions, weights, means, covariances)
 
-SELECT affect_train(m, emotion, '{"groups":["start"],"states":2,"mixtures":1,"joints":["head"],"max_iter":1}') FROM probe;
+SELECT affect_train(m, emotion, '{"groups":["start"],"states":2,"mixtures":1,"joints":["head"],"max_iter":1,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false}') FROM probe;
 -- error: affect_train: motion 0: Fisher score under the HMM of class "angry": start scores need a model with a learned start
 
-SELECT affect_train(m, emotion, '{"score_normalization":"minmax"}') FROM probe;
+SELECT affect_train(m, emotion, '{"score_normalization":"minmax","covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: option "score_normalization" must be one of "zscore", "none", got "minmax"
 
-SELECT affect_train(m, emotion, '{"score_clip":-1}') FROM probe;
+SELECT affect_train(m, emotion, '{"score_clip":-1,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: score_clip must be a finite number, 0 or more (0: no limit)
 
-SELECT affect_train(m, emotion, '{"spca_dims":0}') FROM probe;
+SELECT affect_train(m, emotion, '{"spca_dims":0,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: spca_dims must be at least 1
 
-SELECT affect_train(m, emotion, '{"spca_kernel":"poly"}') FROM probe;
+SELECT affect_train(m, emotion, '{"spca_kernel":"poly","covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: option "spca_kernel" must be one of "linear", "rbf", got "poly"
 
-SELECT affect_train(m, emotion, '{"spca_sigma":0}') FROM probe;
+SELECT affect_train(m, emotion, '{"spca_sigma":0,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: spca_sigma must be a positive finite number
 
-SELECT affect_train(m, emotion, '{"knn_k":0}') FROM probe;
+SELECT affect_train(m, emotion, '{"knn_k":0,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: knn_k must be at least 1
 
-SELECT affect_train(m, emotion, '{"knn_k":2.5}') FROM probe;
+SELECT affect_train(m, emotion, '{"knn_k":2.5,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: option "knn_k" must be a whole number from 0 to 4294967295, got 2.5
 
-SELECT affect_train(m, emotion, '{"grid":[1]}') FROM probe;
+SELECT affect_train(m, emotion, '{"grid":[1],"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: option "grid" must be an object, got array
 
-SELECT affect_train(m, emotion, '{"grid":{"k":[1]}}') FROM probe;
+SELECT affect_train(m, emotion, '{"grid":{"k":[1]},"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: option "grid": unknown key "k" (spca_dims, spca_sigma, knn_k, folds)
 
-SELECT affect_train(m, emotion, '{"grid":{"knn_k":[]}}') FROM probe;
+SELECT affect_train(m, emotion, '{"grid":{"knn_k":[]},"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: option "grid": "knn_k" must be an array of 1 to 128 numbers
 
-SELECT affect_train(m, emotion, '{"grid":{"spca_sigma":["a"]}}') FROM probe;
+SELECT affect_train(m, emotion, '{"grid":{"spca_sigma":["a"]},"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: option "grid": "spca_sigma" must be an array of 1 to 128 numbers
 
-SELECT affect_train(m, emotion, '{"grid":{"spca_dims":3}}') FROM probe;
+SELECT affect_train(m, emotion, '{"grid":{"spca_dims":3},"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: option "grid": "spca_dims" must be an array of 1 to 128 numbers
 
-SELECT affect_train(m, emotion, '{"grid":{"knn_k":[1,0]}}') FROM probe;
+SELECT affect_train(m, emotion, '{"grid":{"knn_k":[1,0]},"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: grid knn_k must be whole numbers of at least 1
 
-SELECT affect_train(m, emotion, '{"grid":{"spca_dims":[1.5]}}') FROM probe;
+SELECT affect_train(m, emotion, '{"grid":{"spca_dims":[1.5]},"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: grid spca_dims must be whole numbers of at least 1
 
-SELECT affect_train(m, emotion, '{"grid":{"spca_sigma":[0.5,-1]}}') FROM probe;
+SELECT affect_train(m, emotion, '{"grid":{"spca_sigma":[0.5,-1]},"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: grid spca_sigma must be positive finite numbers
 
-SELECT affect_train(m, emotion, '{"grid":{"folds":1}}') FROM probe;
+SELECT affect_train(m, emotion, '{"grid":{"folds":1},"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: option "grid": "folds" must be a whole number from 2 to 1000
 
-SELECT affect_train(m, emotion, '{"states":0}') FROM probe;
+SELECT affect_train(m, emotion, '{"states":0,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: states must be between 1 and 256
 
-SELECT affect_train(m, emotion, '{"states":25}') FROM probe;
+SELECT affect_train(m, emotion, '{"states":25,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: row 1: the motion has 20 frames; 25 states need at least 25
 
 SELECT affect_classify('x', m) FROM probe WHERE seed = 1;
@@ -597,7 +631,7 @@ SELECT * FROM affect_crossval('probe', 'motion', 'emotion');
 SELECT * FROM affect_crossval('probe', 'm', 'label');
 -- error: affect_crossval: no such column: t.label
 
-SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"group":"performer"}');
+SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"group":"performer","covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}');
 -- error: affect_crossval: no such column: t.performer
 
 SELECT * FROM affect_crossval('probe', 'emotion', 'emotion');
@@ -606,26 +640,26 @@ SELECT * FROM affect_crossval('probe', 'emotion', 'emotion');
 SELECT * FROM affect_crossval('probe', 'm', 'm');
 -- error: affect_crossval: affect_crossval_json: row 1: label must be text or a number, got a BLOB
 
-SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"folds":1}');
+SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"folds":1,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}');
 -- error: affect_crossval: affect_crossval_json: option "folds" must be from 2 to 1024, got 1
 
-SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"methods":["svm","lda"]}');
+SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"methods":["svm","lda"],"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}');
 -- error: affect_crossval: affect_crossval_json: option "methods" must be a non-empty array of "ml", "svm", "knn"
 
-SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"group":1}');
+SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"group":1,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}');
 -- error: affect_crossval: affect_crossval_json: option "group" must be a column name
 
-SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"fold":3}');
--- error: affect_crossval: affect_crossval_json: unknown option "fold" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, max_iter, tol, reg, seed, groups, score_normalization, score_clip, svm_c, svm_folds, spca_dims, spca_kernel, spca_sigma, knn_k, grid, folds, group, methods, verbose, threads)
+SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"fold":3,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}');
+-- error: affect_crossval: affect_crossval_json: unknown option "fold" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, frame, root, max_iter, tol, reg, seed, groups, score_normalization, score_clip, svm_c, svm_folds, spca_dims, spca_kernel, spca_sigma, knn_k, grid, folds, descriptors, descriptor_weight, mirror, group, methods, verbose, threads)
 
-SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"knn_k":0}');
+SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"knn_k":0,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}');
 -- error: affect_crossval: affect_crossval_json: knn_k must be at least 1
 
 SELECT * FROM affect_crossval('probe', 'm', 'emotion', '[]');
 -- error: affect_crossval: affect_crossval_json: options (argument 4) must be a JSON object, got array
 
 CREATE TABLE lonely AS SELECT m, emotion, CASE WHEN seed = 1 THEN NULL ELSE seed END AS performer FROM probe WHERE seed <= 2;
-SELECT * FROM affect_crossval('lonely', 'm', 'emotion', '{"group":"performer"}');
+SELECT * FROM affect_crossval('lonely', 'm', 'emotion', '{"group":"performer","covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}');
 -- error: affect_crossval: affect_crossval_json: the group is NULL for 2 of 4 motions
 
 SELECT * FROM affect_crossval('lonely', 'm', '''sad''');

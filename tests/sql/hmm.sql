@@ -66,7 +66,7 @@ SELECT 'training twice gives identical BLOBs',
 WITH t AS MATERIALIZED (SELECT hmm_info(model) AS i FROM class_models WHERE label = 'angry')
 SELECT 'hmm_info: configuration and feature definition',
        json_extract(i, '$.config') = json('{"states":5,"mixtures":1,"dim":24,"covariance":"full","topology":"ergodic","max_jump":0,"start":"first","max_iter":8,"tol":0.0001,"reg":0.0001,"seed":1}')
-   AND json_extract(i, '$.features') = json('{"joints":["right_hand","left_hand","head","chest"],"skeleton":["Hand_R","Hand_L","Head","Chest"],"parents":[3,3,3,-1],"normalize":true,"scale":"arm","up":"y","velocity":true,"fps":30,"unit":"arm","dim":24}')
+   AND json_extract(i, '$.features') = json('{"joints":["right_hand","left_hand","head","chest"],"skeleton":["Hand_R","Hand_L","Head","Chest"],"parents":[3,3,3,-1],"frame":"first","normalize":true,"scale":"arm","up":"y","velocity":true,"root":false,"fps":30,"unit":"arm","dim":24}')
   FROM t;
 
 WITH t AS MATERIALIZED (SELECT hmm_info(model) AS i FROM class_models WHERE label = 'happy')
@@ -287,7 +287,7 @@ SELECT hmm_train(m, '{"up":"w"}') FROM probe;
 -- error: hmm_train: option "up" must be one of "x", "y", "z", got "w"
 
 SELECT hmm_train(m, '{"state":3}') FROM probe;
--- error: hmm_train: unknown option "state" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, max_iter, tol, reg, seed)
+-- error: hmm_train: unknown option "state" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, frame, root, max_iter, tol, reg, seed)
 
 SELECT hmm_train(m, '[3]') FROM probe;
 -- error: hmm_train: options (argument 2) must be a JSON object, got array

@@ -8,6 +8,15 @@
  * Training (affect_classifier_train), everything on the training sequences only:
  *   1. one HMM per class (affect_hmm_train, the same configuration and seed for every class);
  *   2. F_i = [F(x_i | Λ_1) … F(x_i | Λ_C)], each part affect_fisher_score with the chosen groups;
+ *   0. with cfg->mirror on (or auto, when every observed joint has a mirror partner), the
+ *      training set is every motion and its mirror image (left and right
+ *      swapped, affect_features_mirror; descriptors by affect_descriptors_mirror), with the
+ *      motion's class: a style or an emotion does not depend on which hand waves, and a
+ *      recognizer that saw only right-hand waves then knows left-hand ones. Everything below
+ *      runs on the 2n motions (the kNN keeps 2n training points);
+ *   2b. with cfg->descriptors, the motion's descriptors d_i (affect_descriptors, computed by the
+ *      caller from the motion with the feature definition's up axis) are appended: the
+ *      representation is [F_i, d_i];
  *   3. normalization fitted on the rows F_i: z-score per dimension (mean, population standard
  *      deviation; a dimension that is constant over the training set keeps scale 1, so it is 0
  *      for every training motion), or none; z-scores are limited to ±score_clip (default 5),
@@ -16,6 +25,11 @@
  *      over the training motions (that is why a_il is tiny) and huge for a new motion that
  *      takes the transition, so its z-score reaches 10⁶ and more. On motion_synth's held-out
  *      performers this limit takes Fisher + SVM from 71 % to 100 % (tests/sql/affect.sql);
+ *      With descriptors, their z-scores (after the limit) are multiplied by
+ *      ω = √(descriptor_weight × D_F / D_d), D_F and D_d the two blocks' sizes: each z-scored
+ *      entry adds about 1 to a squared norm, so the Fisher block (10³ .. 10⁶ entries) would
+ *      drown a few dozen descriptors in the linear kernel; with ω the descriptor block counts
+ *      descriptor_weight times as much as the whole Fisher block;
  *   4. linear SVM (affect/svm.h) with C given, or chosen from AFFECT_CLASSIFIER_C_GRID by
  *      seeded stratified inner cross-validation (svm_folds folds) when cfg->svm_c is 0;
  *   5. sPCA (affect/spca.h) with the label kernel and dims asked (dims are capped by the label
@@ -54,6 +68,7 @@
 #include "affect/fisher.h"
 #include "affect/hmm.h"
 #include "affect/spca.h"
+#include "affect/summary.h"
 #include "affect/svm.h"
 
 #ifdef __cplusplus
@@ -61,7 +76,7 @@ extern "C" {
 #endif
 
 #define AFFECT_CLASSIFIER_MAGIC "AFCL"
-#define AFFECT_CLASSIFIER_VERSION 1u
+#define AFFECT_CLASSIFIER_VERSION 2u
 #define AFFECT_CLASSIFIER_MAX_CLASSES 64u
 /* C values tried when svm_c = 0 (chosen by inner cross-validation; ties → the smallest) */
 #define AFFECT_CLASSIFIER_C_GRID {0.001, 0.01, 0.1, 1.0, 10.0, 100.0, 1000.0}
@@ -80,6 +95,15 @@ typedef struct affect_classifier_grid {
     uint32_t k[AFFECT_CLASSIFIER_GRID_MAX];
 } affect_classifier_grid;
 
+/* Mirror images in training: off, on (an observed joint without a partner is an error), or
+ * auto (on when every observed joint has a partner, else off). A trained classifier's
+ * configuration says what was done: off or on. */
+typedef enum affect_classifier_mirror {
+    AFFECT_MIRROR_OFF = 0,
+    AFFECT_MIRROR_ON = 1,
+    AFFECT_MIRROR_AUTO = 2
+} affect_classifier_mirror;
+
 typedef struct affect_classifier_config {
     affect_hmm_config hmm;          /* the class HMMs (dim = the feature dimension) */
     unsigned groups;                /* Fisher groups (default AFFECT_FISHER_ALL) */
@@ -92,9 +116,22 @@ typedef struct affect_classifier_config {
     double spca_sigma;              /* RBF σ (default 0.25) */
     uint32_t knn_k;                 /* default 5 */
     affect_classifier_grid grid;    /* default: no search */
+    unsigned descriptors;           /* motion-level descriptors appended (affect/summary.h:
+                                       AFFECT_DESC_* mask, 0 = none; default kinematics) */
+    double descriptor_weight;       /* their block's share of the kernel (default 0.1) */
+    affect_classifier_mirror mirror; /* train on every motion and its mirror image (default
+                                        auto) */
 } affect_classifier_config;
 
+/* The measured best (docs/EVALUATION.md, "Choosing the defaults"), not the thesis's: class
+ * HMMs of 5 states × 1 diagonal Gaussian, ergodic, 20 Baum–Welch iterations at most;
+ * kinematic-summary descriptors with weight 0.1; mirror images auto; every other field as
+ * listed above. The thesis's configuration is hmm 7 × 4 full, descriptors 0, mirror off, with
+ * the first-frame observations. */
 void affect_classifier_config_default(affect_classifier_config *cfg);
+/* The observation options that go with those defaults: affect_features_options_default with
+ * the body frame (positions only: no velocities, no root columns). */
+void affect_classifier_features_default(affect_features_options *opt);
 /* NULL when cfg is usable, else a static message ("knn_k must be at least 1"). */
 const char *affect_classifier_config_check(const affect_classifier_config *cfg);
 
@@ -102,9 +139,13 @@ typedef struct affect_classifier affect_classifier; /* opaque */
 
 /* Trains on n sequences with class indices y[i] in 0 .. n_classes − 1 named labels[k] (copied;
  * every class needs at least one sequence, n_classes ≥ 2). feat (copied) is the observation
- * definition the sequences were extracted with; cfg->hmm.dim must be its dimension. */
+ * definition the sequences were extracted with; cfg->hmm.dim must be its dimension. desc:
+ * n × affect_descriptors_dim(cfg->descriptors) values, row i motion i's descriptors; required
+ * when cfg->descriptors is not 0 ("the configuration appends descriptors but none were
+ * given"), ignored otherwise; a non-finite value is "motion 3: descriptor 5 is not finite". */
 affect_status affect_classifier_train(const affect_classifier_config *cfg,
                                       const affect_features *feat, const affect_hmm_seq *seqs,
+                                      const double *desc,
                                       const uint32_t *y, uint32_t n, const char *const *labels,
                                       uint32_t n_classes, affect_classifier **out,
                                       affect_error *err);
@@ -121,9 +162,19 @@ typedef struct affect_classifier_out {
 } affect_classifier_out;
 
 /* Evaluates a sequence (T × dim, from affect_features_extract with the classifier's
- * definition). With ml_only, only loglik and ml are filled (no Fisher scores: much faster). */
+ * definition) with its motion's descriptors desc (as for training; NULL when the classifier
+ * has none). With ml_only, only loglik and ml are filled (no Fisher scores: much faster). */
 affect_status affect_classifier_eval(const affect_classifier *c, const double *x, uint32_t T,
+                                     const double *desc,
                                      bool ml_only, affect_classifier_out *out, affect_error *err);
+
+/* What evaluating a motion needs: its observations (*x, *n_frames, from affect_features_extract
+ * with the classifier's definition) and, when the classifier appends descriptors, *desc
+ * (affect_descriptors with its mask and the definition's up axis; NULL otherwise). Free both
+ * with affect_free. Errors: the extraction's and the descriptors'. */
+affect_status affect_classifier_observe(const affect_classifier *c, const affect_motion *m,
+                                        double **x, uint32_t *n_frames, double **desc,
+                                        affect_error *err);
 
 /* ---- read-only views ---- */
 const affect_classifier_config *affect_classifier_get_config(const affect_classifier *c);

@@ -74,7 +74,8 @@ typedef struct affect_cv_result {
 /* Runs the protocol on n sequences (class y[i] in 0 .. n_classes − 1 named labels[k]); group
  * NULL = stratified k-fold, else leave-one-group-out over group[i] in 0 .. n_groups − 1. */
 affect_status affect_crossval(const affect_cv_config *cfg, const affect_features *feat,
-                              const affect_hmm_seq *seqs, const uint32_t *y, uint32_t n,
+                              const affect_hmm_seq *seqs, const double *desc, const uint32_t *y,
+                              uint32_t n,
                               const char *const *labels, uint32_t n_classes,
                               const uint32_t *group, uint32_t n_groups, affect_cv_result **out,
                               affect_error *err);

@@ -46,6 +46,21 @@ affect_status affect_normalize_transform_compute(const affect_motion *m, const a
  * with them (roots turn and move, offsets and translations scale). */
 void affect_normalize_apply(affect_motion *m, const affect_normalize_transform *tf);
 
+/* The rotation about the up axis that turns the horizontal part of the lateral vector lat onto
+ * the axis normalization puts it on (+x, or +y for x-up data), as an angle (radians); false when
+ * that horizontal part is shorter than 1e-9 (no heading). */
+bool affect_normalize_heading_angle(const double lat[3], int up_axis, double *angle);
+/* The rotation by angle about the up axis (right-handed, row-major 3 × 3). */
+void affect_normalize_axis_rotation(int up_axis, double angle, double rot[9]);
+
+/* The heading correction of every frame: ang[t] = the angle affect_normalize_heading_angle gives
+ * for frame t's lateral vector, unwrapped so that consecutive angles differ by at most π. A
+ * frame without a horizontal lateral vector keeps the previous frame's angle (leading ones the
+ * first available one; 0 when no frame has one). False when no lateral roles resolve. ang holds
+ * n_frames doubles. */
+bool affect_normalize_headings(const affect_motion *m, const affect_roles *roles, int up_axis,
+                               double *ang);
+
 /* Returns a normalized copy of m. */
 affect_status affect_motion_normalize(const affect_motion *m, const affect_roles *roles,
                                       const affect_normalize_options *opt, affect_motion **out,
