@@ -1095,6 +1095,9 @@ static affect_status decode_head(affect_br *r, affect_classifier **out, affect_e
     }
     affect_classifier_config *cfg = &c->cfg;
     affect_classifier_config_default(cfg);
+    cfg->descriptors = 0; /* version 1: no descriptors, no mirror images */
+    cfg->descriptor_weight = 1.0;
+    cfg->mirror = AFFECT_MIRROR_OFF;
     uint8_t zscore, kernel, mirror = 0;
     if (!affect_br_u32(r, &cfg->groups) || !affect_br_u8(r, &zscore) ||
         !affect_br_f64(r, &cfg->score_clip) || !affect_br_f64(r, &cfg->svm_c) || !affect_br_u32(r, &cfg->svm_folds) ||

@@ -918,6 +918,50 @@ static void test_descriptors(void **state)
     assert_non_null(strstr(err.msg, "no label information"));
 }
 
+/* tests/fixtures/classifier-v1.bin: the SQL spec's small classifier (angry and sad waves, the
+ * right hand, 2 states, frames 30 .. 49 of motion_synth seeds 1 .. 3) written by version 1
+ * (commit bd15fd4). Today's decoder reads it as a classifier without descriptors or mirror
+ * images, and its re-encoding (version 2) predicts the same. */
+static void test_fixture_v1(void **state)
+{
+    fixture *fx = *state;
+    size_t len;
+    unsigned char *data =
+        (unsigned char *)tu_read_file(AFFECT_FIXTURES_DIR "/classifier-v1.bin", &len);
+    assert_non_null(data);
+    assert_memory_equal(data, "AFCL\x01\0\0\0", 8);
+    affect_classifier *c = NULL, *d = NULL;
+    affect_error err;
+    assert_int_equal(affect_classifier_decode(data, len, &c, &err), AFFECT_OK);
+    const affect_classifier_config *cfg = affect_classifier_get_config(c);
+    assert_int_equal(cfg->descriptors, 0);
+    assert_true(cfg->descriptor_weight == 1.0 && cfg->mirror == AFFECT_MIRROR_OFF);
+    assert_int_equal(affect_classifier_n_classes(c), 2);
+    assert_string_equal(affect_classifier_label(c, 0), "angry");
+    assert_int_equal(affect_classifier_features(c)->frame, AFFECT_FEATURES_FRAME_FIRST);
+    unsigned char *blob;
+    size_t size;
+    assert_int_equal(affect_classifier_encode(c, &blob, &size, &err), AFFECT_OK);
+    assert_int_equal(blob[4], 2);
+    assert_int_equal(affect_classifier_decode(blob, size, &d, &err), AFFECT_OK);
+    for (uint32_t i = 0; i < fx->small_n; i++) {
+        affect_classifier_out a = {0}, b = {0};
+        double da[1], db[1];
+        a.decision = da;
+        b.decision = db;
+        const affect_hmm_seq *q = &fx->small_seqs[i];
+        assert_int_equal(affect_classifier_eval(c, q->x, q->n_frames, NULL, false, &a, &err),
+                         AFFECT_OK);
+        assert_int_equal(affect_classifier_eval(d, q->x, q->n_frames, NULL, false, &b, &err),
+                         AFFECT_OK);
+        assert_true(a.svm == b.svm && a.knn == b.knn && a.ml == b.ml && da[0] == db[0]);
+    }
+    free(blob);
+    free(data);
+    affect_classifier_free(c);
+    affect_classifier_free(d);
+}
+
 /* ---- grid search ---- */
 
 static bool in_u32(uint32_t v, const uint32_t *list, uint32_t n)
@@ -1234,6 +1278,7 @@ int main(void)
         cmocka_unit_test(test_corrupted_bytes),
         cmocka_unit_test(test_truncations),
         cmocka_unit_test(test_descriptors),
+        cmocka_unit_test(test_fixture_v1),
         cmocka_unit_test(test_bad_fields),
         cmocka_unit_test(test_config_check),
         cmocka_unit_test(test_train_errors),
