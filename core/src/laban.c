@@ -6,9 +6,13 @@
  * Effort components reduce those series; affect_laban_vector computes the six parts' velocity
  * and acceleration once, all 18 channels interleaved and filtered in one lockstep pass (the
  * same bits as affect_lowpass per channel), and derives all 21 Effort values from them; its
- * hull areas are bounded per frame first, and only frames that can beat the best get a hull. Shape components use the raw positions:
- * Directional projects the hand path on its two principal axes (LAPACKE_dsyev on the 3 × 3
- * covariance), Shaping and Flow take convex hulls per frame (hull.c).
+ * hull areas are bounded per frame first, and only frames that can beat the best get a hull.
+ * Shape components use the raw positions: Directional projects the hand path on its two
+ * principal axes (LAPACKE_dsyev on the 3 × 3 covariance), Shaping and Flow take convex hulls
+ * per frame (hull.c). Shape Flow computes the 3-D hull of every frame: its volume is
+ * Quickhull's running sum, so another algorithm would change the bits, and a frame could only
+ * be skipped with a rigorous upper bound of that value; none that is cheaper than the hull is
+ * tight enough to skip most frames (docs/BENCHMARKS.md, bench_laban).
  *
  * The filter: a 2nd-order Butterworth low-pass from the bilinear transform with the cut-off
  * pre-warped, K = tan(π fc / fs), applied forward and then backward (zero phase, the
@@ -442,46 +446,65 @@ static void gradient_channels(const double *x, size_t n, size_t c, double fps, d
             d[t * c + j] = (x[(t + 1) * c + j] - x[(t - 1) * c + j]) * fps * 0.5;
 }
 
+/* Row t of the parts' positions (each part's centroid, as part_positions computes it) into
+ * row: part k at row[3 · slot[k]]. */
+static void centroid_row(const affect_motion *m, const affect_part *parts, const bool have[6],
+                         const uint32_t slot[6], size_t t, double *row)
+{
+    for (int k = 0; k < 6; k++) {
+        if (!have[k])
+            continue;
+        const affect_part *part = &parts[k];
+        double inv = 1.0 / part->n_joints, p3[3] = {0, 0, 0};
+        for (uint32_t i = 0; i < part->n_joints; i++) {
+            const float *p = affect_motion_at(m, (uint32_t)t, (uint32_t)part->joints[i]);
+            p3[0] += p[0], p3[1] += p[1], p3[2] += p[2];
+        }
+        for (int a = 0; a < 3; a++)
+            row[3 * slot[k] + (size_t)a] = part->n_joints == 1 ? p3[a] : p3[a] * inv;
+    }
+}
+
 /* Velocity and acceleration of the parts k with have[k] (as affect_kinematics_compute computes
  * them, to the bit; the jerk, which no component of the vector uses, is skipped) in one block
  * (*block, freed by the caller), all parts' channels interleaved frame by frame so that one
  * pass filters them all; s->vel[k] and s->acc[k] point at part k's series (stride 3 × the
- * number of parts present). m->n_frames ≥ 2. */
+ * number of parts present). The positions are not stored: the velocity's central differences
+ * (gradient_channels' arithmetic) read them from a ring of three rows, which keeps the block
+ * a third smaller (on a long motion the fresh pages of the block, not the arithmetic, are the
+ * cost). m->n_frames ≥ 2. */
 static affect_status vector_kinematics(const affect_motion *m, const affect_part *parts,
                                        const bool have[6], const affect_laban_options *opt,
                                        double **block, effort_series *s, affect_error *err)
 {
-    size_t n = m->n_frames, c = 0, rows, pos_len, len, total;
+    size_t n = m->n_frames, c = 0, rows, len, total;
     uint32_t slot[6];
     for (int k = 0; k < 6; k++)
         if (have[k]) {
             slot[k] = (uint32_t)(c / 3);
             c += 3;
         }
-    if (!affect_mul_size(n, c, &pos_len) || !affect_add_size(n, 2 * PAD_MAX, &rows) ||
-        !affect_mul_size(rows, c, &len) || !affect_mul_size(len, 2, &total) ||
-        !affect_add_size(total, pos_len, &total))
+    if (!affect_add_size(n, 2 * PAD_MAX, &rows) || !affect_mul_size(rows, c, &len) ||
+        !affect_mul_size(len, 2, &total))
         return affect_fail(err, AFFECT_ERR_RANGE, "motion too long");
     double *b = affect_malloc_array(total, sizeof *b);
     if (!b)
         return affect_nomem(err);
-    double *pos = b, *vel = b + pos_len + PAD_MAX * c, *acc = vel + len;
-    for (size_t t = 0; t < n; t++) {
-        double *row = pos + t * c;
-        for (int k = 0; k < 6; k++) {
-            if (!have[k])
-                continue;
-            const affect_part *part = &parts[k];
-            double inv = 1.0 / part->n_joints, p3[3] = {0, 0, 0};
-            for (uint32_t i = 0; i < part->n_joints; i++) {
-                const float *p = affect_motion_at(m, (uint32_t)t, (uint32_t)part->joints[i]);
-                p3[0] += p[0], p3[1] += p[1], p3[2] += p[2];
-            }
-            for (int a = 0; a < 3; a++)
-                row[3 * slot[k] + (size_t)a] = part->n_joints == 1 ? p3[a] : p3[a] * inv;
-        }
+    double *vel = b + PAD_MAX * c, *acc = vel + len, ring[3][MAX_CHANNELS];
+    double fps = m->fps;
+    centroid_row(m, parts, have, slot, 0, ring[0]);
+    centroid_row(m, parts, have, slot, 1, ring[1]);
+    for (size_t j = 0; j < c; j++)
+        vel[j] = (ring[1][j] - ring[0][j]) * fps;
+    for (size_t t = 1; t + 1 < n; t++) {
+        const double *lo = ring[(t - 1) % 3];
+        double *hi = ring[(t + 1) % 3];
+        centroid_row(m, parts, have, slot, t + 1, hi);
+        for (size_t j = 0; j < c; j++)
+            vel[t * c + j] = (hi[j] - lo[j]) * fps * 0.5;
     }
-    gradient_channels(pos, n, c, m->fps, vel);
+    for (size_t j = 0; j < c; j++)
+        vel[(n - 1) * c + j] = (ring[(n - 1) % 3][j] - ring[(n - 2) % 3][j]) * fps;
     lowpass_channels(vel, n, c, m->fps, opt->cutoff_hz);
     gradient_channels(vel, n, c, m->fps, acc);
     lowpass_channels(acc, n, c, m->fps, opt->cutoff_hz);

@@ -24,23 +24,26 @@
  *                     input, the bound for any per-frame descriptor;
  *     laban vector    affect_laban_vector with the default options (3-D convex hull);
  *     vector (box)    the same with opt.hull_box = true (bounding box, no 3-D hull);
- * and the pieces of the vector, timed separately with the same inputs:
- *     kinematics x6   affect_kinematics_compute for the six parts (torso, head, hands, feet:
- *                     centroid, three filtered derivatives) and affect_kinematics_free;
- *     hull3d volume   per frame: gather the body joints into doubles, affect_hull3d_volume;
- *     flow (box)      affect_laban_shape_flow with hull_box: the per-frame gather and bounding
- *                     box that Shape Flow computes in both modes (with the hull it also keeps
- *                     the box, so the default pays for this and the hull; the gather, a few
- *                     per cent of it, is then counted twice);
- *     hull2d area     per frame: gather their horizontal coordinates, affect_hull_area_2d;
+ * and the pieces of the vector, each the very public function affect_laban_vector calls, timed
+ * separately with the same inputs:
+ *     shaping         affect_laban_shape_shaping: the torso's vertical and sagittal
+ *                     displacements and the largest horizontal hull area (every frame's area
+ *                     bounded by its octagon, hulls only for frames that can beat the best);
+ *     flow (hull)     affect_laban_shape_flow, default options: per frame, gather the body joints
+ *                     into doubles and affect_hull3d_volume (the vector's Shape Flow);
+ *     flow (box)      the same with hull_box: the per-frame gather and bounding box;
  *     directional x2  affect_laban_shape_directional for the left and right hand.
- * "other" is the vector's time minus the pieces it runs (the default: all five; box: all but
- * hull3d): the Effort reductions, the rest of Shape Shaping, role look-ups, allocation.
- *
+ * (affect_laban_shape_flow also resolves the roles, once per motion; the vector is given
+ * them.) "effort + rest" is the vector's CPU time minus the pieces' (the
+ * default: shaping, flow (hull), directional; box: shaping, flow (box), directional): the six
+ * parts' kinematics filtered in one lockstep pass (internal to laban.c, so not timed alone),
+ * the 21 Effort reductions, role look-ups, allocation.
  * How it measures: as bench_import — one untimed warm-up pass, then N passes per run (N chosen
  * so that a run takes about a second, or --repeat), 5 runs, the median run reported with the
- * fastest and slowest; clock_gettime(CLOCK_MONOTONIC). Output: a table per data set, then one
- * line per metric for scripts:
+ * fastest and slowest; clock_gettime(CLOCK_MONOTONIC). Each row also gives the median run's
+ * process CPU time per frame ("cpu ns/fr") and "busy", CPU over wall time of the runs (below 1
+ * when the process waited for its core). Output: a table per data set, then one line per
+ * metric for scripts:
  *     BENCH <metric> <value> <unit>
  * e.g. "BENCH laban_vector_corpus 412345 frames/s". Exit status 1 if a computation fails.
  */
@@ -86,9 +89,6 @@ typedef struct dataset {
     uint64_t frames;
     size_t pos_bytes;
     uint32_t max_joints;
-    /* workspaces of the per-frame hull kernels */
-    affect_hull3d *hull;
-    double *xyz, *xy, *scratch;
 } dataset;
 
 
@@ -139,10 +139,6 @@ static void free_dataset(dataset *d)
         free(d->e[i].body);
     }
     free(d->e);
-    affect_hull3d_free(d->hull);
-    free(d->xyz);
-    free(d->xy);
-    free(d->scratch);
     memset(d, 0, sizeof *d);
 }
 
@@ -192,21 +188,6 @@ static int add_motion(dataset *d, affect_motion *m, const char *what)
     d->pos_bytes += (size_t)m->n_frames * m->n_joints * 3 * sizeof(float);
     if (m->n_joints > d->max_joints)
         d->max_joints = m->n_joints;
-    return 0;
-}
-
-/* The per-frame hull workspaces, sized for the largest skeleton. */
-static int alloc_workspace(dataset *d)
-{
-    uint32_t j = d->max_joints;
-    d->hull = affect_hull3d_new(j);
-    d->xyz = malloc((size_t)j * 3 * sizeof *d->xyz);
-    d->xy = malloc((size_t)j * 2 * sizeof *d->xy);
-    d->scratch = malloc((size_t)j * 4 * sizeof *d->scratch);
-    if (!d->hull || !d->xyz || !d->xy || !d->scratch) {
-        fprintf(stderr, "out of memory\n");
-        return 1;
-    }
     return 0;
 }
 
@@ -379,47 +360,24 @@ static int k_vector(const dataset *d, void *ctx)
     return 0;
 }
 
-static int k_kinematics(const dataset *d, void *ctx)
+/* ctx: the affect_laban_options */
+static int k_shaping(const dataset *d, void *ctx)
 {
     const affect_laban_options *opt = ctx;
     for (size_t i = 0; i < d->n; i++) {
-        for (int p = 0; p < 6; p++) {
-            affect_kinematics k;
-            affect_error err;
-            if (affect_kinematics_compute(d->e[i].m, &d->e[i].parts[p], opt, &k, &err)) {
-                fprintf(stderr, "kinematics of motion %zu: %s\n", i, err.msg);
-                return 1;
-            }
-            g_sink += k.jerk[0];
-            affect_kinematics_free(&k);
+        double v[3];
+        affect_error err;
+        if (affect_laban_shape_shaping(d->e[i].m, &d->e[i].roles, opt, v, &err)) {
+            fprintf(stderr, "shape shaping of motion %zu: %s\n", i, err.msg);
+            return 1;
         }
+        g_sink += v[2];
     }
     return 0;
 }
 
-static int k_hull3d(const dataset *d, void *ctx)
-{
-    (void)ctx;
-    double best = 0;
-    for (size_t i = 0; i < d->n; i++) {
-        const entry *e = &d->e[i];
-        for (uint32_t t = 0; t < e->m->n_frames; t++) {
-            for (uint32_t b = 0; b < e->n_body; b++) {
-                const float *p = affect_motion_at(e->m, t, (uint32_t)e->body[b]);
-                d->xyz[3 * b] = p[0];
-                d->xyz[3 * b + 1] = p[1];
-                d->xyz[3 * b + 2] = p[2];
-            }
-            best = fmax(best, affect_hull3d_volume(d->hull, d->xyz, e->n_body));
-        }
-    }
-    g_sink += best;
-    return 0;
-}
-
-/* The horizontal plane of a y-up motion: x and z, as Shape Shaping uses (up_axis 1). */
-/* ctx: the affect_laban_options (hull_box set) */
-static int k_flow_box(const dataset *d, void *ctx)
+/* ctx: the affect_laban_options (default: the 3-D hull; hull_box: the bounding box) */
+static int k_flow(const dataset *d, void *ctx)
 {
     const affect_laban_options *opt = ctx;
     for (size_t i = 0; i < d->n; i++) {
@@ -431,25 +389,6 @@ static int k_flow_box(const dataset *d, void *ctx)
         }
         g_sink += v;
     }
-    return 0;
-}
-
-static int k_hull2d(const dataset *d, void *ctx)
-{
-    (void)ctx;
-    double best = 0;
-    for (size_t i = 0; i < d->n; i++) {
-        const entry *e = &d->e[i];
-        for (uint32_t t = 0; t < e->m->n_frames; t++) {
-            for (uint32_t b = 0; b < e->n_body; b++) {
-                const float *p = affect_motion_at(e->m, t, (uint32_t)e->body[b]);
-                d->xy[2 * b] = p[2];
-                d->xy[2 * b + 1] = p[0];
-            }
-            best = fmax(best, affect_hull_area_2d(d->xy, e->n_body, d->scratch));
-        }
-    }
-    g_sink += best;
     return 0;
 }
 
@@ -489,26 +428,33 @@ static int measure(const dataset *d, kernel_fn fn, void *ctx, unsigned repeat, r
     return bench_measure(one_pass, &a, repeat, r);
 }
 
-enum { K_READ, K_VECTOR, K_BOX, K_KIN, K_HULL3D, K_FLOWBOX, K_HULL2D, K_DIR, K_COUNT };
+enum { K_READ, K_VECTOR, K_BOX, K_SHAPING, K_FLOW, K_FLOWBOX, K_DIR, K_COUNT };
 
 static const char *const kernel_names[K_COUNT] = {
-    "read bound",      "laban vector",    "vector (box)",  "  kinematics x6",
-    "  hull3d volume", "  flow (box)",    "  hull2d area", "  directional x2"};
+    "read bound",   "laban vector", "vector (box)",   "  shaping",
+    "  flow (hull)", "  flow (box)", "  directional x2"};
 static const char *const kernel_keys[K_COUNT] = {
-    "read_bound",    "laban_vector",      "laban_vector_box", "kinematics6",
-    "hull3d_volume", "shape_flow_box",    "hull2d_area",      "directional2"};
+    "read_bound",  "laban_vector",   "laban_vector_box", "shape_shaping",
+    "shape_flow", "shape_flow_box", "directional2"};
 
-/* Seconds per pass over the data set. */
+/* Seconds per pass over the data set: wall clock (the median run) and that run's process CPU
+ * time (which leaves out the time the process waited for its core on a shared machine). */
 static double per_pass(const result *r)
 {
     return r->median / r->repeat;
 }
 
+static double cpu_per_pass(const result *r)
+{
+    return r->cpu_median / r->repeat;
+}
+
 static void row(const char *name, const result *r, double frames, double vector_s)
 {
     double s = per_pass(r);
-    printf("%-17s %7u %9.4f %9.4f %9.4f %13.0f %10.1f %8.1f%%\n", name, r->repeat, r->median,
-           r->min, r->max, frames / s, s / frames * 1e9, 100.0 * s / vector_s);
+    printf("%-17s %7u %9.4f %9.4f %9.4f %13.0f %10.1f %8.1f%% %10.1f %5.2f\n", name, r->repeat,
+           r->median, r->min, r->max, frames / s, s / frames * 1e9, 100.0 * s / vector_s,
+           cpu_per_pass(r) / frames * 1e9, r->busy);
 }
 
 /* Measures and reports one data set; key names it in the BENCH lines. */
@@ -521,30 +467,29 @@ static int run_dataset(const dataset *d, const char *key, unsigned repeat)
     struct {
         kernel_fn fn;
         void *ctx;
-    } k[K_COUNT] = {{k_read, NULL},       {k_vector, &def},   {k_vector, &box},
-                    {k_kinematics, &def}, {k_hull3d, NULL},   {k_flow_box, &box},
-                    {k_hull2d, NULL},     {k_directional, &def}};
+    } k[K_COUNT] = {{k_read, NULL},     {k_vector, &def}, {k_vector, &box}, {k_shaping, &def},
+                    {k_flow, &def},     {k_flow, &box},   {k_directional, &def}};
     result r[K_COUNT];
     for (int i = 0; i < K_COUNT; i++)
         if (measure(d, k[i].fn, k[i].ctx, repeat, &r[i]))
             return 1;
 
+    /* the remainders from CPU times: the kernels run one after another, and on a shared
+     * machine their wall-clock times are taken under different loads */
     double frames = (double)d->frames;
     double vec_s = per_pass(&r[K_VECTOR]), read_s = per_pass(&r[K_READ]);
-    double parts_s = 0;
-    for (int i = K_KIN; i <= K_DIR; i++)
-        parts_s += per_pass(&r[i]);
-    double other_s = vec_s - parts_s;
-    double other_box_s = per_pass(&r[K_BOX]) - (parts_s - per_pass(&r[K_HULL3D]));
+    double shape_cpu = cpu_per_pass(&r[K_SHAPING]) + cpu_per_pass(&r[K_DIR]);
+    double other_s = cpu_per_pass(&r[K_VECTOR]) - shape_cpu - cpu_per_pass(&r[K_FLOW]);
+    double other_box_s = cpu_per_pass(&r[K_BOX]) - shape_cpu - cpu_per_pass(&r[K_FLOWBOX]);
 
-    printf("%-17s %7s %9s %9s %9s %13s %10s %9s\n", "kernel", "passes", "median", "fastest",
-           "slowest", "frames/s", "ns/frame", "% vector");
+    printf("%-17s %7s %9s %9s %9s %13s %10s %9s %10s %5s\n", "kernel", "passes", "median",
+           "fastest", "slowest", "frames/s", "ns/frame", "% vector", "cpu ns/fr", "busy");
     for (int i = 0; i < K_COUNT; i++)
         row(kernel_names[i], &r[i], frames, vec_s);
-    printf("%-17s %7s %9s %9s %9s %13s %10.1f %8.1f%%\n", "  other (default)", "", "", "", "",
-           "", other_s / frames * 1e9, 100.0 * other_s / vec_s);
-    printf("%-17s %7s %9s %9s %9s %13s %10.1f %8.1f%%\n", "  other (box)", "", "", "", "", "",
-           other_box_s / frames * 1e9, 100.0 * other_box_s / vec_s);
+    printf("%-17s %7s %9s %9s %9s %13s %10s %9s %10.1f\n", "  effort+rest", "", "", "", "", "",
+           "", "", other_s / frames * 1e9);
+    printf("%-17s %7s %9s %9s %9s %13s %10s %9s %10.1f\n", "  effort+rest box", "", "", "", "",
+           "", "", "", other_box_s / frames * 1e9);
     printf("\nread bound: %.1f MB/s; laban vector runs at %.2f%% of its speed (%.0fx slower), "
            "vector (box) at %.2f%% (%.0fx slower)\n",
            (double)d->pos_bytes / read_s / 1e6, 100.0 * read_s / vec_s, vec_s / read_s,
@@ -566,8 +511,11 @@ static int run_dataset(const dataset *d, const char *key, unsigned repeat)
     for (int i = K_VECTOR; i < K_COUNT; i++)
         printf("BENCH %s_%s_time %.1f ns/frame\n", kernel_keys[i], key,
                per_pass(&r[i]) / frames * 1e9);
-    printf("BENCH other_%s_time %.1f ns/frame\n", key, other_s / frames * 1e9);
-    printf("BENCH other_box_%s_time %.1f ns/frame\n", key, other_box_s / frames * 1e9);
+    for (int i = K_VECTOR; i < K_COUNT; i++)
+        printf("BENCH %s_%s_cpu_time %.1f ns/frame\n", kernel_keys[i], key,
+               cpu_per_pass(&r[i]) / frames * 1e9);
+    printf("BENCH effort_rest_%s_cpu_time %.1f ns/frame\n", key, other_s / frames * 1e9);
+    printf("BENCH effort_rest_box_%s_cpu_time %.1f ns/frame\n", key, other_box_s / frames * 1e9);
     printf("BENCH read_bound_%s_throughput %.1f MB/s\n", key, (double)d->pos_bytes / read_s / 1e6);
     printf("BENCH laban_vector_%s_vs_read_bound %.6f ratio\n", key, read_s / vec_s);
     printf("BENCH laban_vector_box_%s_vs_read_bound %.6f ratio\n", key,
@@ -609,7 +557,7 @@ int main(int argc, char **argv)
                dir);
     } else if (lc == 0 && corpus.n == 0) {
         printf("bench_laban: no .bvh files in %s: measuring the synthetic motion only\n\n", dir);
-    } else if (lc || alloc_workspace(&corpus)) {
+    } else if (lc) {
         rc = 1;
     } else {
         const entry *e0 = &corpus.e[0];
@@ -623,7 +571,7 @@ int main(int argc, char **argv)
     free_dataset(&corpus);
 
     uint32_t clips = 0;
-    if (!rc && (build_synthetic(&synth, &clips) || alloc_workspace(&synth)))
+    if (!rc && build_synthetic(&synth, &clips))
         rc = 1;
     if (!rc) {
         const entry *e0 = &synth.e[0];
