@@ -56,7 +56,9 @@
  * longest sequence: T × N × M doubles of responsibilities, T × N of log α and of log b) and
  * accumulates, per component, Σγ, Σγ(x − c) and the scatter Σγ(x − c)(x − c)ᵀ with
  * c = the component's current mean (shifting by c avoids cancellation when the data sit far
- * from the origin); the scatter is one cblas_dsyrk per block of frames on rows scaled by √γ.
+ * from the origin); the scatter is one cblas_dsyrk per block of frames on rows scaled by √γ,
+ * leaving out (from PRUNE_MIN_DIM dimensions on) the rows below one unit roundoff of the block's
+ * scale (see scatter).
  * The M-step sets w = n_ij / n_i, μ = c + s/n, Σ = S/n − (s/n)(s/n)ᵀ + reg I, transitions from
  * Σξ with forbidden entries kept at 0, π from γ_0 when learned. A covariance that still fails
  * to factor gets 9 × reg + 1e-9 × its mean variance more on its diagonal, once; then training
@@ -91,6 +93,8 @@
 #define TRI_ROWS 8u /* rows of the inverse factors per product (full covariances); 8 was the \
                        fastest of 4 .. 64 in bench_hmm at m = 15 and m = 63 */
 #define LINEAR_MIN 1e-100     /* a linear-space sum below this is redone in log space */
+#define PRUNE_ROUNDOFF 0x1p-53 /* scatter: rows below this share of the block's scale are left out */
+#define PRUNE_MIN_DIM 24u /* ... from this dimension on (below, the test costs more than the rows) */
 /* exp of less than EXP_MIN is taken as 0: below DBL_MIN, it skips libm's slow underflow path, and
  * such terms are below one ulp of the sums they join (whose largest term is 1) */
 #define EXP_MIN (-708.0)
@@ -118,7 +122,7 @@ struct affect_hmm {
     double *half_logdet; /* N × M: ½ log det Σ */
     double *cnorm;       /* N × M: log w − ½ m log 2π − ½ log det Σ */
     double *inv;         /* full: the inverse factors L⁻¹ by row panels (see prepare_inverses) */
-    double *ib;          /* full: N × M × m, L⁻¹ (μ − centre) */
+    double *ib;          /* full: m × N × M, row r of L_k⁻¹ (μ_k − centre) at [r][k] */
     double *centre;      /* full: m, the mean of the component means */
     /* training report */
     bool has_report;
@@ -319,8 +323,8 @@ static int factor_one(affect_hmm *h, size_t k)
 
 /* Full covariances: the inverse factors W_k = L_k⁻¹ (lower triangular) stored by panels of
  * TRI_ROWS rows for densities: panel p holds rows r0 .. r1 − 1 of every W_k, columns 0 .. r1 − 1
- * only (the rest is 0), as one row-major (K·(r1 − r0)) × r1 matrix, k-major; the panels follow
- * one another. */
+ * only (the rest is 0), as one row-major (K·(r1 − r0)) × r1 matrix, row-major over (r, k) (row r
+ * of every component, then row r + 1, ...); the panels follow one another. */
 static double *inv_row(const affect_hmm *h, uint32_t k, uint32_t r)
 {
     uint32_t m = h->cfg.dim, K = h->cfg.n_states * h->cfg.n_mix;
@@ -328,7 +332,7 @@ static double *inv_row(const affect_hmm *h, uint32_t k, uint32_t r)
     /* the panels before: Σ_{p < P} K × TRI_ROWS × (p + 1) TRI_ROWS, P = r0 / TRI_ROWS */
     size_t P = r0 / TRI_ROWS;
     size_t base = (size_t)K * TRI_ROWS * TRI_ROWS * (P * (P + 1) / 2);
-    return h->inv + base + ((size_t)k * (r1 - r0) + (r - r0)) * r1;
+    return h->inv + base + ((size_t)(r - r0) * K + k) * r1;
 }
 
 /* Fills the panels of W_k (forward substitution, row by row: W[r][c] = (δ_rc −
@@ -367,7 +371,7 @@ static void prepare_inverses(affect_hmm *h)
                 w[c] /= d;
                 y += w[c] * (mu[c] - h->centre[c]);
             }
-            h->ib[(size_t)k * m + r] = y;
+            h->ib[(size_t)r * K + k] = y;
         }
     }
 }
@@ -398,77 +402,22 @@ static inline double exp0(double v)
 }
 
 /* log b_i(x_t) for frames x[0 .. n) (n ≤ block) into lb (n × N) and, when rho is not NULL, the
- * within-state responsibilities into rho (n × N × M). cbuf holds block × N × M doubles, dbuf
- * block × m. */
-static void densities(const affect_hmm *h, const double *x, uint32_t n, double *lb, double *rho,
-                      double *cbuf, double *dbuf)
+ * within-state responsibilities into rho (n × N × M), from c (n × N × M, frame-major): the
+ * components' log(w N(x_t)). The largest term of each log-sum-exp is exp(0) = 1 exactly, so it
+ * is not computed. */
+static void mix_lse(const affect_hmm *h, const double *c, uint32_t n, double *lb, double *rho)
 {
-    uint32_t N = h->cfg.n_states, M = h->cfg.n_mix, m = h->cfg.dim, K = N * M;
-    if (h->cfg.cov == AFFECT_HMM_FULL) {
-        /* ‖L⁻¹(x − μ)‖² = ‖W (x − c) − ib‖², panel by panel and SUB_FRAMES frames at a time
-         * (so that the product stays in cache): Y = −ib, then Y += (X − c)[:, 0..r1) Pᵀ for all
-         * components at once (one dgemm with β = 1), then the sums of squares row by row */
-        double *xc = dbuf, *y = dbuf + (size_t)n * m;
-        for (uint32_t t = 0; t < n; t++)
-            for (uint32_t d = 0; d < m; d++)
-                xc[(size_t)t * m + d] = x[(size_t)t * m + d] - h->centre[d];
-        for (size_t i = 0; i < (size_t)K * n; i++)
-            cbuf[i] = 0.0;
-        for (uint32_t t0 = 0; t0 < n; t0 += SUB_FRAMES) {
-            uint32_t nt = n - t0 < SUB_FRAMES ? n - t0 : SUB_FRAMES;
-            const double *panel = h->inv;
-            for (uint32_t r0 = 0; r0 < m; r0 += TRI_ROWS) {
-                uint32_t r1 = m - r0 < TRI_ROWS ? m : r0 + TRI_ROWS, rows = r1 - r0;
-                uint32_t wide = K * rows;
-                for (uint32_t k = 0; k < K; k++)
-                    for (uint32_t r = 0; r < rows; r++)
-                        y[(size_t)k * rows + r] = -h->ib[(size_t)k * m + r0 + r];
-                for (uint32_t t = 1; t < nt; t++)
-                    memcpy(y + (size_t)t * wide, y, wide * sizeof *y);
-                cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasTrans, (int)nt, (int)wide, (int)r1,
-                            1.0, xc + (size_t)t0 * m, (int)m, panel, (int)r1, 1.0, y, (int)wide);
-                for (uint32_t t = 0; t < nt; t++) {
-                    const double *yt = y + (size_t)t * wide;
-                    for (uint32_t k = 0; k < K; k++) {
-                        const double *v = yt + (size_t)k * rows;
-                        double s = 0.0;
-                        for (uint32_t r = 0; r < rows; r++)
-                            s += v[r] * v[r];
-                        cbuf[(size_t)k * n + t0 + t] += s;
-                    }
-                }
-                panel += (size_t)wide * r1;
-            }
-        }
-        for (uint32_t k = 0; k < K; k++) {
-            double c = h->cnorm[k], *out = cbuf + (size_t)k * n;
-            for (uint32_t t = 0; t < n; t++)
-                out[t] = c == -INFINITY ? -INFINITY : c - 0.5 * out[t];
-        }
-    } else {
-        for (uint32_t k = 0; k < K; k++) {
-            const double *mu = h->means + (size_t)k * m;
-            const double *f = h->fac + (size_t)k * h->cs;
-            double *out = cbuf + (size_t)k * n;
-            double c = h->cnorm[k];
-            for (uint32_t t = 0; t < n; t++) {
-                const double *xt = x + (size_t)t * m;
-                double q = 0.0;
-                for (uint32_t d = 0; d < m; d++) {
-                    double v = (xt[d] - mu[d]) * f[d];
-                    q += v * v;
-                }
-                out[t] = c == -INFINITY ? -INFINITY : c - 0.5 * q;
-            }
-        }
-    }
+    uint32_t N = h->cfg.n_states, M = h->cfg.n_mix;
     for (uint32_t t = 0; t < n; t++) {
         for (uint32_t i = 0; i < N; i++) {
-            const double *ci = cbuf + (size_t)i * M * n + t; /* stride n over j */
-            double mx = -INFINITY;
-            for (uint32_t j = 0; j < M; j++)
-                if (ci[(size_t)j * n] > mx)
-                    mx = ci[(size_t)j * n];
+            const double *ci = c + ((size_t)t * N + i) * M;
+            double mx = ci[0];
+            uint32_t top = 0;
+            for (uint32_t j = 1; j < M; j++)
+                if (ci[j] > mx) {
+                    mx = ci[j];
+                    top = j;
+                }
             double *r = rho ? rho + ((size_t)t * N + i) * M : NULL;
             if (mx == -INFINITY) {
                 lb[(size_t)t * N + i] = -INFINITY;
@@ -479,7 +428,7 @@ static void densities(const affect_hmm *h, const double *x, uint32_t n, double *
             }
             double s = 0.0;
             for (uint32_t j = 0; j < M; j++) {
-                double e = exp0(ci[(size_t)j * n] - mx);
+                double e = j == top ? 1.0 : exp0(ci[j] - mx);
                 s += e;
                 if (r)
                     r[j] = e;
@@ -489,6 +438,105 @@ static void densities(const affect_hmm *h, const double *x, uint32_t n, double *
                 for (uint32_t j = 0; j < M; j++)
                     r[j] /= s;
         }
+    }
+}
+
+/* One frame's sums over a panel's rows: for each component k, s_k = Σ_r y[r][k]² (rows
+ * ascending), stored into out[k] (first panel) or added to it. Eight components at a time in
+ * registers, so that the loop over r vectorizes across them. */
+static void panel_sums(const double *restrict y, uint32_t K, uint32_t rows, bool first,
+                       double *restrict out)
+{
+    uint32_t k0 = 0;
+    for (; k0 + 8 <= K; k0 += 8) {
+        double s[8];
+        for (uint32_t j = 0; j < 8; j++)
+            s[j] = y[k0 + j] * y[k0 + j];
+        for (uint32_t r = 1; r < rows; r++) {
+            const double *restrict yr = y + (size_t)r * K + k0;
+            for (uint32_t j = 0; j < 8; j++)
+                s[j] += yr[j] * yr[j];
+        }
+        if (first)
+            for (uint32_t j = 0; j < 8; j++)
+                out[k0 + j] = s[j];
+        else
+            for (uint32_t j = 0; j < 8; j++)
+                out[k0 + j] += s[j];
+    }
+    for (; k0 < K; k0++) {
+        double s = y[k0] * y[k0];
+        for (uint32_t r = 1; r < rows; r++)
+            s += y[(size_t)r * K + k0] * y[(size_t)r * K + k0];
+        out[k0] = first ? s : out[k0] + s;
+    }
+}
+
+/* log b_i(x_t) for frames x[0 .. n) (n ≤ block) into lb (n × N) and, when rho is not NULL, the
+ * within-state responsibilities into rho (n × N × M). cbuf holds (block + 1) × N × M doubles,
+ * dbuf block × dbuf_width. */
+static void densities(const affect_hmm *h, const double *x, uint32_t n, double *lb, double *rho,
+                      double *cbuf, double *dbuf)
+{
+    uint32_t N = h->cfg.n_states, M = h->cfg.n_mix, m = h->cfg.dim, K = N * M;
+    if (h->cfg.cov != AFFECT_HMM_FULL) {
+        for (uint32_t t = 0; t < n; t++) {
+            const double *xt = x + (size_t)t * m;
+            double *out = cbuf + (size_t)t * K;
+            for (uint32_t k = 0; k < K; k++) {
+                const double *mu = h->means + (size_t)k * m;
+                const double *f = h->fac + (size_t)k * h->cs;
+                double c = h->cnorm[k];
+                double q = 0.0;
+                for (uint32_t d = 0; d < m; d++) {
+                    double v = (xt[d] - mu[d]) * f[d];
+                    q += v * v;
+                }
+                out[k] = c == -INFINITY ? -INFINITY : c - 0.5 * q;
+            }
+        }
+        mix_lse(h, cbuf, n, lb, rho);
+        return;
+    }
+    /* ‖L⁻¹(x − μ)‖² = ‖W (x − c) − ib‖², SUB_FRAMES frames at a time (so that everything stays
+     * in cache), panel by panel: Y = −ib, then Y += (X − c)[:, 0..r1) Pᵀ for all components at
+     * once (one dgemm with β = 1), then per frame and component the panel's sum of squares over
+     * its rows, added to the frame's total (rows r-major in the panel, so that these loops run
+     * across the components); then log(w N) = cnorm − ½ total and the log-sum-exps of these
+     * frames */
+    for (uint32_t t0 = 0; t0 < n; t0 += SUB_FRAMES) {
+        uint32_t nt = n - t0 < SUB_FRAMES ? n - t0 : SUB_FRAMES;
+        double *restrict xc = dbuf, *restrict y = dbuf + (size_t)nt * m;
+        double *restrict acc = cbuf;
+        const double *restrict ctr = h->centre;
+        for (uint32_t t = 0; t < nt; t++) {
+            const double *restrict xt = x + (size_t)(t0 + t) * m;
+            double *restrict ct = xc + (size_t)t * m;
+            for (uint32_t d = 0; d < m; d++)
+                ct[d] = xt[d] - ctr[d];
+        }
+        const double *panel = h->inv;
+        for (uint32_t r0 = 0; r0 < m; r0 += TRI_ROWS) {
+            uint32_t r1 = m - r0 < TRI_ROWS ? m : r0 + TRI_ROWS, rows = r1 - r0;
+            uint32_t wide = K * rows;
+            const double *restrict ib = h->ib + (size_t)r0 * K;
+            for (uint32_t e = 0; e < wide; e++)
+                y[e] = -ib[e];
+            for (uint32_t t = 1; t < nt; t++)
+                memcpy(y + (size_t)t * wide, y, wide * sizeof *y);
+            cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasTrans, (int)nt, (int)wide, (int)r1, 1.0,
+                        xc, (int)m, panel, (int)r1, 1.0, y, (int)wide);
+            for (uint32_t t = 0; t < nt; t++)
+                panel_sums(y + (size_t)t * wide, K, rows, r0 == 0, acc + (size_t)t * K);
+            panel += (size_t)wide * r1;
+        }
+        const double *restrict cn = h->cnorm;
+        for (uint32_t t = 0; t < nt; t++) {
+            double *restrict at = acc + (size_t)t * K;
+            for (uint32_t k = 0; k < K; k++)
+                at[k] = cn[k] == -INFINITY ? -INFINITY : cn[k] - 0.5 * at[k];
+        }
+        mix_lse(h, acc, nt, lb + (size_t)t0 * N, rho ? rho + (size_t)t0 * K : NULL);
     }
 }
 
@@ -526,15 +574,20 @@ static void forward_first(const affect_hmm *h, const double *lb0, double *a0)
 static void forward_step(const affect_hmm *h, const double *prev, const double *lbt, double *cur,
                          double *p)
 {
-    uint32_t N = h->cfg.n_states;
-    double A = vmax(prev, N);
+    uint32_t N = h->cfg.n_states, top = 0;
+    double A = prev[0];
+    for (uint32_t i = 1; i < N; i++)
+        if (prev[i] > A) {
+            A = prev[i];
+            top = i;
+        }
     if (A == -INFINITY) {
         for (uint32_t l = 0; l < N; l++)
             cur[l] = -INFINITY;
         return;
     }
     for (uint32_t i = 0; i < N; i++)
-        p[i] = exp0(prev[i] - A);
+        p[i] = i == top ? 1.0 : exp0(prev[i] - A); /* exp(0) = 1 exactly */
     for (uint32_t l = 0; l < N; l++)
         cur[l] = 0.0;
     for (uint32_t i = 0; i < N; i++) {
@@ -572,7 +625,7 @@ static void forward_step(const affect_hmm *h, const double *prev, const double *
 typedef struct fb_ws {
     double *lb;    /* T × N */
     double *alpha; /* T × N */
-    double *cbuf;  /* block × N × M */
+    double *cbuf;  /* (block + 1) × N × M */
     double *dbuf;  /* block × dbuf_width */
     double *v[6];  /* N each */
     double *vv;    /* N × N */
@@ -798,7 +851,7 @@ affect_status affect_hmm_loglik(const affect_hmm *h, const double *x, uint32_t n
     size_t N = h->cfg.n_states, K = N * h->cfg.n_mix, B = h->block;
     double *cbuf, *dbuf, *lb, *a0, *a1, *p;
     affect_ws_part parts[] = {
-        {(void **)&cbuf, B * K, sizeof(double)}, {(void **)&dbuf, B * dbuf_width(&h->cfg), sizeof(double)},
+        {(void **)&cbuf, (B + 1) * K, sizeof(double)}, {(void **)&dbuf, B * dbuf_width(&h->cfg), sizeof(double)},
         {(void **)&lb, B * N, sizeof(double)},   {(void **)&a0, N, sizeof(double)},
         {(void **)&a1, N, sizeof(double)},       {(void **)&p, N, sizeof(double)}};
     void *ws = affect_ws_alloc(parts, sizeof parts / sizeof parts[0]);
@@ -824,7 +877,7 @@ affect_status affect_hmm_viterbi(const affect_hmm *h, const double *x, uint32_t 
     double *cbuf, *dbuf, *lb, *d0, *d1;
     uint8_t *bp; /* N ≤ 256: a state fits in a byte */
     affect_ws_part parts[] = {
-        {(void **)&cbuf, B * K, sizeof(double)}, {(void **)&dbuf, B * dbuf_width(&h->cfg), sizeof(double)},
+        {(void **)&cbuf, (B + 1) * K, sizeof(double)}, {(void **)&dbuf, B * dbuf_width(&h->cfg), sizeof(double)},
         {(void **)&lb, B * N, sizeof(double)},   {(void **)&d0, N, sizeof(double)},
         {(void **)&d1, N, sizeof(double)},       {(void **)&bp, TN, 1}};
     void *ws = affect_ws_alloc(parts, sizeof parts / sizeof parts[0]);
@@ -883,7 +936,7 @@ static void fb_parts(const affect_hmm *h, size_t T, fb_ws *w, affect_ws_part *pa
     size_t N = h->cfg.n_states, K = N * h->cfg.n_mix, B = h->block, n = *np;
     parts[n++] = (affect_ws_part){(void **)&w->lb, T * N, sizeof(double)}; /* T·N ≤ T·K */
     parts[n++] = (affect_ws_part){(void **)&w->alpha, T * N, sizeof(double)};
-    parts[n++] = (affect_ws_part){(void **)&w->cbuf, B * K, sizeof(double)};
+    parts[n++] = (affect_ws_part){(void **)&w->cbuf, (B + 1) * K, sizeof(double)};
     parts[n++] = (affect_ws_part){(void **)&w->dbuf, B * dbuf_width(&h->cfg), sizeof(double)};
     for (int i = 0; i < 6; i++)
         parts[n++] = (affect_ws_part){(void **)&w->v[i], N, sizeof(double)};
@@ -1164,6 +1217,7 @@ typedef struct train_ws {
     double *frac;      /* M */
     double *mbar;      /* m */
     double *pool;      /* cs */
+    double *dsq;       /* m: scatter's scratch */
 } train_ws;
 
 /* Squared distance with four partial sums (fixed order). */
@@ -1273,25 +1327,57 @@ static void kmeans(train_ws *w, size_t P, uint32_t M, uint32_t m, affect_rng *rn
     }
 }
 
+/* Σ_d z_d² s_d with eight partial sums (a fixed order). */
+static double weighted_sq(const double *restrict z, const double *restrict sc, uint32_t m)
+{
+    double p[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    uint32_t d = 0;
+    for (; d + 8 <= m; d += 8)
+        for (uint32_t j = 0; j < 8; j++)
+            p[j] += z[d + j] * z[d + j] * sc[d + j];
+    for (uint32_t j = 0; d < m; d++, j++)
+        p[j] += z[d] * z[d] * sc[d];
+    return ((p[0] + p[1]) + (p[2] + p[3])) + ((p[4] + p[5]) + (p[6] + p[7]));
+}
+
 /* Adds Σ_t r_t (x_t − c)(x_t − c)ᵀ (full) or its diagonal, Σ_t r_t (x_t − c) and Σ_t r_t to S,
  * s1 and *n over the frames x[0 .. T) (rows of m), r_t = r[t · stride] (or 1 when r is NULL),
- * the frames given either as row pointers (rows) or as one row-major array (x). */
+ * the frames given either as row pointers (rows) or as one row-major array (x). Full
+ * covariances: per block of frames, the rows z_t = √r_t (x_t − c) go to dbuf and S gains
+ * Σ_t z_t z_tᵀ by one dsyrk. With weights (r not NULL), the rows that are negligible,
+ * Σ_d z_td² / D_d ≤ u with D_d = Σ_t z_td² over the block and u = 2⁻⁵³ / (frames in the block),
+ * are left out of the product (most rows of most components when the posteriors are sharp).
+ * Such a row has z_td² ≤ u D_d in every coordinate, so by Cauchy–Schwarz the part left out is at
+ * most 2⁻⁵³ √(D_d D_e) in entry (d, e): within one unit roundoff of the scatter's own scale, the
+ * size of the rounding error of a single addition to it. Only from PRUNE_MIN_DIM dimensions on
+ * (below, the test costs more than the rows it saves). dsq is m doubles of scratch. */
 static void scatter(const affect_hmm *h, const double *const *rows, const double *x, size_t T,
                     const double *r, size_t stride, const double *c, double *n, double *s1,
-                    double *S, double *dbuf)
+                    double *S, double *dbuf, double *dsq)
 {
     uint32_t m = h->cfg.dim;
-    bool full = h->cfg.cov == AFFECT_HMM_FULL;
+    bool full = h->cfg.cov == AFFECT_HMM_FULL, prune = full && r && m >= PRUNE_MIN_DIM;
     size_t B = h->block;
     for (size_t t0 = 0; t0 < T; t0 += B) {
         size_t nb = T - t0 < B ? T - t0 : B;
+        if (prune)
+            memset(dsq, 0, m * sizeof *dsq);
         for (size_t t = 0; t < nb; t++) {
             const double *restrict xt = rows ? rows[t0 + t] : x + (t0 + t) * m;
             double rr = r ? r[(t0 + t) * stride] : 1.0;
             *n += rr;
             double *restrict sum = s1;
             const double *restrict ctr = c;
-            if (full) {
+            if (prune) {
+                double sq = sqrt(rr);
+                double *restrict dt = dbuf + t * m, *restrict ds = dsq;
+                for (uint32_t d = 0; d < m; d++) {
+                    double v = xt[d] - ctr[d], z = sq * v;
+                    sum[d] += rr * v;
+                    dt[d] = z;
+                    ds[d] += z * z;
+                }
+            } else if (full) {
                 double sq = r ? sqrt(rr) : 1.0;
                 double *restrict dt = dbuf + t * m;
                 for (uint32_t d = 0; d < m; d++) {
@@ -1308,9 +1394,27 @@ static void scatter(const affect_hmm *h, const double *const *rows, const double
                 }
             }
         }
-        if (full)
-            cblas_dsyrk(CblasRowMajor, CblasUpper, CblasTrans, (int)m, (int)nb, 1.0, dbuf, (int)m,
-                        1.0, S, (int)m);
+        if (!full)
+            continue;
+        size_t kept = nb;
+        if (prune) {
+            /* dsq becomes 1 / (u D_d), or 0 where D_d = 0 (every z_td is 0 there) */
+            double u = PRUNE_ROUNDOFF / (double)nb;
+            for (uint32_t d = 0; d < m; d++)
+                dsq[d] = dsq[d] > 0 ? 1.0 / (u * dsq[d]) : 0.0;
+            kept = 0;
+            for (size_t t = 0; t < nb; t++) {
+                const double *dt = dbuf + t * m;
+                if (!(weighted_sq(dt, dsq, m) > 1.0))
+                    continue;
+                if (kept != t)
+                    memcpy(dbuf + kept * m, dt, m * sizeof *dt);
+                kept++;
+            }
+        }
+        if (kept > 0)
+            cblas_dsyrk(CblasRowMajor, CblasUpper, CblasTrans, (int)m, (int)kept, 1.0, dbuf,
+                        (int)m, 1.0, S, (int)m);
     }
 }
 
@@ -1457,7 +1561,7 @@ static affect_status init_params(affect_hmm *h, const affect_hmm_seq *seqs, uint
             double n = 0.0;
             memset(w->s1, 0, m * sizeof(double));
             memset(w->S, 0, h->cs * sizeof(double));
-            scatter(h, w->mp, NULL, q, NULL, 0, mu, &n, w->s1, w->S, w->fb.dbuf);
+            scatter(h, w->mp, NULL, q, NULL, 0, mu, &n, w->s1, w->S, w->fb.dbuf, NULL);
             moments(h, k, n, w->s1, w->S);
         }
         if (any_empty) {
@@ -1504,7 +1608,7 @@ static void accumulate(const affect_hmm *h, const double *x, uint32_t T, train_w
     size_t K = (size_t)h->cfg.n_states * h->cfg.n_mix, m = h->cfg.dim;
     for (size_t k = 0; k < K; k++)
         scatter(h, NULL, x, T, w->rho + k, K, h->means + k * m, &w->n[k], w->s1 + k * m,
-                w->S + k * h->cs, w->fb.dbuf);
+                w->S + k * h->cs, w->fb.dbuf, w->dsq);
 }
 
 /* The M-step: new parameters from the statistics of one pass over the sequences. */
@@ -1662,6 +1766,7 @@ affect_status affect_hmm_train(const affect_hmm_config *cfg, const affect_hmm_se
     parts[np++] = (affect_ws_part){(void **)&w.frac, M, sizeof(double)};
     parts[np++] = (affect_ws_part){(void **)&w.mbar, m, sizeof(double)};
     parts[np++] = (affect_ws_part){(void **)&w.pool, h->cs, sizeof(double)};
+    parts[np++] = (affect_ws_part){(void **)&w.dsq, m, sizeof(double)};
     ws = affect_ws_alloc(parts, np);
     if (!ws) {
         st = affect_nomem(err);

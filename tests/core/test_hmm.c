@@ -5,7 +5,9 @@
  * (ergodic and left-right, full and diagonal); a 200,000-frame sequence scores finitely and at
  * the entropy rate; degenerate data train (a constant coordinate, one sequence, identical
  * sequences, single frames with one state) or are refused with their message; an empty mixture
- * component is re-seeded and reported; training is bit-for-bit deterministic; every error
+ * component is re-seeded and reported; one Baum–Welch iteration at m = 32 with sharp posteriors
+ * (where the M-step leaves negligible rows out of its scatter) equals the maximum-likelihood
+ * update computed from the posteriors; training is bit-for-bit deterministic; every error
  * message; and every allocation failing in turn.
  */
 #include <math.h>
@@ -774,6 +776,88 @@ static void assert_same_model(const affect_hmm *a, const affect_hmm *b)
     assert_memory_equal(ra.loglik, rb.loglik, (ra.iterations + 1) * sizeof(double));
 }
 
+/* ---- one M-step at m = 32 equals the maximum-likelihood update from the posteriors ---- */
+
+/* The scatter of the M-step leaves out the rows that are negligible (below one unit roundoff of
+ * the block's scale, from 24 dimensions on): with sharp posteriors most are. One iteration from
+ * the initial model must still equal the update computed here, in long double, from the
+ * posteriors of that initial model. */
+static void test_mstep_sharp(void **state)
+{
+    (void)state;
+    enum { N = 2, M = 2, m = 32, S = 3, T = 80, K = N * M };
+    affect_rng rng;
+    affect_rng_seed(&rng, 23);
+    static double x[S * T * m], gamma[T * K], xi[N * N];
+    static long double n[K], s1[K * m], sc[K * m * m];
+    for (uint32_t s = 0; s < S; s++)
+        for (uint32_t t = 0; t < T; t++) { /* state = half of the sequence, mixture at random:
+                                                * states far apart (posteriors 0 or 1 to 1e-50),
+                                                * mixtures overlapping (posteriors in between) */
+            uint32_t i = t < T / 2 ? 0 : 1, j = affect_rng_uniform(&rng) < 0.5 ? 1 : 0;
+            double shared = affect_rng_normal(&rng);
+            for (uint32_t d = 0; d < m; d++)
+                x[(s * T + t) * m + d] = 6.0 * i + 0.15 * j * (d % 2) + (d % 3) + 0.5 * shared +
+                                         (0.3 + 0.1 * (d % 4)) * affect_rng_normal(&rng);
+        }
+    affect_hmm_seq seqs[S];
+    for (uint32_t s = 0; s < S; s++) {
+        seqs[s].x = x + (size_t)s * T * m;
+        seqs[s].n_frames = T;
+    }
+    affect_hmm_config cfg;
+    config(&cfg, N, M, m, AFFECT_HMM_FULL, AFFECT_HMM_LEFT_RIGHT, 0, false);
+    cfg.reg = 0.0;
+    cfg.tol = 0.0;
+    cfg.max_iter = 0;
+    affect_hmm *h0 = NULL, *h1 = NULL;
+    affect_error err;
+    assert_int_equal(affect_hmm_train(&cfg, seqs, S, &h0, &err), AFFECT_OK);
+    cfg.max_iter = 1;
+    assert_int_equal(affect_hmm_train(&cfg, seqs, S, &h1, &err), AFFECT_OK);
+    /* statistics from the initial model's posteriors, two passes (means, then scatter) */
+    memset(n, 0, sizeof n);
+    memset(s1, 0, sizeof s1);
+    memset(sc, 0, sizeof sc);
+    for (int pass = 0; pass < 2; pass++)
+        for (uint32_t s = 0; s < S; s++) {
+            double ll;
+            assert_int_equal(affect_hmm_posteriors(h0, seqs[s].x, T, gamma, xi, &ll, &err),
+                             AFFECT_OK);
+            for (uint32_t t = 0; t < T; t++)
+                for (uint32_t k = 0; k < K; k++) {
+                    long double g = gamma[t * K + k];
+                    const double *xt = seqs[s].x + (size_t)t * m;
+                    if (pass == 0) {
+                        n[k] += g;
+                        for (uint32_t d = 0; d < m; d++)
+                            s1[k * m + d] += g * xt[d];
+                        continue;
+                    }
+                    for (uint32_t d = 0; d < m; d++)
+                        for (uint32_t e = 0; e < m; e++)
+                            sc[(k * m + d) * m + e] += g * (xt[d] - s1[k * m + d] / n[k]) *
+                                                       (xt[e] - s1[k * m + e] / n[k]);
+                }
+        }
+    const double *mu = affect_hmm_means(h1), *cov = affect_hmm_covariances(h1);
+    for (uint32_t k = 0; k < K; k++) {
+        assert_true(n[k] > 10); /* every component has frames */
+        for (uint32_t d = 0; d < m; d++) {
+            long double want = s1[k * m + d] / n[k];
+            tu_assert_near(mu[k * m + d], want, 1e-12 * (fabsl(want) + 1));
+        }
+        for (uint32_t d = 0; d < m; d++)
+            for (uint32_t e = 0; e < m; e++) {
+                long double want = sc[(k * m + d) * m + e] / n[k];
+                long double scale = sqrtl(sc[(k * m + d) * m + d] * sc[(k * m + e) * m + e]) / n[k];
+                tu_assert_near(cov[(k * m + d) * m + e], want, 1e-12 * scale);
+            }
+    }
+    affect_hmm_free(h0);
+    affect_hmm_free(h1);
+}
+
 static void test_deterministic(void **state)
 {
     (void)state;
@@ -1355,6 +1439,7 @@ int main(void)
         cmocka_unit_test(test_recovers_model),
         cmocka_unit_test(test_long_sequence),
         cmocka_unit_test(test_posteriors),
+        cmocka_unit_test(test_mstep_sharp),
         cmocka_unit_test(test_deterministic),
         cmocka_unit_test(test_degenerate),
         cmocka_unit_test(test_reseed),
