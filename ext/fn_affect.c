@@ -56,7 +56,7 @@
 
 static const char *const train_keys[] = {
     AX_SEQS_KEYS, "groups",     "score_normalization", "score_clip", "svm_c", "svm_folds",
-    "spca_dims",  "spca_kernel", "spca_sigma",          "knn_k",      "grid",  "descriptors", "descriptor_weight", "mirror", NULL};
+    "spca_dims",  "spca_kernel", "spca_sigma",          "knn_k",      "grid",  "descriptors", "descriptor_weight", "mirror", "threads", NULL};
 
 typedef struct cls_train {
     ax_seqs s; /* first: freed by ax_seqs_free's sqlite3_free … see cls_train_free */
@@ -339,6 +339,12 @@ void ax_affect_train_step(sqlite3_context *ctx, int argc, sqlite3_value **argv)
             return;
         }
         ax_arg r = read_classifier_options(ctx, &opts, t);
+        if (r == AX_OK) /* affect_train's own: affect_crossval's threads run folds */
+            r = ax_opt_u32(ctx, &opts, "threads", &t->cfg.threads);
+        if (r == AX_OK && (t->cfg.threads < 1 || t->cfg.threads > 64)) {
+            ax_errorf(ctx, "option \"threads\" must be from 1 to 64, got %u", t->cfg.threads);
+            r = AX_ERROR;
+        }
         ax_opts_free(&opts);
         if (r != AX_OK) {
             t->s.failed = true;

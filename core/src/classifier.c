@@ -37,7 +37,9 @@
  */
 #include "affect/classifier.h"
 
+#include <cblas.h>
 #include <float.h>
+#include <limits.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -45,6 +47,7 @@
 
 #include "affect/bytes.h"
 #include "affect/hmm_blob.h"
+#include "internal.h"
 
 struct affect_classifier {
     affect_classifier_config cfg;
@@ -88,6 +91,7 @@ void affect_classifier_config_default(affect_classifier_config *cfg)
     cfg->descriptors = AFFECT_DESC_KINEMATICS;
     cfg->descriptor_weight = 0.1;
     cfg->mirror = AFFECT_MIRROR_AUTO;
+    cfg->threads = 1;
 }
 
 void affect_classifier_free(affect_classifier *c)
@@ -168,6 +172,8 @@ const char *affect_classifier_config_check(const affect_classifier_config *cfg)
     if (cfg->mirror != AFFECT_MIRROR_OFF && cfg->mirror != AFFECT_MIRROR_ON &&
         cfg->mirror != AFFECT_MIRROR_AUTO)
         return "mirror must be off, on or auto";
+    if (cfg->threads < 1 || cfg->threads > 64)
+        return "threads must be from 1 to 64";
     const affect_classifier_grid *g = &cfg->grid;
     if (g->n_dims > AFFECT_CLASSIFIER_GRID_MAX || g->n_sigma > AFFECT_CLASSIFIER_GRID_MAX ||
         g->n_k > AFFECT_CLASSIFIER_GRID_MAX)
@@ -215,31 +221,45 @@ static bool set_dims(affect_classifier *c)
            affect_add_size(c->fdim, c->ddim, &c->dim);
 }
 
+/* The Fisher scores of x under class HMM k into out (part values), its log-likelihood into
+ * *ll (ll may be NULL). */
+static affect_status score_part(const affect_classifier *c, uint32_t k, const double *x,
+                                uint32_t T, double *out, double *ll, affect_error *err)
+{
+    if (affect_fisher_score(c->hmms[k], x, T, c->cfg.groups, out, ll, err))
+        return prefixed(err, 0, "Fisher score under the HMM of class \"%s\"", c->labels[k]);
+    for (size_t e = 0; e < c->part; e++) {
+        if (isnan(out[e]))
+            return affect_fail(err, AFFECT_ERR_RANGE,
+                               "Fisher score under class \"%s\" is not a number (entry %zu)",
+                               c->labels[k], e);
+        if (isinf(out[e])) /* Σ ξ / a_il with a_il subnormal: the largest finite value */
+            out[e] = out[e] > 0 ? DBL_MAX : -DBL_MAX;
+    }
+    return AFFECT_OK;
+}
+
+/* desc (ddim values) into out, each checked. */
+static affect_status copy_descriptors(const affect_classifier *c, const double *desc, double *out,
+                                      affect_error *err)
+{
+    for (uint32_t e = 0; e < c->ddim; e++) {
+        if (!isfinite(desc[e]))
+            return affect_fail(err, AFFECT_ERR_INVALID, "descriptor %u is not finite", e);
+        out[e] = desc[e];
+    }
+    return AFFECT_OK;
+}
+
 /* The raw representation of x (and its descriptors desc) into f (dim): the Fisher scores under
  * every class HMM, then the descriptors; the log-likelihoods into ll (n_classes). */
 static affect_status represent(const affect_classifier *c, const double *x, uint32_t T,
                                const double *desc, double *f, double *ll, affect_error *err)
 {
-    for (uint32_t e = 0; e < c->ddim; e++) {
-        if (!isfinite(desc[e]))
-            return affect_fail(err, AFFECT_ERR_INVALID, "descriptor %u is not finite", e);
-        f[c->fdim + e] = desc[e];
-    }
-    for (uint32_t k = 0; k < c->n_classes; k++) {
-        if (affect_fisher_score(c->hmms[k], x, T, c->cfg.groups, f + (size_t)k * c->part, &ll[k],
-                                err))
-            return prefixed(err, 0, "Fisher score under the HMM of class \"%s\"", c->labels[k]);
-        for (size_t e = 0; e < c->part; e++) {
-            double *v = &f[(size_t)k * c->part + e];
-            if (isnan(*v))
-                return affect_fail(err, AFFECT_ERR_RANGE,
-                                   "Fisher score under class \"%s\" is not a number (entry %zu)",
-                                   c->labels[k], e);
-            if (isinf(*v)) /* Σ ξ / a_il with a_il subnormal: the largest finite value */
-                *v = *v > 0 ? DBL_MAX : -DBL_MAX;
-        }
-    }
-    return AFFECT_OK;
+    affect_status st = copy_descriptors(c, desc, f + c->fdim, err);
+    for (uint32_t k = 0; k < c->n_classes && st == AFFECT_OK; k++)
+        st = score_part(c, k, x, T, f + (size_t)k * c->part, &ll[k], err);
+    return st;
 }
 
 static uint32_t argmax(const double *v, uint32_t n)
@@ -259,55 +279,63 @@ static double clip(double v, double limit)
     return v;
 }
 
-/* The z-scores of fit_normalization. */
-static void zscore_rows(affect_classifier *c, double *f, uint32_t n)
+/* ---- the representation block by block ----
+ * Block b < C is the Fisher part under class HMM b (columns b · part ..), block C the
+ * descriptors (columns fdim ..). Training never holds more than one block of n rows. */
+
+static size_t block_width(const affect_classifier *c, uint32_t b)
 {
-    size_t D = c->dim;
-    for (size_t e = 0; e < D; e++) {
+    return b < c->n_classes ? c->part : c->ddim;
+}
+
+static size_t block_col0(const affect_classifier *c, uint32_t b)
+{
+    return b < c->n_classes ? (size_t)b * c->part : c->fdim;
+}
+
+/* Fits the normalization of the columns of block B (n × w, starting at column col0). Per
+ * column the values are first divided by their largest magnitude a (Fisher scores of tiny
+ * probabilities reach 1e200 and more, whose sums of squares would overflow): with u = f / a,
+ * mean = a · mean(u) and scale = a · sd(u) (population). A column that is constant over the
+ * training set (sd 0) keeps scale 1. Without z-scores: mean 0, scale 1. */
+static void fit_block(affect_classifier *c, const double *B, uint32_t n, size_t w, size_t col0)
+{
+    for (size_t e = 0; e < w; e++) {
+        double *mean = &c->mean[col0 + e], *scale = &c->scale[col0 + e];
+        *mean = 0.0;
+        *scale = 1.0;
+        if (!c->cfg.zscore)
+            continue;
         double a = 0.0, mu = 0.0, var = 0.0;
         for (uint32_t i = 0; i < n; i++)
-            if (fabs(f[(size_t)i * D + e]) > a)
-                a = fabs(f[(size_t)i * D + e]);
+            if (fabs(B[(size_t)i * w + e]) > a)
+                a = fabs(B[(size_t)i * w + e]);
         if (a == 0.0)
             continue; /* all 0: mean 0, scale 1 */
         for (uint32_t i = 0; i < n; i++)
-            mu += f[(size_t)i * D + e] / a;
+            mu += B[(size_t)i * w + e] / a;
         mu /= n;
         for (uint32_t i = 0; i < n; i++) {
-            double d = f[(size_t)i * D + e] / a - mu;
+            double d = B[(size_t)i * w + e] / a - mu;
             var += d * d;
         }
-        double sd = sqrt(var / n), scale = sd * a;
-        c->mean[e] = mu * a;
-        if (!(sd > 0) || !(scale > 0) || !isfinite(scale)) { /* constant: centre only */
-            for (uint32_t i = 0; i < n; i++)
-                f[(size_t)i * D + e] = (f[(size_t)i * D + e] - c->mean[e]);
-            continue;
-        }
-        c->scale[e] = scale;
-        for (uint32_t i = 0; i < n; i++)
-            f[(size_t)i * D + e] = clip((f[(size_t)i * D + e] / a - mu) / sd, c->cfg.score_clip);
+        double sd = sqrt(var / n), s = sd * a;
+        *mean = mu * a;
+        if (sd > 0 && s > 0 && isfinite(s))
+            *scale = s;
     }
 }
 
-/* Fits the normalization on the rows of f (n × dim) and applies it in place. Per dimension
- * the values are first divided by their largest magnitude a (Fisher scores of tiny
- * probabilities reach 1e200 and more, whose sums of squares would overflow): with u = f / a,
- * mean = a · mean(u) and scale = a · sd(u), and the training rows become (u − mean(u)) / sd(u).
- * A dimension that is constant over the training set (sd 0) keeps scale 1. The z-scores are
- * then limited to ±score_clip (here and in affect_classifier_eval). */
-static void fit_normalization(affect_classifier *c, double *f, uint32_t n)
+/* The normalization of the representation's entries e0 .. e0 + w − 1 in place (v: w values):
+ * z-scores limited to ±score_clip, and the descriptors times ω — exactly as evaluation does. */
+static void normalize(const affect_classifier *c, double *v, size_t w, size_t e0)
 {
-    size_t D = c->dim;
-    for (size_t e = 0; e < D; e++) {
-        c->mean[e] = 0.0;
-        c->scale[e] = 1.0;
-    }
     if (c->cfg.zscore)
-        zscore_rows(c, f, n);
-    for (uint32_t i = 0; i < n; i++)
-        for (size_t e = c->fdim; e < D; e++)
-            f[(size_t)i * D + e] *= c->desc_w;
+        for (size_t e = 0; e < w; e++)
+            v[e] = clip((v[e] - c->mean[e0 + e]) / c->scale[e0 + e], c->cfg.score_clip);
+    if (e0 + w > c->fdim)
+        for (size_t e = e0 < c->fdim ? c->fdim - e0 : 0; e < w; e++)
+            v[e] *= c->desc_w;
 }
 
 /* Leave-one-out kNN accuracy over the training coordinates. */
@@ -369,10 +397,10 @@ static void grid_lists_of(const affect_classifier_config *cfg, grid_lists *g)
             g->max_dims = g->dims[i];
 }
 
-/* Scratch of the grid search. */
+/* Scratch of the grid search (everything n × n at most: the search works on the Gram matrix). */
 typedef struct grid_ws {
     uint32_t *fold_of, *tr_y, *te_y;
-    double *gram, *sub_gram, *tr_x, *tr_z, *te_z, *tr_p, *te_p;
+    double *sub_gram, *te_k, *tr_z, *te_z, *tr_p, *te_p;
     uint32_t *hits; /* n_dims × n_sigma × n_k */
 } grid_ws;
 
@@ -381,9 +409,8 @@ static void grid_ws_free(grid_ws *w)
     affect_free(w->fold_of);
     affect_free(w->tr_y);
     affect_free(w->te_y);
-    affect_free(w->gram);
     affect_free(w->sub_gram);
-    affect_free(w->tr_x);
+    affect_free(w->te_k);
     affect_free(w->tr_z);
     affect_free(w->te_z);
     affect_free(w->tr_p);
@@ -391,26 +418,24 @@ static void grid_ws_free(grid_ws *w)
     affect_free(w->hits);
 }
 
-static bool grid_ws_alloc(grid_ws *w, uint32_t n, size_t D, uint32_t max_dims, size_t combos)
+static bool grid_ws_alloc(grid_ws *w, uint32_t n, uint32_t max_dims, size_t combos)
 {
-    size_t nd, nn, np;
+    size_t nn, np;
     memset(w, 0, sizeof *w);
-    if (!affect_mul_size(n, D, &nd) || !affect_mul_size(n, n, &nn) ||
-        !affect_mul_size(n, max_dims, &np))
+    if (!affect_mul_size(n, n, &nn) || !affect_mul_size(n, max_dims, &np))
         return false;
     w->fold_of = affect_malloc_array(n, sizeof *w->fold_of);
     w->tr_y = affect_malloc_array(n, sizeof *w->tr_y);
     w->te_y = affect_malloc_array(n, sizeof *w->te_y);
-    w->gram = affect_malloc_array(nn, sizeof *w->gram);
     w->sub_gram = affect_malloc_array(nn, sizeof *w->sub_gram);
-    w->tr_x = affect_malloc_array(nd, sizeof *w->tr_x);
+    w->te_k = affect_malloc_array(nn, sizeof *w->te_k);
     w->tr_z = affect_malloc_array(np, sizeof *w->tr_z);
     w->te_z = affect_malloc_array(np, sizeof *w->te_z);
     w->tr_p = affect_malloc_array(np, sizeof *w->tr_p);
     w->te_p = affect_malloc_array(np, sizeof *w->te_p);
     w->hits = affect_calloc(combos, sizeof *w->hits);
-    return w->fold_of && w->tr_y && w->te_y && w->gram && w->sub_gram && w->tr_x && w->tr_z &&
-           w->te_z && w->tr_p && w->te_p && w->hits;
+    return w->fold_of && w->tr_y && w->te_y && w->sub_gram && w->te_k && w->tr_z && w->te_z &&
+           w->tr_p && w->te_p && w->hits;
 }
 
 /* The first p of q coordinates of n rows, contiguous. */
@@ -420,44 +445,39 @@ static void prefix_rows(const double *z, uint32_t n, uint32_t q, uint32_t p, dou
         memcpy(out + (size_t)i * p, z + (size_t)i * q, p * sizeof *out);
 }
 
-/* One inner fold: fits sPCA per σ on the other folds' rows and counts the kNN hits of every
- * (dims, σ, k) on this fold's rows. */
-static affect_status grid_fold(const affect_classifier *c, const double *f, const uint32_t *y,
+/* One inner fold: fits sPCA per σ on the other folds' rows of the Gram matrix G (dual) and
+ * counts the kNN hits of every (dims, σ, k) on this fold's rows, whose coordinates are their
+ * kernel rows times the dual coefficients. */
+static affect_status grid_fold(const affect_classifier *c, const double *G, const uint32_t *y,
                                uint32_t n, uint32_t fold, const grid_lists *g, grid_ws *w,
                                affect_error *err)
 {
-    size_t D = c->dim;
     uint32_t n_tr = 0, n_te = 0;
     for (uint32_t i = 0; i < n; i++) {
-        if (w->fold_of[i] == fold) {
+        if (w->fold_of[i] == fold)
             w->te_y[n_te++] = y[i];
-            continue;
-        }
-        memcpy(w->tr_x + (size_t)n_tr * D, f + (size_t)i * D, D * sizeof *f);
-        w->tr_y[n_tr++] = y[i];
+        else
+            w->tr_y[n_tr++] = y[i];
     }
     if (n_te == 0 || n_tr == 0)
         return AFFECT_OK;
-    for (uint32_t i = 0, a = 0; i < n; i++) { /* the training rows' Gram sub-matrix */
-        if (w->fold_of[i] == fold)
-            continue;
+    for (uint32_t i = 0, a = 0, t = 0; i < n; i++) { /* rows: training, held out; columns: training */
+        double *row = w->fold_of[i] == fold ? w->te_k + (size_t)t++ * n_tr
+                                            : w->sub_gram + (size_t)a++ * n_tr;
         for (uint32_t j = 0, b = 0; j < n; j++)
             if (w->fold_of[j] != fold)
-                w->sub_gram[(size_t)a * n_tr + b++] = w->gram[(size_t)i * n + j];
-        a++;
+                row[b++] = G[(size_t)i * n + j];
     }
     for (uint32_t s = 0; s < g->n_sigma; s++) {
         affect_spca *sp = NULL;
-        affect_status st = affect_spca_fit_gram(w->tr_x, w->sub_gram, n_tr, D, w->tr_y,
-                                                c->n_classes, c->cfg.spca_kernel, g->sigma[s],
-                                                g->max_dims, &sp, err);
+        affect_status st = affect_spca_fit_dual(w->sub_gram, n_tr, c->dim, w->tr_y, c->n_classes,
+                                                c->cfg.spca_kernel, g->sigma[s], g->max_dims,
+                                                &sp, err);
         if (st)
             return st;
         uint32_t q = affect_spca_dims(sp);
-        affect_spca_embed_rows(sp, w->tr_x, n_tr, w->tr_z);
-        for (uint32_t i = 0, t = 0; i < n; i++)
-            if (w->fold_of[i] == fold)
-                affect_spca_embed(sp, f + (size_t)i * D, w->te_z + (size_t)t++ * q);
+        affect_spca_dual_embed(sp, w->sub_gram, n_tr, w->tr_z);
+        affect_spca_dual_embed(sp, w->te_k, n_te, w->te_z);
         affect_spca_free(sp);
         for (uint32_t di = 0; di < g->n_dims; di++) {
             uint32_t p = g->dims[di] < q ? g->dims[di] : q;
@@ -479,8 +499,8 @@ static affect_status grid_fold(const affect_classifier *c, const double *f, cons
 }
 
 /* Chooses spca_dims, spca_sigma and knn_k (into c->cfg) by inner cross-validation on the
- * normalized training rows f. */
-static affect_status grid_search(affect_classifier *c, const double *f, const uint32_t *y,
+ * training rows' Gram matrix G. */
+static affect_status grid_search(affect_classifier *c, const double *G, const uint32_t *y,
                                  uint32_t n, affect_error *err)
 {
     grid_lists g;
@@ -488,16 +508,15 @@ static affect_status grid_search(affect_classifier *c, const double *f, const ui
     size_t combos = (size_t)g.n_dims * g.n_sigma * g.n_k;
     grid_ws w;
     affect_status st;
-    if (!grid_ws_alloc(&w, n, c->dim, g.max_dims, combos)) {
+    if (!grid_ws_alloc(&w, n, g.max_dims, combos)) {
         st = affect_nomem(err);
         goto done;
     }
     if ((st = affect_stratified_folds(y, n, c->n_classes, c->cfg.grid.folds, c->cfg.hmm.seed,
-                                      w.fold_of, err)) != AFFECT_OK ||
-        (st = affect_svm_gram(f, n, c->dim, w.gram, err)) != AFFECT_OK)
+                                      w.fold_of, err)) != AFFECT_OK)
         goto done;
     for (uint32_t fold = 0; fold < c->cfg.grid.folds; fold++)
-        if ((st = grid_fold(c, f, y, n, fold, &g, &w, err)) != AFFECT_OK)
+        if ((st = grid_fold(c, G, y, n, fold, &g, &w, err)) != AFFECT_OK)
             goto done;
     size_t best = 0;
     for (size_t e = 1; e < combos; e++)
@@ -512,27 +531,29 @@ done:
     return st;
 }
 
-/* Steps 4 and 5 and the training accuracies, on the normalized rows f (n × dim). */
-static affect_status fit_discriminative(affect_classifier *c, const double *f, const uint32_t *y,
-                                        uint32_t n, const double *ll, affect_error *err)
+/* Steps 4 and 5 on the Gram matrix G (n × n) of the normalized rows: C, the SVM's dual, the
+ * grid, the sPCA's dual and the training coordinates (signs fixed later, by
+ * affect_spca_finish); the ML and SVM training accuracies. */
+static affect_status fit_dual(affect_classifier *c, const double *G, const uint32_t *y,
+                              uint32_t n, const double *ll, affect_error *err)
 {
     const affect_classifier_config *cfg = &c->cfg;
     size_t D = c->dim;
     double C = cfg->svm_c, cv = NAN;
     if (C == 0) {
         static const double grid[] = AFFECT_CLASSIFIER_C_GRID;
-        if (affect_svm_select_c(f, n, D, y, c->n_classes, grid, sizeof grid / sizeof grid[0],
-                                cfg->svm_folds, cfg->hmm.seed, &C, &cv, err))
+        if (affect_svm_select_c_gram(G, n, D, y, c->n_classes, grid, sizeof grid / sizeof grid[0],
+                                     cfg->svm_folds, cfg->hmm.seed, &C, &cv, err))
             return prefixed(err, 0, "choosing the SVM's C");
     }
-    if (affect_svm_train(f, n, D, y, c->n_classes, C, &c->svm, err))
+    if (affect_svm_train_gram(G, n, D, y, c->n_classes, C, &c->svm, err))
         return prefixed(err, 0, "training the SVM");
     c->report.grid_cv_acc = NAN;
     const affect_classifier_grid *gr = &cfg->grid;
-    if ((gr->n_dims || gr->n_sigma || gr->n_k) && grid_search(c, f, y, n, err))
+    if ((gr->n_dims || gr->n_sigma || gr->n_k) && grid_search(c, G, y, n, err))
         return prefixed(err, 0, "searching the sPCA/kNN grid");
-    if (affect_spca_fit(f, n, D, y, c->n_classes, cfg->spca_kernel, cfg->spca_sigma,
-                        cfg->spca_dims, &c->spca, err))
+    if (affect_spca_fit_dual(G, n, D, y, c->n_classes, cfg->spca_kernel, cfg->spca_sigma,
+                             cfg->spca_dims, &c->spca, err))
         return prefixed(err, 0, "fitting the supervised PCA");
     uint32_t p = affect_spca_dims(c->spca);
     c->n_train = n;
@@ -541,20 +562,88 @@ static affect_status fit_discriminative(affect_classifier *c, const double *f, c
     if (!c->train_y || !c->train_z)
         return affect_nomem(err);
     memcpy(c->train_y, y, n * sizeof *y);
-    affect_spca_embed_rows(c->spca, f, n, c->train_z);
+    affect_spca_dual_embed(c->spca, G, n, c->train_z);
     uint32_t hit_ml = 0, hit_svm = 0;
     for (uint32_t i = 0; i < n; i++) {
         hit_ml += argmax(ll + (size_t)i * c->n_classes, c->n_classes) == y[i];
-        hit_svm += affect_svm_predict(c->svm, f + (size_t)i * D, NULL) == y[i];
+        hit_svm += affect_svm_predict_gram(c->svm, G + (size_t)i * n) == y[i];
     }
     c->report.svm_c = C;
     c->report.svm_cv_acc = cv;
     c->report.train_acc_ml = (double)hit_ml / n;
     c->report.train_acc_svm = (double)hit_svm / n;
-    return loo_knn(c, &c->report.train_acc_knn, err);
+    return AFFECT_OK;
 }
 
-/* Training on the given set (the mirror images already added when asked). */
+/* The work of training shared by the threads (affect_parallel_for): every item writes only its
+ * own class HMM, or its own row of the block B and of ll. */
+typedef struct train_job {
+    affect_classifier *c;
+    const affect_hmm_seq *seqs;
+    const uint32_t *y;
+    uint32_t n;
+    const double *desc;
+    uint32_t block; /* the block being computed */
+    double *B, *ll; /* ll NULL: the second pass */
+} train_job;
+
+/* Item k: the HMM of class k on its motions. */
+static affect_status train_class(void *ctx, uint32_t k, affect_error *err)
+{
+    train_job *j = ctx;
+    affect_hmm_seq *mine = affect_malloc_array(j->n ? j->n : 1, sizeof *mine);
+    if (!mine)
+        return affect_nomem(err);
+    uint32_t count = 0;
+    for (uint32_t i = 0; i < j->n; i++)
+        if (j->y[i] == k)
+            mine[count++] = j->seqs[i];
+    affect_status st = affect_hmm_train(&j->c->cfg.hmm, mine, count, &j->c->hmms[k], err);
+    affect_free(mine);
+    if (st)
+        return prefixed(err, 0, "training the HMM of class \"%s\"", j->c->labels[k]);
+    return AFFECT_OK;
+}
+
+/* Item i: row i of the current block (raw). */
+static affect_status block_row(void *ctx, uint32_t i, affect_error *err)
+{
+    train_job *j = ctx;
+    const affect_classifier *c = j->c;
+    size_t w = block_width(c, j->block);
+    double *row = j->B + (size_t)i * w;
+    affect_status st =
+        j->block < c->n_classes
+            ? score_part(c, j->block, j->seqs[i].x, j->seqs[i].n_frames, row,
+                         j->ll ? &j->ll[(size_t)i * c->n_classes + j->block] : NULL, err)
+            : copy_descriptors(c, j->desc + (size_t)i * c->ddim, row, err);
+    return st ? prefixed(err, 0, "motion %u", i) : AFFECT_OK;
+}
+
+/* Block b of every training motion into j->B, normalized (the first pass also fits the
+ * normalization of its columns). */
+static affect_status compute_block(train_job *j, uint32_t b, bool fit, affect_error *err)
+{
+    affect_classifier *c = j->c;
+    size_t w = block_width(c, b), col0 = block_col0(c, b);
+    j->block = b;
+    affect_status st = affect_parallel_for(j->n, c->cfg.threads, block_row, j, err);
+    if (st)
+        return st;
+    if (fit)
+        fit_block(c, j->B, j->n, w, col0);
+    for (uint32_t i = 0; i < j->n; i++)
+        normalize(c, j->B + (size_t)i * w, w, col0);
+    return AFFECT_OK;
+}
+
+/* Training on the given set (the mirror images already added when asked). The representation
+ * is never held whole: a first pass computes it block by block (one class HMM's Fisher scores,
+ * or the descriptors, for every motion), fits each block's normalization and adds the block's
+ * products to the Gram matrix G = Z Zᵀ; the SVM, the grid and the sPCA are fitted in the dual
+ * on G; a second pass computes the blocks again (the same bits) and adds their columns to the
+ * SVM's weights and the sPCA's axes. Memory: n² for G plus n × the largest block, against
+ * n × the whole representation before (n × 667,331 doubles at the thesis's configuration). */
 static affect_status train_on(const affect_classifier_config *cfg, const affect_features *feat,
                               const affect_hmm_seq *seqs, const double *desc, const uint32_t *y,
                               uint32_t n, const char *const *labels, uint32_t n_classes,
@@ -579,10 +668,9 @@ static affect_status train_on(const affect_classifier_config *cfg, const affect_
         return affect_fail(err, AFFECT_ERR_INVALID,
                            "the configuration appends descriptors but none were given");
     affect_classifier *c = alloc_classifier(n_classes);
-    affect_hmm_seq *mine = affect_malloc_array(n ? n : 1, sizeof *mine);
-    double *f = NULL, *ll = NULL;
+    double *B = NULL, *ll = NULL, *G = NULL;
     affect_status st;
-    if (!c || !mine) {
+    if (!c) {
         st = affect_nomem(err);
         goto done;
     }
@@ -590,8 +678,7 @@ static affect_status train_on(const affect_classifier_config *cfg, const affect_
     for (uint32_t k = 0; k < n_classes; k++) {
         uint32_t count = 0;
         for (uint32_t i = 0; i < n; i++)
-            if (y[i] == k)
-                mine[count++] = seqs[i];
+            count += y[i] == k;
         if (count == 0) {
             st = affect_fail(err, AFFECT_ERR_INVALID, "class \"%s\" has no training motion",
                              labels[k]);
@@ -602,42 +689,66 @@ static affect_status train_on(const affect_classifier_config *cfg, const affect_
             st = affect_nomem(err);
             goto done;
         }
-        if ((st = affect_hmm_train(&cfg->hmm, mine, count, &c->hmms[k], err)) != AFFECT_OK) {
-            st = prefixed(err, 0, "training the HMM of class \"%s\"", labels[k]);
-            goto done;
-        }
     }
+    train_job job = {c, seqs, y, n, desc, 0, NULL, NULL};
+    if ((st = affect_parallel_for(n_classes, cfg->threads, train_class, &job, err)) != AFFECT_OK)
+        goto done;
     if ((st = copy_features(feat, &c->feat, err)) != AFFECT_OK)
         goto done;
+    size_t widest = 0, cells, nn;
     if (!set_dims(c)) {
         st = affect_nomem(err);
         goto done;
     }
-    size_t cells;
-    if (!affect_mul_size(c->dim, n, &cells)) {
-        st = affect_nomem(err);
+    uint32_t blocks = n_classes + (c->ddim ? 1 : 0);
+    for (uint32_t b = 0; b < blocks; b++)
+        if (block_width(c, b) > widest)
+            widest = block_width(c, b);
+    if (!affect_mul_size(widest, n, &cells) || !affect_mul_size(n, n, &nn) || widest > INT_MAX ||
+        n > INT_MAX) {
+        st = affect_fail(err, AFFECT_ERR_RANGE, "%u motions of %zu-value blocks are too many",
+                         n, widest);
         goto done;
     }
-    f = affect_malloc_array(cells, sizeof *f);
+    B = affect_malloc_array(cells ? cells : 1, sizeof *B);
+    G = affect_calloc(nn ? nn : 1, sizeof *G);
     ll = affect_malloc_array((size_t)n * n_classes, sizeof *ll);
     c->mean = affect_malloc_array(c->dim, sizeof *c->mean);
     c->scale = affect_malloc_array(c->dim, sizeof *c->scale);
-    if (!f || !ll || !c->mean || !c->scale) {
+    if (!B || !G || !ll || !c->mean || !c->scale) {
         st = affect_nomem(err);
         goto done;
     }
-    for (uint32_t i = 0; i < n; i++)
-        if ((st = represent(c, seqs[i].x, seqs[i].n_frames,
-                            desc ? desc + (size_t)i * c->ddim : NULL, f + (size_t)i * c->dim,
-                            ll + (size_t)i * n_classes, err)) != AFFECT_OK) {
-            st = prefixed(err, 0, "motion %u", i);
+    job.B = B;
+    job.ll = ll;
+    for (uint32_t b = 0; b < blocks; b++) { /* first pass: normalization and G */
+        if ((st = compute_block(&job, b, true, err)) != AFFECT_OK)
+            goto done;
+        int w = (int)block_width(c, b);
+        cblas_dsyrk(CblasRowMajor, CblasUpper, CblasNoTrans, (int)n, w, 1.0, B, w, 1.0, G,
+                    (int)n);
+    }
+    for (size_t i = 1; i < n; i++)
+        for (size_t k = 0; k < i; k++)
+            G[i * n + k] = G[k * n + i];
+    if ((st = fit_dual(c, G, y, n, ll, err)) != AFFECT_OK)
+        goto done;
+    job.ll = NULL;
+    for (uint32_t b = 0; b < blocks; b++) { /* second pass: the primal weights and axes */
+        if ((st = compute_block(&job, b, false, err)) != AFFECT_OK)
+            goto done;
+        size_t w = block_width(c, b), col0 = block_col0(c, b);
+        if ((st = affect_svm_add_rows(c->svm, B, w, col0, err)) != AFFECT_OK) {
+            st = prefixed(err, 0, "the SVM's weights");
             goto done;
         }
-    fit_normalization(c, f, n);
-    st = fit_discriminative(c, f, y, n, ll, err);
+        affect_spca_add_rows(c->spca, B, w, col0);
+    }
+    affect_spca_finish(c->spca, c->train_z, n);
+    st = loo_knn(c, &c->report.train_acc_knn, err);
 done:
-    affect_free(mine);
-    affect_free(f);
+    affect_free(B);
+    affect_free(G);
     affect_free(ll);
     if (st == AFFECT_OK)
         *out = c;
@@ -752,11 +863,7 @@ affect_status affect_classifier_eval(const affect_classifier *c, const double *x
         }
         if ((st = represent(c, x, T, desc, f, ll, err)) != AFFECT_OK)
             goto done;
-        if (c->cfg.zscore) /* as fit_normalization: no z-scores, no limit */
-            for (size_t e = 0; e < c->dim; e++)
-                f[e] = clip((f[e] - c->mean[e]) / c->scale[e], c->cfg.score_clip);
-        for (size_t e = c->fdim; e < c->dim; e++)
-            f[e] *= c->desc_w;
+        normalize(c, f, c->dim, 0); /* as training's second pass */
         out->svm = affect_svm_predict(c->svm, f, out->decision);
         uint32_t p = affect_spca_dims(c->spca);
         double zbuf[64], *z = out->embed ? out->embed : zbuf;

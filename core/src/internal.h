@@ -27,4 +27,16 @@ typedef struct affect_ws_part {
 
 void *affect_ws_alloc(const affect_ws_part *parts, size_t n);
 
+/* A parallel for over items 0 .. n − 1 (parallel.c): fn(ctx, i, err) on up to `threads` C11
+ * threads, the items taken in increasing order from a shared counter. Each item must write
+ * only its own outputs, so the results do not depend on the schedule. After a failure no
+ * further item starts; the result is the status and error of the lowest-index failing item
+ * (deterministic: every item below a failing one was taken, and runs to its end), or
+ * AFFECT_OK. threads ≤ 1, or a thread that cannot be created, runs the items in the caller.
+ * The allocator and the BLAS must be thread-safe (SQLite's and OpenBLAS's are). */
+#include "affect/base.h"
+typedef affect_status (*affect_item_fn)(void *ctx, uint32_t i, affect_error *err);
+affect_status affect_parallel_for(uint32_t n, uint32_t threads, affect_item_fn fn, void *ctx,
+                                  affect_error *err);
+
 #endif

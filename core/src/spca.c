@@ -67,6 +67,7 @@ struct affect_spca {
     size_t input_dim;
     double *eigenvalues; /* dims, descending */
     double *axes;        /* dims × input_dim, row-major */
+    double *coef;        /* n_train × dims: A of a dual fit until affect_spca_finish, else NULL */
 };
 
 /* The struct, rounded up so the doubles after it are aligned. */
@@ -94,6 +95,8 @@ static affect_spca *model_alloc(uint32_t p, size_t d)
 
 void affect_spca_free(affect_spca *s)
 {
+    if (s)
+        affect_free(s->coef);
     affect_free(s); /* one block, the struct first */
 }
 
@@ -150,7 +153,7 @@ static affect_status check_fit(const double *x, size_t n, size_t d, const uint32
     if (d > BLAS_MAX)
         return affect_fail(err, AFFECT_ERR_RANGE, "d = %zu exceeds the BLAS limit of %d", d,
                            INT_MAX);
-    for (size_t i = 0; i < n; i++) {
+    for (size_t i = 0; x && i < n; i++) { /* x NULL: the dual fit, the Gram matrix only */
         const double *row = x + i * d;
         for (size_t j = 0; j < d; j++)
             if (!isfinite(row[j]))
@@ -402,6 +405,27 @@ static affect_status dual_solve(work *w, size_t n, uint32_t c, uint32_t dims, ui
     return AFFECT_OK;
 }
 
+/* Each axis's largest-magnitude component (the first such) made positive; the same columns of
+ * z (m × dims, NULL for none) change sign with their axis. */
+static void orient_axes(affect_spca *s, double *z, size_t m)
+{
+    size_t d = s->input_dim;
+    uint32_t p = s->dims;
+    for (uint32_t q = 0; q < p; q++) {
+        double *row = s->axes + (size_t)q * d;
+        size_t best = 0;
+        for (size_t j = 1; j < d; j++)
+            if (fabs(row[j]) > fabs(row[best]))
+                best = j;
+        if (row[best] < 0) {
+            for (size_t j = 0; j < d; j++)
+                row[j] = -row[j];
+            for (size_t i = 0; z && i < m; i++)
+                z[i * p + q] = -z[i * p + q];
+        }
+    }
+}
+
 /* Step 5: the axes U = Aᵀ H X, block by block; sums as centred_block's when not NULL. */
 static void axes_from_data(work *w, const double *x, size_t n, size_t d, affect_spca *s,
                            double *sums)
@@ -414,16 +438,19 @@ static void axes_from_data(work *w, const double *x, size_t n, size_t d, affect_
         cblas_dgemm(CblasRowMajor, CblasTrans, CblasNoTrans, (int)p, (int)b, (int)n, 1.0, w->t,
                     (int)p, w->blk, (int)b, 0.0, s->axes + j0, (int)d);
     }
-    for (uint32_t q = 0; q < p; q++) {
-        double *row = s->axes + (size_t)q * d;
-        size_t best = 0;
-        for (size_t j = 1; j < d; j++)
-            if (fabs(row[j]) > fabs(row[best]))
-                best = j;
-        if (row[best] < 0)
-            for (size_t j = 0; j < d; j++)
-                row[j] = -row[j];
-    }
+    orient_axes(s, NULL, 0);
+}
+
+/* The fitted model's eigenvalues (from w), kernel, σ, classes and training size. */
+static void describe(affect_spca *s, const work *w, affect_spca_kernel kernel, double sigma,
+                     uint32_t c, size_t n)
+{
+    for (uint32_t q = 0; q < s->dims; q++)
+        s->eigenvalues[q] = w->lam[c - 1 - q];
+    s->kernel = kernel;
+    s->sigma = kernel == AFFECT_SPCA_RBF ? sigma : 0.0;
+    s->classes = c;
+    s->n_train = n;
 }
 
 static affect_status fit(const double *x, const double *k, size_t n, size_t d, const uint32_t *y,
@@ -473,18 +500,80 @@ static affect_status fit(const double *x, const double *k, size_t n, size_t d, c
             goto cleanup;
         }
     }
-    for (uint32_t q = 0; q < p; q++)
-        s->eigenvalues[q] = w.lam[c - 1 - q];
-    s->kernel = kernel;
-    s->sigma = kernel == AFFECT_SPCA_RBF ? sigma : 0.0;
-    s->classes = c;
-    s->n_train = n;
+    describe(s, &w, kernel, sigma, c, n);
     *out = s;
     s = NULL;
 cleanup:
     affect_spca_free(s);
     affect_free(w.base);
     return st;
+}
+
+affect_status affect_spca_fit_dual(const double *k, size_t n, size_t d, const uint32_t *y,
+                                   uint32_t c, affect_spca_kernel kernel, double sigma,
+                                   uint32_t dims, affect_spca **out, affect_error *err)
+{
+    *out = NULL;
+    affect_status st = check_fit(NULL, n, d, y, c, kernel, sigma, dims, err);
+    if (st != AFFECT_OK)
+        return st;
+    work w;
+    if ((st = work_alloc(&w, n, 1, c, err)) != AFFECT_OK)
+        return st;
+    affect_spca *s = NULL;
+    double trace_k = 0.0;
+    uint32_t p = 0;
+    if ((st = gram_from_k(&w, k, n, &trace_k, err)) != AFFECT_OK)
+        goto cleanup;
+    if (!all_finite(w.kc, n * n)) {
+        st = affect_fail(err, AFFECT_ERR_RANGE, "%s", OVERFLOW_MSG);
+        goto cleanup;
+    }
+    if ((st = label_factor(&w, y, n, c, kernel, sigma, err)) != AFFECT_OK ||
+        (st = dual_solve(&w, n, c, dims, &p, err)) != AFFECT_OK)
+        goto cleanup;
+    s = model_alloc(p, d);
+    if (!s || !(s->coef = affect_malloc_array(n * p, sizeof *s->coef))) {
+        st = affect_nomem(err);
+        goto cleanup;
+    }
+    memcpy(s->coef, w.t, n * p * sizeof *s->coef);
+    memset(s->axes, 0, (size_t)p * d * sizeof *s->axes);
+    describe(s, &w, kernel, sigma, c, n);
+    *out = s;
+    s = NULL;
+cleanup:
+    affect_spca_free(s);
+    affect_free(w.base);
+    return st;
+}
+
+void affect_spca_dual_embed(const affect_spca *s, const double *k, size_t m, double *z)
+{
+    size_t n = (size_t)s->n_train;
+    uint32_t p = s->dims;
+    for (size_t i = 0; i < m; i++)
+        for (uint32_t q = 0; q < p; q++) {
+            double acc = 0.0;
+            for (size_t j = 0; j < n; j++)
+                acc += k[i * n + j] * s->coef[j * p + q];
+            z[i * p + q] = acc;
+        }
+}
+
+void affect_spca_add_rows(affect_spca *s, const double *B, size_t b, size_t col0)
+{
+    size_t n = (size_t)s->n_train, d = s->input_dim;
+    uint32_t p = s->dims;
+    cblas_dgemm(CblasRowMajor, CblasTrans, CblasNoTrans, (int)p, (int)b, (int)n, 1.0, s->coef,
+                (int)p, B, (int)b, 1.0, s->axes + col0, (int)d);
+}
+
+void affect_spca_finish(affect_spca *s, double *z, size_t m)
+{
+    orient_axes(s, z, m);
+    affect_free(s->coef);
+    s->coef = NULL;
 }
 
 affect_status affect_spca_fit(const double *x, size_t n, size_t d, const uint32_t *y, uint32_t c,

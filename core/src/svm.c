@@ -345,38 +345,11 @@ static void sv_starts(const affect_svm *m, uint32_t *start)
         start[k] = start[k - 1] + m->nsv[k - 1];
 }
 
-/* The primal weights of the linear kernel, from the support vectors' rows of X. */
+/* The primal weights of the linear kernel, from the support vectors' rows of X: every column at
+ * once (affect_svm_add_rows). */
 static affect_status primal(affect_svm *m, const double *X, affect_error *err)
 {
-    size_t d = m->d, total;
-    if (!affect_mul_size(n_pairs(m->c), d, &total))
-        return affect_fail(err, AFFECT_ERR_RANGE, "weights of %zu pairs x %zu too large",
-                           n_pairs(m->c), d);
-    m->w = affect_calloc(total, sizeof *m->w);
-    if (!m->w)
-        return affect_nomem(err);
-    uint32_t start[AFFECT_SVM_MAX_CLASSES];
-    sv_starts(m, start);
-    size_t p = 0;
-    for (uint32_t i = 0; i < m->c; i++)
-        for (uint32_t j = i + 1; j < m->c; j++, p++) {
-            double *w = m->w + p * d;
-            const double *coef1 = m->sv_coef + (size_t)(j - 1) * m->l;
-            const double *coef2 = m->sv_coef + (size_t)i * m->l;
-            for (uint32_t k = 0; k < m->nsv[i]; k++) {
-                uint32_t s = start[i] + k;
-                const double *x = X + (size_t)m->sv_index[s] * d;
-                for (size_t t = 0; t < d; t++)
-                    w[t] += coef1[s] * x[t];
-            }
-            for (uint32_t k = 0; k < m->nsv[j]; k++) {
-                uint32_t s = start[j] + k;
-                const double *x = X + (size_t)m->sv_index[s] * d;
-                for (size_t t = 0; t < d; t++)
-                    w[t] += coef2[s] * x[t];
-            }
-        }
-    return AFFECT_OK;
+    return affect_svm_add_rows(m, X, m->d, 0, err);
 }
 
 /* libsvm's winner: most votes, the first (in libsvm's class order) among equals. */
@@ -391,29 +364,18 @@ static uint32_t winner(const uint32_t *votes, uint32_t c)
 
 /* ---- training and prediction ---- */
 
-affect_status affect_svm_train(const double *X, size_t n, size_t d, const uint32_t *y, uint32_t c,
-                               double C, affect_svm **out, affect_error *err)
+/* The dual part of training: libsvm on the Gram matrix G, a model without weights. */
+static affect_status train_dual(const double *G, size_t n, size_t d, const uint32_t *y,
+                                uint32_t c, double C, affect_svm **out, affect_error *err)
 {
     affect_status st;
-    double *G = NULL;
     problem p;
     struct svm_model *sm = NULL;
     affect_svm *m = NULL;
     memset(&p, 0, sizeof p);
     *out = NULL;
-    if ((st = check_data(n, d, y, c, err)) != AFFECT_OK)
-        return st;
-    if (!positive_finite(C))
-        return affect_fail(err, AFFECT_ERR_INVALID, "C must be a positive finite number, got %g",
-                           C);
-    if ((st = check_finite(X, n, d, err)) != AFFECT_OK)
-        return st;
-    if ((st = gram_new(X, n, d, &G, err)) != AFFECT_OK)
-        goto cleanup;
     if ((st = problem_build(G, n, y, c, NULL, 0, &p, err)) != AFFECT_OK)
         goto cleanup;
-    affect_free(G);
-    G = NULL;
     if ((st = fit(&p, C, &sm, err)) != AFFECT_OK)
         goto cleanup;
     if ((uint32_t)svm_get_nr_class(sm) != c) {
@@ -430,19 +392,107 @@ affect_status affect_svm_train(const double *X, size_t n, size_t d, const uint32
                              k);
             goto cleanup;
         }
-    svm_free_and_destroy_model(&sm);
-    problem_free(&p);
-    if ((st = primal(m, X, err)) != AFFECT_OK)
-        goto cleanup;
     *out = m;
     m = NULL;
 cleanup:
     if (sm)
         svm_free_and_destroy_model(&sm);
     problem_free(&p);
-    affect_free(G);
     affect_svm_free(m);
     return st;
+}
+
+affect_status affect_svm_train(const double *X, size_t n, size_t d, const uint32_t *y, uint32_t c,
+                               double C, affect_svm **out, affect_error *err)
+{
+    affect_status st;
+    double *G = NULL;
+    *out = NULL;
+    if ((st = check_data(n, d, y, c, err)) != AFFECT_OK)
+        return st;
+    if (!positive_finite(C))
+        return affect_fail(err, AFFECT_ERR_INVALID, "C must be a positive finite number, got %g",
+                           C);
+    if ((st = check_finite(X, n, d, err)) != AFFECT_OK)
+        return st;
+    if ((st = gram_new(X, n, d, &G, err)) != AFFECT_OK)
+        return st;
+    affect_svm *m = NULL;
+    st = train_dual(G, n, d, y, c, C, &m, err);
+    affect_free(G);
+    if (st == AFFECT_OK && (st = primal(m, X, err)) != AFFECT_OK) {
+        affect_svm_free(m);
+        m = NULL;
+    }
+    *out = m;
+    return st;
+}
+
+/* Every entry of the upper triangle of G finite. */
+static affect_status check_gram(const double *G, size_t n, affect_error *err)
+{
+    for (size_t i = 0; i < n; i++)
+        for (size_t j = i; j < n; j++)
+            if (!isfinite(G[i * n + j]))
+                return affect_fail(
+                    err, AFFECT_ERR_RANGE,
+                    "Gram entry (%zu, %zu) is not finite (the features are too large)", i, j);
+    return AFFECT_OK;
+}
+
+affect_status affect_svm_train_gram(const double *G, size_t n, size_t d, const uint32_t *y,
+                                    uint32_t c, double C, affect_svm **out, affect_error *err)
+{
+    affect_status st;
+    *out = NULL;
+    if ((st = check_data(n, d, y, c, err)) != AFFECT_OK)
+        return st;
+    if (!positive_finite(C))
+        return affect_fail(err, AFFECT_ERR_INVALID, "C must be a positive finite number, got %g",
+                           C);
+    if ((st = check_gram(G, n, err)) != AFFECT_OK)
+        return st;
+    return train_dual(G, n, d, y, c, C, out, err);
+}
+
+affect_status affect_svm_add_rows(affect_svm *m, const double *B, size_t b, size_t col0,
+                                  affect_error *err)
+{
+    size_t d = m->d, P = n_pairs(m->c), total;
+    if (b == 0 || col0 > d || b > d - col0)
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "columns %zu .. %zu are outside the model's %zu dimensions", col0,
+                           col0 + b, d);
+    if (!m->w) {
+        if (!affect_mul_size(P, d, &total))
+            return affect_fail(err, AFFECT_ERR_RANGE, "weights of %zu pairs x %zu too large", P,
+                               d);
+        m->w = affect_calloc(total, sizeof *m->w);
+        if (!m->w)
+            return affect_nomem(err);
+    }
+    uint32_t start[AFFECT_SVM_MAX_CLASSES];
+    sv_starts(m, start);
+    size_t p = 0;
+    for (uint32_t i = 0; i < m->c; i++)
+        for (uint32_t j = i + 1; j < m->c; j++, p++) {
+            double *w = m->w + p * d + col0;
+            const double *coef1 = m->sv_coef + (size_t)(j - 1) * m->l;
+            const double *coef2 = m->sv_coef + (size_t)i * m->l;
+            for (uint32_t k = 0; k < m->nsv[i]; k++) {
+                uint32_t s = start[i] + k;
+                const double *x = B + (size_t)m->sv_index[s] * b;
+                for (size_t t = 0; t < b; t++)
+                    w[t] += coef1[s] * x[t];
+            }
+            for (uint32_t k = 0; k < m->nsv[j]; k++) {
+                uint32_t s = start[j] + k;
+                const double *x = B + (size_t)m->sv_index[s] * b;
+                for (size_t t = 0; t < b; t++)
+                    w[t] += coef2[s] * x[t];
+            }
+        }
+    return AFFECT_OK;
 }
 
 uint32_t affect_svm_predict(const affect_svm *m, const double *x, double *dec)
@@ -490,6 +540,11 @@ static uint32_t dual_predict(const affect_svm *m, const double *g)
                 votes[j]++;
         }
     return m->label[winner(votes, m->c)];
+}
+
+uint32_t affect_svm_predict_gram(const affect_svm *m, const double *g)
+{
+    return dual_predict(m, g);
 }
 
 /* ---- accessors ---- */
@@ -617,20 +672,13 @@ affect_status affect_stratified_folds(const uint32_t *y, size_t n, uint32_t c, u
     return AFFECT_OK;
 }
 
-affect_status affect_svm_select_c(const double *X, size_t n, size_t d, const uint32_t *y,
-                                  uint32_t c, const double *candidates, size_t n_cand,
-                                  uint32_t folds, uint64_t seed, double *best_c, double *best_acc,
+/* The argument checks of the two selections. */
+static affect_status check_select(size_t n, size_t d, const uint32_t *y, uint32_t c,
+                                  const double *candidates, size_t n_cand, uint32_t folds,
                                   affect_error *err)
 {
-    affect_status st;
-    double *G = NULL;
-    uint32_t *fold_of = NULL;
-    size_t *correct = NULL, *size = NULL, n_cells;
-    problem p;
-    struct svm_model *sm = NULL;
-    affect_svm *m = NULL;
-    memset(&p, 0, sizeof p);
-    if ((st = check_data(n, d, y, c, err)) != AFFECT_OK)
+    affect_status st = check_data(n, d, y, c, err);
+    if (st != AFFECT_OK)
         return st;
     if (n_cand == 0)
         return affect_fail(err, AFFECT_ERR_INVALID, "need at least one candidate C");
@@ -641,8 +689,56 @@ affect_status affect_svm_select_c(const double *X, size_t n, size_t d, const uin
                                candidates[i]);
     if (folds < 2)
         return affect_fail(err, AFFECT_ERR_INVALID, "need at least 2 folds, got %u", folds);
-    if ((st = check_finite(X, n, d, err)) != AFFECT_OK)
-        return st;
+    return AFFECT_OK;
+}
+
+static affect_status select_c(const double *G, size_t n, const uint32_t *y, uint32_t c,
+                              const double *candidates, size_t n_cand, uint32_t folds,
+                              uint64_t seed, double *best_c, double *best_acc, affect_error *err);
+
+affect_status affect_svm_select_c(const double *X, size_t n, size_t d, const uint32_t *y,
+                                  uint32_t c, const double *candidates, size_t n_cand,
+                                  uint32_t folds, uint64_t seed, double *best_c, double *best_acc,
+                                  affect_error *err)
+{
+    double *G = NULL;
+    affect_status st = check_select(n, d, y, c, candidates, n_cand, folds, err);
+    if (st == AFFECT_OK)
+        st = check_finite(X, n, d, err);
+    if (st == AFFECT_OK)
+        st = gram_new(X, n, d, &G, err);
+    if (st == AFFECT_OK)
+        st = select_c(G, n, y, c, candidates, n_cand, folds, seed, best_c, best_acc, err);
+    affect_free(G);
+    return st;
+}
+
+affect_status affect_svm_select_c_gram(const double *G, size_t n, size_t d, const uint32_t *y,
+                                       uint32_t c, const double *candidates, size_t n_cand,
+                                       uint32_t folds, uint64_t seed, double *best_c,
+                                       double *best_acc, affect_error *err)
+{
+    affect_status st = check_select(n, d, y, c, candidates, n_cand, folds, err);
+    if (st == AFFECT_OK)
+        st = check_gram(G, n, err);
+    if (st == AFFECT_OK)
+        st = select_c(G, n, y, c, candidates, n_cand, folds, seed, best_c, best_acc, err);
+    return st;
+}
+
+/* The cross-validation of affect_svm_select_c on the Gram matrix. */
+static affect_status select_c(const double *G, size_t n, const uint32_t *y, uint32_t c,
+                              const double *candidates, size_t n_cand, uint32_t folds,
+                              uint64_t seed, double *best_c, double *best_acc, affect_error *err)
+{
+    affect_status st;
+    uint32_t *fold_of = NULL;
+    size_t *correct = NULL, *size = NULL, n_cells;
+    problem p;
+    struct svm_model *sm = NULL;
+    affect_svm *m = NULL;
+    size_t d = 1; /* the models of the folds carry no weights */
+    memset(&p, 0, sizeof p);
     uint32_t k = n < folds ? (uint32_t)n : folds;
     if (!affect_mul_size(n_cand, k, &n_cells))
         return affect_fail(err, AFFECT_ERR_RANGE, "too many candidates: %zu", n_cand);
@@ -654,8 +750,6 @@ affect_status affect_svm_select_c(const double *X, size_t n, size_t d, const uin
         goto cleanup;
     }
     if ((st = affect_stratified_folds(y, n, c, folds, seed, fold_of, err)) != AFFECT_OK)
-        goto cleanup;
-    if ((st = gram_new(X, n, d, &G, err)) != AFFECT_OK)
         goto cleanup;
     for (size_t i = 0; i < n; i++)
         size[fold_of[i]]++;
@@ -700,7 +794,6 @@ cleanup:
         svm_free_and_destroy_model(&sm);
     affect_svm_free(m);
     problem_free(&p);
-    affect_free(G);
     affect_free(fold_of);
     affect_free(correct);
     affect_free(size);

@@ -6,9 +6,9 @@
 #
 #   bash tests/bench/bench_train_scale.sh [CONFIG...]
 #
-# CONFIG is one of: defaults (no option), thesis (the thesis's 7 states x 4 full-covariance
+# CONFIG is one of: defaults (no option), threads (defaults with "threads": 2), thesis (the thesis's 7 states x 4 full-covariance
 # mixtures on the first-frame observations, no descriptors, no mirror images), crossval
-# (affect_crossval, defaults, leave one content out, "threads": 2). Default: defaults crossval.
+# (affect_crossval, defaults, leave one content out, "threads": 2). Default: defaults threads crossval.
 # Needs ../shared/corpora/bandai-namco-2-dev and build/affect.so (./run.sh demo builds it);
 # OpenBLAS runs single-threaded (as run.sh sets it). The goals of issue 12: affect_train on
 # 2,000 motions with defaults <= 60 s and <= 2 GB; with the thesis's configuration <= 10 min and
@@ -23,7 +23,7 @@ if [ ! -d "$CORPUS" ]; then
 fi
 export OPENBLAS_NUM_THREADS=1
 DB="$ROOT/build/bench-scale.db"
-EXT="$ROOT/build/affect"
+EXT="${AFFECT_EXT:-$ROOT/build/affect}"
 if [ ! -f "$DB" ] || [ "$(sqlite3 "$DB" 'SELECT count(*) FROM big' 2>/dev/null)" != 2016 ]; then
     rm -f "$DB"
     sqlite3 "$DB" < sql/schema.sql
@@ -51,12 +51,15 @@ run() { # run NAME SQL: prints seconds, peak RSS and the query's output
 echo
 echo "| run | wall time | peak memory | output |"
 echo "|---|---:|---:|---|"
-for config in "${@:-defaults crossval}"; do
+for config in "${@:-defaults threads crossval}"; do
     for c in $config; do
         case $c in
         defaults)
             run "affect_train, defaults, 2,016 motions" \
                 "SELECT 'BLOB ' || length(m) || ' bytes' FROM (SELECT affect_train(motion, style) AS m FROM big)" ;;
+        threads)
+            run "affect_train, defaults, \"threads\":2, 2,016 motions" \
+                "SELECT 'BLOB ' || length(m) || ' bytes' FROM (SELECT affect_train(motion, style, '{\"threads\":2}') AS m FROM big)" ;;
         thesis)
             run "affect_train, thesis 7 x 4 full, 2,016 motions" \
                 "SELECT 'BLOB ' || length(m) || ' bytes' FROM (SELECT affect_train(motion, style, '{\"frame\":\"first\",\"velocity\":false,\"states\":7,\"mixtures\":4,\"covariance\":\"full\",\"max_iter\":50,\"descriptors\":\"none\",\"mirror\":false}') AS m FROM big)" ;;

@@ -43,7 +43,7 @@ CONFIGS = {
     "defaults": {},
     "defaults without mirror images": {"mirror": False},
     "defaults without kinematic summaries": {"descriptors": "none"},
-    "first-frame observations, 5x1 diag (the earlier recommendation)": {
+    "first-frame observations 5x1 diag (the earlier recommendation)": {
         "frame": "first", "velocity": True, "descriptors": "none", "mirror": False},
     # the thesis's 7 x 4 full on end-effectors + torso (not run unless named: --configs)
     "thesis": {"frame": "first", "states": 7, "mixtures": 4, "covariance": "full",

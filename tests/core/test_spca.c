@@ -903,6 +903,52 @@ static void test_truncations_and_corruptions(void **state)
 
 /* ---- fit errors ---- */
 
+/* The dual fit with the axes given block by block gives affect_spca_fit's model: the same
+ * eigenvalues, the same axes and training coordinates up to rounding (Aᵀ X against Aᵀ H X),
+ * the same signs after affect_spca_finish. */
+static void test_dual_blocks(void **state)
+{
+    (void)state;
+    enum { N = 40, DD = 23, C4 = 4 };
+    double *x;
+    uint32_t *y;
+    make_data(N, DD, C4, 2.0, 3.0, 91, &x, &y);
+    double *k = gram(x, N, DD), *B = malloc(sizeof(double) * N * DD);
+    double *z = malloc(sizeof(double) * N * C4), *zr = malloc(sizeof(double) * N * C4);
+    affect_spca *ref = fit_ok(x, N, DD, y, C4, AFFECT_SPCA_RBF, 0.5, 3), *s = NULL;
+    affect_error err;
+    assert_int_equal(affect_spca_fit_dual(k, N, DD, y, C4, AFFECT_SPCA_RBF, 0.5, 3, &s, &err),
+                     AFFECT_OK);
+    uint32_t p = affect_spca_dims(s);
+    assert_int_equal(p, affect_spca_dims(ref));
+    affect_spca_dual_embed(s, k, N, z);
+    static const size_t cuts[] = {0, 7, 8, DD};
+    for (size_t c = 0; c + 1 < sizeof cuts / sizeof cuts[0]; c++) {
+        size_t w = cuts[c + 1] - cuts[c];
+        for (size_t i = 0; i < N; i++)
+            memcpy(B + i * w, x + i * DD + cuts[c], w * sizeof *B);
+        affect_spca_add_rows(s, B, w, cuts[c]);
+    }
+    affect_spca_finish(s, z, N);
+    affect_spca_embed_rows(ref, x, N, zr);
+    for (uint32_t q = 0; q < p; q++)
+        tu_assert_near(affect_spca_eigenvalues(s)[q], affect_spca_eigenvalues(ref)[q],
+                       1e-9 * affect_spca_eigenvalues(ref)[0]);
+    for (size_t e = 0; e < (size_t)p * DD; e++)
+        tu_assert_near(affect_spca_axes(s)[e], affect_spca_axes(ref)[e], 1e-9);
+    for (size_t e = 0; e < (size_t)N * p; e++)
+        tu_assert_near(z[e], zr[e], 1e-8 * (1 + fabs(zr[e])));
+    assert_sign_convention(s);
+    affect_spca_free(ref);
+    affect_spca_free(s);
+    free(k);
+    free(B);
+    free(z);
+    free(zr);
+    free(x);
+    free(y);
+}
+
 static void test_fit_errors(void **state)
 {
     (void)state;
@@ -1113,6 +1159,7 @@ int main(void)
         cmocka_unit_test(test_determinism_and_round_trip),
         cmocka_unit_test(test_truncations_and_corruptions),
         cmocka_unit_test(test_fit_errors),
+        cmocka_unit_test(test_dual_blocks),
         cmocka_unit_test(test_out_of_memory),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -688,6 +688,65 @@ static void test_select_c(void **state)
 
 /* ---- errors ---- */
 
+/* Training on the Gram matrix with the weights given block by block gives affect_svm_train's
+ * model: the same support vectors and coefficients, the same weights (the same additions in the
+ * same order), the same predictions; the dual prediction agrees; select_c on G agrees. */
+static void test_gram_blocks(void **state)
+{
+    (void)state;
+    enum { N = 45, DD = 37, C3 = 3 };
+    uint32_t y[N];
+    for (uint32_t i = 0; i < N; i++)
+        y[i] = i % C3;
+    blobs b = blobs_new(C3, DD, 1.0, 71);
+    double *X = malloc(sizeof(double) * N * DD), *G = malloc(sizeof(double) * N * N);
+    double *B = malloc(sizeof(double) * N * DD);
+    blobs_draw(&b, y, N, 1.5, 72, X);
+    affect_error err;
+    assert_int_equal(affect_svm_gram(X, N, DD, G, &err), AFFECT_OK);
+    affect_svm *ref = NULL, *m = NULL;
+    assert_int_equal(affect_svm_train(X, N, DD, y, C3, 0.5, &ref, &err), AFFECT_OK);
+    assert_int_equal(affect_svm_train_gram(G, N, DD, y, C3, 0.5, &m, &err), AFFECT_OK);
+    static const size_t cuts[] = {0, 10, 11, 30, DD};
+    for (size_t k = 0; k + 1 < sizeof cuts / sizeof cuts[0]; k++) {
+        size_t w = cuts[k + 1] - cuts[k];
+        for (size_t i = 0; i < N; i++)
+            memcpy(B + i * w, X + i * DD + cuts[k], w * sizeof *B);
+        assert_int_equal(affect_svm_add_rows(m, B, w, cuts[k], &err), AFFECT_OK);
+    }
+    assert_int_equal(affect_svm_total_sv(m), affect_svm_total_sv(ref));
+    for (uint32_t p = 0; p < C3; p++)
+        for (uint32_t q = p + 1; q < C3; q++) {
+            double r1, r2;
+            const double *w1 = affect_svm_weights(ref, p, q, &r1), *w2 = affect_svm_weights(m, p, q, &r2);
+            assert_true(r1 == r2);
+            assert_memory_equal(w1, w2, DD * sizeof *w1);
+        }
+    for (size_t i = 0; i < N; i++) {
+        uint32_t a = affect_svm_predict(ref, X + i * DD, NULL);
+        assert_int_equal(affect_svm_predict(m, X + i * DD, NULL), a);
+        assert_int_equal(affect_svm_predict_gram(m, G + i * N), a);
+    }
+    assert_int_equal(affect_svm_add_rows(m, B, 5, DD - 4, &err), AFFECT_ERR_INVALID);
+    assert_string_equal(err.msg, "columns 33 .. 38 are outside the model's 37 dimensions");
+    static const double cands[3] = {0.01, 1, 100};
+    double c1, a1, c2, a2;
+    assert_int_equal(affect_svm_select_c(X, N, DD, y, C3, cands, 3, 5, 3, &c1, &a1, &err), AFFECT_OK);
+    assert_int_equal(affect_svm_select_c_gram(G, N, DD, y, C3, cands, 3, 5, 3, &c2, &a2, &err),
+                     AFFECT_OK);
+    assert_true(c1 == c2 && a1 == a2);
+    G[3] = NAN;
+    affect_svm *bad = NULL;
+    assert_int_equal(affect_svm_train_gram(G, N, DD, y, C3, 0.5, &bad, &err), AFFECT_ERR_RANGE);
+    assert_string_equal(err.msg, "Gram entry (0, 3) is not finite (the features are too large)");
+    affect_svm_free(ref);
+    affect_svm_free(m);
+    free(b.mu);
+    free(X);
+    free(G);
+    free(B);
+}
+
 static void test_errors(void **state)
 {
     (void)state;
@@ -1127,6 +1186,7 @@ int main(void)
         cmocka_unit_test(test_separable), cmocka_unit_test(test_matches_libsvm),
         cmocka_unit_test(test_vote),      cmocka_unit_test(test_vote_trained),
         cmocka_unit_test(test_folds),     cmocka_unit_test(test_select_c),
+        cmocka_unit_test(test_gram_blocks),
         cmocka_unit_test(test_errors),    cmocka_unit_test(test_round_trip),
         cmocka_unit_test(test_corrupt),   cmocka_unit_test(test_out_of_memory),
     };

@@ -188,6 +188,14 @@ SELECT 'training twice gives identical BLOBs',
   FROM c;
 -- oom: skip
 
+SELECT 'training on 3 threads (class HMMs and Fisher scores in parallel) gives the same BLOB',
+       (SELECT affect_train(m, emotion, '{"threads":3}') FROM s WHERE seed <= 4) = model
+  FROM d;
+-- oom: skip
+
+SELECT affect_train(m, emotion, '{"threads":65}') FROM probe;
+-- error: affect_train: option "threads" must be from 1 to 64, got 65
+
 SELECT 'the small classifier too, and the class order does not depend on the row order',
        (SELECT affect_train(m, emotion, '{"states":2,"mixtures":1,"joints":["right_hand"],"max_iter":2,"svm_c":1,"spca_dims":1,"knn_k":1,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false}')
           FROM probe WHERE seed <= 3) = model
@@ -493,7 +501,7 @@ SELECT affect_train('x', 'sad');
 -- error: affect_train: argument 1 must be a motion BLOB, got text
 
 SELECT affect_train(m, emotion, '{"svm":1,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
--- error: affect_train: unknown option "svm" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, frame, root, max_iter, tol, reg, seed, groups, score_normalization, score_clip, svm_c, svm_folds, spca_dims, spca_kernel, spca_sigma, knn_k, grid, descriptors, descriptor_weight, mirror)
+-- error: affect_train: unknown option "svm" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, frame, root, max_iter, tol, reg, seed, groups, score_normalization, score_clip, svm_c, svm_folds, spca_dims, spca_kernel, spca_sigma, knn_k, grid, descriptors, descriptor_weight, mirror, threads)
 
 SELECT affect_train(m, emotion, '{"svm_c":0,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: option "svm_c" must be a positive number or "auto"

@@ -121,6 +121,9 @@ typedef struct affect_classifier_config {
     double descriptor_weight;       /* their block's share of the kernel (default 0.1) */
     affect_classifier_mirror mirror; /* train on every motion and its mirror image (default
                                         auto) */
+    uint32_t threads;               /* training: class HMMs and motions' Fisher scores on this
+                                       many threads (default 1, at most 64; the result does not
+                                       depend on it; not stored in the BLOB) */
 } affect_classifier_config;
 
 /* The measured best (docs/EVALUATION.md, "Choosing the defaults"), not the thesis's: class

@@ -102,6 +102,27 @@ affect_status affect_spca_fit_gram(const double *x, const double *k, size_t n, s
                                    double sigma, uint32_t dims, affect_spca **out,
                                    affect_error *err);
 
+/* ---- the dual fit, axes block by block ----
+ * For data too large to hold at once: the fit needs only the Gram matrix k (n × n, upper
+ * triangle read); the axes U = Aᵀ X (A the n × p dual coefficients; Aᵀ H = Aᵀ because the
+ * columns of A = H Δ v / √λ sum to 0) are then accumulated from blocks of columns of X.
+ * affect_spca_fit_dual: fit's errors except the data's own (d is the dimension of the axes to
+ * come); the model's axes are 0 and it keeps A until affect_spca_finish.
+ * affect_spca_dual_embed: z (m × p) = k_rows (m × n: kernel values of m samples with the
+ * training samples) · A — the coordinates U x of those samples, before the signs are fixed (the
+ * training coordinates with k_rows = k).
+ * affect_spca_add_rows: the axes' columns col0 .. col0 + b − 1 += Aᵀ B (B: n × b, those columns
+ * of every training sample, in training order), one cblas_dgemm.
+ * affect_spca_finish: orients each axis as affect_spca_fit does (largest-magnitude component
+ * positive), changes the sign of the same columns of z (m × p; NULL for none), and frees A. The
+ * model is then used and encoded like a fitted one. */
+affect_status affect_spca_fit_dual(const double *k, size_t n, size_t d, const uint32_t *y,
+                                   uint32_t c, affect_spca_kernel kernel, double sigma,
+                                   uint32_t dims, affect_spca **out, affect_error *err);
+void affect_spca_dual_embed(const affect_spca *s, const double *k, size_t m, double *z);
+void affect_spca_add_rows(affect_spca *s, const double *B, size_t b, size_t col0);
+void affect_spca_finish(affect_spca *s, double *z, size_t m);
+
 void affect_spca_free(affect_spca *s);
 
 /* z (p values) = U x for x of affect_spca_input_dim values; plain sums in index order, so

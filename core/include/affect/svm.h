@@ -87,6 +87,35 @@ affect_status affect_svm_gram(const double *X, size_t n, size_t d, double *G, af
 affect_status affect_svm_train(const double *X, size_t n, size_t d, const uint32_t *y, uint32_t c,
                                double C, affect_svm **out, affect_error *err);
 
+/* ---- training on the Gram matrix, weights block by block ----
+ * For data too large to hold at once (n × d with d ~ 10⁶): the caller accumulates G = X Xᵀ
+ * (n × n, row-major, only the upper triangle read) block of columns by block, trains on it, then
+ * gives the columns again, block by block, for the weights.
+ *
+ * affect_svm_train_gram: as affect_svm_train on the Gram matrix (d is the dimension of the
+ * weights to come); the model has no weights yet: affect_svm_predict needs them, and
+ * affect_svm_predict_gram does not. Errors: affect_svm_train's, with "Gram entry (3, 5) is not
+ * finite (the features are too large)" for G.
+ * affect_svm_add_rows: the weight columns col0 .. col0 + b − 1 from B (n × b, row-major, the
+ * columns col0 .. of every training sample, in training order): w_pq[col0 + t] += Σ coef ·
+ * B[s][t] over the support vectors; the weights start at 0 (allocated on the first call), so
+ * after every column was given once they equal affect_svm_train's up to the order of the
+ * additions (the same order: support vector after support vector). Errors: "columns 5 .. 9 are
+ * outside the model's 8 dimensions", "weights of 21 pairs x 3000000000 too large"
+ * (AFFECT_ERR_RANGE), AFFECT_ERR_NOMEM.
+ * affect_svm_predict_gram: the prediction of a sample from its kernel values g with every
+ * training sample (a row of G), libsvm's sums and vote.
+ * affect_svm_select_c_gram: affect_svm_select_c on the Gram matrix. */
+affect_status affect_svm_train_gram(const double *G, size_t n, size_t d, const uint32_t *y,
+                                    uint32_t c, double C, affect_svm **out, affect_error *err);
+affect_status affect_svm_add_rows(affect_svm *m, const double *B, size_t b, size_t col0,
+                                  affect_error *err);
+uint32_t affect_svm_predict_gram(const affect_svm *m, const double *g);
+affect_status affect_svm_select_c_gram(const double *G, size_t n, size_t d, const uint32_t *y,
+                                       uint32_t c, const double *candidates, size_t n_cand,
+                                       uint32_t folds, uint64_t seed, double *best_c,
+                                       double *best_acc, affect_error *err);
+
 void affect_svm_free(affect_svm *m);
 
 /* The predicted class of x (dim() values). When dec is not NULL it receives the
