@@ -94,13 +94,13 @@ SELECT id, name, content, emotion, motion FROM motions
 DROP TABLE IF EXISTS classifiers;
 CREATE TABLE classifiers AS
 SELECT 'four emotions' AS name,
-       affect_train(motion, emotion, '{"states":5,"mixtures":1,"covariance":"diag","velocity":true,"max_iter":20,"seed":7}') AS model
+       affect_train(motion, emotion, '{"threads":2}') AS model  -- the defaults, two threads
   FROM rec_data;
 
 .print
 .print '== emotion recognizer (affect_train: HMM per emotion, Fisher scores, SVM, sPCA + kNN) =='
 SELECT json_extract(affect_info(model), '$.training_motions') AS motions,
-       json_extract(affect_info(model), '$.dimensions.fisher') AS fisher_dims,
+       json_extract(affect_info(model), '$.dimensions.representation') AS dims,
        length(model) AS blob_bytes,
        printf('%.2f', json_extract(affect_info(model), '$.training_accuracy.ml')) AS train_ml,
        printf('%.2f', json_extract(affect_info(model), '$.training_accuracy.svm')) AS train_svm,

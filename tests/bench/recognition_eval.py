@@ -4,7 +4,7 @@
 Usage (from the repository root, after ./run.sh demo or any build of build/affect.so):
     OPENBLAS_NUM_THREADS=1 /usr/bin/python3 tests/bench/recognition_eval.py
         [--db build/recognition.db] [--configs NAME,NAME,...] [--no-peer] [--no-cross]
-        [--no-resampled]
+        [--no-resampled] [--grid]
 AFFECT_EXT overrides the extension's path (default build/affect).
 
 It imports both corpora of ../shared/corpora (bandai-namco-1 and bandai-namco-2-dev) into --db
@@ -51,6 +51,66 @@ CONFIGS = {
                "joints": ["pelvis", "chest", "head", "left_hand", "right_hand", "left_foot",
                           "right_foot"]},
 }
+
+# The table that chose the defaults (--grid): leave one content out on both corpora, every
+# option set with "seed": 7 (the runs of docs/EVALUATION.md, "Choosing the defaults"). Options
+# not listed take the values they had before the choice: the first-frame observations, no
+# descriptors, no mirror images, 5 states x 1 diagonal, 20 iterations.
+BEFORE = {"frame": "first", "root": False, "velocity": False, "descriptors": "none",
+          "mirror": False, "states": 5, "mixtures": 1, "covariance": "diag", "max_iter": 20,
+          "seed": 7}
+GRID = [
+    {"velocity": True},
+    {"frame": "body", "velocity": True, "root": True},
+    {"frame": "body", "velocity": True},
+    {"frame": "body", "root": True},
+    {"frame": "body", "velocity": True, "root": True, "states": 3, "mixtures": 2},
+    {"frame": "body", "velocity": True, "states": 4},
+    {"frame": "body", "velocity": True, "root": True, "states": 7},
+    {"frame": "body", "velocity": True, "root": True, "mixtures": 2, "covariance": "full",
+     "joints": ["pelvis", "chest", "head", "left_hand", "right_hand", "left_foot",
+                "right_foot"]},
+    {"frame": "body", "velocity": True, "root": True, "descriptors": "kinematics"},
+    {"frame": "body", "velocity": True, "root": True, "descriptors": "kinematics",
+     "descriptor_weight": 0.3},
+    {"frame": "body", "velocity": True, "root": True, "descriptors": "kinematics",
+     "descriptor_weight": 0.1},
+    {"frame": "body", "velocity": True, "root": True, "descriptors": "all",
+     "descriptor_weight": 0.3},
+    {"frame": "body", "velocity": True, "mirror": True},
+    {"frame": "body", "velocity": True, "mirror": True, "mixtures": 2},
+    {"frame": "body", "velocity": True, "mirror": True, "descriptors": "kinematics",
+     "descriptor_weight": 1},
+    {"frame": "body", "velocity": True, "mirror": True, "descriptors": "kinematics",
+     "descriptor_weight": 0.3},
+    {"frame": "body", "velocity": True, "mirror": True, "descriptors": "kinematics",
+     "descriptor_weight": 0.1},
+    {"frame": "body", "velocity": True, "mirror": True, "descriptors": "all",
+     "descriptor_weight": 0.3},
+    {"frame": "body", "mirror": True},
+    {"frame": "body", "mirror": True, "states": 4},
+    {"frame": "body", "mirror": True, "states": 7},
+    {"frame": "body", "mirror": True, "descriptors": "kinematics", "descriptor_weight": 0.3},
+    {"frame": "body", "mirror": True, "descriptors": "kinematics", "descriptor_weight": 0.1},
+]
+
+
+def grid(con):
+    print("| options (beyond the earlier ones) | B-N-1 ML | B-N-1 SVM | B-N-1 kNN | B-N-2 ML | "
+          "B-N-2 SVM (worst content) | B-N-2 kNN | mean SVM |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|")
+    for g in GRID:
+        opts = dict(BEFORE)
+        opts.update(g)
+        r1 = ours(con, "c1", opts, "loco")
+        r2 = ours(con, "c2", opts, "loco")
+        print("| `%s` | %.1f | %.1f | %.1f | %.1f | %.1f (%.0f) | %.1f | %.1f |" % (
+            json.dumps(g, separators=(",", ":")), 100 * r1["ml"]["pooled"],
+            100 * r1["svm"]["pooled"], 100 * r1["knn"]["pooled"], 100 * r2["ml"]["pooled"],
+            100 * r2["svm"]["pooled"], 100 * min(r2["svm"]["folds"].values()),
+            100 * r2["knn"]["pooled"], 50 * (r1["svm"]["pooled"] + r2["svm"]["pooled"])),
+            flush=True)
+
 
 FOUR = ("angry", "happy", "sad", "normal")
 TEN = ("walk", "run", "dash", "walk-back", "walk-left", "walk-right", "bow", "bye", "byebye",
@@ -206,6 +266,8 @@ def main():
     ap.add_argument("--no-peer", action="store_true")
     ap.add_argument("--no-cross", action="store_true")
     ap.add_argument("--no-resampled", action="store_true")
+    ap.add_argument("--grid", action="store_true",
+                    help="only the table that chose the defaults")
     a = ap.parse_args()
     if not os.path.isdir(CORPORA):
         print("recognition_eval: skipped: ../shared/corpora is absent")
@@ -213,6 +275,9 @@ def main():
     con = connect(a.db)
     import_corpora(con)
     views(con)
+    if a.grid:
+        grid(con)
+        return 0
     names = a.configs.split(",")
     tasks = [("c1", "loco", "bandai-namco-1, 4 emotions, leave one content out"),
              ("c1", "kfold", "bandai-namco-1, 4 emotions, 10-fold"),
