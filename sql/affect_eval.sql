@@ -8,7 +8,7 @@
 -- Data: angry, happy, sad and normal over the ten contents recorded in every style (44 motions,
 -- 11 per emotion); then the 7 affect-related styles (angry, happy, sad, normal, proud,
 -- not-confident, tired; 77 motions) as a harder task. Protocols, both by affect_crossval:
---   10-fold   stratified 10-fold cross-validation, seed 7;
+--   10-fold   stratified 10-fold cross-validation, seed 7 (the defaults row: seed 1);
 --   LOCO      leave one content out (10 folds; the held-out action was never seen in training).
 -- The three methods are scored on the same folds by the same classifiers (ML = the class HMM
 -- with the largest log-likelihood). Cells: mean ± sample sd of the per-fold accuracies, then

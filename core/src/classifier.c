@@ -13,18 +13,24 @@
  *         affect_classifier_free(c);
  *     }
  *
- * How it works. Training keeps the n × D matrix of Fisher representations (D = C × the
- * per-HMM score dimension) only while it trains; the classifier keeps the HMMs, the
- * normalization (mean and scale per dimension), the SVM's one-vs-one weight vectors, the sPCA
- * axes and the training coordinates — O(D) doubles, not O(n D). Evaluation computes the
- * sequence's score under each HMM into one D-vector, normalizes it and applies the SVM and the
- * projection.
+ * How it works. Training (train_on) never holds the n × D matrix of representations (D = C ×
+ * the per-HMM score dimension + the descriptors): it computes it block by block (one class
+ * HMM's scores of every motion, or the descriptors), adds each normalized block to the n × n
+ * Gram matrix, fits C, the SVM, the grid and the sPCA in the dual, then computes the blocks again
+ * for the SVM's weights and the sPCA's axes. With mirror images (affect_classifier_train) the
+ * training set is first doubled. The classifier keeps the HMMs, the normalization (mean and
+ * scale per dimension), the SVM's one-vs-one weight vectors, the sPCA axes and the training
+ * coordinates — O(D) doubles, not O(n D). Evaluation computes the sequence's score under each
+ * HMM into one D-vector (then its descriptors), normalizes it exactly as training did and
+ * applies the SVM and the projection.
  *
- * The binary form, version 1 (little-endian, affect/bytes.h):
+ * The binary form, version 2 (little-endian, affect/bytes.h; version 1 lacks the three fields
+ * after knn_k and is read as descriptors 0, weight 1, no mirror images):
  *     "AFCL", u32 version, u32 flags (0)
  *     u32 C, C × (u32 length, bytes) labels
  *     u32 groups, u8 zscore, f64 score_clip, f64 svm_c, u32 svm_folds, u32 spca_dims, u8 kernel, f64 sigma,
  *     u32 knn_k (the chosen values when a grid was searched)
+ *     u32 descriptors, f64 descriptor_weight, u8 mirror
  *     u32 grid n_dims, n_sigma, n_k, folds; the lists (u32, f64, u32); f64 grid CV accuracy
  *     f64 C used, f64 its inner CV accuracy, f64 × 3 training accuracies (ML, SVM, kNN)
  *     C × (u64 length, the class HMM's model BLOB)
