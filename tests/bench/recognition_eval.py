@@ -5,7 +5,8 @@ Usage (from the repository root, after ./run.sh demo or any build of build/affec
     OPENBLAS_NUM_THREADS=1 /usr/bin/python3 tests/bench/recognition_eval.py
         [--db build/recognition.db] [--configs NAME,NAME,...] [--no-peer] [--no-cross]
         [--no-resampled] [--grid]
-AFFECT_EXT overrides the extension's path (default build/affect).
+AFFECT_EXT overrides the extension's path (default build/affect). The peer needs Debian's
+python3-sklearn (a peer only: the project itself never uses it).
 
 It imports both corpora of ../shared/corpora (bandai-namco-1 and bandai-namco-2-dev) into --db
 (once; the file is reused when it already holds them) with the extension's motion_from_bvh, then
