@@ -129,3 +129,23 @@ SELECT laban_shape_shaping(motion_select(m, '["Hips","Head"]')) FROM s LIMIT 1;
 
 SELECT laban_vector(m, '{"speed_floor":1}') FROM s LIMIT 1;
 -- error: laban_vector: speed_floor must be in [0, 1), got 1
+
+-- ---- motion_kinematics: the recognizer's kinematic summaries ----
+SELECT 'motion_kinematics: 21 named numbers; angry knocks move the hands faster than sad ones',
+       (SELECT count(*) FROM json_each(motion_kinematics(m))) = 21
+   AND json_extract(motion_kinematics(m), '$.duration') = motion_duration(m)
+   AND (SELECT avg(json_extract(motion_kinematics(m), '$.right_hand_speed_p90')) FROM s
+         WHERE action = 'knock' AND emotion = 'angry')
+     > (SELECT avg(json_extract(motion_kinematics(m), '$.right_hand_speed_p90')) FROM s
+         WHERE action = 'knock' AND emotion = 'sad')
+  FROM s WHERE action = 'knock' AND emotion = 'angry' AND seed = 1;
+
+SELECT motion_kinematics(NULL) IS NULL, motion_kinematics(m, '{"up":"z"}') IS NOT NULL
+  FROM s WHERE seed = 1 AND action = 'knock' AND emotion = 'sad';
+-- expect: 1
+
+SELECT motion_kinematics(m, '{"cutoff_hz":3}') FROM s WHERE seed = 1 LIMIT 1;
+-- error: motion_kinematics: unknown option "cutoff_hz" (expected up)
+
+SELECT motion_kinematics(x'00');
+-- error: motion_kinematics: argument 1 is not a valid motion: truncated: 1 bytes is shorter than the 32-byte header
