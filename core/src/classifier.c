@@ -751,6 +751,10 @@ static affect_status train_on(const affect_classifier_config *cfg, const affect_
         affect_spca_add_rows(c->spca, B, w, col0);
     }
     affect_spca_finish(c->spca, c->train_z, n);
+    /* the D-long vectors as float32 (half the BLOB; they act on z-scores of at most ±5, so a
+     * decision value moves by about 1e-7 of its size); out of float32's range: kept float64 */
+    affect_svm_round_weights(c->svm);
+    affect_spca_round_axes(c->spca);
     st = loo_knn(c, &c->report.train_acc_knn, err);
 done:
     affect_free(B);

@@ -49,12 +49,14 @@
 #include <cblas.h>
 #include <inttypes.h>
 #include <lapacke.h>
+#include <float.h>
 #include <limits.h>
 #include <math.h>
 #include <string.h>
 
 #include "affect/hmm_blob.h" /* affect_fnv1a64 */
 
+#define FLAG_F32 1u /* record flag: the axes are float32 */
 #define BLOCK_DOUBLES 262144u /* doubles in one centred column block of X */
 #define GRAM_MATCH_TOL 1e-6   /* relative trace mismatch tolerated by affect_spca_fit_gram */
 #define BLAS_MAX ((size_t)INT_MAX)
@@ -68,6 +70,7 @@ struct affect_spca {
     double *eigenvalues; /* dims, descending */
     double *axes;        /* dims × input_dim, row-major */
     double *coef;        /* n_train × dims: A of a dual fit until affect_spca_finish, else NULL */
+    bool f32;            /* every axis component is a float32 value: encoded with flag 1 */
 };
 
 /* The struct, rounded up so the doubles after it are aligned. */
@@ -653,6 +656,18 @@ const double *affect_spca_eigenvalues(const affect_spca *s)
 
 /* ---- serialisation ---- */
 
+bool affect_spca_round_axes(affect_spca *s)
+{
+    size_t pd = (size_t)s->dims * s->input_dim;
+    for (size_t i = 0; i < pd; i++)
+        if (!(fabs(s->axes[i]) <= FLT_MAX))
+            return false;
+    for (size_t i = 0; i < pd; i++)
+        s->axes[i] = (float)s->axes[i];
+    s->f32 = true;
+    return true;
+}
+
 void affect_spca_encode(const affect_spca *s, affect_bw *w)
 {
     if (w->failed)
@@ -660,7 +675,7 @@ void affect_spca_encode(const affect_spca *s, affect_bw *w)
     size_t start = w->len;
     affect_bw_bytes(w, AFFECT_SPCA_MAGIC, 4);
     affect_bw_u32(w, AFFECT_SPCA_VERSION);
-    affect_bw_u32(w, 0); /* flags */
+    affect_bw_u32(w, s->f32 ? FLAG_F32 : 0u);
     affect_bw_u32(w, (uint32_t)s->kernel);
     affect_bw_u32(w, s->classes);
     affect_bw_u32(w, s->dims);
@@ -668,7 +683,15 @@ void affect_spca_encode(const affect_spca *s, affect_bw *w)
     affect_bw_u64(w, (uint64_t)s->input_dim);
     affect_bw_f64(w, s->sigma);
     affect_bw_f64s(w, s->eigenvalues, s->dims);
-    affect_bw_f64s(w, s->axes, (size_t)s->dims * s->input_dim);
+    size_t pd = (size_t)s->dims * s->input_dim;
+    if (!s->f32) {
+        affect_bw_f64s(w, s->axes, pd);
+    } else {
+        for (size_t i = 0; i < pd; i++) { /* exact: every component is a float32 value */
+            float f = (float)s->axes[i];
+            affect_bw_f32s(w, &f, 1);
+        }
+    }
     if (w->failed)
         return;
     affect_bw_u64(w, affect_fnv1a64(w->data + start, w->len - start));
@@ -701,9 +724,10 @@ affect_status affect_spca_decode(affect_br *r, affect_spca **out, affect_error *
                            "sPCA: unknown format version %" PRIu32 ", this build reads %u "
                            "(offset %zu)",
                            version, AFFECT_SPCA_VERSION, start + 4);
-    if (flags != 0)
+    if (flags & ~(uint32_t)FLAG_F32)
         return affect_fail(err, AFFECT_ERR_FORMAT, "sPCA: unknown flags 0x%" PRIx32 " (offset %zu)",
                            flags, start + 8);
+    size_t width = (flags & FLAG_F32) ? 4 : 8; /* bytes per axis component */
     if (kernel != AFFECT_SPCA_LINEAR && kernel != AFFECT_SPCA_RBF)
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "sPCA: unknown label kernel %" PRIu32 " (offset %zu)", kernel,
@@ -740,10 +764,10 @@ affect_status affect_spca_decode(affect_br *r, affect_spca **out, affect_error *
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "sPCA: truncated in the eigenvalues (offset %zu)", eig_off);
     size_t ax_off = r->off, pd;
-    if (!affect_mul_size(p, (size_t)d, &pd) || !affect_br_has(r, pd, 8))
+    if (!affect_mul_size(p, (size_t)d, &pd) || !affect_br_has(r, pd, width))
         return affect_fail(err, AFFECT_ERR_FORMAT, "sPCA: truncated in the axes (offset %zu)",
                            ax_off);
-    affect_br_bytes(r, &axes, pd * 8);
+    affect_br_bytes(r, &axes, pd * width);
     size_t sum_off = r->off;
     uint64_t sum;
     if (!affect_br_u64(r, &sum))
@@ -758,8 +782,17 @@ affect_status affect_spca_decode(affect_br *r, affect_spca **out, affect_error *
     affect_br sub;
     affect_br_init(&sub, eig, (size_t)p * 8);
     affect_br_f64s(&sub, s->eigenvalues, p);
-    affect_br_init(&sub, axes, pd * 8);
-    affect_br_f64s(&sub, s->axes, pd);
+    affect_br_init(&sub, axes, pd * width);
+    if (width == 8) {
+        affect_br_f64s(&sub, s->axes, pd);
+    } else {
+        for (size_t i = 0; i < pd; i++) {
+            float f;
+            affect_br_f32s(&sub, &f, 1);
+            s->axes[i] = f;
+        }
+    }
+    s->f32 = width == 4;
     affect_status st = AFFECT_OK;
     for (uint32_t q = 0; q < p && st == AFFECT_OK; q++) {
         double v = s->eigenvalues[q];
@@ -777,7 +810,7 @@ affect_status affect_spca_decode(affect_br *r, affect_spca **out, affect_error *
     for (size_t i = 0; i < pd && st == AFFECT_OK; i++)
         if (!isfinite(s->axes[i]))
             st = affect_fail(err, AFFECT_ERR_FORMAT,
-                             "sPCA: non-finite value in the axes (offset %zu)", ax_off + i * 8);
+                             "sPCA: non-finite value in the axes (offset %zu)", ax_off + i * width);
     if (st != AFFECT_OK) {
         affect_spca_free(s);
         return st;

@@ -33,6 +33,7 @@
 #include "affect/svm.h"
 
 #include <cblas.h>
+#include <float.h>
 #include <inttypes.h>
 #include <math.h>
 #include <string.h>
@@ -53,6 +54,7 @@ struct affect_svm {
     double *sv_coef;    /* (c − 1) × l, libsvm's sv_coef row after row */
     double *rho;        /* c(c − 1)/2 */
     double *w;          /* c(c − 1)/2 × d; NULL in cross-validation models */
+    bool f32;           /* every weight is a float32 value: encoded as version 2 */
 };
 
 /* A libsvm problem over a subset of the samples, built from the Gram matrix. */
@@ -805,7 +807,7 @@ cleanup:
 void affect_svm_encode(const affect_svm *m, affect_bw *w)
 {
     size_t P = n_pairs(m->c), n_coef = (size_t)(m->c - 1) * m->l;
-    affect_bw_u8(w, AFFECT_SVM_FORMAT_VERSION);
+    affect_bw_u8(w, m->f32 ? 2 : 1);
     affect_bw_u32(w, m->c);
     affect_bw_u64(w, (uint64_t)m->d);
     affect_bw_f64(w, m->C);
@@ -821,7 +823,28 @@ void affect_svm_encode(const affect_svm *m, affect_bw *w)
     affect_bw_u32(w, (uint32_t)P);
     affect_bw_f64s(w, m->rho, P);
     affect_bw_u32(w, (uint32_t)P);
-    affect_bw_f64s(w, m->w, P * m->d);
+    if (!m->f32) {
+        affect_bw_f64s(w, m->w, P * m->d);
+        return;
+    }
+    for (size_t i = 0; i < P * m->d; i++) { /* exact: every weight is a float32 value */
+        float f = (float)m->w[i];
+        affect_bw_f32s(w, &f, 1);
+    }
+}
+
+bool affect_svm_round_weights(affect_svm *m)
+{
+    size_t total = n_pairs(m->c) * m->d;
+    if (!m->w)
+        return false;
+    for (size_t i = 0; i < total; i++)
+        if (!(fabs(m->w[i]) <= FLT_MAX))
+            return false;
+    for (size_t i = 0; i < total; i++)
+        m->w[i] = (float)m->w[i];
+    m->f32 = true;
+    return true;
 }
 
 static affect_status truncated(affect_error *err, const char *field, size_t off)
@@ -880,6 +903,32 @@ static affect_status get_f64s(affect_br *r, size_t n, double **out, const char *
     return AFFECT_OK;
 }
 
+/* n finite float32 values into a new array of doubles. */
+static affect_status get_f32s(affect_br *r, size_t n, double **out, const char *field,
+                              affect_error *err)
+{
+    if (!affect_br_has(r, n, 4))
+        return truncated(err, field, r->off);
+    float *tmp = affect_malloc_array(n ? n : 1, sizeof *tmp);
+    *out = affect_malloc_array(n ? n : 1, sizeof **out);
+    if (!tmp || !*out) {
+        affect_free(tmp);
+        return affect_nomem(err);
+    }
+    size_t off = r->off;
+    affect_br_f32s(r, tmp, n);
+    for (size_t i = 0; i < n; i++) {
+        if (!isfinite(tmp[i])) {
+            affect_free(tmp);
+            return affect_fail(err, AFFECT_ERR_FORMAT,
+                               "SVM: non-finite value in %s (offset %zu)", field, off + 4 * i);
+        }
+        (*out)[i] = tmp[i];
+    }
+    affect_free(tmp);
+    return AFFECT_OK;
+}
+
 affect_status affect_svm_decode(affect_br *r, affect_svm **out, affect_error *err)
 {
     affect_status st;
@@ -899,9 +948,9 @@ affect_status affect_svm_decode(affect_br *r, affect_svm **out, affect_error *er
         st = truncated(err, "the version", off);
         goto cleanup;
     }
-    if (version != AFFECT_SVM_FORMAT_VERSION) {
+    if (version != 1 && version != AFFECT_SVM_FORMAT_VERSION) {
         st = affect_fail(err, AFFECT_ERR_FORMAT,
-                         "SVM: unknown format version %u at offset %zu (this build reads %u)",
+                         "SVM: unknown format version %u at offset %zu (this build reads 1 .. %u)",
                          version, off, AFFECT_SVM_FORMAT_VERSION);
         goto cleanup;
     }
@@ -1029,8 +1078,13 @@ affect_status affect_svm_decode(affect_br *r, affect_svm **out, affect_error *er
         st = truncated(err, "the weights", r->off);
         goto cleanup;
     }
-    if ((st = get_f64s(r, n_w, &m->w, "the weights", err)) != AFFECT_OK)
+    if (version == 1) {
+        if ((st = get_f64s(r, n_w, &m->w, "the weights", err)) != AFFECT_OK)
+            goto cleanup;
+    } else if ((st = get_f32s(r, n_w, &m->w, "the weights", err)) != AFFECT_OK) {
         goto cleanup;
+    }
+    m->f32 = version == 2;
     *out = m;
     m = NULL;
 cleanup:

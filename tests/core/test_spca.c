@@ -836,7 +836,7 @@ static void test_truncations_and_corruptions(void **state)
     } cases[] = {
         {0, 4, 0x50534641 + 1, "sPCA: bad magic bytes (offset 0)"},
         {4, 4, 2, "sPCA: unknown format version 2, this build reads 1 (offset 4)"},
-        {8, 4, 1, "sPCA: unknown flags 0x1 (offset 8)"},
+        {8, 4, 2, "sPCA: unknown flags 0x2 (offset 8)"},
         {12, 4, 2, "sPCA: unknown label kernel 2 (offset 12)"},
         {16, 4, 1, "sPCA: 1 class, need at least 2 (offset 16)"},
         {16, 4, 0, "sPCA: 0 classes, need at least 2 (offset 16)"},
@@ -939,6 +939,27 @@ static void test_dual_blocks(void **state)
     for (size_t e = 0; e < (size_t)N * p; e++)
         tu_assert_near(z[e], zr[e], 1e-8 * (1 + fabs(zr[e])));
     assert_sign_convention(s);
+    /* float32 axes: flag 1, 4 bytes a component, the same axes and bytes after a round trip */
+    size_t len64, len32, len2;
+    unsigned char *b64 = encode(s, &len64);
+    assert_true(affect_spca_round_axes(s));
+    unsigned char *b32 = encode(s, &len32);
+    assert_int_equal(b32[8], 1);
+    assert_int_equal(len64 - len32, (size_t)4 * p * DD);
+    affect_br rd;
+    affect_br_init(&rd, b32, len32);
+    affect_spca *back = NULL;
+    assert_int_equal(affect_spca_decode(&rd, &back, &err), AFFECT_OK);
+    assert_memory_equal(affect_spca_axes(back), affect_spca_axes(s), sizeof(double) * p * DD);
+    for (size_t e = 0; e < (size_t)p * DD; e++)
+        assert_true(affect_spca_axes(s)[e] == (float)affect_spca_axes(s)[e]);
+    unsigned char *b2 = encode(back, &len2);
+    assert_int_equal(len2, len32);
+    assert_memory_equal(b2, b32, len32);
+    affect_free(b64);
+    affect_free(b32);
+    affect_free(b2);
+    affect_spca_free(back);
     affect_spca_free(ref);
     affect_spca_free(s);
     free(k);

@@ -735,6 +735,35 @@ static void test_gram_blocks(void **state)
     assert_int_equal(affect_svm_select_c_gram(G, N, DD, y, C3, cands, 3, 5, 3, &c2, &a2, &err),
                      AFFECT_OK);
     assert_true(c1 == c2 && a1 == a2);
+    /* float32 weights: version 2, 4 bytes a weight, the same weights after a round trip */
+    affect_bw w64, w32;
+    affect_bw_init(&w64);
+    affect_bw_init(&w32);
+    affect_svm_encode(m, &w64);
+    assert_int_equal(w64.data[0], 1);
+    assert_true(affect_svm_round_weights(m));
+    affect_svm_encode(m, &w32);
+    assert_int_equal(w32.data[0], 2);
+    assert_int_equal(w64.len - w32.len, (size_t)4 * 3 * DD);
+    affect_br rd = {w32.data, w32.len, 0};
+    affect_svm *back = NULL;
+    assert_int_equal(affect_svm_decode(&rd, &back, &err), AFFECT_OK);
+    for (uint32_t p = 0; p < C3; p++)
+        for (uint32_t q = p + 1; q < C3; q++) {
+            const double *w1 = affect_svm_weights(m, p, q, NULL);
+            assert_memory_equal(w1, affect_svm_weights(back, p, q, NULL), DD * sizeof *w1);
+            for (size_t t = 0; t < DD; t++)
+                assert_true(w1[t] == (float)w1[t]);
+        }
+    affect_bw out2;
+    affect_bw_init(&out2);
+    affect_svm_encode(back, &out2);
+    assert_int_equal(out2.len, w32.len);
+    assert_memory_equal(out2.data, w32.data, w32.len);
+    affect_bw_free(&out2);
+    affect_bw_free(&w64);
+    affect_bw_free(&w32);
+    affect_svm_free(back);
     G[3] = NAN;
     affect_svm *bad = NULL;
     assert_int_equal(affect_svm_train_gram(G, N, DD, y, C3, 0.5, &bad, &err), AFFECT_ERR_RANGE);
@@ -1014,8 +1043,8 @@ static void test_corrupt(void **state)
         expect_decode(b, len, AFFECT_ERR_FORMAT, message);                                         \
     } while (0)
 
-    CORRUPT(b[0] = 2, "SVM: unknown format version 2 at offset 0 (this build reads 1)");
-    CORRUPT(b[0] = 0, "SVM: unknown format version 0 at offset 0 (this build reads 1)");
+    CORRUPT(b[0] = 3, "SVM: unknown format version 3 at offset 0 (this build reads 1 .. 2)");
+    CORRUPT(b[0] = 0, "SVM: unknown format version 0 at offset 0 (this build reads 1 .. 2)");
     CORRUPT(put32(b + 1, 1), "SVM: class count 1 out of range 2 .. 256 (offset 1)");
     CORRUPT(put32(b + 1, 257), "SVM: class count 257 out of range 2 .. 256 (offset 1)");
     CORRUPT(put64(b + 5, 0), "SVM: dimension 0 out of range 1 .. 2147483647 (offset 5)");

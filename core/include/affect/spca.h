@@ -151,7 +151,7 @@ const double *affect_spca_eigenvalues(const affect_spca *s);
  * Layout, version 1 (little-endian, offsets from the start of the record):
  *    0  4  magic "AFSP"
  *    4  4  format version (1)
- *    8  4  flags (0; reserved)
+ *    8  4  flags (0, or 1: the axes are float32 — affect_spca_round_axes)
  *   12  4  label kernel (0 linear, 1 rbf)
  *   16  4  classes c (≥ 2)
  *   20  4  axes p (1 .. c − 1)
@@ -159,12 +159,18 @@ const double *affect_spca_eigenvalues(const affect_spca *s);
  *   32  8  input dimension d (1 .. 2147483647)
  *   40  8  sigma (float64; > 0 and finite for rbf, 0 for linear)
  *   48  p × float64      eigenvalues, positive, non-increasing
- *       p × d × float64  axes, row-major
+ *       p × d × float64  axes, row-major (p × d × float32 with flag 1)
  *       8  FNV-1a 64-bit hash of the record's bytes before it
  */
 #define AFFECT_SPCA_MAGIC "AFSP"
 #define AFFECT_SPCA_VERSION 1u
 #define AFFECT_SPCA_HEADER_SIZE 48u
+
+/* Rounds every axis component to the nearest float32 value, so that the record stores the axes
+ * as float32 (flag 1, half the bytes) and decodes to exactly these axes; false (and nothing
+ * changed) when a component is beyond float32's range. The recognizer does this once its axes
+ * are complete. */
+bool affect_spca_round_axes(affect_spca *s);
 
 /* Appends the record to w (check w->failed once at the end, see affect/bytes.h). */
 void affect_spca_encode(const affect_spca *s, affect_bw *w);

@@ -54,7 +54,7 @@ extern "C" {
 /* Dimension at most (BLAS counts it in an int). */
 #define AFFECT_SVM_MAX_DIM 2147483647u
 /* Version of the encoding written by affect_svm_encode. */
-#define AFFECT_SVM_FORMAT_VERSION 1u
+#define AFFECT_SVM_FORMAT_VERSION 2u
 
 typedef struct affect_svm affect_svm; /* opaque */
 
@@ -116,6 +116,13 @@ affect_status affect_svm_select_c_gram(const double *G, size_t n, size_t d, cons
                                        uint32_t folds, uint64_t seed, double *best_c,
                                        double *best_acc, affect_error *err);
 
+/* Rounds every weight to the nearest float32 value, so that the model is encoded with float32
+ * weights (format version 2, half the bytes) and decodes to exactly these weights; false (and
+ * nothing changed) when the model has no weights or a weight is beyond float32's range. The
+ * recognizer does this once its weights are complete: its z-scored inputs are at most ±5, so
+ * the rounding moves a decision value by about 1e-7 of its size. */
+bool affect_svm_round_weights(affect_svm *m);
+
 void affect_svm_free(affect_svm *m);
 
 /* The predicted class of x (dim() values). When dec is not NULL it receives the
@@ -176,7 +183,7 @@ affect_status affect_svm_select_c(const double *X, size_t n, size_t d, const uin
 
 /* ---- serialisation ----
  * Layout, version 1 (little-endian, through affect/bytes.h), offsets relative to the start:
- *    0  1      format version (1)
+ *    0  1      format version (1, or 2 when the weights are float32: affect_svm_round_weights)
  *    1  4      classes c (2 .. 256)
  *    5  8      dimension d (1 .. 2147483647)
  *   13  8      C (float64, positive, finite)
@@ -192,7 +199,8 @@ affect_status affect_svm_select_c(const double *X, size_t n, size_t d, const uin
  *       4      number of rho values P (= c(c−1)/2)
  *       8P     rho (float64, finite)
  *       4      number of weight vectors (= P)
- *       8Pd    weight vectors w, pair after pair (float64, finite)
+ *       8Pd    weight vectors w, pair after pair (float64, finite; version 2: 4Pd bytes of
+ *              float32, finite)
  * No checksum and no length: the object is embedded in the classifier BLOB, which carries
  * both; decoding stops after the weights. */
 
@@ -201,8 +209,8 @@ void affect_svm_encode(const affect_svm *m, affect_bw *w);
 
 /* Reads a model from r at its offset and advances past it; every count and length is checked
  * before anything is read or allocated, and offsets in messages are r's (AFFECT_ERR_FORMAT):
- * "SVM: truncated in the weights (offset 1234)", "SVM: unknown format version 2 at offset 0
- * (this build reads 1)", "SVM: class count 1 out of range 2 .. 256 (offset 1)", "SVM: dimension
+ * "SVM: truncated in the weights (offset 1234)", "SVM: unknown format version 3 at offset 0
+ * (this build reads 1 .. 2)", "SVM: class count 1 out of range 2 .. 256 (offset 1)", "SVM: dimension
  * 0 out of range 1 .. 2147483647 (offset 5)", "SVM: C = -1 is not a positive finite number
  * (offset 13)", "SVM: sample count 2 out of range 3 .. 2147483645 (offset 21)", "SVM: 7 classes
  * but 3 labels (offset 25)", "SVM: label 2 at position 0, expected 0 (offset 29)", "SVM: 7
