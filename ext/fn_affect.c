@@ -55,8 +55,10 @@
 /* ---- affect_train ---- */
 
 static const char *const train_keys[] = {
-    AX_SEQS_KEYS, "groups",     "score_normalization", "score_clip", "svm_c", "svm_folds",
-    "spca_dims",  "spca_kernel", "spca_sigma",          "knn_k",      "grid",  "descriptors", "descriptor_weight", "mirror", "threads", NULL};
+    AX_SEQS_KEYS, "groups",      "score_normalization", "score_clip", "svm_c",
+    "svm_folds",  "spca_dims",   "spca_kernel",         "spca_sigma", "knn_k",
+    "grid",       "descriptors", "descriptor_weight",   "mirror",     "threads",
+    NULL};
 
 typedef struct cls_train {
     ax_seqs s; /* first: freed by ax_seqs_free's sqlite3_free … see cls_train_free */
@@ -531,7 +533,8 @@ typedef struct eval_buf {
 } eval_buf;
 
 static affect_status eval_all(const affect_classifier *c, const double *x, uint32_t T,
-                              const double *desc, bool ml_only, bool want_fisher, eval_buf *b, affect_error *err)
+                              const double *desc, bool ml_only, bool want_fisher, eval_buf *b,
+                              affect_error *err)
 {
     uint32_t C = affect_classifier_n_classes(c), p = affect_spca_dims(affect_classifier_spca(c));
     size_t D = want_fisher ? affect_classifier_dim(c) : 0, pairs = (size_t)C * (C - 1) / 2;
@@ -764,9 +767,11 @@ void ax_affect_info(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 /* ---- affect_crossval_json (the engine of the affect_crossval table) ---- */
 
 static const char *const cv_keys[] = {
-    AX_SEQS_KEYS, "groups",     "score_normalization", "score_clip", "svm_c",   "svm_folds",
-    "spca_dims",  "spca_kernel", "spca_sigma",          "knn_k",      "grid",    "folds",      "descriptors", "descriptor_weight", "mirror",
-    "group",      "methods",     "verbose",             "threads",    NULL};
+    AX_SEQS_KEYS, "groups",      "score_normalization", "score_clip", "svm_c",
+    "svm_folds",  "spca_dims",   "spca_kernel",         "spca_sigma", "knn_k",
+    "grid",       "folds",       "descriptors",         "descriptor_weight",
+    "mirror",     "group",       "methods",             "verbose",    "threads",
+    NULL};
 
 typedef struct cv_state {
     cls_train t;    /* first (freed through cls_train_free) */
@@ -1045,8 +1050,9 @@ static void cv_final(sqlite3_context *ctx, cv_state *s)
     cfg.threads = s->threads;
     if (s->verbose)
         cfg.progress = cv_progress;
-    if (affect_crossval(&cfg, s->t.s.feat, s->t.s.seqs, s->t.s.desc, y, n, (const char *const *)classes,
-                        n_classes, with_group ? g : NULL, n_groups, &r, &err)) {
+    if (affect_crossval(&cfg, s->t.s.feat, s->t.s.seqs, s->t.s.desc, y, n,
+                        (const char *const *)classes, n_classes, with_group ? g : NULL, n_groups,
+                        &r, &err)) {
         ax_error(ctx, &err);
         goto done;
     }

@@ -467,7 +467,8 @@ static affect_status grid_fold(const affect_classifier *c, const double *G, cons
     }
     if (n_te == 0 || n_tr == 0)
         return AFFECT_OK;
-    for (uint32_t i = 0, a = 0, t = 0; i < n; i++) { /* rows: training, held out; columns: training */
+    for (uint32_t i = 0, a = 0, t = 0; i < n;
+         i++) { /* rows: training, held out; columns: training */
         double *row = w->fold_of[i] == fold ? w->te_k + (size_t)t++ * n_tr
                                             : w->sub_gram + (size_t)a++ * n_tr;
         for (uint32_t j = 0, b = 0; j < n; j++)

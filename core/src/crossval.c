@@ -169,8 +169,8 @@ static affect_status run_fold(const run_ctx *rc, uint32_t fold, fold_ws *w, affe
         return affect_fail(err, AFFECT_ERR_INVALID,
                            "fold %u: the training motions have fewer than 2 classes", fold + 1);
     affect_classifier *c = NULL;
-    affect_status st = affect_classifier_train(&cfg->cls, feat, w->seqs, w->desc, w->y, n_tr, w->labels,
-                                               present, &c, err);
+    affect_status st = affect_classifier_train(&cfg->cls, feat, w->seqs, w->desc, w->y, n_tr,
+                                               w->labels, present, &c, err);
     if (st) {
         if (st != AFFECT_ERR_NOMEM) {
             char msg[AFFECT_ERROR_MSG_MAX];

@@ -93,8 +93,10 @@
 #define TRI_ROWS 8u /* rows of the inverse factors per product (full covariances); 8 was the \
                        fastest of 4 .. 64 in bench_hmm at m = 15 and m = 63 */
 #define LINEAR_MIN 1e-100     /* a linear-space sum below this is redone in log space */
-#define PRUNE_ROUNDOFF 0x1p-53 /* scatter: rows below this share of the block's scale are left out */
-#define PRUNE_MIN_DIM 24u /* ... from this dimension on (below, the test costs more than the rows) */
+/* scatter: rows below this share of the block's scale are left out, from PRUNE_MIN_DIM
+ * dimensions on (below, the test costs more than the rows) */
+#define PRUNE_ROUNDOFF 0x1p-53
+#define PRUNE_MIN_DIM 24u
 /* exp of less than EXP_MIN is taken as 0: below DBL_MIN, it skips libm's slow underflow path, and
  * such terms are below one ulp of the sums they join (whose largest term is 1) */
 #define EXP_MIN (-708.0)
@@ -850,10 +852,12 @@ affect_status affect_hmm_loglik(const affect_hmm *h, const double *x, uint32_t n
         return st;
     size_t N = h->cfg.n_states, K = N * h->cfg.n_mix, B = h->block;
     double *cbuf, *dbuf, *lb, *a0, *a1, *p;
-    affect_ws_part parts[] = {
-        {(void **)&cbuf, (B + 1) * K, sizeof(double)}, {(void **)&dbuf, B * dbuf_width(&h->cfg), sizeof(double)},
-        {(void **)&lb, B * N, sizeof(double)},   {(void **)&a0, N, sizeof(double)},
-        {(void **)&a1, N, sizeof(double)},       {(void **)&p, N, sizeof(double)}};
+    affect_ws_part parts[] = {{(void **)&cbuf, (B + 1) * K, sizeof(double)},
+                              {(void **)&dbuf, B * dbuf_width(&h->cfg), sizeof(double)},
+                              {(void **)&lb, B * N, sizeof(double)},
+                              {(void **)&a0, N, sizeof(double)},
+                              {(void **)&a1, N, sizeof(double)},
+                              {(void **)&p, N, sizeof(double)}};
     void *ws = affect_ws_alloc(parts, sizeof parts / sizeof parts[0]);
     if (!ws)
         return affect_nomem(err);
@@ -876,10 +880,12 @@ affect_status affect_hmm_viterbi(const affect_hmm *h, const double *x, uint32_t 
         return affect_nomem(err);
     double *cbuf, *dbuf, *lb, *d0, *d1;
     uint8_t *bp; /* N ≤ 256: a state fits in a byte */
-    affect_ws_part parts[] = {
-        {(void **)&cbuf, (B + 1) * K, sizeof(double)}, {(void **)&dbuf, B * dbuf_width(&h->cfg), sizeof(double)},
-        {(void **)&lb, B * N, sizeof(double)},   {(void **)&d0, N, sizeof(double)},
-        {(void **)&d1, N, sizeof(double)},       {(void **)&bp, TN, 1}};
+    affect_ws_part parts[] = {{(void **)&cbuf, (B + 1) * K, sizeof(double)},
+                              {(void **)&dbuf, B * dbuf_width(&h->cfg), sizeof(double)},
+                              {(void **)&lb, B * N, sizeof(double)},
+                              {(void **)&d0, N, sizeof(double)},
+                              {(void **)&d1, N, sizeof(double)},
+                              {(void **)&bp, TN, 1}};
     void *ws = affect_ws_alloc(parts, sizeof parts / sizeof parts[0]);
     if (!ws)
         return affect_nomem(err);

@@ -55,7 +55,8 @@ bool affect_normalize_heading_angle(const double lat[3], int u, double *angle)
     return true;
 }
 
-bool affect_normalize_headings(const affect_motion *m, const affect_roles *roles, int up, double *ang)
+bool affect_normalize_headings(const affect_motion *m, const affect_roles *roles, int up,
+                               double *ang)
 {
     uint32_t T = m->n_frames, have = 0;
     double last = 0.0;

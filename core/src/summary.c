@@ -160,7 +160,8 @@ affect_status affect_motion_summary(const affect_motion *m, int up, double out[A
         out[11 + e] = p90(tmp, T);
     }
     bool head = roles.joint[AFFECT_ROLE_HEAD] >= 0,
-         hands = roles.joint[AFFECT_ROLE_LEFT_HAND] >= 0 && roles.joint[AFFECT_ROLE_RIGHT_HAND] >= 0,
+         hands =
+             roles.joint[AFFECT_ROLE_LEFT_HAND] >= 0 && roles.joint[AFFECT_ROLE_RIGHT_HAND] >= 0,
          feet = roles.joint[AFFECT_ROLE_LEFT_FOOT] >= 0 && roles.joint[AFFECT_ROLE_RIGHT_FOOT] >= 0;
     for (uint32_t t = 0; t < T; t++) {
         const double *row = buf + (size_t)t * STRIDE;

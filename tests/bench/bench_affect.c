@@ -412,8 +412,8 @@ static int pass_train(void *arg)
     affect_error err;
     affect_classifier_free(t->c);
     t->c = NULL;
-    if (affect_classifier_train(&t->d->cfg, t->d->feat, t->d->seqs, NULL, t->d->y, t->d->n, emotions,
-                                N_CLASSES, &t->c, &err)) {
+    if (affect_classifier_train(&t->d->cfg, t->d->feat, t->d->seqs, NULL, t->d->y, t->d->n,
+                                emotions, N_CLASSES, &t->c, &err)) {
         fprintf(stderr, "bench_affect: training on all motions: %s\n", err.msg);
         return 1;
     }
@@ -565,8 +565,8 @@ static int bench_crossval(const dataset *d, uint32_t runs, uint32_t threads, cv_
         affect_error err;
         double c0 = cpu_now();
         clk.start = now();
-        affect_status st = affect_crossval(&cfg, d->feat, d->seqs, NULL, d->y, d->n, emotions, N_CLASSES,
-                                           NULL, 0, &res[run], &err);
+        affect_status st = affect_crossval(&cfg, d->feat, d->seqs, NULL, d->y, d->n, emotions,
+                                           N_CLASSES, NULL, 0, &res[run], &err);
         t[run] = now() - clk.start;
         cpu[run] = cpu_now() - c0;
         if (st) {
@@ -915,7 +915,8 @@ static int fold_library(const dataset *d, const uint32_t *fold_of, uint32_t fold
             seqs[n_tr] = d->seqs[i];
             y[n_tr++] = d->y[i];
         }
-    if (affect_classifier_train(&d->cfg, d->feat, seqs, NULL, y, n_tr, emotions, N_CLASSES, &c, &err)) {
+    if (affect_classifier_train(&d->cfg, d->feat, seqs, NULL, y, n_tr, emotions, N_CLASSES, &c,
+                                &err)) {
         fprintf(stderr, "bench_affect: affect_classifier_train: %s\n", err.msg);
         goto done;
     }

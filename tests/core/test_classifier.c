@@ -300,9 +300,9 @@ static void test_recognition(void **state)
         affect_classifier_out o = {0};
         o.loglik = ll;
         affect_error err;
-        assert_int_equal(
-            affect_classifier_eval(c, fx->d.seqs[i].x, fx->d.seqs[i].n_frames, NULL, true, &o, &err),
-            AFFECT_OK);
+        assert_int_equal(affect_classifier_eval(c, fx->d.seqs[i].x, fx->d.seqs[i].n_frames, NULL,
+                                                true, &o, &err),
+                         AFFECT_OK);
         assert_int_equal(o.ml, r.o.ml);
         assert_memory_equal(ll, r.loglik, sizeof ll);
         free(r.fisher);
@@ -794,7 +794,8 @@ static void train_fails(const affect_classifier_config *cfg, const affect_featur
 {
     affect_classifier *c = (affect_classifier *)seqs; /* must become NULL */
     affect_error err;
-    affect_status st = affect_classifier_train(cfg, f, seqs, NULL, y, n, labels, n_classes, &c, &err);
+    affect_status st =
+        affect_classifier_train(cfg, f, seqs, NULL, y, n, labels, n_classes, &c, &err);
     if (st == AFFECT_OK)
         fail_msg("training succeeded, expected \"%s\"", msg);
     assert_int_equal(st, AFFECT_ERR_INVALID);
@@ -831,8 +832,9 @@ static void test_train_errors(void **state)
     bad.hmm.n_states = 40; /* sequences of 30 frames */
     affect_classifier *c = NULL;
     affect_error err;
-    assert_int_equal(affect_classifier_train(&bad, f, s, NULL, fx->small_y, n, SMALL_LABELS, 2, &c, &err),
-                     AFFECT_ERR_INVALID);
+    assert_int_equal(
+        affect_classifier_train(&bad, f, s, NULL, fx->small_y, n, SMALL_LABELS, 2, &c, &err),
+        AFFECT_ERR_INVALID);
     assert_null(c);
     const char *prefix = "training the HMM of class \"angry\": ";
     if (strncmp(err.msg, prefix, strlen(prefix)) != 0)
@@ -1182,8 +1184,8 @@ typedef struct oom_ctx {
 static affect_status oom_train(void *ctx, affect_error *err)
 {
     oom_ctx *o = ctx;
-    return affect_classifier_train(o->cfg, o->fx->small_d.feat, o->seqs, NULL, o->y, o->n, SMALL_LABELS,
-                                   2, &o->c, err);
+    return affect_classifier_train(o->cfg, o->fx->small_d.feat, o->seqs, NULL, o->y, o->n,
+                                   SMALL_LABELS, 2, &o->c, err);
 }
 
 static affect_status oom_decode(void *ctx, affect_error *err)

@@ -117,7 +117,8 @@ static void run_fails(const affect_cv_config *cfg, const affect_features *f,
 {
     affect_cv_result *r = (affect_cv_result *)seqs; /* must become NULL */
     affect_error err;
-    affect_status st = affect_crossval(cfg, f, seqs, NULL, y, n, labels, C, group, n_groups, &r, &err);
+    affect_status st =
+        affect_crossval(cfg, f, seqs, NULL, y, n, labels, C, group, n_groups, &r, &err);
     if (st == AFFECT_OK)
         fail_msg("cross-validation succeeded, expected \"%s\"", msg);
     assert_int_equal(st, AFFECT_ERR_INVALID);
@@ -459,7 +460,8 @@ static void direct_fold(const affect_cv_config *cfg, const dataset *d, const uin
         }
     affect_classifier *c = NULL;
     affect_error err;
-    if (affect_classifier_train(&cfg->cls, d->feat, tr, NULL, ty, n, EMOTIONS, N_EMOTIONS, &c, &err))
+    if (affect_classifier_train(&cfg->cls, d->feat, tr, NULL, ty, n, EMOTIONS, N_EMOTIONS, &c,
+                                &err))
         fail_msg("train: %s", err.msg);
     affect_classifier_report rep;
     affect_classifier_get_report(c, &rep);
@@ -673,8 +675,9 @@ static void test_errors(void **state)
                      AFFECT_OK);
     x[7] = NAN; /* training (the other fold) or evaluation (its own) fails */
     affect_cv_result *r = NULL;
-    assert_int_equal(affect_crossval(&cfg, d->feat, bad, NULL, y, d->n, EMOTIONS, 4, NULL, 0, &r, &err),
-                     AFFECT_ERR_INVALID);
+    assert_int_equal(
+        affect_crossval(&cfg, d->feat, bad, NULL, y, d->n, EMOTIONS, 4, NULL, 0, &r, &err),
+        AFFECT_ERR_INVALID);
     assert_null(r);
     char prefix[64];
     if (fold_of[3] == 0)
@@ -700,8 +703,8 @@ typedef struct oom_ctx {
 static affect_status oom_cv(void *ctx, affect_error *err)
 {
     oom_ctx *o = ctx;
-    return affect_crossval(o->cfg, o->d->feat, o->seqs, NULL, o->y, o->n, EMOTIONS, 2, o->g, o->n_groups,
-                           &o->r, err);
+    return affect_crossval(o->cfg, o->d->feat, o->seqs, NULL, o->y, o->n, EMOTIONS, 2, o->g,
+                           o->n_groups, &o->r, err);
 }
 
 static void oom_finish(void *ctx, affect_status st)

@@ -40,7 +40,8 @@ static affect_motion *make_body(double speed, double rate)
         m->parents[j] = parents[j];
     }
     for (uint32_t t = 0; t < T; t++) {
-        double a = rate * t, c = cos(a), s = sin(a); /* +a about y: (x, z) → (x c + z s, −x s + z c) */
+        double a = rate * t, c = cos(a),
+               s = sin(a); /* +a about y: (x, z) → (x c + z s, −x s + z c) */
         for (uint32_t j = 0; j < J; j++) {
             float *p = affect_motion_at(m, t, j);
             p[0] = (float)(pose[j][0] * c + pose[j][2] * s);
@@ -112,7 +113,8 @@ static void test_descriptors(void **state)
     assert_int_equal(affect_descriptors_dim(AFFECT_DESC_LABAN), AFFECT_LABAN_N);
     assert_int_equal(affect_descriptors_dim(8), 0);
     affect_motion *m = make_body(2.0, 0.0);
-    double s[AFFECT_SUMMARY_N], d[AFFECT_SUMMARY_N + AFFECT_LABAN_N], e[AFFECT_SUMMARY_N + AFFECT_LABAN_N];
+    double s[AFFECT_SUMMARY_N], d[AFFECT_SUMMARY_N + AFFECT_LABAN_N],
+        e[AFFECT_SUMMARY_N + AFFECT_LABAN_N];
     affect_error err;
     assert_int_equal(affect_motion_summary(m, 1, s, &err), AFFECT_OK);
     assert_int_equal(affect_descriptors(AFFECT_DESC_ALL, m, 1, d, &err), AFFECT_OK);

@@ -718,7 +718,8 @@ static void test_gram_blocks(void **state)
     for (uint32_t p = 0; p < C3; p++)
         for (uint32_t q = p + 1; q < C3; q++) {
             double r1, r2;
-            const double *w1 = affect_svm_weights(ref, p, q, &r1), *w2 = affect_svm_weights(m, p, q, &r2);
+            const double *w1 = affect_svm_weights(ref, p, q, &r1),
+                         *w2 = affect_svm_weights(m, p, q, &r2);
             assert_true(r1 == r2);
             assert_memory_equal(w1, w2, DD * sizeof *w1);
         }
@@ -731,7 +732,8 @@ static void test_gram_blocks(void **state)
     assert_string_equal(err.msg, "columns 33 .. 38 are outside the model's 37 dimensions");
     static const double cands[3] = {0.01, 1, 100};
     double c1, a1, c2, a2;
-    assert_int_equal(affect_svm_select_c(X, N, DD, y, C3, cands, 3, 5, 3, &c1, &a1, &err), AFFECT_OK);
+    assert_int_equal(affect_svm_select_c(X, N, DD, y, C3, cands, 3, 5, 3, &c1, &a1, &err),
+                     AFFECT_OK);
     assert_int_equal(affect_svm_select_c_gram(G, N, DD, y, C3, cands, 3, 5, 3, &c2, &a2, &err),
                      AFFECT_OK);
     assert_true(c1 == c2 && a1 == a2);
