@@ -113,6 +113,23 @@ void affect_bw_f32s(affect_bw *w, const float *v, size_t n)
     }
 }
 
+void affect_bw_f64s_as_f32(affect_bw *w, const double *v, size_t n)
+{
+    size_t bytes;
+    if (!affect_mul_size(n, 4, &bytes)) {
+        w->failed = true;
+        return;
+    }
+    if (!reserve(w, bytes))
+        return;
+    for (size_t i = 0; i < n; i++) {
+        float f = (float)v[i];
+        uint32_t u;
+        memcpy(&u, &f, sizeof u);
+        put_le(w, u, 4);
+    }
+}
+
 void affect_bw_u32s(affect_bw *w, const uint32_t *v, size_t n)
 {
     size_t bytes;

@@ -684,14 +684,10 @@ void affect_spca_encode(const affect_spca *s, affect_bw *w)
     affect_bw_f64(w, s->sigma);
     affect_bw_f64s(w, s->eigenvalues, s->dims);
     size_t pd = (size_t)s->dims * s->input_dim;
-    if (!s->f32) {
+    if (!s->f32)
         affect_bw_f64s(w, s->axes, pd);
-    } else {
-        for (size_t i = 0; i < pd; i++) { /* exact: every component is a float32 value */
-            float f = (float)s->axes[i];
-            affect_bw_f32s(w, &f, 1);
-        }
-    }
+    else /* exact: every component is a float32 value */
+        affect_bw_f64s_as_f32(w, s->axes, pd);
     if (w->failed)
         return;
     affect_bw_u64(w, affect_fnv1a64(w->data + start, w->len - start));

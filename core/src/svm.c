@@ -827,10 +827,7 @@ void affect_svm_encode(const affect_svm *m, affect_bw *w)
         affect_bw_f64s(w, m->w, P * m->d);
         return;
     }
-    for (size_t i = 0; i < P * m->d; i++) { /* exact: every weight is a float32 value */
-        float f = (float)m->w[i];
-        affect_bw_f32s(w, &f, 1);
-    }
+    affect_bw_f64s_as_f32(w, m->w, P * m->d); /* exact: every weight is a float32 value */
 }
 
 bool affect_svm_round_weights(affect_svm *m)

@@ -152,36 +152,25 @@ static void corpus_tag(const char *dir, char *tag, size_t cap)
  * error. */
 static int load_corpus(const char *dir, corpus *c)
 {
-    char **names;
+    bench_text *t;
     size_t n;
-    int rc = bench_list_files(dir, ".bvh", &names, &n);
-    if (rc)
-        return rc;
-    c->items = calloc(n ? n : 1, sizeof *c->items);
+    int rc = bench_load_texts(dir, ".bvh", &t, &n, &c->text_bytes);
+    c->items = t ? calloc(n ? n : 1, sizeof *c->items) : NULL;
     c->cap = n;
-    char path[4096];
+    if (!rc && !c->items)
+        rc = 2;
     for (size_t i = 0; i < n; i++) {
-        if (!rc && !c->items)
-            rc = 2;
-        if (rc) {
-            free(names[i]);
+        if (!c->items) {
+            free(t[i].name);
+            free(t[i].text);
             continue;
         }
-        item *it = &c->items[c->n];
-        snprintf(path, sizeof path, "%s/%s", dir, names[i]);
-        it->name = names[i];
-        it->text = bench_read_file(path, &it->text_len);
-        if (!it->text) {
-            fprintf(stderr, "cannot read %s: %s\n", path, strerror(errno));
-            free(it->name);
-            it->name = NULL;
-            rc = 2;
-            continue;
-        }
-        c->text_bytes += it->text_len;
-        c->n++;
+        c->items[i].name = t[i].name;
+        c->items[i].text = t[i].text;
+        c->items[i].text_len = t[i].len;
     }
-    free(names);
+    c->n = c->items ? n : 0;
+    free(t);
     return rc;
 }
 

@@ -8,13 +8,15 @@
  *
  * For latency distributions (one time per request rather than per run), bench_summarize gives
  * the median, mean, fastest and slowest of n times. bench_read_file reads a whole file and
- * bench_list_files lists a folder's files by suffix, sorted (the corpus benchmarks' BVH files).
+ * bench_list_files lists a folder's files by suffix, sorted, and bench_load_texts reads them all
+ * (the corpus benchmarks' BVH files).
  * Each run's process CPU time is read too (a shared machine slows a run without it waiting).
  */
 #ifndef AFFECT_BENCHUTIL_H
 #define AFFECT_BENCHUTIL_H
 
 #include <dirent.h>
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -180,6 +182,52 @@ static inline int bench_list_files(const char *dir, const char *suffix, char ***
     closedir(d);
     if (!rc)
         qsort(*names, *n, sizeof **names, bench_cmp_string);
+    return rc;
+}
+
+/* One file of bench_load_texts: its name (not the path), its bytes NUL-terminated, their count. */
+typedef struct bench_text {
+    char *name;
+    char *text;
+    size_t len;
+} bench_text;
+
+/* Reads every file of dir ending with suffix, sorted by name, into *out (*n of them; free each
+ * name and text, then the array); *bytes receives the total size. Returns 0, 1 when dir cannot
+ * be opened, 2 on any other error (a file that cannot be read is named on stderr). */
+static inline int bench_load_texts(const char *dir, const char *suffix, bench_text **out,
+                                   size_t *n, size_t *bytes)
+{
+    char **names;
+    size_t count;
+    *out = NULL;
+    *n = *bytes = 0;
+    int rc = bench_list_files(dir, suffix, &names, &count);
+    if (rc)
+        return rc;
+    bench_text *t = calloc(count ? count : 1, sizeof *t);
+    char path[4096];
+    for (size_t i = 0; i < count; i++) {
+        if (!rc && !t)
+            rc = 2;
+        if (rc) {
+            free(names[i]);
+            continue;
+        }
+        snprintf(path, sizeof path, "%s/%s", dir, names[i]);
+        t[*n].name = names[i];
+        t[*n].text = bench_read_file(path, &t[*n].len);
+        if (!t[*n].text) {
+            fprintf(stderr, "cannot read %s: %s\n", path, strerror(errno));
+            free(names[i]);
+            rc = 2;
+            continue;
+        }
+        *bytes += t[*n].len;
+        (*n)++;
+    }
+    free(names);
+    *out = t;
     return rc;
 }
 

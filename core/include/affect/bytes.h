@@ -39,6 +39,8 @@ void affect_bw_u64(affect_bw *w, uint64_t v);
 void affect_bw_f64(affect_bw *w, double v);
 void affect_bw_f64s(affect_bw *w, const double *v, size_t n);
 void affect_bw_f32s(affect_bw *w, const float *v, size_t n);
+/* n doubles written as float32 (each rounded to nearest; exact for float32 values). */
+void affect_bw_f64s_as_f32(affect_bw *w, const double *v, size_t n);
 void affect_bw_u32s(affect_bw *w, const uint32_t *v, size_t n);
 
 typedef struct affect_br {
