@@ -13,10 +13,14 @@
  * How it works: index_name names a `laban` virtual table (vt_laban.c). Its shadow tables give
  * the labelled Laban vectors (`<index>_data`) and the content table (`<index>_info`). The
  * salient components come from an RMLR fit on those vectors (missing components imputed by the
- * component's mean); the fit is cached in `<index>_info` (keys `rmlr`, a BLOB, and
- * `rmlr_generation`) and refitted when the index's generation changed (any rebuild or refresh),
+ * component's mean); the fit is cached in `<index>_info` (keys `rmlr`, a BLOB, and `rmlr_key`)
  * and kept per connection as well; when the database cannot be written (read-only, busy) the
- * fit is only kept in memory. The components used for the neighbour search are
+ * fit is only kept in memory. The key is a 64-bit FNV-1a hash of a format tag, the component
+ * names, and every labelled row's label and vector bytes, with the row count, seed and folds:
+ * a fit is used only for the index content it was fitted on (a rebuild that changes nothing
+ * keeps it; a changed label, a recreated index of the same name or a copied `_info` row does
+ * not), and a decoded or cached fit must also have the index's class, component and row
+ * counts, else it is refitted. The components used for the neighbour search are
  * L \ L′_target, or L \ (L′_source ∩ L′_target) when the source emotion is known: given
  * (source_label), read from the index when the desired motion is one of its rows (same bytes),
  * or recognized with a classifier (option classifier: the classifier BLOB as hex text, e.g.
@@ -56,13 +60,15 @@
 #include "seqs.h"
 
 #define N_COMP AFFECT_LABAN_N
+/* Versions the cached fit's key: a fit stored under another tag is refitted. */
+#define RMLR_CACHE_TAG "affect-rmlr-cache-2"
 
 /* ---- the per-function cache of RMLR fits ---- */
 
 struct ax_gen_fn {
     char name[32]; /* first: AX_NAME(ctx) reads it */
-    char *index;   /* the cached fit's index, generation and seed */
-    sqlite3_int64 generation;
+    char *index;   /* the cached fit's index, content key and seed */
+    uint64_t key;
     uint64_t seed;
     uint32_t folds;
     affect_rmlr *fit;
@@ -100,7 +106,7 @@ void ax_gen_fn_free(void *p)
 typedef struct gen_index {
     const char *name;
     char *content, *motion; /* content table and motion column */
-    sqlite3_int64 generation;
+    uint64_t key;           /* FNV-1a of the cache tag, component names, labels and vectors */
     uint32_t n;             /* rows with a label */
     sqlite3_int64 *ids;
     double *x;              /* n × N_COMP, missing components imputed by the mean */
@@ -159,16 +165,15 @@ static sqlite3_stmt *prepare(sqlite3_context *ctx, const char *what, const char 
     return st;
 }
 
-/* The index's _info values content, motion and generation; "not a laban table" otherwise. */
+/* The index's _info values content and motion; "not a laban table" otherwise. */
 static ax_arg index_info(sqlite3_context *ctx, gen_index *ix)
 {
     sqlite3 *db = sqlite3_context_db_handle(ctx);
     char *sql = sqlite3_mprintf(
         "SELECT (SELECT sql FROM sqlite_schema WHERE type = 'table' AND name = %Q), "
         "(SELECT value FROM \"%w_info\" WHERE key = 'content'), "
-        "(SELECT value FROM \"%w_info\" WHERE key = 'motion'), "
-        "(SELECT value FROM \"%w_info\" WHERE key = 'generation')",
-        ix->name, ix->name, ix->name, ix->name);
+        "(SELECT value FROM \"%w_info\" WHERE key = 'motion')",
+        ix->name, ix->name, ix->name);
     if (!sql) {
         sqlite3_result_error_nomem(ctx);
         return AX_ERROR;
@@ -193,7 +198,6 @@ static ax_arg index_info(sqlite3_context *ctx, gen_index *ix)
     if (is_laban) {
         ix->content = sqlite3_mprintf("%s", sqlite3_column_text(st, 1));
         ix->motion = sqlite3_mprintf("%s", sqlite3_column_text(st, 2));
-        ix->generation = sqlite3_column_int64(st, 3);
     }
     sqlite3_finalize(st);
     if (!is_laban) {
@@ -219,6 +223,10 @@ static ax_arg index_rows(sqlite3_context *ctx, gen_index *ix)
     uint32_t cap = 0;
     ax_arg r = AX_ERROR;
     int rc;
+    ix->key = affect_fnv1a64((const unsigned char *)RMLR_CACHE_TAG, sizeof RMLR_CACHE_TAG);
+    for (int j = 0; j < N_COMP; j++)
+        ix->key = affect_fnv1a64_update(ix->key, (const unsigned char *)affect_laban_names[j],
+                                        strlen(affect_laban_names[j]) + 1);
     while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
         if (ix->n == cap) {
             cap = cap ? 2 * cap : 64;
@@ -246,6 +254,8 @@ static ax_arg index_rows(sqlite3_context *ctx, gen_index *ix)
         ix->ids[ix->n] = sqlite3_column_int64(st, 0);
         for (int j = 0; j < N_COMP; j++)
             ix->x[(size_t)ix->n * N_COMP + (size_t)j] = ax_get_f32(v + 4 * j);
+        ix->key = affect_fnv1a64_update(ix->key, (const unsigned char *)label, strlen(label) + 1);
+        ix->key = affect_fnv1a64_update(ix->key, v, 4 * N_COMP);
         ix->labels[ix->n] = affect_strndup(label, strlen(label));
         if (!ix->labels[ix->n]) {
             sqlite3_result_error_nomem(ctx);
@@ -295,20 +305,35 @@ static ax_arg index_load(sqlite3_context *ctx, const char *name, gen_index *ix)
 
 /* ---- the RMLR fit, cached ---- */
 
-/* The persisted fit of the index, if its generation, seed and folds are current; NULL
- * otherwise. */
+/* The key under which a fit of ix with this seed and these folds is stored. */
+static void fit_key(const gen_index *ix, uint64_t seed, uint32_t folds, char out[80])
+{
+    sqlite3_snprintf(80, out, "%016llx:%u:%llu:%u", (unsigned long long)ix->key, ix->n,
+                     (unsigned long long)seed, folds);
+}
+
+/* A fit read back from a table or a cache is only used when it was fitted on this index's
+ * rows: its class, feature and row counts must match (a row vector read past them would
+ * read past the fit's arrays). */
+static bool fit_matches(const affect_rmlr *fit, const gen_index *ix)
+{
+    return affect_rmlr_n_classes(fit) == ix->n_classes &&
+           affect_rmlr_n_features(fit) == N_COMP && affect_rmlr_n_train(fit) == ix->n;
+}
+
+/* The persisted fit of the index, if its key (the index's content, seed and folds) is
+ * current and it decodes to a fit of this index's shape; NULL otherwise. */
 static affect_rmlr *stored_fit(sqlite3 *db, const gen_index *ix, uint64_t seed, uint32_t folds)
 {
     char *sql = sqlite3_mprintf("SELECT (SELECT value FROM \"%w_info\" WHERE key = 'rmlr'), "
-                                "(SELECT value FROM \"%w_info\" WHERE key = 'rmlr_generation')",
+                                "(SELECT value FROM \"%w_info\" WHERE key = 'rmlr_key')",
                                 ix->name, ix->name);
     sqlite3_stmt *st = NULL;
     affect_rmlr *fit = NULL;
     if (sql && sqlite3_prepare_v2(db, sql, -1, &st, NULL) == SQLITE_OK &&
         sqlite3_step(st) == SQLITE_ROW && sqlite3_column_type(st, 0) == SQLITE_BLOB) {
-        char expect[64];
-        sqlite3_snprintf(sizeof expect, expect, "%lld:%llu:%u", (long long)ix->generation,
-                         (unsigned long long)seed, folds);
+        char expect[80];
+        fit_key(ix, seed, folds, expect);
         const char *got = (const char *)sqlite3_column_text(st, 1);
         if (got && strcmp(got, expect) == 0) {
             affect_br r;
@@ -316,6 +341,10 @@ static affect_rmlr *stored_fit(sqlite3 *db, const gen_index *ix, uint64_t seed, 
             affect_error err;
             if (affect_rmlr_decode(&r, &fit, &err))
                 fit = NULL;
+            else if (!fit_matches(fit, ix)) {
+                affect_rmlr_free(fit);
+                fit = NULL;
+            }
         }
     }
     sqlite3_free(sql);
@@ -332,15 +361,14 @@ static void store_fit(sqlite3 *db, const gen_index *ix, uint64_t seed, uint32_t 
     affect_bw_init(&w);
     affect_rmlr_encode(fit, &w);
     char *sql = sqlite3_mprintf("INSERT OR REPLACE INTO \"%w_info\"(key, value) "
-                                "VALUES ('rmlr', ?1), ('rmlr_generation', ?2)",
+                                "VALUES ('rmlr', ?1), ('rmlr_key', ?2)",
                                 ix->name);
     sqlite3_stmt *st = NULL;
     if (!w.failed && sql && sqlite3_prepare_v2(db, sql, -1, &st, NULL) == SQLITE_OK) {
-        char gen[64];
-        sqlite3_snprintf(sizeof gen, gen, "%lld:%llu:%u", (long long)ix->generation,
-                         (unsigned long long)seed, folds);
+        char key[80];
+        fit_key(ix, seed, folds, key);
         sqlite3_bind_blob64(st, 1, w.data, w.len, SQLITE_STATIC);
-        sqlite3_bind_text(st, 2, gen, -1, SQLITE_TRANSIENT);
+        sqlite3_bind_text(st, 2, key, -1, SQLITE_TRANSIENT);
         sqlite3_step(st);
     }
     sqlite3_finalize(st);
@@ -354,8 +382,8 @@ static ax_arg rmlr_fit(sqlite3_context *ctx, const gen_index *ix, uint64_t seed,
                        uint32_t folds, uint32_t threads, const affect_rmlr **out)
 {
     ax_gen_fn *fn = sqlite3_user_data(ctx);
-    if (fn->fit && fn->generation == ix->generation && fn->seed == seed && fn->folds == folds &&
-        strcmp(fn->index, ix->name) == 0) {
+    if (fn->fit && fn->key == ix->key && fn->seed == seed && fn->folds == folds &&
+        strcmp(fn->index, ix->name) == 0 && fit_matches(fn->fit, ix)) {
         *out = fn->fit;
         return AX_OK;
     }
@@ -392,7 +420,7 @@ static ax_arg rmlr_fit(sqlite3_context *ctx, const gen_index *ix, uint64_t seed,
         return AX_ERROR;
     }
     fn->fit = fit;
-    fn->generation = ix->generation;
+    fn->key = ix->key;
     fn->seed = seed;
     fn->folds = folds;
     *out = fit;

@@ -14,12 +14,16 @@
 #include <math.h>
 #include <string.h>
 
-uint64_t affect_fnv1a64(const unsigned char *data, size_t size)
+uint64_t affect_fnv1a64_update(uint64_t h, const unsigned char *data, size_t size)
 {
-    uint64_t h = 0xcbf29ce484222325ull;
     for (size_t i = 0; i < size; i++)
         h = (h ^ data[i]) * 0x100000001b3ull;
     return h;
+}
+
+uint64_t affect_fnv1a64(const unsigned char *data, size_t size)
+{
+    return affect_fnv1a64_update(0xcbf29ce484222325ull, data, size);
 }
 
 static void put_u16(unsigned char *p, uint16_t v)

@@ -33,7 +33,7 @@ SELECT 'laban_salient: every label has salient components, every pair a set',
 -- oom: skip
 
 SELECT 'the fit is cached in the index''s info table', count(*) = 2
-  FROM idx_info WHERE key IN ('rmlr', 'rmlr_generation');
+  FROM idx_info WHERE key IN ('rmlr', 'rmlr_key');
 -- oom: skip
 
 -- ---- generation with given components (no fit needed) ----
@@ -170,13 +170,64 @@ SELECT 'explain reports how the output was drawn',
 -- oom: skip
 
 -- ---- laban_salient: folds are part of the cache key; threads change only the time ----
+-- (the 4-fold fit in between replaces both caches, so the last call fits again)
 CREATE TABLE fits AS SELECT 'threads 2' AS k, laban_salient('idx', '{"folds":5,"threads":2}') AS s;
-INSERT INTO idx(idx) VALUES('rebuild');
+INSERT INTO fits SELECT 'folds 4', laban_salient('idx', '{"folds":4}');
 INSERT INTO fits SELECT 'threads 1', laban_salient('idx', '{"folds":5}');
+-- oom: skip
 
 SELECT 'the fit with 2 threads is the fit with 1, and the stored key names the folds',
        (SELECT s FROM fits WHERE k = 'threads 2') = (SELECT s FROM fits WHERE k = 'threads 1')
-   AND (SELECT value FROM idx_info WHERE key = 'rmlr_generation') LIKE '%:1:5';
+   AND (SELECT value FROM idx_info WHERE key = 'rmlr_key') LIKE '%:24:1:5';
+
+CREATE TABLE key_before AS SELECT value AS k FROM idx_info WHERE key = 'rmlr_key';
+INSERT INTO idx(idx) VALUES('rebuild');
+SELECT 'a rebuild that changes nothing keeps the stored fit, under the same key',
+       (SELECT value FROM idx_info WHERE key = 'rmlr_key') = (SELECT k FROM key_before)
+   AND (SELECT typeof(value) FROM idx_info WHERE key = 'rmlr') = 'blob'
+   AND laban_salient('idx', '{"folds":5}') = (SELECT s FROM fits WHERE k = 'threads 1');
+
+-- ---- a cached fit is used only for the index it was fitted on (regression: a laban index
+-- dropped and created again under the same name over more labels, a changed label, or a
+-- copied _info row made affect_generate read past the old fit's arrays) ----
+CREATE TABLE more AS SELECT * FROM motions;
+INSERT INTO more(id, action, emotion, seed, motion)
+SELECT 100 + k.value, 'wave', 'happy', k.value, motion_synth('wave', 'happy', k.value)
+  FROM json_each('[1,2,3,4]') AS k;
+SELECT 'the old index''s fit is cached', json_extract(laban_salient('idx'), '$.rows') = 24;
+-- oom: skip
+DROP TABLE idx;
+CREATE VIRTUAL TABLE idx USING laban(content=more, motion=motion, label=emotion);
+SELECT 'recreated over 4 labels: refitted, 4 labels and 6 pairs',
+       (SELECT count(*) FROM json_each(s, '$.salient')) = 4
+   AND (SELECT count(*) FROM json_each(s, '$.pairs')) = 6 AND json_extract(s, '$.rows') = 28
+  FROM (SELECT laban_salient('idx') AS s);
+-- oom: skip
+
+SELECT 'generation toward the new label works', motion_frames(g) = motion_frames(src)
+  FROM (SELECT motion AS src, affect_generate('idx', motion, 'happy') AS g FROM more WHERE id = 1);
+-- oom: skip
+
+UPDATE more SET emotion = 'glad' WHERE emotion = 'happy';
+INSERT INTO idx(idx) VALUES('rebuild');
+SELECT 'a changed label: refitted under the new label',
+       json_extract(s, '$.salient.glad') IS NOT NULL AND json_extract(s, '$.salient.happy') IS NULL
+  FROM (SELECT laban_salient('idx') AS s);
+-- oom: skip
+
+CREATE VIRTUAL TABLE idx3 USING laban(content=motions, motion=motion, label=emotion);
+INSERT OR REPLACE INTO idx3_info(key, value)
+SELECT key, value FROM idx_info WHERE key IN ('rmlr', 'rmlr_key');
+SELECT 'a fit copied from another index is not used: 3 labels, 24 rows',
+       (SELECT count(*) FROM json_each(s, '$.salient')) = 3 AND json_extract(s, '$.rows') = 24
+  FROM (SELECT laban_salient('idx3') AS s);
+-- oom: skip
+
+UPDATE idx3_info SET value = (SELECT value FROM idx_info WHERE key = 'rmlr') WHERE key = 'rmlr';
+SELECT 'a fit of another shape under this index''s key is not used either',
+       (SELECT count(*) FROM json_each(s, '$.salient')) = 3
+  FROM (SELECT laban_salient('idx3', '{"seed":7}') AS s);
+-- oom: skip
 
 SELECT laban_salient('idx', '{"threads":0}');
 -- error: laban_salient: option "threads" must be from 1 to 64, got 0

@@ -70,6 +70,10 @@ affect_status affect_hmm_blob_decode(const unsigned char *data, size_t size, aff
 /* FNV-1a 64-bit hash (the checksum of the BLOB). */
 uint64_t affect_fnv1a64(const unsigned char *data, size_t size);
 
+/* The same hash continued over more bytes: affect_fnv1a64(ab) =
+ * affect_fnv1a64_update(affect_fnv1a64(a), b). */
+uint64_t affect_fnv1a64_update(uint64_t h, const unsigned char *data, size_t size);
+
 #ifdef __cplusplus
 }
 #endif
