@@ -18,7 +18,9 @@
 # OPENBLAS_NUM_THREADS=1, then its cross-validation again with two threads, unpinned, then
 # bench_generate (corpus and the built module; generation latency by stage and the RMLR fit,
 # about a minute) with OPENBLAS_NUM_THREADS=1, then its RMLR fit again with {"threads":2},
-# unpinned (--rmlr-only --threads 2; it says so when laban_salient has no threads option).
+# unpinned (--rmlr-only --threads 2; it says so when laban_salient has no threads option),
+# then bench_rmlr (affect_rmlr_cv on the Laban vectors of bandai-namco-1's 44 emotion motions
+# and bandai-namco-2-dev's 504, pinned; about 3 minutes).
 # AFFECT_BENCH_ONLY="bench_hmm ..." runs only the benchmarks it names (default: all).
 # Record the output in docs/BENCHMARKS.md.
 set -euo pipefail
@@ -99,5 +101,12 @@ if want bench_generate; then
     echo
     echo "== bench_generate --rmlr-only --threads 2 (unpinned: both cores)"
     OPENBLAS_NUM_THREADS=1 "$build/tests/bench/bench_generate" --rmlr-only --threads 2 "$@"
+    echo
+fi
+
+# The cross-validated RMLR fit (laban_salient's) on both corpora's Laban vectors, one core.
+if want bench_rmlr; then
+    echo "== bench_rmlr"
+    "${pin[@]}" "$build/tests/bench/bench_rmlr"
     echo
 fi

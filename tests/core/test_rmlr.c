@@ -157,6 +157,78 @@ static void test_kkt(void **state)
     free(beta);
 }
 
+/* The sequential strong rule is a heuristic: it may screen out a feature that the new λ needs,
+ * which the KKT check must then find. A suppressor makes the rule fail: class = sign(e + noise),
+ * feature 0 = s + e, feature 1 = s (s independent of the class): feature 1 alone is useless (its
+ * gradient stays small while feature 0 is out), but once feature 0 is in, feature 1 cancels its
+ * s and its gradient grows faster than the rule assumes (|dg/dλ| ≤ 1); with this seed and λ
+ * steps of 0.63 the rule drops feature 1 (and another) where the KKT conditions need them
+ * (twice: counted once by instrumenting the solver). And on correlated random data, the KKT
+ * conditions hold along whole paths. */
+static void test_strong_rule_kkt(void **state)
+{
+    (void)state;
+    enum { N = 100, K = 2, L = 6 };
+    double *x = malloc(N * P * sizeof *x), *beta = malloc(30 * 4 * P * sizeof *beta);
+    double beta0[30 * 4], lam[30];
+    uint32_t y[N];
+    uint8_t conv[30];
+    affect_error err;
+    affect_rng r;
+    assert_non_null(x);
+    assert_non_null(beta);
+    affect_rng_seed(&r, 2012);
+    for (size_t i = 0; i < N; i++) {
+        double s = 3 * affect_rng_normal(&r), e = affect_rng_normal(&r);
+        y[i] = e + affect_rng_normal(&r) > 0;
+        x[i * P] = s + e;
+        x[i * P + 1] = s;
+        for (size_t j = 2; j < P; j++)
+            x[i * P + j] = affect_rng_normal(&r);
+    }
+    affect_rmlr_options o;
+    affect_rmlr_options_default(&o);
+    o.lambda_min_ratio = 0.1; /* steps of 0.63 */
+    o.tol = 1e-13;
+    assert_int_equal(
+        affect_rmlr_fit_path(x, N, P, y, K, 1.0, NULL, L, &o, lam, beta, beta0, conv, &err),
+        AFFECT_OK);
+    for (uint32_t l = 0; l < L; l++)
+        assert_int_equal(conv[l], 1);
+    check_kkt(x, N, y, K, 1.0, lam, L, beta, beta0, 2e-6);
+    /* both in at the end of the path, with opposite signs (feature 1 cancels s) */
+    const double *last = beta + (size_t)(L - 1) * K * P;
+    assert_true(last[P] != 0 && last[P + 1] != 0 && (last[P] > 0) != (last[P + 1] > 0));
+    /* correlated features (three latent factors, one carrying the class) along whole paths */
+    enum { N2 = 100, K2 = 3, L2 = 30 };
+    static const double alphas[] = {0.1, 0.5, 1.0};
+    for (uint64_t seed = 1; seed <= 6; seed++) {
+        affect_rng_seed(&r, seed);
+        for (size_t i = 0; i < N2; i++) {
+            double u[3];
+            y[i] = (uint32_t)(i % K2);
+            for (int q = 0; q < 3; q++)
+                u[q] = affect_rng_normal(&r) + (q == 0 ? 0.8 * y[i] : 0);
+            for (size_t j = 0; j < P; j++)
+                x[i * P + j] = u[j % 3] * (1 + 0.1 * (double)j) + 0.5 * affect_rng_normal(&r) +
+                               (j % 5 == 1 ? 0.4 * (y[i] == j % K2) : 0);
+        }
+        for (size_t a = 0; a < sizeof alphas / sizeof *alphas; a++) {
+            affect_rmlr_options_default(&o);
+            o.lambda_min_ratio = 0.1; /* far from separable, where tol 1e-13 takes too long */
+            o.tol = 1e-13;
+            assert_int_equal(affect_rmlr_fit_path(x, N2, P, y, K2, alphas[a], NULL, L2, &o, lam,
+                                                  beta, beta0, conv, &err),
+                             AFFECT_OK);
+            for (uint32_t l = 0; l < L2; l++)
+                assert_int_equal(conv[l], 1);
+            check_kkt(x, N2, y, K2, alphas[a], lam, L2, beta, beta0, 2e-6);
+        }
+    }
+    free(x);
+    free(beta);
+}
+
 static void test_lasso_path(void **state)
 {
     (void)state;
@@ -820,7 +892,7 @@ int main(void)
         cmocka_unit_test(test_determinism),   cmocka_unit_test(test_errors),
         cmocka_unit_test(test_round_trip),    cmocka_unit_test(test_corrupt),
         cmocka_unit_test(test_out_of_memory), cmocka_unit_test(test_threads),
-        cmocka_unit_test(test_impute),
+        cmocka_unit_test(test_impute),        cmocka_unit_test(test_strong_rule_kkt),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -18,6 +18,15 @@
  * quadratic approximation of the log-likelihood in that class's parameters, the others held —
  * solved by cyclic coordinate descent with soft-thresholding and an active set; the step is
  * halved until the penalised objective does not increase; warm starts along a decreasing λ path.
+ * Screening (sequential strong rule, Tibshirani et al. 2012, by feature over the classes as
+ * glmnet): at λ after λ', coordinate descent visits only the features with a non-zero
+ * coefficient or max_k |g_kj| ≥ α(2λ − λ'), g the log-likelihood's gradient at the fit of λ'
+ * (the threshold is αλ for the first λ fitted, or one larger than the previous); after it
+ * converges, every other feature's KKT condition (max_k |g_kj| ≤ αλ at the new fit) is checked
+ * and any that fails joins the set and the fit goes on, so the rule only saves work and never
+ * changes the solution. The path is not stopped early (glmnet stops when the fraction of
+ * deviance explained reaches 0.999 or changes by less than 1e-5 between λ values): every
+ * n_lambda value is fitted.
  *
  * λ path: λ_max = max_kj |(1/n) Σ_i z_ij (y_ik − π_k)| / max(α, 1e-3), with π_k the class
  * frequencies (the gradient at the intercept-only fit): for α ≥ 1e-3 it is the smallest λ at
