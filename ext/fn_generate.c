@@ -56,8 +56,11 @@
 #include "affect/hmm_blob.h"
 #include "affect/laban.h"
 #include "affect/rmlr.h"
+#include "affect/roles.h"
 #include "affect/strbuf.h"
+#include "affect/transfer.h"
 #include "seqs.h"
+#include "vt_laban.h"
 
 #define N_COMP AFFECT_LABAN_N
 /* Versions the cached fit's key: a fit stored under another tag is refitted. */
@@ -165,115 +168,62 @@ static sqlite3_stmt *prepare(sqlite3_context *ctx, const char *what, const char 
     return st;
 }
 
-/* The index's _info values content and motion; "not a laban table" otherwise. */
-static ax_arg index_info(sqlite3_context *ctx, gen_index *ix)
-{
-    sqlite3 *db = sqlite3_context_db_handle(ctx);
-    char *sql = sqlite3_mprintf(
-        "SELECT (SELECT sql FROM sqlite_schema WHERE type = 'table' AND name = %Q), "
-        "(SELECT value FROM \"%w_info\" WHERE key = 'content'), "
-        "(SELECT value FROM \"%w_info\" WHERE key = 'motion')",
-        ix->name, ix->name, ix->name);
-    if (!sql) {
-        sqlite3_result_error_nomem(ctx);
-        return AX_ERROR;
-    }
-    sqlite3_stmt *st = NULL;
-    int rc = sqlite3_prepare_v2(db, sql, -1, &st, NULL);
-    sqlite3_free(sql);
-    if (rc != SQLITE_OK || sqlite3_step(st) != SQLITE_ROW) {
-        sqlite3_finalize(st);
-        if (sqlite3_errcode(db) == SQLITE_NOMEM) {
-            sqlite3_result_error_nomem(ctx);
-            return AX_ERROR;
-        }
-        ax_errorf(ctx, "\"%s\" is not a laban table (CREATE VIRTUAL TABLE %s USING laban(…))",
-                  ix->name, ix->name);
-        return AX_ERROR;
-    }
-    const char *def = (const char *)sqlite3_column_text(st, 0);
-    bool is_laban = def && sqlite3_strlike("%USING laban(%", def, 0) == 0 &&
-                    sqlite3_column_type(st, 1) == SQLITE_TEXT &&
-                    sqlite3_column_type(st, 2) == SQLITE_TEXT;
-    if (is_laban) {
-        ix->content = sqlite3_mprintf("%s", sqlite3_column_text(st, 1));
-        ix->motion = sqlite3_mprintf("%s", sqlite3_column_text(st, 2));
-    }
-    sqlite3_finalize(st);
-    if (!is_laban) {
-        ax_errorf(ctx, "\"%s\" is not a laban table (CREATE VIRTUAL TABLE %s USING laban(…))",
-                  ix->name, ix->name);
-        return AX_ERROR;
-    }
-    if (!ix->content || !ix->motion) {
-        sqlite3_result_error_nomem(ctx);
-        return AX_ERROR;
-    }
-    return AX_OK;
-}
-
-/* The labelled rows: ids, vectors (NaN kept for now), labels. */
+/* The index's rows (through the index's own API, vt_laban.h): ids, vectors (NaN kept for
+ * now), labels, classes, and the content key of the cached fit. */
 static ax_arg index_rows(sqlite3_context *ctx, gen_index *ix)
 {
-    sqlite3_stmt *st = prepare(ctx, "reading the index",
-                               "SELECT id, CAST(label AS TEXT), vector FROM \"%w_data\" "
-                               "WHERE label IS NOT NULL ORDER BY id", ix->name);
-    if (!st)
+    sqlite3 *db = sqlite3_context_db_handle(ctx);
+    ax_laban_rows rows;
+    char *msg = NULL;
+    int rc = ax_laban_read(db, ix->name, &rows, &msg);
+    if (rc == SQLITE_NOTFOUND) {
+        ax_errorf(ctx, "\"%s\" is not a laban table (CREATE VIRTUAL TABLE %s USING laban(…))",
+                  ix->name, ix->name);
         return AX_ERROR;
-    uint32_t cap = 0;
+    }
+    if (rc != SQLITE_OK) {
+        if (rc == SQLITE_NOMEM)
+            sqlite3_result_error_nomem(ctx);
+        else
+            ax_errorf(ctx, "index \"%s\": %s", ix->name, msg ? msg : "cannot be read");
+        sqlite3_free(msg);
+        return AX_ERROR;
+    }
+    /* take the strings; copy the vectors */
+    ix->content = rows.content;
+    ix->motion = rows.motion;
+    rows.content = rows.motion = NULL;
+    uint32_t n = rows.n;
+    ix->ids = affect_malloc_array(n ? n : 1, sizeof *ix->ids);
+    ix->x = affect_malloc_array((size_t)(n ? n : 1) * N_COMP, sizeof *ix->x);
+    ix->labels = affect_calloc(n ? n : 1, sizeof *ix->labels);
+    ix->classes = affect_malloc_array(n ? n : 1, sizeof *ix->classes);
+    ix->y = affect_malloc_array(n ? n : 1, sizeof *ix->y);
     ax_arg r = AX_ERROR;
-    int rc;
+    if (!ix->ids || !ix->x || !ix->labels || !ix->classes || !ix->y) {
+        sqlite3_result_error_nomem(ctx);
+        goto done;
+    }
     ix->key = affect_fnv1a64((const unsigned char *)RMLR_CACHE_TAG, sizeof RMLR_CACHE_TAG);
     for (int j = 0; j < N_COMP; j++)
         ix->key = affect_fnv1a64_update(ix->key, (const unsigned char *)affect_laban_names[j],
                                         strlen(affect_laban_names[j]) + 1);
-    while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
-        if (ix->n == cap) {
-            cap = cap ? 2 * cap : 64;
-            sqlite3_int64 *ids = affect_realloc(ix->ids, cap * sizeof *ids);
-            if (ids)
-                ix->ids = ids;
-            double *x = affect_realloc(ix->x, (size_t)cap * N_COMP * sizeof *x);
-            if (x)
-                ix->x = x;
-            char **l = affect_realloc(ix->labels, cap * sizeof *l);
-            if (l)
-                ix->labels = l;
-            if (!ids || !x || !l) {
-                sqlite3_result_error_nomem(ctx);
-                goto done;
-            }
-        }
-        const unsigned char *v = sqlite3_column_blob(st, 2);
-        const char *label = (const char *)sqlite3_column_text(st, 1);
-        if (!label || sqlite3_column_bytes(st, 2) != 4 * N_COMP || !v) {
-            ax_errorf(ctx, "index \"%s\": row %" PRId64 " has no valid Laban vector", ix->name,
-                      (int64_t)sqlite3_column_int64(st, 0));
-            goto done;
-        }
-        ix->ids[ix->n] = sqlite3_column_int64(st, 0);
-        for (int j = 0; j < N_COMP; j++)
-            ix->x[(size_t)ix->n * N_COMP + (size_t)j] = ax_get_f32(v + 4 * j);
+    for (uint32_t i = 0; i < n; i++) {
+        const unsigned char *v = rows.vectors + (size_t)i * 4 * N_COMP;
+        const char *label = rows.labels[i];
         ix->key = affect_fnv1a64_update(ix->key, (const unsigned char *)label, strlen(label) + 1);
         ix->key = affect_fnv1a64_update(ix->key, v, 4 * N_COMP);
-        ix->labels[ix->n] = affect_strndup(label, strlen(label));
-        if (!ix->labels[ix->n]) {
+        ix->ids[i] = rows.ids[i];
+        for (int j = 0; j < N_COMP; j++)
+            ix->x[(size_t)i * N_COMP + (size_t)j] = ax_get_f32(v + 4 * j);
+        ix->labels[i] = affect_strndup(label, strlen(label));
+        if (!ix->labels[i]) {
             sqlite3_result_error_nomem(ctx);
             goto done;
         }
         ix->n++;
     }
-    if (rc != SQLITE_DONE) {
-        db_error(ctx, "reading the index");
-        goto done;
-    }
     /* classes: the distinct labels in byte order */
-    ix->classes = affect_malloc_array(ix->n ? ix->n : 1, sizeof *ix->classes);
-    ix->y = affect_malloc_array(ix->n ? ix->n : 1, sizeof *ix->y);
-    if (!ix->classes || !ix->y) {
-        sqlite3_result_error_nomem(ctx);
-        goto done;
-    }
     memcpy(ix->classes, ix->labels, ix->n * sizeof *ix->classes);
     qsort(ix->classes, ix->n, sizeof *ix->classes, cmp_text);
     uint32_t k = 0;
@@ -288,7 +238,7 @@ static ax_arg index_rows(sqlite3_context *ctx, gen_index *ix)
     }
     r = AX_OK;
 done:
-    sqlite3_finalize(st);
+    ax_laban_rows_free(&rows);
     return r;
 }
 
@@ -296,7 +246,7 @@ static ax_arg index_load(sqlite3_context *ctx, const char *name, gen_index *ix)
 {
     memset(ix, 0, sizeof *ix);
     ix->name = name;
-    if (index_info(ctx, ix) != AX_OK || index_rows(ctx, ix) != AX_OK)
+    if (index_rows(ctx, ix) != AX_OK)
         return AX_ERROR;
     /* missing components: the component's mean (0 when no row has it) */
     affect_impute_column_means(ix->x, ix->n, N_COMP);
@@ -321,58 +271,43 @@ static bool fit_matches(const affect_rmlr *fit, const gen_index *ix)
            affect_rmlr_n_features(fit) == N_COMP && affect_rmlr_n_train(fit) == ix->n;
 }
 
-/* The persisted fit of the index, if its key (the index's content, seed and folds) is
- * current and it decodes to a fit of this index's shape; NULL otherwise. */
+/* The persisted fit of the index (the index's cache, vt_laban.h), if its key (the index's
+ * content, seed and folds) is current and it decodes to a fit of this index's shape; NULL
+ * otherwise. */
 static affect_rmlr *stored_fit(sqlite3 *db, const gen_index *ix, uint64_t seed, uint32_t folds)
 {
-    char *sql = sqlite3_mprintf("SELECT (SELECT value FROM \"%w_info\" WHERE key = 'rmlr'), "
-                                "(SELECT value FROM \"%w_info\" WHERE key = 'rmlr_key')",
-                                ix->name, ix->name);
-    sqlite3_stmt *st = NULL;
+    char key[80];
+    fit_key(ix, seed, folds, key);
+    void *blob;
+    int size;
     affect_rmlr *fit = NULL;
-    if (sql && sqlite3_prepare_v2(db, sql, -1, &st, NULL) == SQLITE_OK &&
-        sqlite3_step(st) == SQLITE_ROW && sqlite3_column_type(st, 0) == SQLITE_BLOB) {
-        char expect[80];
-        fit_key(ix, seed, folds, expect);
-        const char *got = (const char *)sqlite3_column_text(st, 1);
-        if (got && strcmp(got, expect) == 0) {
-            affect_br r;
-            affect_br_init(&r, sqlite3_column_blob(st, 0), (size_t)sqlite3_column_bytes(st, 0));
-            affect_error err;
-            if (affect_rmlr_decode(&r, &fit, &err))
-                fit = NULL;
-            else if (!fit_matches(fit, ix)) {
-                affect_rmlr_free(fit);
-                fit = NULL;
-            }
+    if (ax_laban_cache_get(db, ix->name, "rmlr", key, &blob, &size) == SQLITE_OK && blob) {
+        affect_br r;
+        affect_br_init(&r, blob, (size_t)size);
+        affect_error err;
+        if (affect_rmlr_decode(&r, &fit, &err))
+            fit = NULL;
+        else if (!fit_matches(fit, ix)) {
+            affect_rmlr_free(fit);
+            fit = NULL;
         }
+        sqlite3_free(blob);
     }
-    sqlite3_free(sql);
-    sqlite3_finalize(st);
     return fit;
 }
 
-/* Stores the fit in the index's _info table; failures (read-only database, busy) are ignored:
- * the fit stays cached in memory. */
+/* Stores the fit in the index's cache; failures (read-only database, busy) are ignored: the
+ * fit stays cached in memory. */
 static void store_fit(sqlite3 *db, const gen_index *ix, uint64_t seed, uint32_t folds,
                       const affect_rmlr *fit)
 {
     affect_bw w;
     affect_bw_init(&w);
     affect_rmlr_encode(fit, &w);
-    char *sql = sqlite3_mprintf("INSERT OR REPLACE INTO \"%w_info\"(key, value) "
-                                "VALUES ('rmlr', ?1), ('rmlr_key', ?2)",
-                                ix->name);
-    sqlite3_stmt *st = NULL;
-    if (!w.failed && sql && sqlite3_prepare_v2(db, sql, -1, &st, NULL) == SQLITE_OK) {
-        char key[80];
-        fit_key(ix, seed, folds, key);
-        sqlite3_bind_blob64(st, 1, w.data, w.len, SQLITE_STATIC);
-        sqlite3_bind_text(st, 2, key, -1, SQLITE_TRANSIENT);
-        sqlite3_step(st);
-    }
-    sqlite3_finalize(st);
-    sqlite3_free(sql);
+    char key[80];
+    fit_key(ix, seed, folds, key);
+    if (!w.failed && w.len <= INT32_MAX)
+        ax_laban_cache_put(db, ix->name, "rmlr", key, w.data, (int)w.len);
     affect_bw_free(&w);
 }
 
@@ -526,22 +461,44 @@ done:
 
 /* ---- affect_generate and affect_generate_explain ---- */
 
-static const char *const gen_keys[] = {"copies",     "states", "epsilon",   "k",
-                                       "components", "source_label", "classifier",
-                                       "cutoff_hz",  "covariance_scale", "seed",
-                                       "render",     "keep_path", "threads", NULL};
+static const char *const gen_keys[] = {"method",     "strength",     "pairs",      "bands",
+                                       "max_ratio",  "keep_contacts", "copies",    "states",
+                                       "epsilon",    "k",            "components", "source_label",
+                                       "classifier", "cutoff_hz",    "covariance_scale",
+                                       "seed",       "render",       "keep_path",  "threads",
+                                       "pair_by",    "min_neighbours", "prefer_action", NULL};
 /* In the order of affect_generate_render. */
 static const char *const render_names[] = {"steps", "linear", NULL};
 
+/* Generation methods. */
+enum { METHOD_TRANSFER, METHOD_HMM_NN };
+static const char *const method_names[] = {"transfer", "hmm_nn", NULL};
+/* Neighbours at most (hmm_nn). */
+#define MAX_NEIGHBOURS 1024u
+/* Donor pairs at most. */
+#define MAX_PAIRS 64u
+/* Options of one method only: using one with the other method is an error, not ignored. */
+static const char *const hmm_only[] = {"copies",         "states",           "epsilon", "k",
+                                       "cutoff_hz",      "covariance_scale", "render",  "keep_path",
+                                       "min_neighbours", "prefer_action",    NULL};
+static const char *const transfer_only[] = {"strength",      "pairs",   "bands", "max_ratio",
+                                            "keep_contacts", "pair_by", NULL};
+
 typedef struct gen_opts {
+    int method;
+    affect_transfer_options tr;
+    uint32_t pairs;          /* donor pairs (transfer) */
     affect_generate_options g;
     double epsilon;
     uint32_t k;              /* 0: by epsilon */
+    uint32_t min_neighbours; /* hmm_nn: at least this many (3) */
+    bool prefer_action;      /* hmm_nn: candidates ranked by DTW to the desired motion (true) */
     uint32_t threads;        /* for the RMLR fit when it is not cached (1) */
     bool auto_components;
     bool use[N_COMP];        /* the components asked for (not auto) */
     const char *source_label;
     const char *classifier_hex;
+    const char *pair_by;     /* content table column naming each row's content (transfer) */
 } gen_opts;
 
 /* The "components" option: "auto" or an array of component names. */
@@ -576,23 +533,56 @@ static ax_arg opt_components(sqlite3_context *ctx, const ax_opts *opts, gen_opts
     return AX_OK;
 }
 
+/* The "bands" option: two edges in Hz, [low, high]. */
+static ax_arg opt_bands(sqlite3_context *ctx, const ax_opts *opts, double band_hz[2])
+{
+    const affect_json_node *n = ax_opt(opts, "bands");
+    if (!n)
+        return AX_OK;
+    const affect_json_node *e = n->type == AFFECT_JSON_ARRAY && n->count == 2
+                                    ? affect_json_first(opts->doc, n)
+                                    : NULL;
+    const affect_json_node *f = e ? affect_json_next_sibling(opts->doc, e) : NULL;
+    if (!e || !f || e->type != AFFECT_JSON_NUMBER || f->type != AFFECT_JSON_NUMBER) {
+        ax_errorf(ctx, "option \"bands\" must be an array of two frequencies in Hz, [low, high]");
+        return AX_ERROR;
+    }
+    band_hz[0] = e->num;
+    band_hz[1] = f->num;
+    return AX_OK;
+}
+
 static ax_arg read_gen_options(sqlite3_context *ctx, int argc, sqlite3_value **argv,
                                ax_opts *opts, gen_opts *o)
 {
     memset(o, 0, sizeof *o);
     affect_generate_options_default(&o->g);
+    affect_transfer_options_default(&o->tr);
+    o->method = METHOD_TRANSFER;
+    o->pairs = 3;
+    o->min_neighbours = 3;
+    o->prefer_action = true;
+    o->g.render = AFFECT_GENERATE_LINEAR; /* no steps between state means */
     o->epsilon = 0.1;
     o->threads = 1;
     double seed = (double)o->g.seed;
     int render = (int)o->g.render;
     if (ax_opts_parse(ctx, argc, argv, 3, gen_keys, opts) != AX_OK)
         return AX_ERROR;
-    if (ax_opt_u32(ctx, opts, "copies", &o->g.copies) ||
+    if (ax_opt_enum(ctx, opts, "method", method_names, &o->method) ||
+        ax_opt_number(ctx, opts, "strength", &o->tr.strength) ||
+        ax_opt_u32(ctx, opts, "pairs", &o->pairs) || opt_bands(ctx, opts, o->tr.band_hz) ||
+        ax_opt_number(ctx, opts, "max_ratio", &o->tr.max_ratio) ||
+        ax_opt_bool(ctx, opts, "keep_contacts", &o->tr.keep_contacts) ||
+        ax_opt_u32(ctx, opts, "copies", &o->g.copies) ||
         ax_opt_u32(ctx, opts, "states", &o->g.states) ||
         ax_opt_number(ctx, opts, "epsilon", &o->epsilon) || ax_opt_u32(ctx, opts, "k", &o->k) ||
+        ax_opt_u32(ctx, opts, "min_neighbours", &o->min_neighbours) ||
+        ax_opt_bool(ctx, opts, "prefer_action", &o->prefer_action) ||
         opt_components(ctx, opts, o) ||
         ax_opt_string(ctx, opts, "source_label", &o->source_label) ||
         ax_opt_string(ctx, opts, "classifier", &o->classifier_hex) ||
+        ax_opt_string(ctx, opts, "pair_by", &o->pair_by) ||
         ax_opt_number(ctx, opts, "cutoff_hz", &o->g.cutoff_hz) ||
         ax_opt_number(ctx, opts, "covariance_scale", &o->g.covariance_scale) ||
         ax_opt_whole(ctx, opts, "seed", 9007199254740992.0, &seed) ||
@@ -609,6 +599,28 @@ static ax_arg read_gen_options(sqlite3_context *ctx, int argc, sqlite3_value **a
     }
     if (ax_opt(opts, "k") && o->k == 0) {
         ax_errorf(ctx, "option \"k\" must be at least 1");
+        return AX_ERROR;
+    }
+    const char *const *other = o->method == METHOD_TRANSFER ? hmm_only : transfer_only;
+    for (int i = 0; other[i]; i++)
+        if (ax_opt(opts, other[i])) {
+            ax_errorf(ctx, "option \"%s\" applies to {\"method\":\"%s\"} only", other[i],
+                      method_names[o->method == METHOD_TRANSFER ? METHOD_HMM_NN
+                                                                : METHOD_TRANSFER]);
+            return AX_ERROR;
+        }
+    if (o->min_neighbours < 1 || o->min_neighbours > MAX_NEIGHBOURS / 3) {
+        ax_errorf(ctx, "option \"min_neighbours\" must be from 1 to %u, got %u",
+                  MAX_NEIGHBOURS / 3, o->min_neighbours);
+        return AX_ERROR;
+    }
+    if (o->pairs < 1 || o->pairs > MAX_PAIRS) {
+        ax_errorf(ctx, "option \"pairs\" must be from 1 to %u, got %u", MAX_PAIRS, o->pairs);
+        return AX_ERROR;
+    }
+    const char *bad = affect_transfer_options_check(&o->tr);
+    if (bad) {
+        ax_errorf(ctx, "option %s", bad);
         return AX_ERROR;
     }
     return AX_OK;
@@ -738,24 +750,23 @@ static ax_arg find_source(sqlite3_context *ctx, const gen_index *ix, const gen_o
         src->how = "classifier";
         return AX_OK;
     }
-    const unsigned char *data = sqlite3_value_blob(desired);
-    size_t n = (size_t)sqlite3_value_bytes(desired);
-    uint64_t h = affect_fnv1a64(data, n);
-    sqlite3_int64 hash = h <= (uint64_t)INT64_MAX ? (sqlite3_int64)h
-                                                  : -(sqlite3_int64)(UINT64_MAX - h) - 1;
-    sqlite3_stmt *st = prepare(ctx, "reading the index",
-                               "SELECT CAST(label AS TEXT) FROM \"%w_data\" WHERE msize = ?1 "
-                               "AND mhash = ?2 AND label IS NOT NULL ORDER BY id LIMIT 1",
-                               ix->name);
-    if (!st)
+    char *label = NULL, *msg = NULL;
+    int rc = ax_laban_label_of(sqlite3_context_db_handle(ctx), ix->name,
+                               sqlite3_value_blob(desired), sqlite3_value_bytes(desired), &label,
+                               &msg);
+    if (rc != SQLITE_OK) {
+        if (rc == SQLITE_NOMEM)
+            sqlite3_result_error_nomem(ctx);
+        else
+            ax_errorf(ctx, "reading the index: %s", msg ? msg : "failed");
+        sqlite3_free(msg);
         return AX_ERROR;
-    sqlite3_bind_int64(st, 1, (sqlite3_int64)n);
-    sqlite3_bind_int64(st, 2, hash);
-    if (sqlite3_step(st) == SQLITE_ROW && sqlite3_column_text(st, 0)) {
-        src->cls = class_of(ix, (const char *)sqlite3_column_text(st, 0));
+    }
+    if (label) {
+        src->cls = class_of(ix, label);
         src->how = "index";
     }
-    sqlite3_finalize(st);
+    sqlite3_free(label);
     return AX_OK;
 }
 
@@ -777,20 +788,15 @@ static ax_arg choose_components(sqlite3_context *ctx, const gen_index *ix, const
     }
     if (rmlr_fit(ctx, ix, o->g.seed, 10, o->threads, &cc->fit) != AX_OK)
         return AX_ERROR;
+    /* the two classes' salience as rows 0 (source) and 1 (target) */
+    bool salient[2 * N_COMP];
     salient_of(cc->fit, (uint32_t)target, cc->sal_t);
     if (src->cls >= 0)
         salient_of(cc->fit, (uint32_t)src->cls, cc->sal_o);
-    int used = 0;
-    for (int j = 0; j < N_COMP; j++) {
-        bool drop = src->cls >= 0 ? cc->sal_t[j] && cc->sal_o[j] : cc->sal_t[j];
-        cc->use[j] = !drop;
-        used += cc->use[j];
-    }
-    if (used == 0) {
-        for (int j = 0; j < N_COMP; j++)
-            cc->use[j] = true;
-        cc->fell_back = true;
-    }
+    memcpy(salient, cc->sal_o, sizeof cc->sal_o);
+    memcpy(salient + N_COMP, cc->sal_t, sizeof cc->sal_t);
+    cc->fell_back = affect_transfer_components(salient, N_COMP, src->cls >= 0 ? 0 : -1, 1,
+                                               cc->use);
     return AX_OK;
 }
 
@@ -808,53 +814,124 @@ static char *components_json(const bool use[N_COMP])
 /* The neighbours: content rowids and distances from the index's own query. */
 typedef struct neighbours {
     uint32_t n;
-    sqlite3_int64 ids[1024];
-    double dist[1024];
-    bool by_k, nearest_only;
+    sqlite3_int64 ids[MAX_NEIGHBOURS];
+    double dist[MAX_NEIGHBOURS];
+    double dtw[MAX_NEIGHBOURS]; /* with prefer_action: DTW to the desired motion */
+    bool by_k, filled, ranked;
 } neighbours;
 
-static ax_arg find_neighbours(sqlite3_context *ctx, const gen_index *ix, const gen_opts *o,
-                              sqlite3_value *desired, const char *target, const char *comps,
-                              neighbours *nb)
+/* The index's query: the k nearest target rows (by_k) or the ε-ball, into nb. */
+static ax_arg query_neighbours(sqlite3_context *ctx, const gen_index *ix, sqlite3_value *desired,
+                               const char *target, const char *comps, bool by_k, uint32_t k,
+                               double epsilon, neighbours *nb)
 {
     nb->n = 0;
-    nb->by_k = o->k > 0;
-    nb->nearest_only = false;
-    for (int pass = 0; pass < 2 && nb->n == 0; pass++) {
-        bool by_k = o->k > 0 || pass == 1;
-        sqlite3_stmt *st = prepare(ctx, "the neighbour search",
-                                   "SELECT rowid, distance FROM \"%w\" WHERE query = ?1 AND "
-                                   "label = ?2 AND components = ?3 AND %s = ?4 "
-                                   "ORDER BY distance, rowid",
-                                   ix->name, by_k ? "k" : "radius");
-        if (!st)
-            return AX_ERROR;
-        sqlite3_bind_value(st, 1, desired);
-        sqlite3_bind_text(st, 2, target, -1, SQLITE_STATIC);
-        sqlite3_bind_text(st, 3, comps, -1, SQLITE_STATIC);
-        if (by_k)
-            sqlite3_bind_int64(st, 4, o->k > 0 ? o->k : 1);
-        else
-            sqlite3_bind_double(st, 4, o->epsilon);
-        int rc;
-        while ((rc = sqlite3_step(st)) == SQLITE_ROW && nb->n < 1024) {
-            nb->ids[nb->n] = sqlite3_column_int64(st, 0);
-            nb->dist[nb->n++] = sqlite3_column_double(st, 1);
-        }
-        if (rc != SQLITE_ROW && rc != SQLITE_DONE) {
-            sqlite3_finalize(st);
-            db_error(ctx, "the neighbour search");
-            return AX_ERROR;
-        }
-        sqlite3_finalize(st);
-        nb->nearest_only = pass == 1;
+    sqlite3_stmt *st = prepare(ctx, "the neighbour search",
+                               "SELECT rowid, distance FROM \"%w\" WHERE query = ?1 AND "
+                               "label = ?2 AND components = ?3 AND %s = ?4 "
+                               "ORDER BY distance, rowid",
+                               ix->name, by_k ? "k" : "radius");
+    if (!st)
+        return AX_ERROR;
+    sqlite3_bind_value(st, 1, desired);
+    sqlite3_bind_text(st, 2, target, -1, SQLITE_STATIC);
+    sqlite3_bind_text(st, 3, comps, -1, SQLITE_STATIC);
+    if (by_k)
+        sqlite3_bind_int64(st, 4, k);
+    else
+        sqlite3_bind_double(st, 4, epsilon);
+    int rc;
+    while ((rc = sqlite3_step(st)) == SQLITE_ROW && nb->n < MAX_NEIGHBOURS) {
+        nb->ids[nb->n] = sqlite3_column_int64(st, 0);
+        nb->dist[nb->n++] = sqlite3_column_double(st, 1);
+    }
+    sqlite3_finalize(st);
+    if (rc != SQLITE_ROW && rc != SQLITE_DONE) {
+        db_error(ctx, "the neighbour search");
+        return AX_ERROR;
     }
     return AX_OK;
 }
 
-/* The neighbours' motions from the content table. */
-static ax_arg load_neighbours(sqlite3_context *ctx, const gen_index *ix, const neighbours *nb,
-                              affect_motion **out)
+static ax_arg load_motions(sqlite3_context *ctx, const gen_index *ix, const sqlite3_int64 *ids,
+                           uint32_t n, affect_motion **out);
+
+/* Keeps the `want` candidates of nb nearest to m by DTW (affect_generate_rank_by_action), in
+ * that order. */
+static ax_arg rank_by_action(sqlite3_context *ctx, const gen_index *ix, const affect_motion *m,
+                             uint32_t want, neighbours *nb)
+{
+    uint32_t n = nb->n;
+    affect_motion **cand = affect_calloc(n ? n : 1, sizeof *cand);
+    uint32_t *order = affect_malloc_array(n ? n : 1, sizeof *order);
+    double *dtw = affect_malloc_array(n ? n : 1, sizeof *dtw);
+    sqlite3_int64 *ids = affect_malloc_array(n ? n : 1, sizeof *ids);
+    double *dist = affect_malloc_array(n ? n : 1, sizeof *dist);
+    ax_arg r = AX_ERROR;
+    affect_error err;
+    if (!cand || !order || !dtw || !ids || !dist) {
+        sqlite3_result_error_nomem(ctx);
+        goto done;
+    }
+    if (load_motions(ctx, ix, nb->ids, n, cand) != AX_OK)
+        goto done;
+    if (affect_generate_rank_by_action(m, (const affect_motion *const *)cand, n, order, dtw,
+                                       &err)) {
+        ax_error(ctx, &err);
+        goto done;
+    }
+    if (want > n)
+        want = n;
+    for (uint32_t i = 0; i < want; i++) {
+        ids[i] = nb->ids[order[i]];
+        dist[i] = nb->dist[order[i]];
+        nb->dtw[i] = dtw[order[i]];
+    }
+    memcpy(nb->ids, ids, want * sizeof *ids);
+    memcpy(nb->dist, dist, want * sizeof *dist);
+    nb->n = want;
+    nb->ranked = true;
+    r = AX_OK;
+done:
+    for (uint32_t i = 0; cand && i < n; i++)
+        affect_motion_free(cand[i]);
+    affect_free(cand);
+    affect_free(order);
+    affect_free(dtw);
+    affect_free(ids);
+    affect_free(dist);
+    return r;
+}
+
+/* HMM_NN's neighbours: the ε-ball (or the k nearest), at least min_neighbours of them; with
+ * prefer_action that many chosen among three times as many nearest candidates by their DTW
+ * distance to the desired motion, so that neighbours of the desired motion's own action come
+ * first when the index has them. */
+static ax_arg find_neighbours(sqlite3_context *ctx, const gen_index *ix, const gen_opts *o,
+                              sqlite3_value *desired, const affect_motion *m, const char *target,
+                              const char *comps, neighbours *nb)
+{
+    nb->by_k = o->k > 0;
+    nb->filled = nb->ranked = false;
+    if (query_neighbours(ctx, ix, desired, target, comps, nb->by_k, o->k, o->epsilon, nb))
+        return AX_ERROR;
+    uint32_t want = nb->n;
+    if (want < o->min_neighbours) {
+        want = o->min_neighbours;
+        nb->filled = true;
+    }
+    if (!o->prefer_action)
+        return nb->filled ? query_neighbours(ctx, ix, desired, target, comps, true, want, 0, nb)
+                          : AX_OK;
+    uint32_t pool = want > MAX_NEIGHBOURS / 3 ? MAX_NEIGHBOURS : 3 * want;
+    if (query_neighbours(ctx, ix, desired, target, comps, true, pool, 0, nb) != AX_OK)
+        return AX_ERROR;
+    return rank_by_action(ctx, ix, m, want, nb);
+}
+
+/* The motions of content rows ids[0 .. n) from the content table. */
+static ax_arg load_motions(sqlite3_context *ctx, const gen_index *ix, const sqlite3_int64 *ids,
+                           uint32_t n, affect_motion **out)
 {
     sqlite3_stmt *st = prepare(ctx, "reading the content table",
                                "SELECT \"%w\" FROM \"%w\" WHERE rowid = ?1", ix->motion,
@@ -862,12 +939,12 @@ static ax_arg load_neighbours(sqlite3_context *ctx, const gen_index *ix, const n
     if (!st)
         return AX_ERROR;
     ax_arg r = AX_OK;
-    for (uint32_t i = 0; i < nb->n && r == AX_OK; i++) {
+    for (uint32_t i = 0; i < n && r == AX_OK; i++) {
         sqlite3_reset(st);
-        sqlite3_bind_int64(st, 1, nb->ids[i]);
+        sqlite3_bind_int64(st, 1, ids[i]);
         if (sqlite3_step(st) != SQLITE_ROW || sqlite3_column_type(st, 0) != SQLITE_BLOB) {
             ax_errorf(ctx, "content row %" PRId64 " of \"%s\" has no motion (run the index's "
-                           "'check' command)", (int64_t)nb->ids[i], ix->name);
+                           "'check' command)", (int64_t)ids[i], ix->name);
             r = AX_ERROR;
             break;
         }
@@ -877,12 +954,49 @@ static ax_arg load_neighbours(sqlite3_context *ctx, const gen_index *ix, const n
             if (err.status == AFFECT_ERR_NOMEM)
                 sqlite3_result_error_nomem(ctx);
             else
-                ax_errorf(ctx, "content row %" PRId64 ": %s", (int64_t)nb->ids[i], err.msg);
+                ax_errorf(ctx, "content row %" PRId64 ": %s", (int64_t)ids[i], err.msg);
             r = AX_ERROR;
         }
     }
     sqlite3_finalize(st);
     return r;
+}
+
+/* The explanation's common head: index, method, target, source and components (the object
+ * left open). */
+static void explain_head(affect_strbuf *sb, const gen_index *ix, const gen_opts *o,
+                         const char *target, const source_info *src, const comp_choice *cc)
+{
+    affect_strbuf_puts(sb, "{\"index\":");
+    affect_strbuf_json_string(sb, ix->name);
+    affect_strbuf_printf(sb, ",\"method\":\"%s\",\"target\":", method_names[o->method]);
+    affect_strbuf_json_string(sb, target);
+    affect_strbuf_puts(sb, ",\"source\":{\"label\":");
+    if (src->cls >= 0)
+        affect_strbuf_json_string(sb, ix->classes[src->cls]);
+    else
+        affect_strbuf_puts(sb, "null");
+    affect_strbuf_printf(sb, ",\"from\":\"%s\"", src->how);
+    if (src->recognized) {
+        affect_strbuf_puts(sb, ",\"recognized\":");
+        affect_strbuf_json_string(sb, src->recognized);
+    }
+    affect_strbuf_printf(sb, "},\"components\":{\"chosen_by\":\"%s\",\"used\":",
+                         o->auto_components ? "rmlr" : "option");
+    put_components(sb, cc->use, true);
+    affect_strbuf_puts(sb, ",\"excluded\":");
+    put_components(sb, cc->use, false);
+    if (o->auto_components) {
+        affect_strbuf_puts(sb, ",\"salient_target\":");
+        put_components(sb, cc->sal_t, true);
+        if (src->cls >= 0) {
+            affect_strbuf_puts(sb, ",\"salient_source\":");
+            put_components(sb, cc->sal_o, true);
+        }
+        affect_strbuf_printf(sb, ",\"all_salient_fallback\":%s",
+                             cc->fell_back ? "true" : "false");
+    }
+    affect_strbuf_puts(sb, "}");
 }
 
 static void explain_json(sqlite3_context *ctx, const gen_index *ix, const gen_opts *o,
@@ -892,48 +1006,29 @@ static void explain_json(sqlite3_context *ctx, const gen_index *ix, const gen_op
 {
     affect_strbuf sb;
     affect_strbuf_init(&sb);
-    affect_strbuf_puts(&sb, "{\"index\":");
-    affect_strbuf_json_string(&sb, ix->name);
-    affect_strbuf_puts(&sb, ",\"target\":");
-    affect_strbuf_json_string(&sb, target);
-    affect_strbuf_puts(&sb, ",\"source\":{\"label\":");
-    if (src->cls >= 0)
-        affect_strbuf_json_string(&sb, ix->classes[src->cls]);
-    else
-        affect_strbuf_puts(&sb, "null");
-    affect_strbuf_printf(&sb, ",\"from\":\"%s\"", src->how);
-    if (src->recognized) {
-        affect_strbuf_puts(&sb, ",\"recognized\":");
-        affect_strbuf_json_string(&sb, src->recognized);
-    }
-    affect_strbuf_printf(&sb, "},\"components\":{\"chosen_by\":\"%s\",\"used\":",
-                         o->auto_components ? "rmlr" : "option");
-    put_components(&sb, cc->use, true);
-    affect_strbuf_puts(&sb, ",\"excluded\":");
-    put_components(&sb, cc->use, false);
-    if (o->auto_components) {
-        affect_strbuf_puts(&sb, ",\"salient_target\":");
-        put_components(&sb, cc->sal_t, true);
-        if (src->cls >= 0) {
-            affect_strbuf_puts(&sb, ",\"salient_source\":");
-            put_components(&sb, cc->sal_o, true);
-        }
-        affect_strbuf_printf(&sb, ",\"all_salient_fallback\":%s",
-                             cc->fell_back ? "true" : "false");
-    }
-    affect_strbuf_puts(&sb, "},\"neighbours\":{\"by\":");
+    explain_head(&sb, ix, o, target, src, cc);
+    affect_strbuf_puts(&sb, ",\"neighbours\":{\"by\":");
     if (nb->by_k)
         affect_strbuf_printf(&sb, "\"k\",\"k\":%u", o->k);
     else {
         affect_strbuf_puts(&sb, "\"epsilon\",\"epsilon\":");
         affect_strbuf_double(&sb, o->epsilon);
     }
-    affect_strbuf_printf(&sb, ",\"nearest_only\":%s,\"rows\":[",
-                         nb->nearest_only ? "true" : "false");
+    affect_strbuf_printf(&sb, ",\"min_neighbours\":%u,\"filled_to_min\":%s,"
+                              "\"ranked_by_action\":%s,\"rows\":[",
+                         o->min_neighbours, nb->filled ? "true" : "false",
+                         nb->ranked ? "true" : "false");
     for (uint32_t i = 0; i < nb->n; i++) {
         affect_strbuf_printf(&sb, "%s{\"rowid\":%" PRId64 ",\"distance\":", i ? "," : "",
                              (int64_t)nb->ids[i]);
         affect_strbuf_double(&sb, nb->dist[i]);
+        if (nb->ranked) {
+            affect_strbuf_puts(&sb, ",\"dtw\":");
+            if (isfinite(nb->dtw[i]))
+                affect_strbuf_double(&sb, nb->dtw[i]);
+            else
+                affect_strbuf_puts(&sb, "null");
+        }
         affect_strbuf_putc(&sb, '}');
     }
     affect_strbuf_printf(&sb, "],\"used\":%u,\"excluded_skeleton\":%u},\"hmm\":{\"states\":%u,"
@@ -953,6 +1048,249 @@ static void explain_json(sqlite3_context *ctx, const gen_index *ix, const gen_op
         affect_strbuf_printf(&sb, "%s%d", t ? "," : "", (int)rep->path[t]);
     affect_strbuf_puts(&sb, "]}}");
     ax_result_json_buffer(ctx, &sb);
+}
+
+/* ---- the transfer method ---- */
+
+typedef struct donors {
+    uint32_t n;
+    uint32_t from[MAX_PAIRS], to[MAX_PAIRS]; /* index rows */
+    double dq[MAX_PAIRS], dist[MAX_PAIRS];   /* desired → from, from → to */
+    sqlite3_int64 ids[2 * MAX_PAIRS];        /* content rowids: the from rows, then the to rows */
+} donors;
+
+static int cmp_id(const void *a, const void *b)
+{
+    sqlite3_int64 x = *(const sqlite3_int64 *)a, y = *(const sqlite3_int64 *)b;
+    return (x > y) - (x < y);
+}
+
+/* dq[i]: the index's distance from the desired motion to its row i on the components (NaN
+ * when the index gives none), from the index's own query. */
+static ax_arg query_distances(sqlite3_context *ctx, const gen_index *ix, sqlite3_value *desired,
+                              const char *comps, double *dq)
+{
+    for (uint32_t i = 0; i < ix->n; i++)
+        dq[i] = NAN;
+    sqlite3_stmt *st = prepare(ctx, "the donor search",
+                               "SELECT rowid, distance FROM \"%w\" WHERE query = ?1 AND "
+                               "components = ?2 AND k = ?3", ix->name);
+    if (!st)
+        return AX_ERROR;
+    sqlite3_bind_value(st, 1, desired);
+    sqlite3_bind_text(st, 2, comps, -1, SQLITE_STATIC);
+    sqlite3_bind_int64(st, 3, (sqlite3_int64)ix->n + 1000000);
+    int rc;
+    while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
+        sqlite3_int64 id = sqlite3_column_int64(st, 0);
+        const sqlite3_int64 *hit = bsearch(&id, ix->ids, ix->n, sizeof *ix->ids, cmp_id);
+        if (hit && sqlite3_column_type(st, 1) != SQLITE_NULL)
+            dq[hit - ix->ids] = sqlite3_column_double(st, 1);
+    }
+    sqlite3_finalize(st);
+    if (rc != SQLITE_DONE) {
+        db_error(ctx, "the donor search");
+        return AX_ERROR;
+    }
+    return AX_OK;
+}
+
+/* group[i]: a key of the value of column pair_by in row i's content row (its dense rank:
+ * equal values, equal keys), INT64_MIN when NULL. */
+static ax_arg content_keys(sqlite3_context *ctx, const gen_index *ix, const char *column,
+                           int64_t *group)
+{
+    for (uint32_t i = 0; i < ix->n; i++)
+        group[i] = INT64_MIN;
+    sqlite3 *db = sqlite3_context_db_handle(ctx);
+    char *sql = sqlite3_mprintf("SELECT rowid, dense_rank() OVER (ORDER BY \"%w\") FROM \"%w\" "
+                                "WHERE \"%w\" IS NOT NULL", column, ix->content, column);
+    sqlite3_stmt *st = NULL;
+    if (!sql) {
+        sqlite3_result_error_nomem(ctx);
+        return AX_ERROR;
+    }
+    int rc = sqlite3_prepare_v2(db, sql, -1, &st, NULL);
+    sqlite3_free(sql);
+    if (rc != SQLITE_OK) {
+        if (rc == SQLITE_NOMEM)
+            sqlite3_result_error_nomem(ctx);
+        else
+            ax_errorf(ctx, "option \"pair_by\": \"%s\" is not a column of the content table "
+                           "\"%s\" (%s)", column, ix->content, sqlite3_errmsg(db));
+        return AX_ERROR;
+    }
+    while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
+        sqlite3_int64 id = sqlite3_column_int64(st, 0);
+        const sqlite3_int64 *hit = bsearch(&id, ix->ids, ix->n, sizeof *ix->ids, cmp_id);
+        if (hit)
+            group[hit - ix->ids] = sqlite3_column_int64(st, 1);
+    }
+    sqlite3_finalize(st);
+    if (rc != SQLITE_DONE) {
+        db_error(ctx, "reading the content table");
+        return AX_ERROR;
+    }
+    return AX_OK;
+}
+
+/* The donor pairs (affect_transfer_pairs on the index's rows). */
+static ax_arg find_donors(sqlite3_context *ctx, const gen_index *ix, const gen_opts *o,
+                          sqlite3_value *desired, int target, const source_info *src,
+                          const comp_choice *cc, const char *comps, donors *dn)
+{
+    double *dq = affect_malloc_array(ix->n ? ix->n : 1, sizeof *dq);
+    int32_t *label = affect_malloc_array(ix->n ? ix->n : 1, sizeof *label);
+    int64_t *group = o->pair_by ? affect_malloc_array(ix->n ? ix->n : 1, sizeof *group) : NULL;
+    ax_arg r = AX_ERROR;
+    if (!dq || !label || (o->pair_by && !group)) {
+        sqlite3_result_error_nomem(ctx);
+        goto done;
+    }
+    if (query_distances(ctx, ix, desired, comps, dq) != AX_OK ||
+        (group && content_keys(ctx, ix, o->pair_by, group) != AX_OK))
+        goto done;
+    for (uint32_t i = 0; i < ix->n; i++)
+        label[i] = (int32_t)ix->y[i];
+    affect_error err;
+    if (affect_transfer_pairs(ix->x, ix->n, N_COMP, label, group, cc->use, dq, src->cls, target,
+                              o->pairs, dn->from, dn->to, dn->dist, &dn->n, &err)) {
+        ax_error(ctx, &err);
+        goto done;
+    }
+    if (dn->n == 0) {
+        ax_errorf(ctx, "index \"%s\": no motion can donate the change (no row of the source "
+                       "emotion with a row of the target emotion%s)", ix->name,
+                  o->pair_by ? " of the same pair_by value" : "");
+        goto done;
+    }
+    for (uint32_t k = 0; k < dn->n; k++) {
+        dn->dq[k] = dq[dn->from[k]];
+        dn->ids[k] = ix->ids[dn->from[k]];
+        dn->ids[dn->n + k] = ix->ids[dn->to[k]];
+    }
+    r = AX_OK;
+done:
+    affect_free(dq);
+    affect_free(label);
+    affect_free(group);
+    return r;
+}
+
+/* Laban vectors of the desired and the generated motion (default options; NaN when a
+ * component cannot be computed), for the explanation's per-component change. */
+static void laban_change(const affect_motion *a, const affect_motion *b, double *delta)
+{
+    affect_laban_options lo;
+    affect_laban_options_default(&lo);
+    lo.missing_null = true;
+    double va[N_COMP], vb[N_COMP];
+    affect_roles ra, rb;
+    affect_roles_resolve(a, &ra);
+    affect_roles_resolve(b, &rb);
+    affect_error err;
+    bool ok = affect_laban_vector(a, &ra, &lo, va, &err) == AFFECT_OK &&
+              affect_laban_vector(b, &rb, &lo, vb, &err) == AFFECT_OK;
+    for (int j = 0; j < N_COMP; j++)
+        delta[j] = ok ? vb[j] - va[j] : NAN;
+}
+
+static void explain_transfer(sqlite3_context *ctx, const gen_index *ix, const gen_opts *o,
+                             const char *target, const source_info *src, const comp_choice *cc,
+                             const donors *dn, const affect_transfer_report *rep,
+                             const double *delta)
+{
+    affect_strbuf sb;
+    affect_strbuf_init(&sb);
+    explain_head(&sb, ix, o, target, src, cc);
+    affect_strbuf_puts(&sb, ",\"strength\":");
+    affect_strbuf_double(&sb, o->tr.strength);
+    affect_strbuf_puts(&sb, ",\"pairs\":[");
+    for (uint32_t k = 0; k < dn->n; k++) {
+        affect_strbuf_printf(&sb, "%s{\"from\":{\"rowid\":%" PRId64 ",\"label\":",
+                             k ? "," : "", (int64_t)dn->ids[k]);
+        affect_strbuf_json_string(&sb, ix->labels[dn->from[k]]);
+        affect_strbuf_puts(&sb, ",\"distance\":");
+        affect_strbuf_double(&sb, dn->dq[k]);
+        affect_strbuf_printf(&sb, "},\"to\":{\"rowid\":%" PRId64 ",\"label\":",
+                             (int64_t)dn->ids[dn->n + k]);
+        affect_strbuf_json_string(&sb, ix->labels[dn->to[k]]);
+        affect_strbuf_puts(&sb, ",\"distance\":");
+        affect_strbuf_double(&sb, dn->dist[k]);
+        affect_strbuf_puts(&sb, "}}");
+    }
+    affect_strbuf_printf(&sb, "],\"change\":{\"joints\":%u,\"posture_deg\":",
+                         rep->joints_changed);
+    affect_strbuf_double(&sb, rep->posture_deg);
+    affect_strbuf_puts(&sb, ",\"amplitude_ratios\":[");
+    for (int b = 0; b < AFFECT_TRANSFER_BANDS; b++) {
+        affect_strbuf_puts(&sb, b ? "," : "");
+        affect_strbuf_double(&sb, rep->ratio[b]);
+    }
+    affect_strbuf_puts(&sb, "],\"bands_hz\":[");
+    affect_strbuf_double(&sb, o->tr.band_hz[0]);
+    affect_strbuf_putc(&sb, ',');
+    affect_strbuf_double(&sb, o->tr.band_hz[1]);
+    affect_strbuf_puts(&sb, "],\"max_ratio\":");
+    affect_strbuf_double(&sb, o->tr.max_ratio);
+    affect_strbuf_printf(&sb, "},\"contacts\":{\"kept\":%s,\"left_frames\":%u,"
+                              "\"right_frames\":%u},\"laban_change\":{",
+                         o->tr.keep_contacts ? "true" : "false", rep->contact_frames[0],
+                         rep->contact_frames[1]);
+    for (int j = 0; j < N_COMP; j++) {
+        affect_strbuf_puts(&sb, j ? "," : "");
+        affect_strbuf_json_string(&sb, affect_laban_names[j]);
+        affect_strbuf_putc(&sb, ':');
+        if (isnan(delta[j]))
+            affect_strbuf_puts(&sb, "null");
+        else
+            affect_strbuf_double(&sb, delta[j]);
+    }
+    affect_strbuf_puts(&sb, "}}");
+    ax_result_json_buffer(ctx, &sb);
+}
+
+static void run_transfer(sqlite3_context *ctx, const gen_index *ix, const gen_opts *o,
+                         sqlite3_value *desired, const affect_motion *m, int target,
+                         const source_info *src, const comp_choice *cc, const char *comps,
+                         bool explain)
+{
+    donors *dn = affect_calloc(1, sizeof *dn);
+    affect_motion **motions = NULL, *out = NULL;
+    if (!dn) {
+        sqlite3_result_error_nomem(ctx);
+        return;
+    }
+    if (find_donors(ctx, ix, o, desired, target, src, cc, comps, dn) != AX_OK)
+        goto done;
+    motions = affect_calloc(2 * (size_t)dn->n, sizeof *motions);
+    if (!motions) {
+        sqlite3_result_error_nomem(ctx);
+        goto done;
+    }
+    if (load_motions(ctx, ix, dn->ids, 2 * dn->n, motions) != AX_OK)
+        goto done;
+    affect_transfer_report rep;
+    affect_error err;
+    if (affect_transfer(m, (const affect_motion *const *)motions,
+                        (const affect_motion *const *)motions + dn->n, dn->n, &o->tr, &out,
+                        &rep, &err)) {
+        ax_error(ctx, &err);
+        goto done;
+    }
+    if (explain) {
+        double delta[N_COMP];
+        laban_change(m, out, delta);
+        explain_transfer(ctx, ix, o, ix->classes[target], src, cc, dn, &rep, delta);
+    } else {
+        ax_result_motion(ctx, out);
+    }
+done:
+    for (uint32_t i = 0; motions && i < 2 * dn->n; i++)
+        affect_motion_free(motions[i]);
+    affect_free(motions);
+    affect_motion_free(out);
+    affect_free(dn);
 }
 
 static void run_generation(sqlite3_context *ctx, int argc, sqlite3_value **argv, bool explain)
@@ -987,19 +1325,23 @@ static void run_generation(sqlite3_context *ctx, int argc, sqlite3_value **argv,
         choose_components(ctx, &ix, &o, t, &src, &cc) != AX_OK)
         goto done;
     comps = components_json(cc.use);
+    if (comps && o.method == METHOD_TRANSFER) {
+        run_transfer(ctx, &ix, &o, argv[1], m, t, &src, &cc, comps, explain);
+        goto done;
+    }
     nb = affect_malloc(sizeof *nb);
     if (!comps || !nb) {
         sqlite3_result_error_nomem(ctx);
         goto done;
     }
-    if (find_neighbours(ctx, &ix, &o, argv[1], target, comps, nb) != AX_OK)
+    if (find_neighbours(ctx, &ix, &o, argv[1], m, target, comps, nb) != AX_OK)
         goto done;
     motions = affect_calloc(nb->n ? nb->n : 1, sizeof *motions);
     if (!motions) {
         sqlite3_result_error_nomem(ctx);
         goto done;
     }
-    if (load_neighbours(ctx, &ix, nb, motions) != AX_OK)
+    if (load_motions(ctx, &ix, nb->ids, nb->n, motions) != AX_OK)
         goto done;
     affect_error err;
     if (affect_generate(m, (const affect_motion *const *)motions, nb->n, &o.g, &out, &rep,

@@ -1881,3 +1881,226 @@ int ax_register_laban(sqlite3 *db)
 {
     return sqlite3_create_module(db, "laban", &lab_module, NULL);
 }
+
+/* ---- what the rest of the extension reads of an index (vt_laban.h) ---- */
+
+/* *err = the message (replacing what was there); SQLITE_ERROR, or SQLITE_NOMEM. */
+static int rows_error(char **err, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    sqlite3_free(*err);
+    *err = sqlite3_vmprintf(fmt, ap);
+    va_end(ap);
+    return *err ? SQLITE_ERROR : SQLITE_NOMEM;
+}
+
+static int rows_db_error(char **err, sqlite3 *db, int rc)
+{
+    if ((rc & 0xff) == SQLITE_NOMEM)
+        return SQLITE_NOMEM;
+    return rows_error(err, "%s", sqlite3_errmsg(db));
+}
+
+void ax_laban_rows_free(ax_laban_rows *r)
+{
+    sqlite3_free(r->content);
+    sqlite3_free(r->motion);
+    sqlite3_free(r->ids);
+    for (uint32_t i = 0; r->labels && i < r->n; i++)
+        sqlite3_free(r->labels[i]);
+    sqlite3_free(r->labels);
+    sqlite3_free(r->vectors);
+    memset(r, 0, sizeof *r);
+}
+
+/* The content table and motion column of a laban table; SQLITE_NOTFOUND if it is not one. */
+static int rows_info(sqlite3 *db, const char *name, ax_laban_rows *r, char **err)
+{
+    sqlite3_stmt *st = NULL;
+    char *sql = sqlite3_mprintf(
+        "SELECT (SELECT sql FROM sqlite_schema WHERE type = 'table' AND name = %Q), "
+        "(SELECT value FROM \"%w_info\" WHERE key = 'content'), "
+        "(SELECT value FROM \"%w_info\" WHERE key = 'motion')",
+        name, name, name);
+    if (!sql)
+        return SQLITE_NOMEM;
+    int rc = sqlite3_prepare_v2(db, sql, -1, &st, NULL);
+    sqlite3_free(sql);
+    if (rc == SQLITE_OK)
+        rc = sqlite3_step(st);
+    if (rc != SQLITE_ROW) {
+        sqlite3_finalize(st);
+        return (sqlite3_errcode(db) & 0xff) == SQLITE_NOMEM ? SQLITE_NOMEM : SQLITE_NOTFOUND;
+    }
+    const char *def = (const char *)sqlite3_column_text(st, 0);
+    bool is_laban = def && sqlite3_strlike("%USING laban(%", def, 0) == 0 &&
+                    sqlite3_column_type(st, 1) == SQLITE_TEXT &&
+                    sqlite3_column_type(st, 2) == SQLITE_TEXT;
+    rc = SQLITE_NOTFOUND;
+    if (is_laban) {
+        const char *content = (const char *)sqlite3_column_text(st, 1);
+        const char *motion = (const char *)sqlite3_column_text(st, 2);
+        r->content = content ? sqlite3_mprintf("%s", content) : NULL;
+        r->motion = motion ? sqlite3_mprintf("%s", motion) : NULL;
+        rc = r->content && r->motion ? SQLITE_OK : SQLITE_NOMEM;
+    }
+    sqlite3_finalize(st);
+    (void)err;
+    return rc;
+}
+
+int ax_laban_read(sqlite3 *db, const char *name, ax_laban_rows *out, char **err)
+{
+    memset(out, 0, sizeof *out);
+    int rc = rows_info(db, name, out, err);
+    if (rc != SQLITE_OK) {
+        ax_laban_rows_free(out);
+        return rc;
+    }
+    sqlite3_stmt *st = NULL;
+    char *sql = sqlite3_mprintf("SELECT id, CAST(label AS TEXT), vector FROM \"%w_data\" "
+                                "WHERE label IS NOT NULL ORDER BY id", name);
+    if (!sql) {
+        ax_laban_rows_free(out);
+        return SQLITE_NOMEM;
+    }
+    rc = sqlite3_prepare_v2(db, sql, -1, &st, NULL);
+    sqlite3_free(sql);
+    if (rc != SQLITE_OK) {
+        sqlite3_finalize(st);
+        ax_laban_rows_free(out);
+        return rows_db_error(err, db, rc);
+    }
+    uint32_t cap = 0;
+    while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
+        if (out->n == UINT32_MAX / 2) {
+            rc = rows_error(err, "the index has too many rows");
+            goto done;
+        }
+        if (out->n == cap) {
+            cap = cap ? 2 * cap : 64;
+            sqlite3_int64 *ids = sqlite3_realloc64(out->ids, cap * sizeof *ids);
+            if (ids)
+                out->ids = ids;
+            char **l = sqlite3_realloc64(out->labels, cap * sizeof *l);
+            if (l)
+                out->labels = l;
+            unsigned char *v = sqlite3_realloc64(out->vectors, (sqlite3_uint64)cap *
+                                                                   LAB_VECTOR_BYTES);
+            if (v)
+                out->vectors = v;
+            if (!ids || !l || !v) {
+                rc = SQLITE_NOMEM;
+                goto done;
+            }
+        }
+        const unsigned char *v = sqlite3_column_blob(st, 2);
+        const char *label = (const char *)sqlite3_column_text(st, 1);
+        if (!label || sqlite3_column_bytes(st, 2) != LAB_VECTOR_BYTES || !v) {
+            if ((sqlite3_errcode(db) & 0xff) == SQLITE_NOMEM) {
+                rc = SQLITE_NOMEM;
+                goto done;
+            }
+            rc = rows_error(err, "row %lld has no valid Laban vector (run 'rebuild')",
+                            (long long)sqlite3_column_int64(st, 0));
+            goto done;
+        }
+        out->labels[out->n] = sqlite3_mprintf("%s", label);
+        if (!out->labels[out->n]) {
+            rc = SQLITE_NOMEM;
+            goto done;
+        }
+        out->ids[out->n] = sqlite3_column_int64(st, 0);
+        memcpy(out->vectors + (size_t)out->n * LAB_VECTOR_BYTES, v, LAB_VECTOR_BYTES);
+        out->n++;
+    }
+    rc = rc == SQLITE_DONE ? SQLITE_OK : rows_db_error(err, db, rc);
+done:
+    sqlite3_finalize(st);
+    if (rc != SQLITE_OK)
+        ax_laban_rows_free(out);
+    return rc;
+}
+
+int ax_laban_label_of(sqlite3 *db, const char *name, const void *blob, int size, char **label,
+                      char **err)
+{
+    *label = NULL;
+    sqlite3_stmt *st = NULL;
+    char *sql = sqlite3_mprintf("SELECT CAST(label AS TEXT) FROM \"%w_data\" WHERE msize = ?1 "
+                                "AND mhash = ?2 AND label IS NOT NULL ORDER BY id LIMIT 1",
+                                name);
+    if (!sql)
+        return SQLITE_NOMEM;
+    int rc = sqlite3_prepare_v2(db, sql, -1, &st, NULL);
+    sqlite3_free(sql);
+    if (rc != SQLITE_OK) {
+        sqlite3_finalize(st);
+        return rows_db_error(err, db, rc);
+    }
+    sqlite3_bind_int64(st, 1, size);
+    sqlite3_bind_int64(st, 2, lab_fnv1a(blob, (size_t)size));
+    rc = sqlite3_step(st);
+    const char *text = rc == SQLITE_ROW ? (const char *)sqlite3_column_text(st, 0) : NULL;
+    if (text) {
+        *label = sqlite3_mprintf("%s", text);
+        rc = *label ? SQLITE_OK : SQLITE_NOMEM;
+    } else if (rc == SQLITE_ROW && (sqlite3_errcode(db) & 0xff) == SQLITE_NOMEM) {
+        rc = SQLITE_NOMEM;
+    } else {
+        rc = rc == SQLITE_ROW || rc == SQLITE_DONE ? SQLITE_OK : rows_db_error(err, db, rc);
+    }
+    sqlite3_finalize(st);
+    return rc;
+}
+
+int ax_laban_cache_get(sqlite3 *db, const char *name, const char *key, const char *tag,
+                       void **blob, int *size)
+{
+    *blob = NULL;
+    *size = 0;
+    char *sql = sqlite3_mprintf("SELECT (SELECT value FROM \"%w_info\" WHERE key = %Q), "
+                                "(SELECT value FROM \"%w_info\" WHERE key = %Q || '_key')",
+                                name, key, name, key);
+    if (!sql)
+        return SQLITE_NOMEM;
+    sqlite3_stmt *st = NULL;
+    int rc = sqlite3_prepare_v2(db, sql, -1, &st, NULL);
+    sqlite3_free(sql);
+    if (rc == SQLITE_OK && sqlite3_step(st) == SQLITE_ROW &&
+        sqlite3_column_type(st, 0) == SQLITE_BLOB) {
+        const char *got = (const char *)sqlite3_column_text(st, 1);
+        int n = sqlite3_column_bytes(st, 0);
+        if (got && strcmp(got, tag) == 0 && n > 0) {
+            *blob = sqlite3_malloc(n);
+            if (*blob) {
+                memcpy(*blob, sqlite3_column_blob(st, 0), (size_t)n);
+                *size = n;
+            }
+        }
+    }
+    rc = (sqlite3_errcode(db) & 0xff) == SQLITE_NOMEM ? SQLITE_NOMEM : SQLITE_OK;
+    sqlite3_finalize(st);
+    return rc;
+}
+
+int ax_laban_cache_put(sqlite3 *db, const char *name, const char *key, const char *tag,
+                       const void *blob, int size)
+{
+    char *sql = sqlite3_mprintf("INSERT OR REPLACE INTO \"%w_info\"(key, value) "
+                                "VALUES (%Q, ?1), (%Q || '_key', ?2)", name, key, key);
+    if (!sql)
+        return SQLITE_NOMEM;
+    sqlite3_stmt *st = NULL;
+    int rc = sqlite3_prepare_v2(db, sql, -1, &st, NULL);
+    sqlite3_free(sql);
+    if (rc == SQLITE_OK) {
+        sqlite3_bind_blob(st, 1, blob, size, SQLITE_STATIC);
+        sqlite3_bind_text(st, 2, tag, -1, SQLITE_STATIC);
+        rc = sqlite3_step(st);
+        rc = rc == SQLITE_DONE ? SQLITE_OK : rc;
+    }
+    sqlite3_finalize(st);
+    return rc;
+}

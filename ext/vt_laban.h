@@ -10,4 +10,35 @@
 /* Registers the module "laban" on db. */
 int ax_register_laban(sqlite3 *db);
 
+/* What the rest of the extension reads of an index: the index owns its shadow tables, and no
+ * other file reads them. */
+typedef struct ax_laban_rows {
+    char *content, *motion;  /* the content table and its motion column */
+    uint32_t n;              /* rows with a label, by content rowid ascending */
+    sqlite3_int64 *ids;      /* their content rowids */
+    char **labels;           /* their labels as text */
+    unsigned char *vectors;  /* n × 27 little-endian float32 (NaN: missing), as stored */
+} ax_laban_rows;
+
+/* Reads index `name` of the main schema: SQLITE_OK; SQLITE_NOTFOUND when it is not a laban
+ * table; SQLITE_NOMEM; SQLITE_ERROR with *err (sqlite3_malloc'd) saying what is wrong ("row 4
+ * has no valid Laban vector (run 'rebuild')", or the database's message). */
+int ax_laban_read(sqlite3 *db, const char *name, ax_laban_rows *out, char **err);
+void ax_laban_rows_free(ax_laban_rows *r);
+
+/* *label (sqlite3_free it): the text label of the first indexed row (by rowid) whose motion
+ * has exactly these bytes and a label, or NULL. SQLITE_OK, or an error code with *err. */
+int ax_laban_label_of(sqlite3 *db, const char *name, const void *blob, int size, char **label,
+                      char **err);
+
+/* Caches of other parts of the extension kept in the index's _info table: entry `key` (a BLOB)
+ * stored with a text `tag` under the key "<key>_key" (the RMLR fit: "rmlr", "rmlr_key").
+ * get: *blob (sqlite3_free it) and *size, or NULL when there is no entry or it has another tag;
+ * SQLITE_OK or SQLITE_NOMEM. put: SQLITE_OK or the database's error code (a read-only or busy
+ * database: the caller may keep the entry elsewhere). */
+int ax_laban_cache_get(sqlite3 *db, const char *name, const char *key, const char *tag,
+                       void **blob, int *size);
+int ax_laban_cache_put(sqlite3 *db, const char *name, const char *key, const char *tag,
+                       const void *blob, int size);
+
 #endif

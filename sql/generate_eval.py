@@ -53,12 +53,18 @@ EMOTIONS = ["angry", "happy", "normal", "sad"]
 CLASSIFIER = ('{"states":5,"mixtures":1,"covariance":"diag","velocity":true,"max_iter":20,'
               '"seed":7,"frame":"first","descriptors":"none","mirror":false}')
 # (name, options): the generation settings compared
+# (the thesis's method, {"method":"hmm_nn"}, as it was published: steps, the ε-ball alone, no
+# preference for the action; tests/bench/generation_eval.py evaluates the default method)
+OLD = '"method":"hmm_nn","min_neighbours":1,"prefer_action":false'
 SETTINGS = [
-    ("steps, copies 0", '{"copies":0}'),
-    ("steps, copies 1", '{"copies":1}'),
-    ("steps, copies 2", '{"copies":2}'),
-    ("linear, copies 0", '{"copies":0,"render":"linear"}'),
-    ("steps, copies 0, keep_path false (the thesis's)", '{"copies":0,"keep_path":false}'),
+    ("steps, copies 0", '{%s,"render":"steps","copies":0}' % OLD),
+    ("steps, copies 1", '{%s,"render":"steps","copies":1}' % OLD),
+    ("steps, copies 2", '{%s,"render":"steps","copies":2}' % OLD),
+    ("linear, copies 0", '{%s,"copies":0,"render":"linear"}' % OLD),
+    ("steps, copies 0, keep_path false (the thesis's)",
+     '{%s,"render":"steps","copies":0,"keep_path":false}' % OLD),
+    ("hmm_nn defaults (linear, at least 3 neighbours, same action preferred)",
+     '{"method":"hmm_nn"}'),
 ]
 FOCUS = ["WeightAll", "TimeAll", "FlowAll"]
 

@@ -85,6 +85,20 @@ char *affect_strndup(const char *s, size_t n)
     return d;
 }
 
+affect_status affect_prefix(affect_error *err, const char *fmt, ...)
+{
+    if (!err || err->status == AFFECT_ERR_NOMEM)
+        return err ? err->status : AFFECT_ERR_INVALID;
+    char msg[AFFECT_ERROR_MSG_MAX], head[AFFECT_ERROR_MSG_MAX];
+    memcpy(msg, err->msg, sizeof msg);
+    msg[sizeof msg - 1] = '\0';
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(head, sizeof head, fmt, ap);
+    va_end(ap);
+    return affect_fail(err, err->status, "%s: %s", head, msg);
+}
+
 affect_status affect_fail(affect_error *err, affect_status status, const char *fmt, ...)
 {
     if (err) {

@@ -39,6 +39,7 @@
 #include "affect/hmm.h"
 #include "affect/laban.h"
 #include "affect/roles.h"
+#include "affect/skeleton.h"
 
 void affect_generate_options_default(affect_generate_options *opt)
 {
@@ -56,6 +57,7 @@ void affect_generate_options_default(affect_generate_options *opt)
     opt->clock = NULL;
     opt->render = AFFECT_GENERATE_STEPS;
     opt->keep_path = true;
+    opt->rigid = true;
 }
 
 /* The output rows before filtering: with AFFECT_GENERATE_STEPS the mean of state path[t] at
@@ -423,6 +425,22 @@ affect_status affect_generate(const affect_motion *desired, const affect_motion 
             row[i] = (float)pts[i];
     }
 
+    if (opt->rigid) {
+        /* a skeleton that plays the output: the desired motion's bone lengths, rotations */
+        affect_rigid_options ro;
+        affect_rigid_options_default(&ro);
+        ro.model = AFFECT_RIGID_SKELETON;
+        ro.lengths = AFFECT_RIGID_REFERENCE;
+        ro.reference = desired;
+        affect_motion *r = NULL;
+        if ((st = affect_motion_rigid(m, &ro, &r, err)) != AFFECT_OK) {
+            st = prefixed(err, st, "making the output rigid", -1);
+            goto done;
+        }
+        affect_motion_free(m);
+        m = r;
+    }
+
     if (rep) {
         affect_hmm_report hr;
         affect_hmm_get_report(h, &hr);
@@ -559,4 +577,42 @@ done:
     affect_free(xb);
     affect_features_free(f);
     return st;
+}
+
+/* ---- neighbours of the same action ---- */
+
+affect_status affect_generate_rank_by_action(const affect_motion *desired,
+                                             const affect_motion *const *candidates, uint32_t n,
+                                             uint32_t *order, double *dist, affect_error *err)
+{
+    double *d = affect_malloc_array(n ? n : 1, sizeof *d);
+    if (!d)
+        return affect_nomem(err);
+    for (uint32_t i = 0; i < n; i++) {
+        order[i] = i;
+        d[i] = INFINITY;
+        if (!candidates[i] || !same_joint_names(desired, candidates[i]))
+            continue;
+        affect_status st = affect_dtw_distance(desired, candidates[i], &d[i], err);
+        if (st == AFFECT_ERR_NOMEM) {
+            affect_free(d);
+            return st;
+        }
+        if (st)
+            d[i] = INFINITY;
+    }
+    /* insertion sort: stable, so ties keep the given order */
+    for (uint32_t i = 1; i < n; i++) {
+        uint32_t v = order[i];
+        uint32_t k = i;
+        while (k > 0 && d[order[k - 1]] > d[v]) {
+            order[k] = order[k - 1];
+            k--;
+        }
+        order[k] = v;
+    }
+    if (dist)
+        memcpy(dist, d, n * sizeof *d);
+    affect_free(d);
+    return AFFECT_OK;
 }

@@ -122,6 +122,26 @@ void affect_quat_slerp(const double a[4], const double b[4], double t, double r[
     affect_quat_normalize(r);
 }
 
+void affect_quat_log(const double q[4], double v[3])
+{
+    double sgn = q[0] < 0 ? -1.0 : 1.0;
+    double s = sqrt(q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    double angle = 2 * atan2(s, sgn * q[0]);
+    /* angle / s → 2 as s → 0 (sin(θ/2) ≈ θ/2); below 1e-12 the quotient is 2 to rounding */
+    double f = s > 1e-12 ? sgn * angle / s : sgn * 2.0;
+    for (int i = 0; i < 3; i++)
+        v[i] = f * q[i + 1];
+}
+
+void affect_quat_exp(const double v[3], double q[4])
+{
+    double angle = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    double f = angle > 1e-12 ? sin(angle / 2) / angle : 0.5;
+    q[0] = cos(angle / 2);
+    for (int i = 0; i < 3; i++)
+        q[i + 1] = f * v[i];
+}
+
 double affect_quat_angle(const double q[4])
 {
     double v = sqrt(q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);

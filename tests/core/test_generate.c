@@ -195,6 +195,7 @@ static void test_single_neighbour_and_no_filter(void **state)
     affect_generate_options_default(&opt);
     opt.cutoff_hz = 0;
     opt.keep_path = false; /* every output frame is exactly a state mean */
+    opt.rigid = false;
     affect_generate_report rep;
     affect_motion *g = generate(d, &nb, 1, &opt, &rep);
     assert_int_equal(rep.neighbours_used, 1);
@@ -295,6 +296,7 @@ static void test_keep_path(void **state)
     affect_generate_options opt;
     affect_generate_options_default(&opt);
     assert_true(opt.keep_path);
+    opt.rigid = false; /* the path exactly (the rigid projection moves the root a little) */
     affect_motion *g = generate(d, nb, 2, &opt, NULL);
     double worst = 0, travel = 0;
     for (uint32_t t = 0; t < d->n_frames; t++) {
@@ -362,7 +364,9 @@ static void test_determinism(void **state)
 
 /* A desired motion with joint rotations (imported from BVH, here from IK): the output has new
  * positions, so it must not carry the desired motion's rotations (they would describe the
- * source, and motion_to_bvh would refuse them). */
+ * source, and motion_to_bvh would refuse them); by default it gets rotations of its own (a
+ * rigid skeleton whose forward kinematics are its positions, bones of the desired motion's
+ * lengths). */
 static void test_output_drops_source_rotations(void **state)
 {
     (void)state;
@@ -372,9 +376,22 @@ static void test_output_drops_source_rotations(void **state)
     affect_motion *nb[2] = {synth("bow", "angry", 6, 30), synth("bow", "angry", 7, 30)};
     affect_generate_options opt;
     affect_generate_options_default(&opt);
+    opt.rigid = false;
     affect_motion *g = generate(d, nb, 2, &opt, NULL);
     assert_null(g->skel);
     assert_null(g->rot);
+    affect_motion_free(g);
+    opt.rigid = true;
+    g = generate(d, nb, 2, &opt, NULL);
+    assert_non_null(g->rot);
+    double fk, variation;
+    uint32_t frame, joint;
+    int32_t worst;
+    assert_int_equal(affect_motion_fk_error(g, &fk, &frame, &joint, NULL), AFFECT_OK);
+    assert_true(fk < 1e-5);
+    assert_int_equal(affect_motion_bone_variation(g, &variation, &worst, NULL), AFFECT_OK);
+    assert_true(variation <= 1e-4);
+    assert_int_equal(g->n_frames, d->n_frames);
     affect_motion_free(g);
     free_all(nb, 2);
     affect_motion_free(d);

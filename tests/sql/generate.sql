@@ -39,8 +39,8 @@ SELECT 'the fit is cached in the index''s info table', count(*) = 2
 -- ---- generation with given components (no fit needed) ----
 CREATE TABLE out AS
 SELECT m.id, m.action, m.seed,
-       affect_generate('idx', m.motion, 'sad', '{"components":["WeightAll","TimeAll","FlowAll"],"k":2}') AS sad,
-       affect_generate('idx', m.motion, 'angry', '{"components":["WeightAll","TimeAll","FlowAll"],"k":2}') AS angry,
+       affect_generate('idx', m.motion, 'sad', '{"method":"hmm_nn","components":["WeightAll","TimeAll","FlowAll"],"k":2}') AS sad,
+       affect_generate('idx', m.motion, 'angry', '{"method":"hmm_nn","components":["WeightAll","TimeAll","FlowAll"],"k":2}') AS angry,
        m.motion AS source
   FROM motions AS m WHERE m.emotion = 'neutral' AND m.seed = 1;
 
@@ -74,18 +74,20 @@ SELECT 'toward sad: below toward angry on average (WeightAll and TimeAll)',
   FROM dir AS s JOIN dir AS a ON a.id = s.id AND a.target = 'angry' WHERE s.target = 'sad';
 
 SELECT 'deterministic',
-       (SELECT affect_generate('idx', motion, 'sad', '{"components":["WeightAll","TimeAll"],"k":2}')
+       (SELECT affect_generate('idx', motion, 'sad', '{"method":"hmm_nn","components":["WeightAll","TimeAll"],"k":2}')
           FROM motions WHERE id = 1)
-     = (SELECT affect_generate('idx', motion, 'sad', '{"components":["WeightAll","TimeAll"],"k":2}')
+     = (SELECT affect_generate('idx', motion, 'sad', '{"method":"hmm_nn","components":["WeightAll","TimeAll"],"k":2}')
           FROM motions WHERE id = 1);
 -- oom: skip
 
 SELECT 'explain: source from the index, neighbours, Viterbi path of the desired length',
        json_valid(e) AND json_extract(e, '$.source.from') = 'index'
    AND json_extract(e, '$.source.label') = 'neutral'
-   AND json_array_length(e, '$.neighbours.rows') = 2
+   AND json_array_length(e, '$.neighbours.rows') = 3
+   AND json_type(e, '$.neighbours.filled_to_min') = 'true'
+   AND json_type(e, '$.neighbours.ranked_by_action') = 'true'
    AND json_array_length(e, '$.viterbi.path') = (SELECT motion_frames(motion) FROM motions WHERE id = 1)
-  FROM (SELECT affect_generate_explain('idx', motion, 'sad', '{"components":["TimeAll"],"k":2}') AS e
+  FROM (SELECT affect_generate_explain('idx', motion, 'sad', '{"method":"hmm_nn","components":["TimeAll"],"k":2}') AS e
           FROM motions WHERE id = 1);
 -- oom: skip
 
@@ -93,8 +95,97 @@ SELECT 'automatic components (RMLR) and epsilon',
        json_extract(e, '$.components.chosen_by') = 'rmlr'
    AND json_extract(e, '$.neighbours.by') = 'epsilon'
    AND json_array_length(e, '$.neighbours.rows') >= 1
-  FROM (SELECT affect_generate_explain('idx', motion, 'angry') AS e FROM motions WHERE id = 1);
+  FROM (SELECT affect_generate_explain('idx', motion, 'angry', '{"method":"hmm_nn"}') AS e FROM motions WHERE id = 1);
 -- oom: skip
+
+-- ---- the default method: transfer onto the desired motion ----
+CREATE TABLE tr AS
+SELECT m.id, m.action, m.motion AS src,
+       affect_generate('idx', m.motion, 'angry', '{"strength":0}') AS s0,
+       affect_generate('idx', m.motion, 'angry', '{"strength":0.5}') AS s05,
+       affect_generate('idx', m.motion, 'angry') AS s1,
+       affect_generate('idx', m.motion, 'angry', '{"strength":2}') AS s2,
+       affect_generate('idx', m.motion, 'sad') AS sad,
+       affect_generate_explain('idx', m.motion, 'angry') AS e
+  FROM motions AS m WHERE m.emotion = 'neutral' AND m.seed IN (1, 2);
+-- oom: skip
+
+SELECT 'transfer: the desired length, fps and joints; strength 0 is the source''s rigid form',
+       count(*) = 4 AND sum(motion_frames(s1) = motion_frames(src)) = 4
+   AND sum(motion_fps(s2) = motion_fps(src)) = 4
+   AND sum(json_extract(motion_info(s1), '$.names') = json_extract(motion_info(src), '$.names')) = 4
+   AND sum(motion_dtw(s0, src) < 0.01) = 4
+  FROM tr;
+
+SELECT 'transfer: every output is a rigid skeleton (bone lengths vary by at most 1e-4)',
+       max(json_extract(motion_info(s2), '$.bone_variation')) <= 1e-4
+   AND max(json_extract(motion_info(sad), '$.bone_variation')) <= 1e-4
+  FROM tr;
+
+SELECT 'transfer: toward angry WeightAll rises with the strength, motion by motion',
+       sum(laban_weight(s0) < laban_weight(s05) AND laban_weight(s05) < laban_weight(s1)
+           AND laban_weight(s1) < laban_weight(s2)) = 4
+  FROM tr;
+
+SELECT 'transfer: toward sad below toward angry (WeightAll), motion by motion',
+       sum(laban_weight(sad) < laban_weight(s1)) = 4 FROM tr;
+
+SELECT 'transfer: the action stays (closer to its source than to the other action''s source)',
+       count(*) = 8 AND sum(motion_dtw(a.s1, a.src) < motion_dtw(a.s1, b.src)) = 8
+  FROM tr AS a JOIN tr AS b ON b.action <> a.action;
+
+SELECT 'explain: method, strength, three donor pairs of neutral → angry, the change applied',
+       json_extract(e, '$.method') = 'transfer' AND json_extract(e, '$.strength') = 1
+   AND json_array_length(e, '$.pairs') = 3
+   AND json_extract(e, '$.pairs[0].from.label') = 'neutral'
+   AND json_extract(e, '$.pairs[2].to.label') = 'angry'
+   AND json_extract(e, '$.change.joints') > 10
+   AND json_extract(e, '$.change.amplitude_ratios[1]') > 1
+   AND json_extract(e, '$.laban_change.WeightAll') > 0
+   AND json_type(e, '$.contacts.kept') = 'true'
+  FROM tr;
+
+SELECT 'deterministic (the same bytes)',
+       (SELECT affect_generate('idx', motion, 'sad', '{"pairs":2}') FROM motions WHERE id = 1)
+     = (SELECT affect_generate('idx', motion, 'sad', '{"pairs":2}') FROM motions WHERE id = 1);
+-- oom: skip
+
+-- A position-only motion's rigid form (inverse kinematics) is what strength 0 returns; the
+-- root (Hips) is where it is there, frame by frame, and within 1 cm of the source's.
+SELECT 'a walk keeps its root path, frame by frame',
+       (SELECT group_concat(x || ',' || y || ',' || z) FROM motion_points(g) WHERE name = 'Hips')
+     = (SELECT group_concat(x || ',' || y || ',' || z) FROM motion_points(g0) WHERE name = 'Hips')
+   AND (SELECT max(abs(a.x - b.x) + abs(a.y - b.y) + abs(a.z - b.z))
+          FROM motion_points(g) AS a JOIN motion_points(src) AS b USING (frame, joint)
+         WHERE a.name = 'Hips') < 0.01
+  FROM (SELECT motion_synth('walk', 'neutral', 9) AS src),
+       (SELECT affect_generate('idx', motion_synth('walk', 'neutral', 9), 'sad') AS g),
+       (SELECT affect_generate('idx', motion_synth('walk', 'neutral', 9), 'sad', '{"strength":0}') AS g0);
+-- oom: skip
+
+SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad', '{"strength":2.5}');
+-- error: affect_generate: option strength must be between 0 and 2
+
+SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad', '{"pairs":0}');
+-- error: affect_generate: option "pairs" must be from 1 to 64, got 0
+
+SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad', '{"bands":[3]}');
+-- error: affect_generate: option "bands" must be an array of two frequencies in Hz, [low, high]
+
+SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad', '{"bands":[3,1]}');
+-- error: affect_generate: option band edges must satisfy 0 < low < high (Hz)
+
+SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad', '{"max_ratio":0.5}');
+-- error: affect_generate: option max_ratio must be a finite number of at least 1
+
+SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad', '{"method":"spectral"}');
+-- error: affect_generate: option "method" must be one of "transfer", "hmm_nn", got "spectral"
+
+SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad', '{"k":3}');
+-- error: affect_generate: option "k" applies to {"method":"hmm_nn"} only
+
+SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad', '{"method":"hmm_nn","strength":1}');
+-- error: affect_generate: option "strength" applies to {"method":"transfer"} only
 
 -- ---- NULL and errors ----
 SELECT affect_generate('idx', NULL, 'sad') IS NULL;
@@ -103,10 +194,10 @@ SELECT affect_generate('idx', NULL, 'sad') IS NULL;
 SELECT affect_generate('plain', (SELECT motion FROM motions WHERE id = 1), 'sad');
 -- error: affect_generate: "plain" is not a laban table (CREATE VIRTUAL TABLE plain USING laban(…))
 
-SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'happy', '{"k":1,"components":["TimeAll"]}');
+SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'happy', '{"components":["TimeAll"]}');
 -- error: affect_generate: target label "happy": no motion of "idx" has this label (labels: angry, neutral, sad)
 
-SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad', '{"epsilon":2}');
+SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad', '{"method":"hmm_nn","epsilon":2}');
 -- error: affect_generate: option "epsilon" must be in (0, 1] (a fraction of the distance to the furthest target motion)
 
 SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad', '{"components":["Weight"]}');
@@ -115,13 +206,13 @@ SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad', 
 SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad', '{"source_label":"x","components":["TimeAll"]}');
 -- error: affect_generate: source_label "x": no motion of "idx" has this label (labels: angry, neutral, sad)
 
-SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad', '{"render":"smooth","k":1,"components":["TimeAll"]}');
+SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad', '{"method":"hmm_nn","render":"smooth","k":1,"components":["TimeAll"]}');
 -- error: affect_generate: option "render" must be one of "steps", "linear", got "smooth"
 
-SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad', '{"keep_path":1,"k":1,"components":["TimeAll"]}');
+SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad', '{"method":"hmm_nn","keep_path":1,"k":1,"components":["TimeAll"]}');
 -- error: affect_generate: option "keep_path" must be true or false, got number
 
-SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad', '{"copies":5000,"k":1,"components":["TimeAll"]}');
+SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad', '{"method":"hmm_nn","copies":5000,"k":1,"components":["TimeAll"]}');
 -- error: affect_generate: copies must be at most 1000, got 5000
 -- oom: skip
 
@@ -138,15 +229,15 @@ SELECT 'zero to itself, symmetric, positive between different motions',
 SELECT 'linear rendering and keep_path false give other motions of the same shape',
        motion_frames(l) = motion_frames(src) AND l <> s AND p <> s
   FROM (SELECT motion AS src,
-               affect_generate('idx', motion, 'sad', '{"components":["TimeAll"],"k":2}') AS s,
-               affect_generate('idx', motion, 'sad', '{"components":["TimeAll"],"k":2,"render":"linear"}') AS l,
-               affect_generate('idx', motion, 'sad', '{"components":["TimeAll"],"k":2,"keep_path":false}') AS p
+               affect_generate('idx', motion, 'sad', '{"method":"hmm_nn","components":["TimeAll"],"k":2,"render":"steps"}') AS s,
+               affect_generate('idx', motion, 'sad', '{"method":"hmm_nn","components":["TimeAll"],"k":2,"render":"linear"}') AS l,
+               affect_generate('idx', motion, 'sad', '{"method":"hmm_nn","components":["TimeAll"],"k":2,"keep_path":false}') AS p
           FROM motions WHERE id = 1);
 -- oom: skip
 
 SELECT 'a generated motion keeps more of its path with copies = 2 than with 0',
-       motion_dtw(affect_generate('idx', m.motion, 'sad', '{"components":["TimeAll"],"k":2,"copies":2}'), m.motion)
-     < motion_dtw(affect_generate('idx', m.motion, 'sad', '{"components":["TimeAll"],"k":2,"copies":0}'), m.motion)
+       motion_dtw(affect_generate('idx', m.motion, 'sad', '{"method":"hmm_nn","components":["TimeAll"],"k":2,"copies":2}'), m.motion)
+     < motion_dtw(affect_generate('idx', m.motion, 'sad', '{"method":"hmm_nn","components":["TimeAll"],"k":2,"copies":0}'), m.motion)
   FROM motions AS m WHERE m.id = 1;
 -- oom: skip
 
@@ -165,7 +256,7 @@ SELECT motion_dtw(motion, motion_select(motion, '["Hips","Spine"]')) FROM motion
 SELECT 'explain reports how the output was drawn',
        json_extract(e, '$.output') = '{"render":"linear","keep_path":false,"cutoff_hz":2,"covariance_scale":1}'
   FROM (SELECT affect_generate_explain('idx', motion, 'sad',
-          '{"components":["TimeAll"],"k":2,"render":"linear","keep_path":false,"cutoff_hz":2}') AS e
+          '{"method":"hmm_nn","components":["TimeAll"],"k":2,"render":"linear","keep_path":false,"cutoff_hz":2}') AS e
           FROM motions WHERE id = 1);
 -- oom: skip
 

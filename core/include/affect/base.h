@@ -48,6 +48,14 @@ affect_status affect_fail(affect_error *err, affect_status status, const char *f
 #endif
     ;
 
+/* Prefixes err's message with a printf-style context and ": " ("desired motion: …"), keeping
+ * its status, which it returns; "out of memory" is left as it is. */
+affect_status affect_prefix(affect_error *err, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
 /* Records "out of memory" and returns AFFECT_ERR_NOMEM. */
 affect_status affect_nomem(affect_error *err);
 

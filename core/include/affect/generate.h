@@ -41,8 +41,11 @@
  * output has no jumps between state means; then it is low-pass filtered coordinate by coordinate (affect_lowpass: zero-lag
  * Butterworth at opt->cutoff_hz for x_d's fps; not filtered when the cut-off is 0, at or above
  * the Nyquist frequency, or the output has one frame), then de-normalized by the inverse of
- * x_d's normalization transform: p = origin + Rᵀ (scale · p'). The result has x_d's joint
- * names, parents, fps, unit and frame count.
+ * x_d's normalization transform: p = origin + Rᵀ (scale · p'). With opt->rigid (the default)
+ * these positions are then made a skeletal motion that plays them with constant bones
+ * (affect_motion_rigid, AFFECT_RIGID_SKELETON, the desired motion's median bone lengths): it
+ * exports to BVH as it is. The result has x_d's joint names, parents, fps, unit and frame
+ * count.
  *
  * Errors (0-based neighbour indices): AFFECT_ERR_INVALID for
  *   "no desired motion", "no neighbours", "neighbour 2 is missing",
@@ -87,6 +90,7 @@ typedef struct affect_generate_options {
     int up_axis;             /* 0 = x, 1 = y (default), 2 = z */
     affect_generate_render render; /* AFFECT_GENERATE_STEPS (default) or _LINEAR */
     bool keep_path;          /* keep x_d's horizontal root path (default true; see above) */
+    bool rigid;              /* output made a rigid skeletal motion (default true; see above) */
     /* Optional clock (seconds, monotonic) for the report's stage times; NULL (default) = not
      * timed. The core has no clock of its own: a benchmark passes one. It never changes the
      * result. */
@@ -139,6 +143,14 @@ void affect_normalize_invert(const affect_normalize_transform *tf, const double 
  * errors prefixed with "first motion: " / "second motion: ", "out of memory". */
 affect_status affect_dtw_distance(const affect_motion *a, const affect_motion *b, double *dist,
                                   affect_error *err);
+
+/* HMM_NN's preference for neighbours of the desired motion's own action: order[0 .. n) gets
+ * the candidates' indices by their affect_dtw_distance to desired, nearest first (ties: the
+ * lower index; a candidate on another skeleton, or NULL, comes last in its given order).
+ * dist (may be NULL) gets each candidate's distance (INFINITY for those). */
+affect_status affect_generate_rank_by_action(const affect_motion *desired,
+                                             const affect_motion *const *candidates, uint32_t n,
+                                             uint32_t *order, double *dist, affect_error *err);
 
 #ifdef __cplusplus
 }

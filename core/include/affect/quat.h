@@ -39,6 +39,14 @@ void affect_quat_normalize(double q[4]);
 /* Spherical linear interpolation from a (t = 0) to b (t = 1) along the shorter arc. */
 void affect_quat_slerp(const double a[4], const double b[4], double t, double r[4]);
 
+/* Rotation vector (axis × angle, radians, angle in [0, π]) of a unit q: the logarithm map,
+ * taken on the hemisphere w ≥ 0. */
+void affect_quat_log(const double q[4], double v[3]);
+
+/* Unit quaternion of a rotation vector (the exponential map; the inverse of affect_quat_log
+ * for angles up to π). */
+void affect_quat_exp(const double v[3], double q[4]);
+
 /* Rotation angle of q in radians, in [0, π]. */
 double affect_quat_angle(const double q[4]);
 
