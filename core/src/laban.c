@@ -9,10 +9,12 @@
  * hull areas are bounded per frame first, and only frames that can beat the best get a hull.
  * Shape components use the raw positions: Directional projects the hand path on its two
  * principal axes (LAPACKE_dsyev on the 3 × 3 covariance), Shaping and Flow take convex hulls
- * per frame (hull.c). Shape Flow computes the 3-D hull of every frame: its volume is
- * Quickhull's running sum, so another algorithm would change the bits, and a frame could only
- * be skipped with a rigorous upper bound of that value; none that is cheaper than the hull is
- * tight enough to skip most frames (docs/BENCHMARKS.md, bench_laban).
+ * per frame (hull.c). Shape Flow is the largest 3-D hull volume over the frames: the frame of
+ * the largest bounding box is built first, then every frame is bounded from the last hull
+ * built (affect_hull3d_bound, rigorous and tight while the hull's faces change little) and its
+ * hull is built only when the bound reaches the best so far (on the corpora about a quarter
+ * of the frames: fast limbs soon make the last hull's faces a loose fit). The volumes built
+ * are Quickhull's, so the result has the same bits as a hull of every frame.
  *
  * The filter: a 2nd-order Butterworth low-pass from the bilinear transform with the cut-off
  * pre-warped, K = tan(π fc / fs), applied forward and then backward (zero phase, the
@@ -897,6 +899,30 @@ affect_status affect_laban_shape_shaping(const affect_motion *m, const affect_ro
     return AFFECT_OK;
 }
 
+/* Frame t's body joints as doubles (xyz, 3 · nb). */
+static void gather_body(const affect_motion *m, uint32_t t, const int32_t *joints, uint32_t nb,
+                        double *xyz)
+{
+    for (uint32_t i = 0; i < nb; i++) {
+        const float *p = affect_motion_at(m, t, (uint32_t)joints[i]);
+        xyz[3 * i] = p[0], xyz[3 * i + 1] = p[1], xyz[3 * i + 2] = p[2];
+    }
+}
+
+/* The volume of the bounding box of nb ≥ 1 points (xyz). Positions are validated finite:
+ * plain comparisons (gcc does not inline fmin and fmax without fast math). */
+static double box_volume(const double *xyz, uint32_t nb)
+{
+    double lo[3] = {xyz[0], xyz[1], xyz[2]}, hi[3] = {xyz[0], xyz[1], xyz[2]};
+    for (uint32_t i = 1; i < nb; i++)
+        for (int a = 0; a < 3; a++) {
+            double c = xyz[3 * i + a];
+            lo[a] = c < lo[a] ? c : lo[a];
+            hi[a] = c > hi[a] ? c : hi[a];
+        }
+    return (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
+}
+
 /* Shape Flow with the roles' pelvis (for the body joints). */
 static affect_status shape_flow(const affect_motion *m, int32_t pelvis,
                                 const affect_laban_options *opt, double *out, affect_error *err)
@@ -911,28 +937,34 @@ static affect_status shape_flow(const affect_motion *m, int32_t pelvis,
     }
     uint32_t nb = body_joints(m, pelvis, joints);
     double best = 0;
-    for (uint32_t t = 0; t < m->n_frames; t++) {
-        for (uint32_t i = 0; i < nb; i++) {
-            const float *p = affect_motion_at(m, t, (uint32_t)joints[i]);
-            xyz[3 * i] = p[0], xyz[3 * i + 1] = p[1], xyz[3 * i + 2] = p[2];
+    if (opt->hull_box) {
+        for (uint32_t t = 0; t < m->n_frames; t++) {
+            gather_body(m, t, joints, nb, xyz);
+            double v = box_volume(xyz, nb);
+            best = v > best ? v : best;
         }
-        double v;
-        if (opt->hull_box) {
-            /* positions are validated finite: plain comparisons (gcc does not inline fmin and
-             * fmax without fast math) */
-            double lo[3] = {xyz[0], xyz[1], xyz[2]}, hi[3] = {xyz[0], xyz[1], xyz[2]};
-            for (uint32_t i = 1; i < nb; i++)
-                for (int a = 0; a < 3; a++) {
-                    double c = xyz[3 * i + a];
-                    lo[a] = c < lo[a] ? c : lo[a];
-                    hi[a] = c > hi[a] ? c : hi[a];
-                }
-            v = (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
-        } else {
-            v = affect_hull3d_volume(hull, xyz, nb);
+    } else {
+        /* every frame's hull is bounded first from the last one built (affect_hull3d_bound)
+         * and built only when the bound does not rule out that it beats the best so far; the
+         * frame of the largest bounding box goes first, a good guess of the maximum */
+        uint32_t first = 0;
+        double box_best = -1;
+        for (uint32_t t = 0; t < m->n_frames; t++) {
+            gather_body(m, t, joints, nb, xyz);
+            double v = box_volume(xyz, nb);
+            first = v > box_best ? t : first;
+            box_best = v > box_best ? v : box_best;
         }
-        if (v > best)
-            best = v;
+        for (uint32_t k = 0; k <= m->n_frames && m->n_frames > 0; k++) {
+            uint32_t t = k == 0 ? first : k - 1;
+            if (k > 0 && t == first)
+                continue;
+            gather_body(m, t, joints, nb, xyz);
+            if (affect_hull3d_bound(hull, xyz, nb) < best)
+                continue; /* this frame's hull cannot beat the best */
+            double v = affect_hull3d_volume(hull, xyz, nb);
+            best = v > best ? v : best;
+        }
     }
     *out = best;
 done:

@@ -833,6 +833,139 @@ static void test_out_of_memory(void **state)
     affect_hull3d_free(h);
 }
 
+/* ---- upper bound from a reference hull (affect_hull3d_bound) ---- */
+
+/* A long random walk of a skeleton (joints drift by a seeded normal step of 0.05 to 1 cm per
+ * frame about their rest pose, the body turns and walks, end sites now and then coincide with
+ * their parent, as in the corpus): the bound from the last hull built (every 1 to 8 frames, as
+ * shape_flow would) is never below the volume a fresh Quickhull gives, and it is the volume
+ * itself, to 1e-4 (the slack of its float arithmetic), on the reference's own frame (the certificate: no point above a face). */
+static void test_bound_random_walk(void **state)
+{
+    (void)state;
+    affect_rng rng;
+    affect_rng_seed(&rng, 77);
+    affect_hull3d *ref = affect_hull3d_new(27), *fresh = affect_hull3d_new(27);
+    assert_non_null(ref);
+    assert_non_null(fresh);
+    double rest[81], p[81], off[81] = {0};
+    random_skeleton(&rng, rest);
+    uint32_t tight = 0, frames = 4000, next = 0;
+    double sigma = 1, yaw = 0;
+    for (uint32_t t = 0; t < frames; t++) {
+        if (t % 500 == 0)
+            sigma = affect_rng_range(&rng, 0.05, 1);
+        yaw += 0.01;
+        for (int i = 0; i < 81; i++)
+            off[i] = 0.95 * off[i] + sigma * affect_rng_normal(&rng);
+        double cy = cos(yaw), sy = sin(yaw);
+        for (int i = 0; i < 27; i++) {
+            double x = rest[3 * i] + off[3 * i], z = rest[3 * i + 2] + off[3 * i + 2];
+            p[3 * i] = cy * x + sy * z + 0.5 * t;
+            p[3 * i + 1] = rest[3 * i + 1] + off[3 * i + 1];
+            p[3 * i + 2] = -sy * x + cy * z;
+        }
+        if (t % 3 == 0) /* end sites (hands, feet, head) on their parents */
+            for (int k = 0; k < 3; k++)
+                p[3 * 26 + k] = p[3 * 25 + k], p[3 * 12 + k] = p[3 * 11 + k];
+        double v = affect_hull3d_volume(fresh, p, 27);
+        double b = affect_hull3d_bound(ref, p, 27);
+        assert_true(v > 0);
+        if (t == 0)
+            assert_true(isinf(b) && b > 0); /* no reference yet */
+        else
+            assert_true(b >= v);
+        tight += b <= 1.05 * v;
+        if (t == next) {
+            assert_true(affect_hull3d_volume(ref, p, 27) == v); /* same bits, any handle */
+            double self = affect_hull3d_bound(ref, p, 27);
+            assert_true(self >= v && self <= v * (1 + 1e-4));
+            next = t + 1 + (uint32_t)(affect_rng_next(&rng) % 8);
+        }
+    }
+    assert_true(tight > frames / 5); /* a useful bound (within 5 %), not merely a valid one */
+    affect_hull3d_free(ref);
+    affect_hull3d_free(fresh);
+}
+
+/* Every kind of random point set (lattices with duplicates, near-coplanar, clusters,
+ * skeletons, at scales 10^-2 to 10^3), then the same points moved a little, a lot, or one of
+ * them thrown far out (the hull's combinatorics change); also extreme scales. */
+static void test_bound_random_sets(void **state)
+{
+    (void)state;
+    affect_rng rng;
+    affect_rng_seed(&rng, 4242);
+    affect_hull3d *ref = affect_hull3d_new(64), *fresh = affect_hull3d_new(64);
+    assert_non_null(ref);
+    assert_non_null(fresh);
+    double p[3 * 64], q[3 * 64];
+    for (int trial = 0; trial < 600; trial++) {
+        uint32_t n = random_set(&rng, trial % 6, p);
+        double v0 = affect_hull3d_volume(ref, p, n);
+        double len = 0;
+        for (uint32_t i = 0; i < 3 * n; i++)
+            len = fabs(p[i] - p[i % 3]) > len ? fabs(p[i] - p[i % 3]) : len;
+        double self = affect_hull3d_bound(ref, p, n);
+        assert_true(self >= v0); /* +∞ too: thin sets put r within rounding of a face */
+        for (int move = 0; move < 4; move++) {
+            double amount = len * (move == 0 ? 1e-9 : move == 1 ? 1e-3 : 0.1);
+            for (uint32_t i = 0; i < 3 * n; i++)
+                q[i] = p[i] + amount * affect_rng_normal(&rng);
+            if (move == 3) {
+                uint32_t j = (uint32_t)(affect_rng_next(&rng) % n);
+                for (int k = 0; k < 3; k++)
+                    q[3 * j + k] += len * affect_rng_range(&rng, -2, 2);
+            }
+            double scale = trial % 50 == 0 ? 1e-150 : trial % 50 == 1 ? 1e150 : 1;
+            for (uint32_t i = 0; i < 3 * n; i++)
+                q[i] *= scale;
+            double v = affect_hull3d_volume(fresh, q, n), b = affect_hull3d_bound(ref, q, n);
+            assert_true(b >= v);
+            for (uint32_t i = 0; i < 3 * n; i++)
+                q[i] /= scale;
+        }
+    }
+    affect_hull3d_free(ref);
+    affect_hull3d_free(fresh);
+}
+
+/* No reference, fewer than 4 points, another number of points, non-finite input, degenerate
+ * frames (a flat frame leaves the reference as it was). */
+static void test_bound_limits(void **state)
+{
+    (void)state;
+    affect_hull3d *h = affect_hull3d_new(8);
+    assert_non_null(h);
+    double box[24], flat[24];
+    for (int i = 0; i < 8; i++) {
+        for (int k = 0; k < 3; k++)
+            box[3 * i + k] = (i >> k) & 1;
+        flat[3 * i] = box[3 * i], flat[3 * i + 1] = box[3 * i + 1], flat[3 * i + 2] = 0;
+    }
+    assert_true(isinf(affect_hull3d_bound(h, box, 8)));
+    assert_true(affect_hull3d_bound(h, box, 3) == 0);
+    assert_true(affect_hull3d_bound(NULL, cube, 8) > 0);
+    assert_true(isinf(affect_hull3d_bound(h, box, 9)));
+    assert_true(affect_hull3d_volume(h, flat, 8) == 0); /* no reference from a flat frame */
+    assert_true(isinf(affect_hull3d_bound(h, box, 8)));
+    assert_true(fabs(affect_hull3d_volume(h, box, 8) - 1) < 1e-12);
+    double b = affect_hull3d_bound(h, box, 8);
+    assert_true(b >= 1 && b < 1 + 1e-4);
+    assert_true(affect_hull3d_bound(h, flat, 8) >= 0);
+    assert_true(affect_hull3d_volume(h, flat, 8) == 0);
+    b = affect_hull3d_bound(h, box, 8); /* the cube is still the reference */
+    assert_true(b >= 1 && b < 1 + 1e-4);
+    assert_true(isinf(affect_hull3d_bound(h, box, 7))); /* not the reference's points */
+    double same[24] = {0};
+    assert_true(affect_hull3d_bound(h, same, 8) == 0);
+    box[5] = NAN;
+    assert_true(isinf(affect_hull3d_bound(h, box, 8)));
+    box[5] = INFINITY;
+    assert_true(isinf(affect_hull3d_bound(h, box, 8)));
+    affect_hull3d_free(h);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -850,6 +983,9 @@ int main(void)
         cmocka_unit_test(test_deterministic),
         cmocka_unit_test(test_limits),
         cmocka_unit_test(test_out_of_memory),
+        cmocka_unit_test(test_bound_random_walk),
+        cmocka_unit_test(test_bound_random_sets),
+        cmocka_unit_test(test_bound_limits),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -151,6 +151,15 @@ typedef struct affect_hull3d affect_hull3d;
 affect_hull3d *affect_hull3d_new(uint32_t max_points); /* NULL if an allocation fails */
 void affect_hull3d_free(affect_hull3d *h);
 double affect_hull3d_volume(affect_hull3d *h, const double *xyz, uint32_t n); /* n ≤ max */
+/* An upper bound of affect_hull3d_volume(h, xyz, n) from the last hull h built with a positive
+ * volume (its reference), without building this one: the reference's faces, with these
+ * coordinates, seen from the points' centroid, each cone cut where the points' extent ends
+ * (hull.c). It is the volume itself (to about 1e-5) while no point rises above a reference
+ * face, and grows as the hull's faces change (the next frames of a motion are the intended
+ * use). +∞ when there is no reference, the reference had another n, n > max, a coordinate is
+ * not finite or the centroid is too close to a face's plane; 0 when n < 4. Allocates nothing;
+ * changes nothing that affect_hull3d_volume returns. */
+double affect_hull3d_bound(affect_hull3d *h, const double *xyz, uint32_t n);
 
 #ifdef __cplusplus
 }
