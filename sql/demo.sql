@@ -134,27 +134,33 @@ INSERT INTO gen_corpus SELECT id, name, content, emotion, motion FROM indexed
  WHERE content <> (SELECT content FROM gen_source);
 CREATE VIRTUAL TABLE gen_laban USING laban(content=gen_corpus, motion=motion, label=emotion);
 DROP TABLE IF EXISTS generated;
-CREATE TABLE generated(id INTEGER PRIMARY KEY, source_id INTEGER, target TEXT, motion BLOB,
-                       explain TEXT, truth_id INTEGER);
-INSERT INTO generated(source_id, target, motion, explain, truth_id)
-SELECT s.id, t.value,
-       affect_generate('gen_laban', s.motion, t.value, json_object('source_label', s.emotion)),
-       affect_generate_explain('gen_laban', s.motion, t.value, json_object('source_label', s.emotion)),
+CREATE TABLE generated(id INTEGER PRIMARY KEY, source_id INTEGER, target TEXT,
+                       strength REAL, motion BLOB, explain TEXT, truth_id INTEGER);
+INSERT INTO generated(source_id, target, strength, motion, explain, truth_id)
+SELECT s.id, t.value, k.value,
+       affect_generate('gen_laban', s.motion, t.value,
+                       json_object('source_label', s.emotion, 'strength', k.value)),
+       affect_generate_explain('gen_laban', s.motion, t.value,
+                               json_object('source_label', s.emotion, 'strength', k.value)),
        (SELECT id FROM indexed WHERE content = s.content AND emotion = t.value ORDER BY name LIMIT 1)
-  FROM gen_source AS s, json_each('["angry","happy","sad"]') AS t
+  FROM gen_source AS s, json_each('["angry","happy","sad"]') AS t, json_each('[0.5,1,1.5]') AS k
  WHERE t.value IN (SELECT emotion FROM gen_corpus);
 
 .print
 .print '== generation: the source made angry, happy, sad (affect_generate; its content left out of the corpus) =='
 SELECT s.name AS source, g.target,
        json_array_length(json_extract(g.explain, '$.components.used')) AS components,
-       (SELECT group_concat(c.name, ' ') FROM json_each(g.explain, '$.neighbours.rows') AS n
-          JOIN gen_corpus AS c ON c.id = json_extract(n.value, '$.rowid')) AS neighbours
-  FROM generated AS g JOIN gen_source AS s ON s.id = g.source_id ORDER BY g.target;
+       (SELECT group_concat(a.content || '/' || a.emotion || '→' || b.emotion, ' ')
+          FROM json_each(g.explain, '$.pairs') AS p
+          JOIN gen_corpus AS a ON a.id = json_extract(p.value, '$.from.rowid')
+          JOIN gen_corpus AS b ON b.id = json_extract(p.value, '$.to.rowid')) AS "donor pairs",
+       printf('%.1f', json_extract(g.explain, '$.change.posture_deg')) AS "posture°"
+  FROM generated AS g JOIN gen_source AS s ON s.id = g.source_id WHERE g.strength = 1
+ ORDER BY g.target;
 
 .print
-.print '== generated vs source vs the real recording in the target emotion =='
-SELECT g.target, printf('%.4g / %.4g / %.4g', laban_weight(s.motion), laban_weight(g.motion),
+.print '== generated (strengths 0.5, 1, 1.5) vs source vs the real recording in the target emotion =='
+SELECT g.target, g.strength, printf('%.4g / %.4g / %.4g', laban_weight(s.motion), laban_weight(g.motion),
                         laban_weight(r.motion)) AS "WeightAll src / gen / real",
        printf('%.4g / %.4g / %.4g', laban_time(s.motion), laban_time(g.motion),
               laban_time(r.motion)) AS "TimeAll src / gen / real",
@@ -163,7 +169,7 @@ SELECT g.target, printf('%.4g / %.4g / %.4g', laban_weight(s.motion), laban_weig
        affect_classify(c.model, g.motion) AS recognized
   FROM generated AS g JOIN gen_source AS s ON s.id = g.source_id
   JOIN indexed AS r ON r.id = g.truth_id, classifiers AS c
- ORDER BY g.target;
+ ORDER BY g.target, g.strength;
 
 -- ---- the HTML page ----
 .headers off
@@ -202,23 +208,29 @@ SELECT '<h3>' || content || '</h3>' || group_concat(
          ORDER BY content, CASE emotion WHEN 'normal' THEN 0 WHEN 'happy' THEN 1
                                         WHEN 'sad' THEN 2 ELSE 3 END)
  GROUP BY content ORDER BY content;
-SELECT '<h2>Generation: the source, the generated motion, the real recording (SCIENCE.md §5)</h2>'
-    || '<p><code>affect_generate(''gen_laban'', motion, target, json_object(''source_label'', emotion))</code>'
-    || ' over a laban index that leaves the source''s content out; right: the actor''s own '
-    || 'recording of that content in the target emotion (ground truth, not used).</p>';
-SELECT '<h3>' || s.name || ' → ' || g.target || '</h3>'
+SELECT '<h2>Generation: the source, the generated motion at three strengths, the real recording (SCIENCE.md §5)</h2>'
+    || '<p><code>affect_generate(''gen_laban'', motion, target, json_object(''source_label'', emotion, ''strength'', s))</code>'
+    || ' over a laban index that leaves the source''s content out: the emotion''s change, learned '
+    || 'from donor pairs of other contents, applied to the source itself (its action, timing and '
+    || 'path stay); right: the actor''s own recording of that content in the target emotion '
+    || '(ground truth, not used).</p>';
+SELECT '<h3>' || s.name || ' → ' || g1.target || '</h3>'
     || '<figure>' || motion_svg(s.motion, json_object('frames', 6, 'size', 110, 'view', 'front',
                                  'title', 'source · ' || s.emotion))
     || '<figcaption>source: ' || s.name || '</figcaption></figure>'
-    || '<figure>' || motion_svg(g.motion, json_object('frames', 6, 'size', 110, 'view', 'front',
-                                 'title', 'generated · ' || g.target))
-    || '<figcaption>generated (recognized: ' || affect_classify(c.model, g.motion) || ')</figcaption></figure>'
+    || (SELECT group_concat('<figure>' || motion_svg(g.motion, json_object('frames', 6, 'size', 110,
+                               'view', 'front', 'title', g.target || ' · strength ' || g.strength))
+                || '<figcaption>generated, strength ' || g.strength || ' (recognized: '
+                || affect_classify(c.model, g.motion) || ')</figcaption></figure>', '')
+          FROM (SELECT * FROM generated WHERE source_id = g1.source_id AND target = g1.target
+                 ORDER BY strength) AS g)
     || coalesce('<figure>' || motion_svg(r.motion, json_object('frames', 6, 'size', 110, 'view', 'front',
-                                 'title', 'real · ' || g.target))
+                                 'title', 'real · ' || g1.target))
                 || '<figcaption>real: ' || r.name || '</figcaption></figure>', '')
-  FROM generated AS g JOIN gen_source AS s ON s.id = g.source_id
-  LEFT JOIN indexed AS r ON r.id = g.truth_id, classifiers AS c
- ORDER BY g.target;
+  FROM generated AS g1 JOIN gen_source AS s ON s.id = g1.source_id
+  LEFT JOIN indexed AS r ON r.id = g1.truth_id, classifiers AS c
+ WHERE g1.strength = 1
+ ORDER BY g1.target;
 SELECT '<h2>Laban Weight and Time by emotion (thesis Fig. 5.1)</h2><p>Each point is a motion of the '
     || 'indexed source; crosses show each emotion''s mean ± 1 sd (log axes). Drawn by '
     || '<code>laban_plot(laban_weight(motion), laban_time(motion), emotion, …)</code>.</p>'

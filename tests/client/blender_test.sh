@@ -6,9 +6,9 @@
 # Cases, each written by the sqlite3 shell with the built module, then checked by
 # tests/client/blender_bvh.py (see its header for Blender's axis and frame mapping):
 #   stored rotations   corpus BVH -> motion_from_bvh -> motion_to_bvh (bye and walk, cm, 27
-#                      joints)
-#   inverse kinematics position-only motions: motion_synth, an affect_generate result over a
-#                      laban index of motion_synth motions, and a corpus walk through
+#                      joints); affect_generate's results over a laban index of motion_synth
+#                      motions (both methods: their outputs are skeletal)
+#   inverse kinematics position-only motions: motion_synth and a corpus walk through
 #                      motion_from_json(motion_to_json(m))
 # Blender must place every joint where our own reader places it: the positions of
 # motion_from_bvh(the written BVH), on ten frames per motion (first and last included), within
@@ -73,11 +73,11 @@ INSERT INTO synth(emotion, seed, motion)
 SELECT e.value, k.value, motion_synth('wave', e.value, k.value)
   FROM json_each('["neutral","sad","angry"]') AS e, json_each('[1,2,3]') AS k;
 CREATE VIRTUAL TABLE idx USING laban(content=synth, motion=motion, label=emotion);
-INSERT INTO pos
-SELECT 'generated-wave-angry-ik',
-       affect_generate('idx', motion, 'angry',
-                       '{"components":["WeightAll","TimeAll","FlowAll"],"k":2}')
-  FROM synth WHERE emotion = 'neutral' AND seed = 1;
+-- generated motions are skeletal (rigid, with rotations): written with their own rotations
+INSERT INTO cases(name, kind, bvh)
+SELECT 'generated-wave-angry-' || m.value, 'stored',
+       motion_to_bvh(affect_generate('idx', motion, 'angry', json_object('method', m.value)))
+  FROM synth, json_each('["transfer","hmm_nn"]') AS m WHERE emotion = 'neutral' AND seed = 1;
 
 INSERT INTO pos
 SELECT 'corpus-walk_angry-positions-ik', motion_from_json(motion_to_json(m))

@@ -59,10 +59,13 @@ grep -q "wrote demo.html" summary.txt || fail "demo page"
 grep -q '</html>' demo.html || fail "demo.html is incomplete"
 grep -q "Laban nearest neighbours" summary.txt || fail "demo: nearest neighbours"
 grep -q "Laban Weight vs Time" demo.html || fail "demo: the Weight vs Time figure"
-grep -q "generated vs source vs the real recording" summary.txt || fail "demo: generation summary"
-[ "$(q "SELECT count(*) FROM generated WHERE motion_frames(motion) > 0")" = 3 ] ||
-    fail "demo: three generated motions"
-grep -q "Generation: the source, the generated motion, the real recording" demo.html ||
+grep -q "generated (strengths 0.5, 1, 1.5) vs source vs the real recording" summary.txt ||
+    fail "demo: generation summary"
+[ "$(q "SELECT count(*) FROM generated WHERE motion_frames(motion) > 0")" = 9 ] ||
+    fail "demo: nine generated motions (three targets at three strengths)"
+[ "$(q "SELECT count(*) FROM generated WHERE json_extract(motion_info(motion), '\$.bone_variation') <= 1e-4")" = 9 ] ||
+    fail "demo: every generated motion is rigid"
+grep -q "Generation: the source, the generated motion at three strengths, the real recording" demo.html ||
     fail "demo: generation film strips"
 if [ -n "$corpus" ] && [ -d "$corpus" ]; then
     q < "$src/sql/laban_corpus.sql" > laban.md
