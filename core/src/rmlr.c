@@ -65,8 +65,10 @@
  * the lasso path, where the objective falls by a constant factor of about 0.99 per cycle. There
  * the data are nearly separable and most samples share their probability between two classes,
  * whose Newton blocks are then almost collinear, and class-by-class (block Gauss–Seidel) steps
- * crawl. A joint step over the classes (per feature, its K × K Hessian block) would be the
- * remedy; the screening above only makes each cycle cheaper.
+ * crawl; the screening above only makes each cycle cheaper. A proximal Newton loop with joint
+ * per-feature K × K steps was tried and was about 2× slower (docs/BENCHMARKS.md): the flat
+ * directions run across features (two classes' coefficient vectors moving together), so any
+ * coordinate-wise inner solver crawls along them as well.
  *
  * Cross-validation keeps one fitter per worker and, after each λ, predicts the held-out
  * samples, so no path of coefficients is stored. Counts of misclassified samples are integers,
