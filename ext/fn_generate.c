@@ -466,7 +466,8 @@ static const char *const gen_keys[] = {"method",     "strength",     "pairs",   
                                        "epsilon",    "k",            "components", "source_label",
                                        "classifier", "cutoff_hz",    "covariance_scale",
                                        "seed",       "render",       "keep_path",  "threads",
-                                       "pair_by",    "min_neighbours", "prefer_action", NULL};
+                                       "pair_by",    "min_neighbours", "prefer_action", "amplitude",
+                                       "pooled",     "pairing",    NULL};
 /* In the order of affect_generate_render. */
 static const char *const render_names[] = {"steps", "linear", NULL};
 
@@ -477,17 +478,26 @@ static const char *const method_names[] = {"transfer", "hmm_nn", NULL};
 #define MAX_NEIGHBOURS 1024u
 /* Donor pairs at most. */
 #define MAX_PAIRS 64u
+/* Target rows among which pairing "action" chooses by DTW. */
+#define PAIR_CANDIDATES 5u
+/* How a donor pair's target row is chosen. */
+enum { PAIRING_ACTION, PAIRING_LABAN };
+static const char *const pairing_names[] = {"action", "laban", NULL};
 /* Options of one method only: using one with the other method is an error, not ignored. */
 static const char *const hmm_only[] = {"copies",         "states",           "epsilon", "k",
                                        "cutoff_hz",      "covariance_scale", "render",  "keep_path",
                                        "min_neighbours", "prefer_action",    NULL};
-static const char *const transfer_only[] = {"strength",      "pairs",   "bands", "max_ratio",
-                                            "keep_contacts", "pair_by", NULL};
+static const char *const transfer_only[] = {"strength",      "pairs",   "bands",     "max_ratio",
+                                            "keep_contacts", "pair_by", "amplitude", "pooled",
+                                            "pairing",       NULL};
+/* In the order of affect_transfer_amplitude. */
+static const char *const amplitude_names[] = {"velocity", "displacement", NULL};
 
 typedef struct gen_opts {
     int method;
     affect_transfer_options tr;
     uint32_t pairs;          /* donor pairs (transfer) */
+    int pairing;             /* PAIRING_ACTION (default) or PAIRING_LABAN */
     affect_generate_options g;
     double epsilon;
     uint32_t k;              /* 0: by epsilon */
@@ -566,7 +576,7 @@ static ax_arg read_gen_options(sqlite3_context *ctx, int argc, sqlite3_value **a
     o->epsilon = 0.1;
     o->threads = 1;
     double seed = (double)o->g.seed;
-    int render = (int)o->g.render;
+    int render = (int)o->g.render, amplitude = (int)o->tr.amplitude;
     if (ax_opts_parse(ctx, argc, argv, 3, gen_keys, opts) != AX_OK)
         return AX_ERROR;
     if (ax_opt_enum(ctx, opts, "method", method_names, &o->method) ||
@@ -574,6 +584,9 @@ static ax_arg read_gen_options(sqlite3_context *ctx, int argc, sqlite3_value **a
         ax_opt_u32(ctx, opts, "pairs", &o->pairs) || opt_bands(ctx, opts, o->tr.band_hz) ||
         ax_opt_number(ctx, opts, "max_ratio", &o->tr.max_ratio) ||
         ax_opt_bool(ctx, opts, "keep_contacts", &o->tr.keep_contacts) ||
+        ax_opt_enum(ctx, opts, "amplitude", amplitude_names, &amplitude) ||
+        ax_opt_bool(ctx, opts, "pooled", &o->tr.pooled) ||
+        ax_opt_enum(ctx, opts, "pairing", pairing_names, &o->pairing) ||
         ax_opt_u32(ctx, opts, "copies", &o->g.copies) ||
         ax_opt_u32(ctx, opts, "states", &o->g.states) ||
         ax_opt_number(ctx, opts, "epsilon", &o->epsilon) || ax_opt_u32(ctx, opts, "k", &o->k) ||
@@ -592,6 +605,7 @@ static ax_arg read_gen_options(sqlite3_context *ctx, int argc, sqlite3_value **a
         return AX_ERROR;
     o->g.seed = (uint64_t)seed;
     o->g.render = (affect_generate_render)render;
+    o->tr.amplitude = (affect_transfer_amplitude)amplitude;
     if (!(o->epsilon > 0) || !(o->epsilon <= 1)) {
         ax_errorf(ctx, "option \"epsilon\" must be in (0, 1] (a fraction of the distance to the "
                        "furthest target motion)");
@@ -1055,6 +1069,8 @@ static void explain_json(sqlite3_context *ctx, const gen_index *ix, const gen_op
 typedef struct donors {
     uint32_t n;
     uint32_t from[MAX_PAIRS], to[MAX_PAIRS]; /* index rows */
+    uint32_t cand[MAX_PAIRS * PAIR_CANDIDATES];   /* the target candidates of each pair */
+    double cand_dist[MAX_PAIRS * PAIR_CANDIDATES];
     double dq[MAX_PAIRS], dist[MAX_PAIRS];   /* desired → from, from → to */
     sqlite3_int64 ids[2 * MAX_PAIRS];        /* content rowids: the from rows, then the to rows */
 } donors;
@@ -1103,6 +1119,19 @@ static ax_arg content_keys(sqlite3_context *ctx, const gen_index *ix, const char
     for (uint32_t i = 0; i < ix->n; i++)
         group[i] = INT64_MIN;
     sqlite3 *db = sqlite3_context_db_handle(ctx);
+    /* a double-quoted name that is not a column would be read as a string: check it first */
+    sqlite3_stmt *chk = prepare(ctx, "reading the content table",
+                                "SELECT count(*) FROM pragma_table_info(%Q) WHERE name = %Q",
+                                ix->content, column);
+    if (!chk)
+        return AX_ERROR;
+    bool exists = sqlite3_step(chk) == SQLITE_ROW && sqlite3_column_int(chk, 0) > 0;
+    sqlite3_finalize(chk);
+    if (!exists) {
+        ax_errorf(ctx, "option \"pair_by\": \"%s\" is not a column of the content table \"%s\"",
+                  column, ix->content);
+        return AX_ERROR;
+    }
     char *sql = sqlite3_mprintf("SELECT rowid, dense_rank() OVER (ORDER BY \"%w\") FROM \"%w\" "
                                 "WHERE \"%w\" IS NOT NULL", column, ix->content, column);
     sqlite3_stmt *st = NULL;
@@ -1134,6 +1163,62 @@ static ax_arg content_keys(sqlite3_context *ctx, const gen_index *ix, const char
     return AX_OK;
 }
 
+/* Pairing "action": each source row takes, among its PAIR_CANDIDATES nearest target rows, the
+ * one nearest to it by DTW (affect_generate_rank_by_action: the same action), preferring one
+ * that no earlier pair took. */
+static ax_arg choose_by_action(sqlite3_context *ctx, const gen_index *ix, uint32_t nc,
+                               donors *dn)
+{
+    affect_motion *a = NULL, *cand[PAIR_CANDIDATES] = {NULL};
+    ax_arg r = AX_OK;
+    for (uint32_t k = 0; k < dn->n && r == AX_OK; k++) {
+        uint32_t m = 0;
+        sqlite3_int64 ids[PAIR_CANDIDATES];
+        uint32_t rows[PAIR_CANDIDATES];
+        for (uint32_t c = 0; c < nc; c++)
+            if (dn->cand[(size_t)k * nc + c] != UINT32_MAX) {
+                rows[m] = dn->cand[(size_t)k * nc + c];
+                ids[m] = ix->ids[rows[m]];
+                m++;
+            }
+        sqlite3_int64 aid = ix->ids[dn->from[k]];
+        uint32_t order[PAIR_CANDIDATES];
+        affect_error err;
+        if (m < 2)
+            continue;
+        if (load_motions(ctx, ix, &aid, 1, &a) != AX_OK ||
+            load_motions(ctx, ix, ids, m, cand) != AX_OK) {
+            r = AX_ERROR;
+        } else if (affect_generate_rank_by_action(a, (const affect_motion *const *)cand, m,
+                                                  order, NULL, &err)) {
+            ax_error(ctx, &err);
+            r = AX_ERROR;
+        } else {
+            uint32_t pick = order[0];
+            for (uint32_t c = 0; c < m; c++) {
+                bool used = false;
+                for (uint32_t e = 0; e < k; e++)
+                    used = used || dn->to[e] == rows[order[c]];
+                if (!used) {
+                    pick = order[c];
+                    break;
+                }
+            }
+            dn->to[k] = rows[pick];
+            for (uint32_t c = 0; c < nc; c++)
+                if (dn->cand[(size_t)k * nc + c] == rows[pick])
+                    dn->dist[k] = dn->cand_dist[(size_t)k * nc + c];
+        }
+        affect_motion_free(a);
+        a = NULL;
+        for (uint32_t c = 0; c < m; c++) {
+            affect_motion_free(cand[c]);
+            cand[c] = NULL;
+        }
+    }
+    return r;
+}
+
 /* The donor pairs (affect_transfer_pairs on the index's rows). */
 static ax_arg find_donors(sqlite3_context *ctx, const gen_index *ix, const gen_opts *o,
                           sqlite3_value *desired, int target, const source_info *src,
@@ -1153,8 +1238,9 @@ static ax_arg find_donors(sqlite3_context *ctx, const gen_index *ix, const gen_o
     for (uint32_t i = 0; i < ix->n; i++)
         label[i] = (int32_t)ix->y[i];
     affect_error err;
+    uint32_t nc = o->pairing == PAIRING_ACTION ? PAIR_CANDIDATES : 1;
     if (affect_transfer_pairs(ix->x, ix->n, N_COMP, label, group, cc->use, dq, src->cls, target,
-                              o->pairs, dn->from, dn->to, dn->dist, &dn->n, &err)) {
+                              o->pairs, nc, dn->from, dn->cand, dn->cand_dist, &dn->n, &err)) {
         ax_error(ctx, &err);
         goto done;
     }
@@ -1164,6 +1250,12 @@ static ax_arg find_donors(sqlite3_context *ctx, const gen_index *ix, const gen_o
                   o->pair_by ? " of the same pair_by value" : "");
         goto done;
     }
+    for (uint32_t k = 0; k < dn->n; k++) {
+        dn->to[k] = dn->cand[(size_t)k * nc];
+        dn->dist[k] = dn->cand_dist[(size_t)k * nc];
+    }
+    if (nc > 1 && choose_by_action(ctx, ix, nc, dn) != AX_OK)
+        goto done;
     for (uint32_t k = 0; k < dn->n; k++) {
         dn->dq[k] = dq[dn->from[k]];
         dn->ids[k] = ix->ids[dn->from[k]];

@@ -21,8 +21,9 @@
 #include "affect/skeleton.h"
 
 #define PI 3.14159265358979323846
-/* Energy floor of a band, rad² per frame: (0.5°)². */
-#define ENERGY_FLOOR ((0.5 * PI / 180) * (0.5 * PI / 180))
+/* Energy floor of a band: (0.5°)² of displacement, (2° per second)² of velocity. */
+#define DISPLACEMENT_FLOOR ((0.5 * PI / 180) * (0.5 * PI / 180))
+#define VELOCITY_FLOOR ((2 * PI / 180) * (2 * PI / 180))
 
 void affect_transfer_options_default(affect_transfer_options *opt)
 {
@@ -32,6 +33,8 @@ void affect_transfer_options_default(affect_transfer_options *opt)
     opt->max_ratio = 3.0;
     opt->keep_contacts = true;
     opt->up_axis = 1;
+    opt->amplitude = AFFECT_TRANSFER_VELOCITY;
+    opt->pooled = false;
 }
 
 const char *affect_transfer_options_check(const affect_transfer_options *opt)
@@ -42,6 +45,8 @@ const char *affect_transfer_options_check(const affect_transfer_options *opt)
         return "band edges must satisfy 0 < low < high (Hz)";
     if (!(opt->max_ratio >= 1 && isfinite(opt->max_ratio)))
         return "max_ratio must be a finite number of at least 1";
+    if (opt->amplitude != AFFECT_TRANSFER_VELOCITY && opt->amplitude != AFFECT_TRANSFER_DISPLACEMENT)
+        return "amplitude must be \"velocity\" or \"displacement\"";
     if (opt->up_axis < 0 || opt->up_axis > 2)
         return "up_axis must be 0 (x), 1 (y) or 2 (z)";
     return NULL;
@@ -121,19 +126,32 @@ static void split_bands(const double *q, uint32_t T, double fps, const double me
     }
 }
 
-/* Mean rotation and mean squared band amplitudes of joint j of m. */
-static void joint_stats(const affect_motion *m, uint32_t j, const double band_hz[2], scratch *s,
-                        double mean[4], double energy[AFFECT_TRANSFER_BANDS])
+/* Mean rotation and each band's mean squared amplitude (AFFECT_TRANSFER_DISPLACEMENT, rad²)
+ * or mean squared rate of change (AFFECT_TRANSFER_VELOCITY, central differences, rad² s⁻²)
+ * of joint j of m. */
+static void joint_stats(const affect_motion *m, uint32_t j, const affect_transfer_options *opt,
+                        scratch *s, double mean[4], double energy[AFFECT_TRANSFER_BANDS])
 {
     uint32_t T = m->n_frames;
     load_rotations(m, j, s->q);
     mean_rotation(s->q, T, mean);
-    split_bands(s->q, T, m->fps, mean, band_hz, s);
+    split_bands(s->q, T, m->fps, mean, opt->band_hz, s);
     for (int b = 0; b < AFFECT_TRANSFER_BANDS; b++) {
         const double *x = s->band + (size_t)b * 3 * T;
         double e = 0;
-        for (size_t i = 0; i < 3 * (size_t)T; i++)
-            e += x[i] * x[i];
+        if (opt->amplitude == AFFECT_TRANSFER_VELOCITY) {
+            for (uint32_t t = 0; t < T && T > 1; t++) {
+                uint32_t a = t > 0 ? t - 1 : t, c = t + 1 < T ? t + 1 : t;
+                for (int k = 0; k < 3; k++) {
+                    double v = (x[3 * (size_t)c + (size_t)k] - x[3 * (size_t)a + (size_t)k]) *
+                               m->fps / (double)(c - a);
+                    e += v * v;
+                }
+            }
+        } else {
+            for (size_t i = 0; i < 3 * (size_t)T; i++)
+                e += x[i] * x[i];
+        }
         energy[b] = e / T;
     }
 }
@@ -262,7 +280,10 @@ static uint32_t learn(const affect_motion *d, const affect_motion *const *a,
                       const affect_motion *const *b, uint32_t n, const bool *rotational,
                       const affect_transfer_options *opt, scratch *s, change *ch)
 {
-    uint32_t changed = 0;
+    uint32_t changed = 0, total = 0;
+    double ta[AFFECT_TRANSFER_BANDS] = {0}, tb[AFFECT_TRANSFER_BANDS] = {0};
+    double floor = opt->amplitude == AFFECT_TRANSFER_VELOCITY ? VELOCITY_FLOOR
+                                                              : DISPLACEMENT_FLOOR;
     for (uint32_t j = 0; j < d->n_joints; j++) {
         memset(&ch[j], 0, sizeof ch[j]);
         if (!rotational[j])
@@ -274,8 +295,8 @@ static uint32_t learn(const affect_motion *d, const affect_motion *const *a,
             if (ja < 0 || jb < 0)
                 continue;
             double ma[4], mb[4], e1[AFFECT_TRANSFER_BANDS], e2[AFFECT_TRANSFER_BANDS];
-            joint_stats(a[i], (uint32_t)ja, opt->band_hz, s, ma, e1);
-            joint_stats(b[i], (uint32_t)jb, opt->band_hz, s, mb, e2);
+            joint_stats(a[i], (uint32_t)ja, opt, s, ma, e1);
+            joint_stats(b[i], (uint32_t)jb, opt, s, mb, e2);
             double inv[4], r[4], v[3];
             qconj(ma, inv);
             affect_quat_mul(mb, inv, r);
@@ -293,10 +314,20 @@ static uint32_t learn(const affect_motion *d, const affect_motion *const *a,
         for (int k = 0; k < 3; k++)
             ch[j].delta[k] /= count;
         for (int k = 0; k < AFFECT_TRANSFER_BANDS; k++) {
-            double r = sqrt((eb[k] + count * ENERGY_FLOOR) / (ea[k] + count * ENERGY_FLOOR));
+            double r = sqrt((eb[k] + count * floor) / (ea[k] + count * floor));
             ch[j].ratio[k] = fmin(opt->max_ratio, fmax(1.0 / opt->max_ratio, r));
+            ta[k] += ea[k];
+            tb[k] += eb[k];
         }
+        total += count;
     }
+    if (opt->pooled && changed)
+        for (int k = 0; k < AFFECT_TRANSFER_BANDS; k++) {
+            double r = sqrt((tb[k] + total * floor) / (ta[k] + total * floor));
+            r = fmin(opt->max_ratio, fmax(1.0 / opt->max_ratio, r));
+            for (uint32_t j = 0; j < d->n_joints; j++)
+                ch[j].ratio[k] = ch[j].on ? r : ch[j].ratio[k];
+        }
     return changed;
 }
 
@@ -499,8 +530,8 @@ static double row_distance(const double *z, uint32_t p, uint32_t a, uint32_t b, 
 
 affect_status affect_transfer_pairs(const double *x, uint32_t n, uint32_t p, const int32_t *label,
                                     const int64_t *group, const bool *use, const double *dq,
-                                    int32_t source,
-                                    int32_t target, uint32_t n_pairs, uint32_t *from,
+                                    int32_t source, int32_t target, uint32_t n_pairs,
+                                    uint32_t n_cand, uint32_t *from,
                                     uint32_t *to, double *dist, uint32_t *got,
                                     affect_error *err)
 {
@@ -548,24 +579,38 @@ affect_status affect_transfer_pairs(const double *x, uint32_t n, uint32_t p, con
         taken[a] = true;
         if (group && group[a] == INT64_MIN)
             continue;
-        int64_t b = -1;
-        double best = INFINITY;
-        for (uint32_t i = 0; i < n; i++) {
-            if (label[i] != target || (uint32_t)a == i || (group && group[i] != group[a]))
+        /* its n_cand nearest target rows, nearest first (ties: the lower row) */
+        uint32_t *tk = to + (size_t)*got * n_cand;
+        double *dk = dist ? dist + (size_t)*got * n_cand : NULL;
+        uint32_t found = 0;
+        double last = -INFINITY;
+        int64_t last_row = -1;
+        for (uint32_t c = 0; c < n_cand; c++) {
+            int64_t b = -1;
+            double best = INFINITY;
+            for (uint32_t i = 0; i < n; i++) {
+                if (label[i] != target || (uint32_t)a == i || (group && group[i] != group[a]))
+                    continue;
+                double dd = row_distance(z, p, (uint32_t)a, i, use);
+                bool after = dd > last || (dd == last && (int64_t)i > last_row);
+                if (!isnan(dd) && after && (dd < best || (dd == best && i < b)))
+                    best = dd, b = i;
+            }
+            tk[c] = b < 0 ? UINT32_MAX : (uint32_t)b;
+            if (dk)
+                dk[c] = b < 0 ? NAN : best;
+            if (b < 0)
                 continue;
-            double dd = row_distance(z, p, (uint32_t)a, i, use);
-            if (!isnan(dd) && dd < best)
-                best = dd, b = i;
+            found++;
+            last = best;
+            last_row = b;
         }
-        if (b < 0) {
+        if (found == 0) {
             if (group)
                 continue; /* no row of its content in the target emotion: the next one */
             break;
         }
         from[*got] = (uint32_t)a;
-        to[*got] = (uint32_t)b;
-        if (dist)
-            dist[*got] = best;
         (*got)++;
     }
     affect_free(z);

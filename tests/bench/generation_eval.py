@@ -4,6 +4,7 @@
 Usage (from the repository root, after any build of build/affect.so):
     OPENBLAS_NUM_THREADS=1 /usr/bin/python3 tests/bench/generation_eval.py
         [--db build/recognition.db] [--corpus 1|2|both] [--options JSON] [--quick]
+        [--protocol takes|content|both]
 AFFECT_EXT overrides the extension's path (default build/affect). The corpora are imported into
 --db by recognition_eval.py's importer (once; reused when the file holds them).
 
@@ -77,8 +78,12 @@ def dist(a, b):
     return math.sqrt(s)
 
 
+RUN = "r%d_" % os.getpid()  # table names of this run: runs may share one --db
+
+
 def fold_setup(con, name, where, params):
     """A training table, its laban index and a recognizer with affect_train's defaults."""
+    name = RUN + name
     con.execute('DROP TABLE IF EXISTS "lab_%s"' % name)
     con.execute('DROP TABLE IF EXISTS "tr_%s"' % name)
     con.execute('CREATE TABLE "tr_%s" AS SELECT * FROM pool WHERE %s' % (name, where), params)
@@ -193,7 +198,7 @@ def corpus1(con, options, quick):
 STYLES2 = ["active", "elderly", "exhausted", "feminine", "masculine", "normal", "youthful"]
 
 
-def corpus2(con, options, quick):
+def corpus2(con, options, quick, protocol="both"):
     con.execute("DROP TABLE IF EXISTS pool")
     con.execute("CREATE TEMP TABLE pool AS SELECT id, content, style, "
                 "CAST(substr(name, -3) AS INTEGER) AS take, motion FROM motions "
@@ -214,6 +219,8 @@ def corpus2(con, options, quick):
                           [r for r in sources_all if r[1] == c]) for c in contents]),
     ]
     for pname, folds in protocols:
+        if protocol != "both" and not pname.startswith(protocol):
+            continue
         t0 = time.time()
         results = []
         for name, where, params, sources in folds:
@@ -266,6 +273,8 @@ def main():
     ap.add_argument("--corpus", default="both", choices=["1", "2", "both"])
     ap.add_argument("--options", default="{}")
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--protocol", default="both", choices=["takes", "content", "both"],
+                    help="bandai-namco-2-dev: which protocol(s)")
     a = ap.parse_args()
     if not os.path.isdir(rec.CORPORA):
         sys.exit("generation_eval.py: the corpora are not at %s (../shared)" % rec.CORPORA)
@@ -276,7 +285,13 @@ def main():
     if a.corpus in ("1", "both"):
         corpus1(con, options, a.quick)
     if a.corpus in ("2", "both"):
-        corpus2(con, options, a.quick)
+        corpus2(con, options, a.quick, a.protocol)
+    for (t,) in con.execute("SELECT name FROM sqlite_schema WHERE type = 'table' AND "
+                            "(name LIKE 'lab\\_%s%%' ESCAPE '\\' OR name LIKE 'tr\\_%s%%' "
+                            "ESCAPE '\\')" % (RUN, RUN)).fetchall():
+        if not t.endswith(("_data", "_info")):
+            con.execute('DROP TABLE IF EXISTS "%s"' % t)
+    con.commit()
 
 
 if __name__ == "__main__":

@@ -241,7 +241,7 @@ static void test_pairs(void **state)
     uint32_t from[3], to[3], got;
     double dist[3];
     affect_error err;
-    assert_int_equal(affect_transfer_pairs(x, 6, 2, label, NULL, use, dq, 0, 1, 3, from, to, dist, &got,
+    assert_int_equal(affect_transfer_pairs(x, 6, 2, label, NULL, use, dq, 0, 1, 3, 1, from, to, dist, &got,
                                            &err),
                      AFFECT_OK);
     assert_int_equal(got, 3);
@@ -251,15 +251,27 @@ static void test_pairs(void **state)
     assert_int_equal(to[1], 5);
     assert_int_equal(from[2], 0);
     assert_int_equal(to[2], 3);
+    /* two candidates each: the nearest and the next */
+    uint32_t to2[6];
+    double d2[6];
+    assert_int_equal(affect_transfer_pairs(x, 6, 2, label, NULL, use, dq, 0, 1, 3, 2, from, to2,
+                                           d2, &got, &err),
+                     AFFECT_OK);
+    assert_int_equal(got, 3);
+    assert_int_equal(to2[0], 4);
+    assert_int_equal(to2[1], 3); /* from row 1 (5, 5): rows 3 (0, 1) and 5 (10, 1) tie */
+    assert_true(d2[0] < d2[1]);
+    assert_int_equal(to2[2], 5); /* from row 2 (10, 0): row 5, then row 4 */
+    assert_int_equal(to2[3], 4);
     /* no row of the target: no pair */
     const int32_t only0[6] = {0, 0, 0, 0, 0, 0};
-    assert_int_equal(affect_transfer_pairs(x, 6, 2, only0, NULL, use, dq, 0, 1, 3, from, to, NULL, &got,
+    assert_int_equal(affect_transfer_pairs(x, 6, 2, only0, NULL, use, dq, 0, 1, 3, 1, from, to, NULL, &got,
                                            &err),
                      AFFECT_OK);
     assert_int_equal(got, 0);
     /* with content keys: row 1 (content 8) pairs with row 4; row 2 has no key */
     const int64_t group[6] = {7, 8, INT64_MIN, 7, 8, 9};
-    assert_int_equal(affect_transfer_pairs(x, 6, 2, label, group, use, dq, 0, 1, 3, from, to,
+    assert_int_equal(affect_transfer_pairs(x, 6, 2, label, group, use, dq, 0, 1, 3, 1, from, to,
                                            NULL, &got, &err),
                      AFFECT_OK);
     assert_int_equal(got, 2);
@@ -268,7 +280,7 @@ static void test_pairs(void **state)
     assert_int_equal(from[1], 0);
     assert_int_equal(to[1], 3);
     const int64_t apart[6] = {1, 2, 3, 4, 5, 6};
-    assert_int_equal(affect_transfer_pairs(x, 6, 2, label, apart, use, dq, 0, 1, 3, from, to,
+    assert_int_equal(affect_transfer_pairs(x, 6, 2, label, apart, use, dq, 0, 1, 3, 1, from, to,
                                            NULL, &got, &err),
                      AFFECT_OK);
     assert_int_equal(got, 0);

@@ -145,6 +145,31 @@ SELECT 'explain: method, strength, three donor pairs of neutral → angry, the c
    AND json_type(e, '$.contacts.kept') = 'true'
   FROM tr;
 
+-- (on these synthetic gestures a wave's nearest angry candidates are sometimes all knocks)
+SELECT 'donor pairs show one action in both emotions (pairing "action", the default): 10 of 12',
+       count(*) = 12 AND sum(a.action = b.action) >= 10
+  FROM tr, json_each(tr.e, '$.pairs') AS p
+  JOIN motions AS a ON a.id = json_extract(p.value, '$.from.rowid')
+  JOIN motions AS b ON b.id = json_extract(p.value, '$.to.rowid');
+
+SELECT 'pair_by names a content column: pairs of one action, the same values',
+       (SELECT count(*) FROM json_each(e, '$.pairs') AS p
+          JOIN motions AS a ON a.id = json_extract(p.value, '$.from.rowid')
+          JOIN motions AS b ON b.id = json_extract(p.value, '$.to.rowid')
+         WHERE a.action = b.action) = 3
+  FROM (SELECT affect_generate_explain('idx', motion, 'sad',
+                 '{"pair_by":"action","pairing":"laban"}') AS e FROM motions WHERE id = 1);
+-- oom: skip
+
+SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad', '{"pair_by":"nope"}');
+-- error: affect_generate: option "pair_by": "nope" is not a column of the content table "motions"
+
+SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad', '{"pairing":"dtw"}');
+-- error: affect_generate: option "pairing" must be one of "action", "laban", got "dtw"
+
+SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad', '{"amplitude":"speed"}');
+-- error: affect_generate: option "amplitude" must be one of "velocity", "displacement", got "speed"
+
 SELECT 'deterministic (the same bytes)',
        (SELECT affect_generate('idx', motion, 'sad', '{"pairs":2}') FROM motions WHERE id = 1)
      = (SELECT affect_generate('idx', motion, 'sad', '{"pairs":2}') FROM motions WHERE id = 1);

@@ -80,12 +80,20 @@ extern "C" {
 /* Seconds over which a leg returns from its own rotations to the transferred ones. */
 #define AFFECT_TRANSFER_CONTACT_RAMP 0.2
 
+/* What a band's amplitude ratio compares. */
+typedef enum affect_transfer_amplitude {
+    AFFECT_TRANSFER_VELOCITY = 0,    /* its rate of change (default) */
+    AFFECT_TRANSFER_DISPLACEMENT = 1 /* its deviation from the mean rotation */
+} affect_transfer_amplitude;
+
 typedef struct affect_transfer_options {
     double strength;    /* s in [0, 2] (default 1) */
     double band_hz[2];  /* the bands' edges (default 1 and 3 Hz) */
     double max_ratio;   /* amplitude ratios limited to [1/max_ratio, max_ratio] (default 3) */
     bool keep_contacts; /* (default true) */
     int up_axis;        /* for the feet's heights: 0 = x, 1 = y (default), 2 = z */
+    affect_transfer_amplitude amplitude; /* what the ratios compare (default: velocity) */
+    bool pooled; /* one ratio per band for the whole body instead of one per joint (false) */
 } affect_transfer_options;
 
 void affect_transfer_options_default(affect_transfer_options *opt);
@@ -111,13 +119,16 @@ affect_status affect_transfer(const affect_motion *desired, const affect_motion 
  * of row i; group (NULL: none) a content key per row: a source row then pairs only with a
  * target row of its own key, and one with no such row, or with the key INT64_MIN (none), is
  * passed over; use[j] the components of the distances; dq[i] the distance of row i to the desired
- * motion on those components (NaN: not a candidate); up to n_pairs pairs (from[k], to[k]) in
- * order of dq, ties by row; dist[k] (may be NULL) the distance of to[k] from from[k].
+ * motion on those components (NaN: not a candidate); up to n_pairs source rows from[k] in
+ * order of dq, ties by row, each with its n_cand ≥ 1 nearest target rows to[k · n_cand + c],
+ * nearest first (UINT32_MAX where there are fewer), and their distances dist[k · n_cand + c]
+ * (dist may be NULL; NaN where there is none): the caller takes the first, or chooses among
+ * them (affect_generate's default ranks them by DTW to the source row: the same action).
  * *got = 0 when no row can donate one side. */
 affect_status affect_transfer_pairs(const double *x, uint32_t n, uint32_t p, const int32_t *label,
                                     const int64_t *group, const bool *use, const double *dq,
-                                    int32_t source,
-                                    int32_t target, uint32_t n_pairs, uint32_t *from,
+                                    int32_t source, int32_t target, uint32_t n_pairs,
+                                    uint32_t n_cand, uint32_t *from,
                                     uint32_t *to, double *dist, uint32_t *got,
                                     affect_error *err);
 
