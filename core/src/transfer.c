@@ -32,7 +32,6 @@ void affect_transfer_options_default(affect_transfer_options *opt)
     opt->band_hz[1] = 3.0;
     opt->max_ratio = 3.0;
     opt->keep_contacts = true;
-    opt->up_axis = 1;
     opt->amplitude = AFFECT_TRANSFER_VELOCITY;
     opt->pooled = false;
 }
@@ -47,8 +46,6 @@ const char *affect_transfer_options_check(const affect_transfer_options *opt)
         return "max_ratio must be a finite number of at least 1";
     if (opt->amplitude != AFFECT_TRANSFER_VELOCITY && opt->amplitude != AFFECT_TRANSFER_DISPLACEMENT)
         return "amplitude must be \"velocity\" or \"displacement\"";
-    if (opt->up_axis < 0 || opt->up_axis > 2)
-        return "up_axis must be 0 (x), 1 (y) or 2 (z)";
     return NULL;
 }
 
@@ -167,29 +164,40 @@ static int32_t same_joint(const affect_motion *m, const affect_motion *d, uint32
 
 /* ---- foot contacts ---- */
 
-/* w[t] in [0, 1]: 1 at frames where the foot rests, ramping down to 0 over the ramp. */
-static uint32_t contact_weights(const affect_motion *m, uint32_t foot, int up, double *w)
+/* Whether joint j is in the subtree rooted at `top`. */
+static bool below(const affect_motion *m, uint32_t j, uint32_t top);
+
+/* Speed of joint j from frame t to frame t + 1, per second. */
+static double joint_speed(const affect_motion *m, uint32_t t, uint32_t j)
+{
+    uint32_t nj = m->n_joints;
+    const float *pa = m->pos + ((size_t)t * nj + j) * 3;
+    const float *pb = pa + (size_t)nj * 3;
+    double v2 = 0;
+    for (int i = 0; i < 3; i++)
+        v2 += ((double)pb[i] - pa[i]) * ((double)pb[i] - pa[i]);
+    return sqrt(v2) * m->fps;
+}
+
+/* w[t] in [0, 1]: 1 at both ends of every step t → t + 1 in which the foot joint or one below
+ * it (a toe) moves slower than AFFECT_TRANSFER_CONTACT_SPEED × body size per second (so that
+ * the step is the desired motion's own), ramping down to 0 over the ramp around them. */
+static uint32_t contact_weights(const affect_motion *m, uint32_t foot, double *w)
 {
     uint32_t T = m->n_frames, nj = m->n_joints;
-    double body = affect_motion_body_size(m);
-    double lowest = INFINITY;
-    for (uint32_t t = 0; t < T; t++)
-        lowest = fmin(lowest, m->pos[((size_t)t * nj + foot) * 3 + (size_t)up]);
+    double limit = AFFECT_TRANSFER_CONTACT_SPEED * affect_motion_body_size(m);
     uint32_t ramp = (uint32_t)fmax(1.0, round(AFFECT_TRANSFER_CONTACT_RAMP * m->fps));
     uint32_t count = 0;
     for (uint32_t t = 0; t < T; t++)
         w[t] = 0;
+    bool slow_before = false; /* the step into frame t */
     for (uint32_t t = 0; t < T && T > 1; t++) {
-        uint32_t a = t > 0 ? t - 1 : t, b = t + 1 < T ? t + 1 : t;
-        const float *pa = m->pos + ((size_t)a * nj + foot) * 3;
-        const float *pb = m->pos + ((size_t)b * nj + foot) * 3;
-        double v2 = 0;
-        for (int i = 0; i < 3; i++)
-            v2 += ((double)pb[i] - pa[i]) * ((double)pb[i] - pa[i]);
-        double speed = sqrt(v2) * m->fps / (double)(b - a);
-        double h = m->pos[((size_t)t * nj + foot) * 3 + (size_t)up] - lowest;
-        if (h > AFFECT_TRANSFER_CONTACT_HEIGHT * body ||
-            speed > AFFECT_TRANSFER_CONTACT_SPEED * body)
+        bool slow_after = false;
+        for (uint32_t j = 0; j < nj && t + 1 < T && !slow_after; j++)
+            slow_after = below(m, j, foot) && joint_speed(m, t, j) < limit;
+        bool rests = slow_before || slow_after;
+        slow_before = slow_after;
+        if (!rests)
             continue;
         count++;
         uint32_t lo = t > ramp ? t - ramp : 0, hi = t + ramp < T ? t + ramp : T - 1;
@@ -212,7 +220,7 @@ static bool below(const affect_motion *m, uint32_t j, uint32_t top)
 }
 
 /* Leg joints take back the desired motion's rotations (src) where its foot rests. */
-static void hold_legs(const affect_motion *src, affect_motion *out, int up, double *w,
+static void hold_legs(const affect_motion *src, affect_motion *out, double *w,
                       uint32_t contacts[2])
 {
     affect_roles roles;
@@ -224,7 +232,7 @@ static void hold_legs(const affect_motion *src, affect_motion *out, int up, doub
         int32_t hip = roles.joint[hips[side]], foot = roles.joint[feet[side]];
         if (hip < 0 || foot < 0 || !below(src, (uint32_t)foot, (uint32_t)hip))
             continue;
-        contacts[side] = contact_weights(src, (uint32_t)foot, up, w);
+        contacts[side] = contact_weights(src, (uint32_t)foot, w);
         if (contacts[side] == 0)
             continue;
         for (uint32_t j = 0; j < nj; j++) {
@@ -464,7 +472,7 @@ affect_status affect_transfer(const affect_motion *desired, const affect_motion 
     apply(d, ch, opt, &s, res, rep);
     if (opt->keep_contacts) {
         uint32_t contacts[2] = {0, 0};
-        hold_legs(d, res, opt->up_axis, s.tmp, contacts);
+        hold_legs(d, res, s.tmp, contacts);
         if (rep)
             rep->contact_frames[0] = contacts[0], rep->contact_frames[1] = contacts[1];
     }

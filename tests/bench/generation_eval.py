@@ -110,6 +110,35 @@ def generate(con, index, model, sources, targets, options):
     return out
 
 
+FEET = ("Foot_L", "Foot_R", "Toes_L", "Toes_R")
+
+
+def fidelity(con, g, src):
+    """(bone-length variation of g, worst extra foot sliding in cm/s): over the frames where a
+    foot joint of the source moves slower than 10 cm/s (resting), the mean of the generated
+    motion's foot speed minus the source's, the worst foot; the corpora are in cm."""
+    bones = con.execute("SELECT json_extract(motion_info(?), '$.bone_variation')",
+                        (g,)).fetchone()[0]
+    worst = 0.0
+    for foot in FEET:
+        pts = con.execute(
+            "SELECT a.x, a.y, a.z, b.x, b.y, b.z FROM motion_points(?) AS a "
+            "JOIN motion_points(?) AS b USING (frame, joint) WHERE a.name = ? ORDER BY frame",
+            (src, g, foot)).fetchall()
+        if len(pts) < 2:
+            continue
+        fps = con.execute("SELECT motion_fps(?)", (src,)).fetchone()[0]
+        extra = []
+        for p0, p1 in zip(pts, pts[1:]):
+            vs = math.dist(p0[:3], p1[:3]) * fps
+            vg = math.dist(p0[3:], p1[3:]) * fps
+            if vs < 10.0:
+                extra.append(vg - vs)
+        if extra:
+            worst = max(worst, statistics.fmean(extra))
+    return bones, worst
+
+
 def nearest_content(con, g, refs, exclude):
     best, content = None, None
     for rid, rmotion, rcontent in refs:
@@ -160,7 +189,7 @@ def corpus1(con, options, quick):
                 dw=(vg[0] - vs[0]) * (vt[0] - vs[0]) > 0,
                 dt=(vg[5] - vs[5]) * (vt[5] - vs[5]) > 0,
                 lab=dist(z(vg), z(vt)) < dist(z(vs), z(vt)),
-                dtw=d_gt < d_st, dtw_g=d_gt, dtw_s=d_st))
+                dtw=d_gt < d_st, dtw_g=d_gt, dtw_s=d_st, fid=fidelity(con, g, s[4])))
     secs = time.time() - t0
     n = len(results)
     print("### bandai-namco-1, leave one content out (%d contents, %d conversions, %.0f s)\n"
@@ -182,9 +211,10 @@ def corpus1(con, options, quick):
           % pct(sum(r["lab"] for r in results), n))
     print("| closer to the real recording than the source (DTW) | %s | |"
           % pct(sum(r["dtw"] for r in results), n))
-    print("| mean DTW to the real recording: generated / source | %.3f / %.3f | |\n"
+    print("| mean DTW to the real recording: generated / source | %.3f / %.3f | |"
           % (statistics.fmean(r["dtw_g"] for r in results),
              statistics.fmean(r["dtw_s"] for r in results)))
+    print_fidelity(results)
     print("Recognized (rows: target, columns: label):\n")
     print("| target | " + " | ".join(rec.FOUR) + " |")
     print("|---|" + "---:|" * len(rec.FOUR))
@@ -193,6 +223,15 @@ def corpus1(con, options, quick):
             str(sum(1 for r in results if r["target"] == t and r["label"] == l))
             for l in rec.FOUR)))
     print()
+
+
+def print_fidelity(results):
+    bones = [r["fid"][0] for r in results]
+    slide = [r["fid"][1] for r in results]
+    print("| bone-length variation, worst output | %.2g | ≤ 1e-4 |" % max(bones))
+    print("| extra foot sliding where the source's foot rests, worst output (cm/s) | %.2f | ≤ 1 |"
+          % max(slide))
+    print("| the same, median output (cm/s) | %.2f | |\n" % statistics.median(slide))
 
 
 STYLES2 = ["active", "elderly", "exhausted", "feminine", "masculine", "normal", "youthful"]
@@ -243,7 +282,7 @@ def corpus2(con, options, quick, protocol="both"):
                 results.append(dict(
                     target=t, recognized=recog == t, label=recog,
                     lab=dist(zg, mean) < dist(zrows[sid], mean), dtw=dg < ds,
-                    kept=nearest_content(con, g, refs, sid) == s[1]))
+                    kept=nearest_content(con, g, refs, sid) == s[1], fid=fidelity(con, g, s[4])))
         n = len(results)
         print("### bandai-namco-2-dev, normal → the 6 other styles, %s (%d conversions, %.0f s)\n"
               % (pname, n, time.time() - t0))
@@ -255,7 +294,8 @@ def corpus2(con, options, quick, protocol="both"):
               % pct(sum(r["lab"] for r in results), n))
         print("| closer than the source to the real takes (mean DTW) | %s | ≥ 60 %% |"
               % pct(sum(r["dtw"] for r in results), n))
-        print("| action kept | %s | ≥ 95 %% |\n" % pct(sum(r["kept"] for r in results), n))
+        print("| action kept | %s | ≥ 95 %% |" % pct(sum(r["kept"] for r in results), n))
+        print_fidelity(results)
         print("| target | " + " | ".join(STYLES2) + " |")
         print("|---|" + "---:|" * len(STYLES2))
         for t in STYLES2:

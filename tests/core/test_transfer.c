@@ -261,8 +261,8 @@ static void test_pairs(void **state)
     assert_int_equal(to2[0], 4);
     assert_int_equal(to2[1], 3); /* from row 1 (5, 5): rows 3 (0, 1) and 5 (10, 1) tie */
     assert_true(d2[0] < d2[1]);
-    assert_int_equal(to2[2], 5); /* from row 2 (10, 0): row 5, then row 4 */
-    assert_int_equal(to2[3], 4);
+    assert_int_equal(to2[2], 5); /* from row 2 (10, 0): row 5 (10, 1), then row 3 (0, 1) */
+    assert_int_equal(to2[3], 3);
     /* no row of the target: no pair */
     const int32_t only0[6] = {0, 0, 0, 0, 0, 0};
     assert_int_equal(affect_transfer_pairs(x, 6, 2, only0, NULL, use, dq, 0, 1, 3, 1, from, to, NULL, &got,

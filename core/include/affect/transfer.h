@@ -19,10 +19,14 @@
  * d_t = log(q̄⁻¹ q_t), rotation vectors split by two zero-lag low-pass filters (affect_lowpass
  * at band_hz[0] and band_hz[1]) into a slow, a middle and a fast band whose sum is d_t. A donor
  * pair (A in the source emotion, B in the target) gives per joint the posture change
- * log(q̄_B q̄_A⁻¹) and per band the energy of each; over the pairs the posture changes are
- * averaged and each band's amplitude ratio is √((Σ E_B + e) / (Σ E_A + e)) (e = (0.5°)², so a
- * joint that hardly moves in the donors does not get a huge ratio), limited to
- * [1 / max_ratio, max_ratio]. Applied to the desired motion with strength s:
+ * log(q̄_B q̄_A⁻¹) and per band the energy of each: the mean squared rate of change of the
+ * band (amplitude = AFFECT_TRANSFER_VELOCITY, the default: a faster performance of the same
+ * action shows as more energy even where its excursions are no wider) or of the band itself
+ * (AFFECT_TRANSFER_DISPLACEMENT); over the pairs the posture changes are averaged and each
+ * band's amplitude ratio is √((Σ E_B + e) / (Σ E_A + e)) (e = (2°/s)², resp. (0.5°)², per
+ * pair, so a joint that hardly moves in the donors does not get a huge ratio), limited to
+ * [1 / max_ratio, max_ratio]; with `pooled` one ratio per band from the energies of all joints
+ * together. Applied to the desired motion with strength s:
  *     q'_t = exp(s · Δ) · q̄ · exp(Σ_b r_b^s · d_b,t),
  * the rotation vector limited to an angle of π. s = 0 returns the desired motion's skeletal
  * form unchanged (the same bytes); s = 1 is the change seen in the donors; s = 2 doubles the
@@ -34,10 +38,10 @@
  * motion's, frame by frame.
  * A joint that a pair's motions lack (by name) takes no change from that pair.
  *
- * Foot contacts (keep_contacts, default true; needs the left/right foot roles): a foot is in
- * contact at frame t when its height is within AFFECT_TRANSFER_CONTACT_HEIGHT × body size of
- * its lowest height in the desired motion and its speed is below
- * AFFECT_TRANSFER_CONTACT_SPEED × body size per second. The leg's joints (from the hip role's
+ * Foot contacts (keep_contacts, default true; needs the left/right foot and hip roles): a foot
+ * rests during a step from frame t to t + 1 when the foot joint or a joint below it (a toe)
+ * moves slower than AFFECT_TRANSFER_CONTACT_SPEED × body size per second in the desired motion
+ * (a planted heel or a planted toe); both frames of the step are contact frames. The leg's joints (from the hip role's
  * joint down to the foot's descendants) take the desired motion's own rotations at contact
  * frames, blended back to the transferred ones by slerp over 0.2 s on either side. As the
  * pelvis is unchanged, a foot at rest in the desired motion is exactly where it was: no
@@ -74,9 +78,8 @@ extern "C" {
 
 #define AFFECT_TRANSFER_MAX_STRENGTH 2.0
 #define AFFECT_TRANSFER_BANDS 3
-/* Foot contact thresholds, relative to the body size (affect_motion_body_size). */
-#define AFFECT_TRANSFER_CONTACT_HEIGHT 0.04
-#define AFFECT_TRANSFER_CONTACT_SPEED 0.3
+/* Foot contact threshold, relative to the body size (affect_motion_body_size) per second. */
+#define AFFECT_TRANSFER_CONTACT_SPEED 0.1
 /* Seconds over which a leg returns from its own rotations to the transferred ones. */
 #define AFFECT_TRANSFER_CONTACT_RAMP 0.2
 
@@ -91,7 +94,6 @@ typedef struct affect_transfer_options {
     double band_hz[2];  /* the bands' edges (default 1 and 3 Hz) */
     double max_ratio;   /* amplitude ratios limited to [1/max_ratio, max_ratio] (default 3) */
     bool keep_contacts; /* (default true) */
-    int up_axis;        /* for the feet's heights: 0 = x, 1 = y (default), 2 = z */
     affect_transfer_amplitude amplitude; /* what the ratios compare (default: velocity) */
     bool pooled; /* one ratio per band for the whole body instead of one per joint (false) */
 } affect_transfer_options;
