@@ -581,26 +581,46 @@ done:
 
 /* ---- neighbours of the same action ---- */
 
+/* m at no more than AFFECT_RANK_FPS frames per second: *made (free it) or m itself. */
+static affect_status coarse(const affect_motion *m, affect_motion **made, affect_error *err)
+{
+    *made = NULL;
+    if (m->fps <= AFFECT_RANK_FPS || m->n_frames < 2)
+        return AFFECT_OK;
+    return affect_motion_resample(m, AFFECT_RANK_FPS, made, err);
+}
+
 affect_status affect_generate_rank_by_action(const affect_motion *desired,
                                              const affect_motion *const *candidates, uint32_t n,
                                              uint32_t *order, double *dist, affect_error *err)
 {
     double *d = affect_malloc_array(n ? n : 1, sizeof *d);
-    if (!d)
-        return affect_nomem(err);
+    affect_motion *dc = NULL, *cc = NULL;
+    affect_status st = d ? coarse(desired, &dc, err) : affect_nomem(err);
+    if (st) {
+        affect_free(d);
+        return st;
+    }
+    const affect_motion *dm = dc ? dc : desired;
     for (uint32_t i = 0; i < n; i++) {
         order[i] = i;
         d[i] = INFINITY;
         if (!candidates[i] || !same_joint_names(desired, candidates[i]))
             continue;
-        affect_status st = affect_dtw_distance(desired, candidates[i], &d[i], err);
+        st = coarse(candidates[i], &cc, err);
+        if (st == AFFECT_OK)
+            st = affect_dtw_distance(dm, cc ? cc : candidates[i], &d[i], err);
+        affect_motion_free(cc);
+        cc = NULL;
         if (st == AFFECT_ERR_NOMEM) {
             affect_free(d);
+            affect_motion_free(dc);
             return st;
         }
         if (st)
             d[i] = INFINITY;
     }
+    affect_motion_free(dc);
     /* insertion sort: stable, so ties keep the given order */
     for (uint32_t i = 1; i < n; i++) {
         uint32_t v = order[i];

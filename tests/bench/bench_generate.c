@@ -7,6 +7,7 @@
  * Usage:
  *     bench_generate [corpus directory] [--module PATH] [--reps N] [--rmlr-runs N] [--quick]
  *     bench_generate --rmlr-only [--threads N] [corpus directory]
+ *     bench_generate --transfer-only [--reps N] [corpus directory]   (section 3 alone)
  *     AFFECT_BENCH_ONLY=bench_generate bash tests/bench/run.sh   # Release, one core
  * The directory defaults to AFFECT_BENCH_CORPUS and the module to AFFECT_BENCH_MODULE (the
  * built affect.so), both set by tests/bench/CMakeLists.txt. When the corpus is absent, or the
@@ -997,12 +998,14 @@ done:
 /* 3. The default method (transfer): the SQL call on the 300-frame 22-joint paths to every
  * other emotion, with its defaults and the source label; per generation the median of reps
  * calls, then the median, mean and worst over the generations. */
-static int bench_transfer(sqlite3 *db, const path *paths, uint32_t n_paths, uint32_t reps,
-                          bool quick)
+static int bench_transfer(sqlite3 *db, const char *index, const path *paths, uint32_t n_paths,
+                          uint32_t reps, bool quick)
 {
     sqlite3_stmt *st = NULL;
-    if (prepare(db, "SELECT affect_generate('ix22', ?1, ?2, json_object('source_label', ?3))",
-                &st))
+    char sql[128];
+    snprintf(sql, sizeof sql,
+             "SELECT affect_generate('%s', ?1, ?2, json_object('source_label', ?3))", index);
+    if (prepare(db, sql, &st))
         return 1;
     double *med = calloc((size_t)n_paths * N_EMOTIONS + 1, sizeof *med), rv[MAX_REPS];
     uint32_t n = 0;
@@ -1032,16 +1035,16 @@ static int bench_transfer(sqlite3 *db, const path *paths, uint32_t n_paths, uint
             med[n++] = bench_summarize(rv, reps).median;
         }
     bench_summary s = bench_summarize(med, n);
-    printf("== 3. the default method (transfer): SQL affect_generate('ix22', path, target, "
-           "{\"source_label\"}), %u generations x %u repetitions in %.1f s (CPU %.1f s)\n", n,
-           reps, now() - t0, cpu_now() - c0);
+    printf("== 3. the default method (transfer): SQL affect_generate('%s', path, target, "
+           "{\"source_label\"}), %u generations x %u repetitions in %.1f s (CPU %.1f s)\n",
+           index, n, reps, now() - t0, cpu_now() - c0);
     printf("  per generation, ms: median %.3f, mean %.3f, worst %.3f; goal <= %.0f ms: %s "
            "(%.2fx)\n",
            s.median * 1e3, s.mean * 1e3, s.max * 1e3, TRANSFER_GOAL_MS,
            s.median * 1e3 <= TRANSFER_GOAL_MS ? "MET" : "NOT MET",
            TRANSFER_GOAL_MS / (s.median * 1e3));
-    printf("BENCH transfer22_300_median %.3f ms\n", s.median * 1e3);
-    printf("BENCH transfer22_300_worst %.3f ms\n", s.max * 1e3);
+    printf("BENCH transfer_%s_300_median %.3f ms\n", index, s.median * 1e3);
+    printf("BENCH transfer_%s_300_worst %.3f ms\n", index, s.max * 1e3);
     rc = 0;
 done:
     free(med);
@@ -1165,7 +1168,7 @@ int main(int argc, char **argv)
 {
     const char *dir = AFFECT_BENCH_CORPUS, *module = AFFECT_BENCH_MODULE;
     uint32_t reps = DEFAULT_REPS, rmlr_runs = RMLR_RUNS, threads = 1;
-    bool quick = false, only_rmlr = false;
+    bool quick = false, only_rmlr = false, only_transfer = false;
     for (int i = 1; i < argc; i++) {
         if (strcmp(argv[i], "--module") == 0 && i + 1 < argc) {
             module = argv[++i];
@@ -1182,10 +1185,12 @@ int main(int argc, char **argv)
             quick = true;
         } else if (strcmp(argv[i], "--rmlr-only") == 0) {
             only_rmlr = true;
+        } else if (strcmp(argv[i], "--transfer-only") == 0) {
+            only_transfer = true;
         } else if (argv[i][0] == '-') {
             fprintf(stderr,
                     "usage: %s [corpus directory] [--module PATH] [--reps N] [--rmlr-runs N] "
-                    "[--quick] [--rmlr-only [--threads N]]\n",
+                    "[--quick] [--rmlr-only [--threads N]] [--transfer-only]\n",
                     argv[0]);
             return 2;
         } else {
@@ -1276,6 +1281,13 @@ int main(int argc, char **argv)
         rc = rmlr_only(db, threads, rmlr_runs);
         goto done;
     }
+    if (only_transfer) {
+        rc = load_paths(db, "corpus22", true, &p22, &n22) ||
+             bench_transfer(db, "ix22", p22, n22, reps, quick) ||
+             (with27 && (load_paths(db, "corpus27", true, &p27, &n27) ||
+                         bench_transfer(db, "ix27", p27, n27, reps, quick)));
+        goto done;
+    }
     if (bench_rmlr(db, rmlr_runs, quick, with27, &rr))
         goto done;
     print_rmlr(&rr, quick, with27);
@@ -1332,7 +1344,8 @@ int main(int argc, char **argv)
         if (make_jobs(&w[k], quick ? 1 : EXPECTED_MOTIONS, quick ? 1 : N_EMOTIONS) ||
             bench_workload(db, &w[k], reps))
             goto done;
-    if (bench_transfer(db, p22, n22, reps, quick))
+    if (bench_transfer(db, "ix22", p22, n22, reps, quick) ||
+        (with27 && bench_transfer(db, "ix27", p27, n27, reps, quick)))
         goto done;
     printf("check: for every generation the neighbour search returned the rowids and distances "
            "of affect_generate_explain, and the core's motion had exactly the bytes of the SQL "

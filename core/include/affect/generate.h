@@ -144,10 +144,16 @@ void affect_normalize_invert(const affect_normalize_transform *tf, const double 
 affect_status affect_dtw_distance(const affect_motion *a, const affect_motion *b, double *dist,
                                   affect_error *err);
 
-/* HMM_NN's preference for neighbours of the desired motion's own action: order[0 .. n) gets
- * the candidates' indices by their affect_dtw_distance to desired, nearest first (ties: the
- * lower index; a candidate on another skeleton, or NULL, comes last in its given order).
- * dist (may be NULL) gets each candidate's distance (INFINITY for those). */
+/* Frame rate at which affect_generate_rank_by_action compares motions. */
+#define AFFECT_RANK_FPS 10.0
+
+/* The preference for motions of the desired motion's own action (HMM_NN's neighbours, the
+ * transfer's donor pairs): order[0 .. n) gets the candidates' indices by their
+ * affect_dtw_distance to desired, both resampled to AFFECT_RANK_FPS when they are faster
+ * (the action's shape, at a ninth of the cost for 30 fps motions), nearest first (ties: the
+ * lower index; a candidate on another skeleton, or NULL, or one that cannot be compared, comes
+ * last in its given order). dist (may be NULL) gets each candidate's distance (INFINITY for
+ * those). Errors: out of memory, the resampling of the desired motion. */
 affect_status affect_generate_rank_by_action(const affect_motion *desired,
                                              const affect_motion *const *candidates, uint32_t n,
                                              uint32_t *order, double *dist, affect_error *err);
