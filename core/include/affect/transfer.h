@@ -9,7 +9,8 @@
  *     affect_transfer_options opt;
  *     affect_transfer_options_default(&opt);            // strength 1, bands 1 and 3 Hz
  *     uint32_t from[3], to[3], n;                        // the donor pairs, as index rows
- *     affect_transfer_pairs(x, rows, label, use, dq, source, target, 3, from, to, NULL, &n, &err);
+ *     affect_transfer_pairs(x, rows, 27, label, NULL, use, dq, source, target, 3, 1, from, to,
+ *                           NULL, &n, &err);
  *     affect_motion *out;
  *     affect_transfer(desired, donors_from, donors_to, n, &opt, &out, &rep, &err);
  *
@@ -60,12 +61,14 @@
  * must also have the source row's key. Without a source emotion (source < 0) any row not of the target emotion
  * can donate the first motion.
  *
- * Errors (AFFECT_ERR_INVALID unless said): "strength must be between 0 and 2, got 3",
- * "band edges must satisfy 0 < low < high, got 3 and 1", "max_ratio must be at least 1, got
- * 0.5", "no donor pairs", "donor pair 2: its motion in the source emotion is missing", "donor
- * pair 1: its target motion has a frame rate of 0 …", the skeletal form's errors prefixed
- * with "desired motion: " or "donor pair 2: ", "no donor pair has a joint of the desired
- * motion's skeleton (joint names)"; AFFECT_ERR_NOMEM.
+ * Errors (AFFECT_ERR_INVALID unless said): an option out of range, named with every value:
+ * "strength must be between 0 and 2 (strength 3, bands 1 and 3 Hz, max_ratio 3)", "band edges
+ * must satisfy 0 < low < high (Hz) (…)", "max_ratio must be a finite number of at least 1 (…)",
+ * "amplitude must be \"velocity\" or \"displacement\" (…)"; "no donor pairs"; "donor pair 2:
+ * its motion in the source emotion is missing"; the skeletal form's errors prefixed with
+ * "desired motion: " or "donor pair 1 (motion in the target emotion): "; "no donor pair has a
+ * joint of the desired motion's skeleton (joint names)"; "out of memory" (AFFECT_ERR_NOMEM).
+ * affect_transfer_pairs fails only when out of memory.
  */
 #ifndef AFFECT_TRANSFER_H
 #define AFFECT_TRANSFER_H
