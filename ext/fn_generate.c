@@ -10,36 +10,46 @@
  *   motion_dtw(a, b)                        → REAL: DTW distance of two motions of one skeleton
  *                                            (affect_dtw_distance), to judge generated motions
  *
- * How it works: index_name names a `laban` virtual table (vt_laban.c). Its shadow tables give
- * the labelled Laban vectors (`<index>_data`) and the content table (`<index>_info`). The
- * salient components come from an RMLR fit on those vectors (missing components imputed by the
- * component's mean); the fit is cached in `<index>_info` (keys `rmlr`, a BLOB, and `rmlr_key`)
- * and kept per connection as well; when the database cannot be written (read-only, busy) the
- * fit is only kept in memory. The key is a 64-bit FNV-1a hash of a format tag, the component
- * names, and every labelled row's label and vector bytes, with the row count, seed and folds:
- * a fit is used only for the index content it was fitted on (a rebuild that changes nothing
- * keeps it; a changed label, a recreated index of the same name or a copied `_info` row does
- * not), and a decoded or cached fit must also have the index's class, component and row
- * counts, else it is refitted. The components used for the neighbour search are
- * L \ L′_target, or L \ (L′_source ∩ L′_target) when the source emotion is known: given
- * (source_label), read from the index when the desired motion is one of its rows (same bytes),
- * or recognized with a classifier (option classifier: the classifier BLOB as hex text, e.g.
- * json_object('classifier', hex(model))). The neighbours are the index's own query:
- *   SELECT rowid, distance FROM <index> WHERE query = :desired AND label = :target
- *                                         AND radius = :epsilon AND components = :json
- * (ε relative to the furthest target motion, the thesis's; at least the nearest one is kept),
- * or `k = n` instead of the radius with the option k. Their motions are read from the content
- * table and handed to affect_generate (core), which excludes neighbours on another skeleton.
+ * How it works: index_name names a `laban` virtual table (vt_laban.c), read only through the
+ * index's own API (vt_laban.h): its labelled rows (content rowids, labels, Laban vectors), the
+ * label of a motion it holds, its content table, and a cache it keeps for us. The salient
+ * components come from an RMLR fit on those vectors (missing components imputed by the
+ * component's mean); the fit is cached in the index (entry `rmlr`, tag `rmlr_key`) and kept per
+ * connection as well; when the database cannot be written (read-only, busy) the fit is only
+ * kept in memory. The key is a 64-bit FNV-1a hash of a format tag, the component names, and
+ * every labelled row's label and vector bytes, with the row count, seed and folds: a fit is
+ * used only for the index content it was fitted on (a rebuild that changes nothing keeps it; a
+ * changed label, a recreated index of the same name or a copied `_info` row does not), and a
+ * decoded or cached fit must also have the index's class, component and row counts, else it is
+ * refitted. The components of the searches are L \ L′_target, or L \ (L′_source ∩ L′_target)
+ * when the source emotion is known (affect_transfer_components): given (source_label), read
+ * from the index when the desired motion is one of its rows (same bytes), or recognized with a
+ * classifier (option classifier: the classifier BLOB as hex text, e.g.
+ * json_object('classifier', hex(model))).
+ *   method "transfer" (default): the index's distances from the desired motion to every row on
+ *   those components (its own query, k = all), the donor pairs chosen in core
+ *   (affect_transfer_pairs, with pair_by's content keys when given; with pairing "action" each
+ *   pair's target row is chosen among 5 candidates by affect_generate_rank_by_action), their
+ *   motions read from the content table, and affect_transfer (core).
+ *   method "hmm_nn": the index's own query
+ *     SELECT rowid, distance FROM <index> WHERE query = :desired AND label = :target
+ *                                           AND radius = :epsilon AND components = :json
+ *   (ε relative to the furthest target motion, the thesis's), or `k = n`; at least
+ *   min_neighbours; with prefer_action three times as many candidates ranked by DTW; their
+ *   motions handed to affect_generate (core), which excludes neighbours on another skeleton.
  *
  * These functions read (and laban_salient and affect_generate may write the cache into) the
  * index's tables, so they are registered SQLITE_DIRECTONLY (not usable from triggers or views)
  * and not deterministic in SQLite's sense: for the same database content and options they
  * return the same bytes.
  *
- * Options (affect_generate and affect_generate_explain): copies (n_d, 0), states (12), epsilon
- * (0.1), k (instead of epsilon), components ("auto" = RMLR, or an array of names), source_label,
- * classifier (hex text), cutoff_hz (3), covariance_scale (1), seed (1). laban_salient: seed,
- * folds (10).
+ * Options (affect_generate and affect_generate_explain; docs/reference.md): method, components
+ * ("auto" = RMLR, or an array of names), source_label, classifier (hex text), seed (1), threads
+ * (1); transfer: strength (1), pairs (3), pairing ("action"), pair_by, bands ([1, 3]),
+ * amplitude ("velocity"), max_ratio (3), pooled (false), keep_contacts (true); hmm_nn: copies
+ * (0), states (12), epsilon (0.1), k, min_neighbours (3), prefer_action (true), cutoff_hz (3),
+ * covariance_scale (1), render ("linear"), keep_path (true). An option of the other method is
+ * an error. laban_salient: seed, folds (10), threads.
  */
 #include "fn_generate.h"
 
