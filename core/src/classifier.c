@@ -47,7 +47,6 @@
 #include <float.h>
 #include <limits.h>
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -198,22 +197,6 @@ const char *affect_classifier_config_check(const affect_classifier_config *cfg)
     return affect_hmm_config_check(&cfg->hmm);
 }
 
-/* Prefixes err's message (unless it is out of memory) with a formatted context, keeping the
- * status unless status is not 0: "training the HMM of class \"sad\": …". */
-static affect_status prefixed(affect_error *err, affect_status status, const char *fmt, ...)
-{
-    if (err->status == AFFECT_ERR_NOMEM)
-        return AFFECT_ERR_NOMEM;
-    char msg[AFFECT_ERROR_MSG_MAX], head[AFFECT_ERROR_MSG_MAX];
-    memcpy(msg, err->msg, sizeof msg);
-    msg[sizeof msg - 1] = '\0';
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(head, sizeof head, fmt, ap);
-    va_end(ap);
-    return affect_fail(err, status ? status : err->status, "%s: %s", head, msg);
-}
-
 /* The sizes of the representation: the Fisher block, the descriptors and ω; false when the
  * sizes overflow. */
 static bool set_dims(affect_classifier *c)
@@ -233,7 +216,7 @@ static affect_status score_part(const affect_classifier *c, uint32_t k, const do
                                 uint32_t T, double *out, double *ll, affect_error *err)
 {
     if (affect_fisher_score(c->hmms[k], x, T, c->cfg.groups, out, ll, err))
-        return prefixed(err, 0, "Fisher score under the HMM of class \"%s\"", c->labels[k]);
+        return affect_prefix(err, "Fisher score under the HMM of class \"%s\"", c->labels[k]);
     for (size_t e = 0; e < c->part; e++) {
         if (isnan(out[e]))
             return affect_fail(err, AFFECT_ERR_RANGE,
@@ -551,17 +534,17 @@ static affect_status fit_dual(affect_classifier *c, const double *G, const uint3
         static const double grid[] = AFFECT_CLASSIFIER_C_GRID;
         if (affect_svm_select_c_gram(G, n, D, y, c->n_classes, grid, sizeof grid / sizeof grid[0],
                                      cfg->svm_folds, cfg->hmm.seed, &C, &cv, err))
-            return prefixed(err, 0, "choosing the SVM's C");
+            return affect_prefix(err, "choosing the SVM's C");
     }
     if (affect_svm_train_gram(G, n, D, y, c->n_classes, C, &c->svm, err))
-        return prefixed(err, 0, "training the SVM");
+        return affect_prefix(err, "training the SVM");
     c->report.grid_cv_acc = NAN;
     const affect_classifier_grid *gr = &cfg->grid;
     if ((gr->n_dims || gr->n_sigma || gr->n_k) && grid_search(c, G, y, n, err))
-        return prefixed(err, 0, "searching the sPCA/kNN grid");
+        return affect_prefix(err, "searching the sPCA/kNN grid");
     if (affect_spca_fit_dual(G, n, D, y, c->n_classes, cfg->spca_kernel, cfg->spca_sigma,
                              cfg->spca_dims, &c->spca, err))
-        return prefixed(err, 0, "fitting the supervised PCA");
+        return affect_prefix(err, "fitting the supervised PCA");
     uint32_t p = affect_spca_dims(c->spca);
     c->n_train = n;
     c->train_y = affect_malloc_array(n, sizeof *c->train_y);
@@ -608,7 +591,7 @@ static affect_status train_class(void *ctx, uint32_t k, affect_error *err)
     affect_status st = affect_hmm_train(&j->c->cfg.hmm, mine, count, &j->c->hmms[k], err);
     affect_free(mine);
     if (st)
-        return prefixed(err, 0, "training the HMM of class \"%s\"", j->c->labels[k]);
+        return affect_prefix(err, "training the HMM of class \"%s\"", j->c->labels[k]);
     return AFFECT_OK;
 }
 
@@ -624,7 +607,7 @@ static affect_status block_row(void *ctx, uint32_t i, affect_error *err)
             ? score_part(c, j->block, j->seqs[i].x, j->seqs[i].n_frames, row,
                          j->ll ? &j->ll[(size_t)i * c->n_classes + j->block] : NULL, err)
             : copy_descriptors(c, j->desc + (size_t)i * c->ddim, row, err);
-    return st ? prefixed(err, 0, "motion %u", i) : AFFECT_OK;
+    return st ? affect_prefix(err, "motion %u", i) : AFFECT_OK;
 }
 
 /* Block b of every training motion into j->B, normalized (the first pass also fits the
@@ -746,7 +729,7 @@ static affect_status train_on(const affect_classifier_config *cfg, const affect_
             goto done;
         size_t w = block_width(c, b), col0 = block_col0(c, b);
         if ((st = affect_svm_add_rows(c->svm, B, w, col0, err)) != AFFECT_OK) {
-            st = prefixed(err, 0, "the SVM's weights");
+            st = affect_prefix(err, "the SVM's weights");
             goto done;
         }
         affect_spca_add_rows(c->spca, B, w, col0);
@@ -858,7 +841,7 @@ affect_status affect_classifier_eval(const affect_classifier *c, const double *x
     if (ml_only) {
         for (uint32_t k = 0; k < C; k++)
             if ((st = affect_hmm_loglik(c->hmms[k], x, T, &ll[k], err)) != AFFECT_OK) {
-                st = prefixed(err, 0, "scoring under the HMM of class \"%s\"", c->labels[k]);
+                st = affect_prefix(err, "scoring under the HMM of class \"%s\"", c->labels[k]);
                 goto done;
             }
     } else {
@@ -1273,8 +1256,10 @@ static affect_status decode_hmms(affect_br *r, affect_classifier *c, affect_erro
             return truncated(err, r, "the class HMMs");
         affect_features *f = NULL;
         affect_status st = affect_hmm_blob_decode(p, (size_t)len, &c->hmms[k], &f, err);
+        if (st && affect_prefix(err, "the HMM of class \"%s\"", c->labels[k]) != AFFECT_ERR_NOMEM)
+            err->status = AFFECT_ERR_FORMAT;
         if (st)
-            return prefixed(err, AFFECT_ERR_FORMAT, "the HMM of class \"%s\"", c->labels[k]);
+            return err->status;
         if (!c->feat) {
             c->feat = f;
         } else {
