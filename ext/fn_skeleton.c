@@ -162,6 +162,8 @@ affect_status ax_skel_opts_parse(const char *text, size_t len, const char *const
         if (!copy)
             st = affect_nomem(err);
         so->bvh.root_name = copy;
+    } else {
+        so->bvh.root_name = NULL; /* on an error it still points into the document */
     }
 done:
     affect_json_free(doc);

@@ -6,8 +6,8 @@
  *
  * The input is the BVH text as is (not NUL-terminated: the parser must stay inside len). Checks
  * beyond "no crash, no leak, no undefined behaviour":
- *   - on failure the error record holds a non-empty message and a status that is
- *     not AFFECT_OK;
+ *   - on failure the error record holds a non-empty message (one line of valid UTF-8) and a
+ *     status that is not AFFECT_OK;
  *   - on success the motion passes affect_motion_validate, and its BLOB decodes back to a
  *     motion with the same bytes (the importer only produces motions the decoder accepts).
  * A broken invariant calls abort(), which libFuzzer reports as a crash with the input saved.
@@ -19,14 +19,20 @@
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
-/* A failure is recorded with its status and a non-empty, NUL-terminated message. (Messages
- * may quote input text, joint names included, verbatim, so a line break in one is not an
- * error here.) */
+/* A failure is recorded with its status and a non-empty, NUL-terminated message: one line of
+ * valid UTF-8 whatever it quotes of the input (affect_fail escapes control bytes and bytes
+ * that are not UTF-8 as \xNN). */
 static void check_error(affect_status st, const affect_error *err)
 {
     if (st == AFFECT_OK || err->status != st || err->msg[0] == '\0' ||
         !memchr(err->msg, '\0', sizeof err->msg))
         abort();
+    size_t len = strlen(err->msg);
+    if (!affect_utf8_valid(err->msg, len))
+        abort();
+    for (size_t i = 0; i < len; i++)
+        if ((unsigned char)err->msg[i] < 0x20 || err->msg[i] == 0x7f)
+            abort();
 }
 
 /* encode → decode → encode gives the same bytes. */

@@ -10,7 +10,7 @@
  *     bit  4    unit:      0 none, 1 "cm"
  * The frame rate is always 30. Checks beyond "no crash, no leak, no undefined behaviour":
  *   - on failure: a status other than AFFECT_OK, recorded in the error with a non-empty
- *     message, and no motion handed out;
+ *     message of valid UTF-8 on one line, and no motion handed out;
  *   - on success: the motion validates, and affect_csv_write → affect_csv_parse (',' and a
  *     header row) gives back a motion whose BLOB is byte-identical (io.h promises exact text
  *     round trips: same names, bit-identical positions).
@@ -23,14 +23,20 @@
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
-/* A failure is recorded with its status and a non-empty, NUL-terminated message. (Messages
- * may quote input text, joint names included, verbatim, so a line break in one is not an
- * error here.) */
+/* A failure is recorded with its status and a non-empty, NUL-terminated message: one line of
+ * valid UTF-8 whatever it quotes of the input (affect_fail escapes control bytes and bytes
+ * that are not UTF-8 as \xNN). */
 static void check_error(affect_status st, const affect_error *err)
 {
     if (st == AFFECT_OK || err->status != st || err->msg[0] == '\0' ||
         !memchr(err->msg, '\0', sizeof err->msg))
         abort();
+    size_t len = strlen(err->msg);
+    if (!affect_utf8_valid(err->msg, len))
+        abort();
+    for (size_t i = 0; i < len; i++)
+        if ((unsigned char)err->msg[i] < 0x20 || err->msg[i] == 0x7f)
+            abort();
 }
 
 /* True when both motions encode to the same bytes; allocation failure counts as equal. */

@@ -287,6 +287,11 @@ SELECT motion_to_bvh(m, '{"frame_time":-1}') FROM t WHERE name = 'small';
 SELECT motion_to_bvh(m, '{"speed":1}') FROM t WHERE name = 'small';
 -- error: motion_to_bvh: unknown option "speed" (expected one of: order, frame_time, precision, root, rotations, rest_frame, lengths, free, siblings)
 
+-- "root" before a bad option: its name, which still points into the options, is not freed
+-- (a bad free found by tests/fuzz/fuzz_sql_options)
+SELECT motion_to_bvh(m, '{"root":"Root","speed":1}') FROM t WHERE name = 'small';
+-- error: motion_to_bvh: unknown option "speed" (expected one of: order, frame_time, precision, root, rotations, rest_frame, lengths, free, siblings)
+
 SELECT motion_to_bvh(m, 3) FROM t WHERE name = 'small';
 -- error: motion_to_bvh: options (argument 2) must be a JSON object as text, got integer
 
