@@ -101,6 +101,8 @@ static const ax_function functions[] = {
     {"affect_build_info", 0, true, fn_build_info},
     {"motion_from_bvh", 1, false, ax_motion_from_bvh},
     {"motion_from_bvh", 2, false, ax_motion_from_bvh},
+    {"motion_bvh_error", 1, false, ax_motion_bvh_error},
+    {"motion_bvh_error", 2, false, ax_motion_bvh_error},
     {"motion_from_csv", 2, false, ax_motion_from_csv},
     {"motion_from_csv", 3, false, ax_motion_from_csv},
     {"motion_from_json", 1, false, ax_motion_from_json},
@@ -284,7 +286,9 @@ int sqlite3_affect_init(sqlite3 *db, char **err, const sqlite3_api_routines *api
         *err = sqlite3_mprintf("affect: cannot register motion_angles: %s", sqlite3_errmsg(db));
         return rc;
     }
-    rc = ax_register_laban(db);
+    static const ax_laban_cache_kind laban_caches[] = {{"rmlr", ax_gen_check_fit},
+                                                        {NULL, NULL}};
+    rc = ax_register_laban(db, laban_caches);
     if (rc != SQLITE_OK) {
         *err = sqlite3_mprintf("affect: cannot register laban: %s", sqlite3_errmsg(db));
         return rc;

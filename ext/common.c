@@ -12,24 +12,57 @@
 
 void ax_error(sqlite3_context *ctx, const affect_error *err)
 {
+    if (affect_nomem_named(err)) { /* a large request: say which, not a bare SQLITE_NOMEM */
+        ax_errorf(ctx, "%s: out of memory", err->msg);
+        return;
+    }
     if (err->status == AFFECT_ERR_NOMEM) {
         sqlite3_result_error_nomem(ctx);
+        return;
+    }
+    if (err->status == AFFECT_ERR_INTERRUPTED) { /* whatever context the core added */
+        ax_interrupted(ctx);
         return;
     }
     ax_errorf(ctx, "%s", err->msg);
 }
 
+void ax_interrupted(sqlite3_context *ctx)
+{
+    ax_errorf(ctx, "interrupted");
+    sqlite3_result_error_code(ctx, SQLITE_INTERRUPT);
+}
+
 void ax_errorf(sqlite3_context *ctx, const char *fmt, ...)
 {
-    char msg[AFFECT_ERROR_MSG_MAX + 512]; /* room for a list of the allowed option keys */
-    int n = snprintf(msg, sizeof msg, "%s: ", AX_NAME(ctx));
+    char raw[AFFECT_ERROR_MSG_MAX + 512]; /* room for a list of the allowed option keys */
+    char msg[sizeof raw];
+    int n = snprintf(raw, sizeof raw, "%s: ", AX_NAME(ctx));
     if (n < 0)
         n = 0;
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(msg + n, sizeof msg - (size_t)n, fmt, ap);
+    vsnprintf(raw + n, sizeof raw - (size_t)n, fmt, ap);
     va_end(ap);
+    /* what the message quotes (a name, a text argument) may not be UTF-8: clients decode it */
+    affect_escape_text(msg, sizeof msg, raw, strlen(raw));
     sqlite3_result_error(ctx, msg, -1);
+}
+
+char *ax_mprintf(const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    char *raw = sqlite3_vmprintf(fmt, ap);
+    va_end(ap);
+    if (!raw)
+        return NULL;
+    size_t len = strlen(raw);
+    char *msg = sqlite3_malloc64(4 * (sqlite3_uint64)len + 1); /* every byte may become \xNN */
+    if (msg)
+        affect_escape_text(msg, 4 * len + 1, raw, len);
+    sqlite3_free(raw);
+    return msg;
 }
 
 const char *ax_type_name(sqlite3_value *v)
@@ -62,7 +95,7 @@ ax_arg ax_arg_motion(sqlite3_context *ctx, sqlite3_value **argv, int i, affect_m
     affect_error err;
     if (affect_motion_decode(data, (size_t)n, out, &err)) {
         if (err.status == AFFECT_ERR_NOMEM)
-            sqlite3_result_error_nomem(ctx);
+            ax_error(ctx, &err);
         else
             ax_errorf(ctx, "argument %d is not a valid motion: %s", i + 1, err.msg);
         return AX_ERROR;
@@ -149,7 +182,19 @@ ax_arg ax_arg_double(sqlite3_context *ctx, sqlite3_value **argv, int i, double *
 void ax_result_motion(sqlite3_context *ctx, const affect_motion *m)
 {
     size_t n;
-    if (!affect_motion_encoded_size(m, &n) || n > 0x7fffffff) {
+    if (!affect_motion_encoded_size(m, &n)) {
+        /* a name the decoder would refuse (affect_motion_encode says which), or too large */
+        unsigned char *buf = NULL;
+        affect_error err;
+        if (affect_motion_encode(m, &buf, &n, &err) == AFFECT_ERR_INVALID) {
+            ax_error(ctx, &err);
+            return;
+        }
+        affect_free(buf);
+        sqlite3_result_error_toobig(ctx);
+        return;
+    }
+    if (n > 0x7fffffff) {
         sqlite3_result_error_toobig(ctx);
         return;
     }
@@ -398,4 +443,92 @@ ax_arg ax_opt_roles(sqlite3_context *ctx, const ax_opts *opts, const affect_moti
         }
     }
     return AX_OK;
+}
+
+/* ---- ax_monitor ---- */
+
+/* The probe counts to 100 so that it also runs about 1,000 VM steps: a progress handler
+ * installed with N ≤ 1,000 is asked at every poll, one with N = 10,000 every tenth (20–50 µs
+ * per poll, every 10 ms at most). */
+#define AX_PROBE_SQL                                                                              \
+    "WITH RECURSIVE c(i) AS (SELECT 1 UNION ALL SELECT i + 1 FROM c WHERE i < 100) "             \
+    "SELECT count(*) FROM c"
+
+static bool monitor_stop(void *arg)
+{
+    ax_monitor *am = arg;
+    if (!am->probe) {
+        int rc = sqlite3_prepare_v2(am->db, AX_PROBE_SQL, -1, &am->probe, NULL);
+        if ((rc & 0xff) == SQLITE_INTERRUPT) /* the parser refuses while one is pending */
+            return true;
+        if (rc != SQLITE_OK)
+            return false; /* out of memory: carry on rather than fail the call */
+    }
+    int rc = sqlite3_step(am->probe);
+    sqlite3_reset(am->probe);
+    return rc == SQLITE_INTERRUPT;
+}
+
+static void monitor_progress(void *arg, const char *stage, uint64_t done, uint64_t total)
+{
+    ax_monitor *am = arg;
+    if (!am->report)
+        return;
+    sqlite3_bind_text(am->report, 1, stage, -1, SQLITE_STATIC);
+    sqlite3_bind_int64(am->report, 2, (sqlite3_int64)done);
+    sqlite3_bind_int64(am->report, 3, (sqlite3_int64)total);
+    while (sqlite3_step(am->report) == SQLITE_ROW) {
+    }
+    sqlite3_reset(am->report);
+}
+
+int ax_monitor_begin_db(ax_monitor *am, sqlite3 *db, const char *progress_fn, char **errmsg)
+{
+    am->db = db;
+    am->probe = NULL;
+    am->report = NULL;
+    affect_monitor_init(&am->mon, monitor_stop, monitor_progress, am);
+    if (!progress_fn)
+        return SQLITE_OK;
+    char *sql = sqlite3_mprintf("SELECT \"%w\"(?1, ?2, ?3)", progress_fn);
+    if (!sql)
+        return SQLITE_NOMEM;
+    int rc = sqlite3_prepare_v2(db, sql, -1, &am->report, NULL);
+    sqlite3_free(sql);
+    if ((rc & 0xff) == SQLITE_NOMEM || (rc & 0xff) == SQLITE_INTERRUPT)
+        return rc & 0xff;
+    if (rc != SQLITE_OK) {
+        *errmsg = ax_mprintf("option \"progress\": %s", sqlite3_errmsg(db));
+        return *errmsg ? SQLITE_ERROR : SQLITE_NOMEM;
+    }
+    return SQLITE_OK;
+}
+
+ax_arg ax_monitor_begin(ax_monitor *am, sqlite3_context *ctx, const char *progress_fn)
+{
+    char *msg = NULL;
+    int rc = ax_monitor_begin_db(am, sqlite3_context_db_handle(ctx), progress_fn, &msg);
+    if (rc == SQLITE_OK)
+        return AX_OK;
+    if (rc == SQLITE_NOMEM)
+        sqlite3_result_error_nomem(ctx);
+    else if (rc == SQLITE_INTERRUPT)
+        ax_interrupted(ctx);
+    else
+        ax_errorf(ctx, "%s", msg);
+    sqlite3_free(msg);
+    ax_monitor_end(am);
+    return AX_ERROR;
+}
+
+bool ax_monitor_interrupted(ax_monitor *am)
+{
+    return monitor_stop(am);
+}
+
+void ax_monitor_end(ax_monitor *am)
+{
+    sqlite3_finalize(am->probe);
+    sqlite3_finalize(am->report);
+    am->probe = am->report = NULL;
 }

@@ -17,6 +17,7 @@ SQLITE_EXTENSION_INIT3
 
 #include "affect/base.h"
 #include "affect/json.h"
+#include "affect/monitor.h"
 #include "affect/motion.h"
 #include "affect/roles.h"
 
@@ -34,13 +35,24 @@ typedef enum ax_arg { AX_OK = 0, AX_NULL = 1, AX_ERROR = 2 } ax_arg;
 /* The function's name, as registered (sqlite3_user_data points at it). */
 #define AX_NAME(ctx) ((const char *)sqlite3_user_data(ctx))
 
-/* "fn: message" as the result error; AFFECT_ERR_NOMEM becomes SQLITE_NOMEM. */
+/* "fn: message" as the result error; AFFECT_ERR_NOMEM becomes SQLITE_NOMEM, except a large
+ * request named by affect_nomem_of, which is an error with its message: "affect_train: cannot
+ * allocate the 4032 x 95333 Fisher score block (2.9 GiB): out of memory" (a bare SQLITE_NOMEM
+ * says nothing, and clients such as Python drop its text). Every error
+ * message is one line of valid UTF-8: what it quotes from the input (a name, a text argument,
+ * BLOB bytes) goes through affect_escape_text, so control bytes and bytes that are not UTF-8
+ * become \xNN (clients such as Python decode messages as UTF-8). */
 void ax_error(sqlite3_context *ctx, const affect_error *err);
+/* "fn: interrupted" with the code SQLITE_INTERRUPT (a call stopped by sqlite3_interrupt). */
+void ax_interrupted(sqlite3_context *ctx);
 void ax_errorf(sqlite3_context *ctx, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 2, 3)))
 #endif
     ;
+/* sqlite3_mprintf (its %q, %w, …) with the result escaped as above, for virtual-table errors
+ * (zErrMsg); NULL when out of memory. */
+char *ax_mprintf(const char *fmt, ...);
 /* Name of a value's type for messages: "integer", "real", "text", "blob", "null". */
 const char *ax_type_name(sqlite3_value *v);
 
@@ -105,5 +117,34 @@ ax_arg ax_opt_up(sqlite3_context *ctx, const ax_opts *opts, int *up);
  * (null unassigns a role). */
 ax_arg ax_opt_roles(sqlite3_context *ctx, const ax_opts *opts, const affect_motion *m,
                     affect_roles *roles);
+
+/* ---- stopping long calls (affect/monitor.h) ----
+ * A long call runs with an ax_monitor whose stop hook steps a prepared "SELECT 1" on the
+ * calling connection: the step fails with SQLITE_INTERRUPT once sqlite3_interrupt() was called
+ * on the connection (SQLite 3.40, which has no sqlite3_is_interrupted, included) or once the
+ * connection's progress handler (which counts the probe's VM steps) asked to stop. With a
+ * progress function (the "progress" option: the name of an SQL function of 3 arguments), the
+ * monitor calls SELECT fn(stage, done, total) as the call advances; its result and errors are
+ * ignored.
+ *
+ *     ax_monitor am;
+ *     if (ax_monitor_begin(&am, ctx, progress_fn) != AX_OK) return;   (error reported)
+ *     cfg.monitor = &am.mon;  … the core call …   (AFFECT_ERR_INTERRUPTED: ax_error says so)
+ *     ax_monitor_end(&am);
+ */
+typedef struct ax_monitor {
+    affect_monitor mon;
+    sqlite3 *db;
+    sqlite3_stmt *probe;  /* SELECT 1, prepared at the first poll */
+    sqlite3_stmt *report; /* SELECT fn(?1, ?2, ?3), or NULL */
+} ax_monitor;
+
+/* progress_fn may be NULL; an unknown function is reported as "option \"progress\": …". */
+ax_arg ax_monitor_begin(ax_monitor *am, sqlite3_context *ctx, const char *progress_fn);
+/* The same for a virtual table's methods (no context; errors into *errmsg, sqlite3_malloc'd). */
+int ax_monitor_begin_db(ax_monitor *am, sqlite3 *db, const char *progress_fn, char **errmsg);
+void ax_monitor_end(ax_monitor *am);
+/* Asks now, unthrottled (an aggregate's step: see ext/seqs.c). */
+bool ax_monitor_interrupted(ax_monitor *am);
 
 #endif

@@ -279,6 +279,12 @@ static ax_arg row_label(sqlite3_context *ctx, sqlite3_value **argv, const cls_tr
         ax_errorf(ctx, "row %" PRIu64 ": label must not be empty or contain NUL", t->s.rows);
         return AX_ERROR;
     }
+    size_t len = strlen(*text), bad = affect_utf8_invalid_at(*text, len);
+    if (bad < len) { /* the classifier BLOB keeps labels as UTF-8 */
+        ax_errorf(ctx, "row %" PRIu64 ": label is not valid UTF-8 (byte 0x%02x at offset %zu)",
+                  t->s.rows, (unsigned char)(*text)[bad], bad);
+        return AX_ERROR;
+    }
     return AX_OK;
 }
 
@@ -390,8 +396,14 @@ static void train_final(sqlite3_context *ctx, cls_train *t)
         y[i] = (uint32_t)(hit - classes);
     }
     t->cfg.hmm = t->s.cfg;
-    if (affect_classifier_train(&t->cfg, t->s.feat, t->s.seqs, t->s.desc, y, n,
-                                (const char *const *)classes, n_classes, &c, &err)) {
+    ax_monitor am;
+    if (ax_monitor_begin(&am, ctx, t->s.progress) != AX_OK)
+        goto done;
+    t->cfg.hmm.monitor = &am.mon;
+    affect_status st = affect_classifier_train(&t->cfg, t->s.feat, t->s.seqs, t->s.desc, y, n,
+                                               (const char *const *)classes, n_classes, &c, &err);
+    ax_monitor_end(&am);
+    if (st) {
         ax_error(ctx, &err);
         goto done;
     }
@@ -490,7 +502,7 @@ static ax_arg arg_classifier(sqlite3_context *ctx, sqlite3_value **argv,
     affect_error err;
     if (affect_classifier_decode(data, n, &c, &err)) {
         if (err.status == AFFECT_ERR_NOMEM)
-            sqlite3_result_error_nomem(ctx);
+            ax_error(ctx, &err); /* SQLITE_NOMEM, or the large block it could not allocate */
         else
             ax_errorf(ctx, "argument 1 is not a valid classifier: %s", err.msg);
         return AX_ERROR;
@@ -899,9 +911,25 @@ void ax_affect_crossval_step(sqlite3_context *ctx, int argc, sqlite3_value **arg
     }
     s->groups = groups;
     s->groups[before] = NULL;
+    if (sqlite3_value_type(argv[2]) == SQLITE_BLOB) { /* the group names go into the JSON */
+        ax_errorf(ctx, "row %" PRIu64 ": group must be text or a number, got a BLOB", s->t.s.rows);
+        s->t.s.failed = true;
+        return;
+    }
     if (sqlite3_value_type(argv[2]) != SQLITE_NULL) {
         const char *g = (const char *)sqlite3_value_text(argv[2]);
-        s->groups[before] = g ? affect_strndup(g, strlen(g)) : NULL;
+        size_t len = g ? strlen(g) : 0, bad = g ? affect_utf8_invalid_at(g, len) : 0;
+        if (g && (len != (size_t)sqlite3_value_bytes(argv[2]) || bad < len)) {
+            if (bad < len)
+                ax_errorf(ctx,
+                          "row %" PRIu64 ": group is not valid UTF-8 (byte 0x%02x at offset %zu)",
+                          s->t.s.rows, (unsigned char)g[bad], bad);
+            else
+                ax_errorf(ctx, "row %" PRIu64 ": group must not contain NUL", s->t.s.rows);
+            s->t.s.failed = true;
+            return;
+        }
+        s->groups[before] = g ? affect_strndup(g, len) : NULL;
         if (!s->groups[before]) {
             sqlite3_result_error_nomem(ctx);
             s->t.s.failed = true;
@@ -1050,9 +1078,15 @@ static void cv_final(sqlite3_context *ctx, cv_state *s)
     cfg.threads = s->threads;
     if (s->verbose)
         cfg.progress = cv_progress;
-    if (affect_crossval(&cfg, s->t.s.feat, s->t.s.seqs, s->t.s.desc, y, n,
-                        (const char *const *)classes, n_classes, with_group ? g : NULL, n_groups,
-                        &r, &err)) {
+    ax_monitor am;
+    if (ax_monitor_begin(&am, ctx, s->t.s.progress) != AX_OK)
+        goto done;
+    cfg.cls.hmm.monitor = &am.mon;
+    affect_status st = affect_crossval(&cfg, s->t.s.feat, s->t.s.seqs, s->t.s.desc, y, n,
+                                       (const char *const *)classes, n_classes,
+                                       with_group ? g : NULL, n_groups, &r, &err);
+    ax_monitor_end(&am);
+    if (st) {
         ax_error(ctx, &err);
         goto done;
     }

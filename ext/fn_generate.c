@@ -21,8 +21,10 @@
  * used only for the index content it was fitted on (a rebuild that changes nothing keeps it; a
  * changed label, a recreated index of the same name or a copied `_info` row does not), and a
  * decoded or cached fit must also have the index's class, component and row counts, else it is
- * refitted. The components of the searches are L \ L′_target, or L \ (L′_source ∩ L′_target)
- * when the source emotion is known (affect_transfer_components): given (source_label), read
+ * refitted; the index's 'check' command validates the stored fit with ax_gen_check_fit. An
+ * index without labelled rows is an error ("index \"g\" is empty: …"). The components of the
+ * searches are L \ L′_target, or L \ (L′_source ∩ L′_target) when the source emotion is known
+ * (affect_transfer_components): given (source_label), read
  * from the index when the desired motion is one of its rows (same bytes), or recognized with a
  * classifier (option classifier: the classifier BLOB as hex text, e.g.
  * json_object('classifier', hex(model))).
@@ -178,6 +180,22 @@ static sqlite3_stmt *prepare(sqlite3_context *ctx, const char *what, const char 
     return st;
 }
 
+/* The content key of a cached fit: FNV-1a of the cache tag, the component names, and every
+ * labelled row's label and vector bytes. */
+static uint64_t rows_key(const ax_laban_rows *rows)
+{
+    uint64_t key = affect_fnv1a64((const unsigned char *)RMLR_CACHE_TAG, sizeof RMLR_CACHE_TAG);
+    for (int j = 0; j < N_COMP; j++)
+        key = affect_fnv1a64_update(key, (const unsigned char *)affect_laban_names[j],
+                                    strlen(affect_laban_names[j]) + 1);
+    for (uint32_t i = 0; i < rows->n; i++) {
+        const char *label = rows->labels[i];
+        key = affect_fnv1a64_update(key, (const unsigned char *)label, strlen(label) + 1);
+        key = affect_fnv1a64_update(key, rows->vectors + (size_t)i * 4 * N_COMP, 4 * N_COMP);
+    }
+    return key;
+}
+
 /* The index's rows (through the index's own API, vt_laban.h): ids, vectors (NaN kept for
  * now), labels, classes, and the content key of the cached fit. */
 static ax_arg index_rows(sqlite3_context *ctx, gen_index *ix)
@@ -194,6 +212,8 @@ static ax_arg index_rows(sqlite3_context *ctx, gen_index *ix)
     if (rc != SQLITE_OK) {
         if (rc == SQLITE_NOMEM)
             sqlite3_result_error_nomem(ctx);
+        else if (rc == SQLITE_INTERRUPT)
+            ax_interrupted(ctx);
         else
             ax_errorf(ctx, "index \"%s\": %s", ix->name, msg ? msg : "cannot be read");
         sqlite3_free(msg);
@@ -214,15 +234,10 @@ static ax_arg index_rows(sqlite3_context *ctx, gen_index *ix)
         sqlite3_result_error_nomem(ctx);
         goto done;
     }
-    ix->key = affect_fnv1a64((const unsigned char *)RMLR_CACHE_TAG, sizeof RMLR_CACHE_TAG);
-    for (int j = 0; j < N_COMP; j++)
-        ix->key = affect_fnv1a64_update(ix->key, (const unsigned char *)affect_laban_names[j],
-                                        strlen(affect_laban_names[j]) + 1);
+    ix->key = rows_key(&rows);
     for (uint32_t i = 0; i < n; i++) {
         const unsigned char *v = rows.vectors + (size_t)i * 4 * N_COMP;
         const char *label = rows.labels[i];
-        ix->key = affect_fnv1a64_update(ix->key, (const unsigned char *)label, strlen(label) + 1);
-        ix->key = affect_fnv1a64_update(ix->key, v, 4 * N_COMP);
         ix->ids[i] = rows.ids[i];
         for (int j = 0; j < N_COMP; j++)
             ix->x[(size_t)i * N_COMP + (size_t)j] = ax_get_f32(v + 4 * j);
@@ -258,6 +273,10 @@ static ax_arg index_load(sqlite3_context *ctx, const char *name, gen_index *ix)
     ix->name = name;
     if (index_rows(ctx, ix) != AX_OK)
         return AX_ERROR;
+    if (ix->n == 0) { /* nothing to fit, search or learn from */
+        ax_errorf(ctx, "index \"%s\" is empty: it holds no row with a label", name);
+        return AX_ERROR;
+    }
     /* missing components: the component's mean (0 when no row has it) */
     affect_impute_column_means(ix->x, ix->n, N_COMP);
     return AX_OK;
@@ -321,6 +340,106 @@ static void store_fit(sqlite3 *db, const gen_index *ix, uint64_t seed, uint32_t 
     affect_bw_free(&w);
 }
 
+/* Reads up to max_digits digits of base 10 or 16 (lower case) at p into *out, overflow-checked;
+ * the end, or NULL when there are none or too many. */
+static const char *parse_digits(const char *p, int base, int max_digits, uint64_t *out)
+{
+    uint64_t v = 0;
+    int n = 0;
+    for (;; p++, n++) {
+        int d = *p >= '0' && *p <= '9'              ? *p - '0'
+                : base == 16 && *p >= 'a' && *p <= 'f' ? *p - 'a' + 10
+                                                        : -1;
+        if (d < 0)
+            break;
+        if (n == max_digits || v > (UINT64_MAX - (uint64_t)d) / (uint64_t)base)
+            return NULL;
+        v = v * (uint64_t)base + (uint64_t)d;
+    }
+    *out = v;
+    return n ? p : NULL;
+}
+
+/* A fit's key as fit_key writes it: content key, rows, seed, folds. */
+static bool parse_fit_key(const char *tag, uint64_t out[4])
+{
+    const char *p = parse_digits(tag, 16, 16, &out[0]);
+    for (int i = 1; i < 4 && p; i++)
+        p = *p == ':' ? parse_digits(p + 1, 10, 20, &out[i]) : NULL;
+    return p && *p == '\0' && p - tag <= 80 && out[1] <= UINT32_MAX && out[3] <= UINT32_MAX;
+}
+
+int ax_gen_check_fit(const ax_laban_rows *rows, const char *tag, const void *blob, int size,
+                     char **why)
+{
+    *why = NULL;
+    uint64_t key[4];
+    affect_rmlr *fit = NULL;
+    char *what = NULL;
+    bool bad = true;
+    int rc = SQLITE_OK;
+    affect_br r;
+    affect_br_init(&r, blob, size > 0 ? (size_t)size : 0);
+    affect_error err;
+    if (!parse_fit_key(tag, key)) {
+        what = sqlite3_mprintf("its key \"%.40s\" is not content:rows:seed:folds as "
+                               "laban_salient writes it",
+                               tag);
+    } else if (affect_rmlr_decode(&r, &fit, &err)) {
+        if (err.status == AFFECT_ERR_NOMEM) {
+            rc = SQLITE_NOMEM;
+            goto done;
+        }
+        what = sqlite3_mprintf("it is not an RMLR fit (%s)", err.msg);
+    } else if (r.off != r.size) {
+        what = sqlite3_mprintf("%llu bytes follow the RMLR fit",
+                               (unsigned long long)(r.size - r.off));
+    } else if (affect_rmlr_n_features(fit) != N_COMP) {
+        what = sqlite3_mprintf("the fit has %llu components, expected %d",
+                               (unsigned long long)affect_rmlr_n_features(fit), N_COMP);
+    } else if (affect_rmlr_n_train(fit) != key[1]) {
+        what = sqlite3_mprintf("the fit has %u rows, its key says %llu", affect_rmlr_n_train(fit),
+                               (unsigned long long)key[1]);
+    } else if (key[0] == rows_key(rows)) {
+        /* the fit of the index's current rows: it must have their shape */
+        const char **sorted = affect_malloc_array(rows->n ? rows->n : 1, sizeof *sorted);
+        if (!sorted) {
+            rc = SQLITE_NOMEM;
+            goto done;
+        }
+        for (uint32_t i = 0; i < rows->n; i++)
+            sorted[i] = rows->labels[i];
+        qsort(sorted, rows->n, sizeof *sorted, cmp_text);
+        uint32_t classes = 0;
+        for (uint32_t i = 0; i < rows->n; i++)
+            classes += i == 0 || strcmp(sorted[i], sorted[i - 1]) != 0;
+        affect_free(sorted);
+        if (affect_rmlr_n_train(fit) != rows->n)
+            what = sqlite3_mprintf("its key names the index's rows, but the fit has %u rows and "
+                                   "the index %u",
+                                   affect_rmlr_n_train(fit), rows->n);
+        else if (affect_rmlr_n_classes(fit) != classes)
+            what = sqlite3_mprintf("its key names the index's rows, but the fit has %u classes "
+                                   "and the index %u labels",
+                                   affect_rmlr_n_classes(fit), classes);
+        else
+            bad = false;
+    } else {
+        bad = false; /* the fit of other rows (before a change): unused, replaced by the next */
+    }
+    if (bad) {
+        *why = what ? sqlite3_mprintf("%s; the next laban_salient or affect_generate on the "
+                                      "index replaces it",
+                                      what)
+                    : NULL;
+        rc = *why ? SQLITE_ERROR : SQLITE_NOMEM;
+    }
+done:
+    sqlite3_free(what);
+    affect_rmlr_free(fit);
+    return rc;
+}
+
 /* The index's RMLR fit: from this function's cache, the index's _info, or fitted now (the
  * α grid in `threads` threads; the fit does not depend on it). */
 static ax_arg rmlr_fit(sqlite3_context *ctx, const gen_index *ix, uint64_t seed,
@@ -349,9 +468,16 @@ static ax_arg rmlr_fit(sqlite3_context *ctx, const gen_index *ix, uint64_t seed,
         o.lambda_min_ratio = 0.01; /* the weakly penalized end of the path converges slowly
                                       and is never chosen on these data */
         affect_error err;
-        if (affect_rmlr_cv(ix->x, ix->n, N_COMP, ix->y, ix->n_classes, &o, &fit, &err)) {
-            if (err.status == AFFECT_ERR_NOMEM)
-                sqlite3_result_error_nomem(ctx);
+        ax_monitor am;
+        if (ax_monitor_begin(&am, ctx, NULL) != AX_OK)
+            return AX_ERROR;
+        o.monitor = &am.mon;
+        affect_status st = affect_rmlr_cv(ix->x, ix->n, N_COMP, ix->y, ix->n_classes, &o, &fit,
+                                          &err);
+        ax_monitor_end(&am);
+        if (st) {
+            if (err.status == AFFECT_ERR_NOMEM || err.status == AFFECT_ERR_INTERRUPTED)
+                ax_error(ctx, &err);
             else
                 ax_errorf(ctx, "salient components of \"%s\": %s", ix->name, err.msg);
             return AX_ERROR;
@@ -899,8 +1025,13 @@ static ax_arg rank_by_action(sqlite3_context *ctx, const gen_index *ix, const af
     }
     if (load_motions(ctx, ix, nb->ids, n, cand) != AX_OK)
         goto done;
-    if (affect_generate_rank_by_action(m, (const affect_motion *const *)cand, n, order, dtw,
-                                       &err)) {
+    ax_monitor am;
+    if (ax_monitor_begin(&am, ctx, NULL) != AX_OK)
+        goto done;
+    affect_status st = affect_generate_rank_by_action(m, (const affect_motion *const *)cand, n,
+                                                      order, dtw, &am.mon, &err);
+    ax_monitor_end(&am);
+    if (st) {
         ax_error(ctx, &err);
         goto done;
     }
@@ -1196,11 +1327,15 @@ static ax_arg choose_by_action(sqlite3_context *ctx, const gen_index *ix, uint32
         affect_error err;
         if (m < 2)
             continue;
+        ax_monitor am;
+        affect_status st = AFFECT_OK;
         if (load_motions(ctx, ix, &aid, 1, &a) != AX_OK ||
-            load_motions(ctx, ix, ids, m, cand) != AX_OK) {
+            load_motions(ctx, ix, ids, m, cand) != AX_OK ||
+            ax_monitor_begin(&am, ctx, NULL) != AX_OK) {
             r = AX_ERROR;
-        } else if (affect_generate_rank_by_action(a, (const affect_motion *const *)cand, m,
-                                                  order, NULL, &err)) {
+        } else if ((st = affect_generate_rank_by_action(a, (const affect_motion *const *)cand, m,
+                                                        order, NULL, &am.mon, &err)),
+                   ax_monitor_end(&am), st) {
             ax_error(ctx, &err);
             r = AX_ERROR;
         } else {
@@ -1446,8 +1581,15 @@ static void run_generation(sqlite3_context *ctx, int argc, sqlite3_value **argv,
     if (load_motions(ctx, &ix, nb->ids, nb->n, motions) != AX_OK)
         goto done;
     affect_error err;
-    if (affect_generate(m, (const affect_motion *const *)motions, nb->n, &o.g, &out, &rep,
-                        &err)) {
+    ax_monitor am;
+    if (ax_monitor_begin(&am, ctx, NULL) != AX_OK)
+        goto done;
+    o.g.monitor = &am.mon;
+    affect_status st = affect_generate(m, (const affect_motion *const *)motions, nb->n, &o.g, &out,
+                                       &rep, &err);
+    o.g.monitor = NULL;
+    ax_monitor_end(&am);
+    if (st) {
         ax_error(ctx, &err);
         goto done;
     }
@@ -1488,10 +1630,15 @@ void ax_motion_dtw(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     if (ax_arg_motion(ctx, argv, 0, &a) == AX_OK && ax_arg_motion(ctx, argv, 1, &b) == AX_OK) {
         double d;
         affect_error err;
-        if (affect_dtw_distance(a, b, &d, &err))
-            ax_error(ctx, &err);
-        else
-            sqlite3_result_double(ctx, d);
+        ax_monitor am;
+        if (ax_monitor_begin(&am, ctx, NULL) == AX_OK) {
+            affect_status st = affect_dtw_distance(a, b, &d, &am.mon, &err);
+            ax_monitor_end(&am);
+            if (st)
+                ax_error(ctx, &err);
+            else
+                sqlite3_result_double(ctx, d);
+        }
     }
     affect_motion_free(a);
     affect_motion_free(b);

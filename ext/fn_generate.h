@@ -8,6 +8,7 @@
 #define AFFECT_EXT_FN_GENERATE_H
 
 #include "fn_motion.h"
+#include "vt_laban.h"
 
 typedef struct ax_gen_fn ax_gen_fn;
 ax_gen_fn *ax_gen_fn_new(const char *name);
@@ -17,5 +18,11 @@ AX_FN(ax_affect_generate);
 AX_FN(ax_affect_generate_explain);
 AX_FN(ax_laban_salient);
 AX_FN(ax_motion_dtw);
+
+/* The 'check' of a laban index's cache entry "rmlr" (ax_laban_cache_kind, vt_laban.h): the
+ * stored RMLR fit must decode exactly, with the 27 components and the row count of its key;
+ * a fit whose key names the index's current rows must also have its classes. */
+int ax_gen_check_fit(const ax_laban_rows *rows, const char *tag, const void *blob,
+                     int size, char **why);
 
 #endif

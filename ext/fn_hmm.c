@@ -104,7 +104,13 @@ void ax_hmm_train_final(sqlite3_context *ctx)
             sqlite3_result_null(ctx);
         goto done;
     }
-    if (affect_hmm_train(&ts->cfg, ts->seqs, ts->n_seqs, &h, &err)) {
+    ax_monitor am;
+    if (ax_monitor_begin(&am, ctx, ts->progress) != AX_OK)
+        goto done;
+    ts->cfg.monitor = &am.mon;
+    affect_status st = affect_hmm_train(&ts->cfg, ts->seqs, ts->n_seqs, &h, &err);
+    ax_monitor_end(&am);
+    if (st) {
         ax_error(ctx, &err);
         goto done;
     }
@@ -178,7 +184,7 @@ static ax_arg arg_model(sqlite3_context *ctx, sqlite3_value **argv, model_arg *m
     if (affect_hmm_blob_decode(data, (size_t)n, &ref->h, &ref->f, &err)) {
         sqlite3_free(ref);
         if (err.status == AFFECT_ERR_NOMEM)
-            sqlite3_result_error_nomem(ctx);
+            ax_error(ctx, &err); /* SQLITE_NOMEM, or the large block it could not allocate */
         else
             ax_errorf(ctx, "argument 1 is not a valid model: %s", err.msg);
         return AX_ERROR;

@@ -45,7 +45,61 @@ static void finish_text(sqlite3_context *ctx, affect_status st, char **text, siz
 
 /* ---- import ---- */
 
-static const char *const bvh_keys[] = {"unit", "scale", NULL};
+/* motion_from_bvh's options; motion_bvh_error takes the same but "on_error" */
+static const char *const bvh_keys[] = {"unit", "scale", "max_samples", "on_error", NULL};
+static const char *const bvh_error_keys[] = {"unit", "scale", "max_samples", NULL};
+static const char *const on_error_choices[] = {"raise", "null", NULL};
+
+/* The option "max_samples" of the importers (frames × joints at most; absent: the core's
+ * default, AFFECT_MOTION_MAX_SAMPLES): a whole number from 1 to the most a motion can hold. */
+static ax_arg max_samples_option(sqlite3_context *ctx, const ax_opts *opts, uint64_t *out)
+{
+    double v = 0;
+    if (!ax_opt(opts, "max_samples"))
+        return AX_OK;
+    if (ax_opt_number(ctx, opts, "max_samples", &v))
+        return AX_ERROR;
+    double top = (double)AFFECT_MOTION_MAX_FRAMES * AFFECT_MOTION_MAX_JOINTS;
+    if (!(v >= 1 && v <= top) || v != floor(v)) {
+        ax_errorf(ctx, "option \"max_samples\" must be a whole number from 1 to %.0f, got %g", top,
+                  v);
+        return AX_ERROR;
+    }
+    *out = (uint64_t)v;
+    return AX_OK;
+}
+
+/* Reads the options "unit", "scale" and "max_samples" into *bo and checks the unit before any
+ * text is read (the core checks it only after the hierarchy), so that a bad option is never
+ * taken for a bad file: the unit is tried on a one-frame motion. */
+static ax_arg bvh_options(sqlite3_context *ctx, const ax_opts *opts, affect_bvh_options *bo)
+{
+    if (ax_opt_string(ctx, opts, "unit", &bo->unit) ||
+        ax_opt_number(ctx, opts, "scale", &bo->scale) ||
+        max_samples_option(ctx, opts, &bo->max_samples))
+        return AX_ERROR;
+    if (!bo->unit)
+        return AX_OK;
+    affect_motion *probe = NULL;
+    affect_error err;
+    affect_status st = affect_motion_create(1, 1, 30.0, &probe, &err);
+    if (!st)
+        st = affect_motion_set_unit(probe, bo->unit, &err);
+    affect_motion_free(probe);
+    if (st) {
+        ax_error(ctx, &err);
+        return AX_ERROR;
+    }
+    return AX_OK;
+}
+
+/* Whether a failed import is the text's fault (malformed, or too large) rather than the
+ * call's: the options are checked first (bvh_options; the core reports a bad scale as
+ * AFFECT_ERR_INVALID before reading), and running out of memory is never the text's. */
+static bool bvh_text_error(affect_status st)
+{
+    return st != AFFECT_OK && st != AFFECT_ERR_NOMEM && st != AFFECT_ERR_INVALID;
+}
 
 void ax_motion_from_bvh(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 {
@@ -56,17 +110,55 @@ void ax_motion_from_bvh(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     ax_opts opts;
     if (ax_opts_parse(ctx, argc, argv, 1, bvh_keys, &opts))
         return;
-    affect_bvh_options bo = {1.0, NULL};
+    affect_bvh_options bo = {1.0, NULL, 0};
     affect_motion *m = NULL;
     affect_error err;
-    if (ax_opt_string(ctx, &opts, "unit", &bo.unit) || ax_opt_number(ctx, &opts, "scale", &bo.scale))
+    affect_status st;
+    int on_error = 0; /* index in on_error_choices: 0 raise, 1 null */
+    if (ax_opt_enum(ctx, &opts, "on_error", on_error_choices, &on_error) ||
+        bvh_options(ctx, &opts, &bo))
         goto done;
-    finish_motion(ctx, affect_bvh_parse(text, len, &bo, &m, &err), &m, &err);
+    st = affect_bvh_parse(text, len, &bo, &m, &err);
+    if (on_error == 1 && bvh_text_error(st))
+        sqlite3_result_null(ctx); /* m is NULL: the core sets it only on success */
+    else
+        finish_motion(ctx, st, &m, &err);
 done:
     ax_opts_free(&opts);
 }
 
-static const char *const csv_keys[] = {"header", "delimiter", "unit", "parents", NULL};
+/* motion_bvh_error(bvh [, options]): NULL when motion_from_bvh(bvh, options) imports the text,
+ * else the message it would raise, without its "motion_from_bvh: " prefix ("line 57: …").
+ * Bad options and out of memory are raised, as motion_from_bvh raises them. */
+void ax_motion_bvh_error(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    const char *text;
+    size_t len;
+    if (ax_arg_document(ctx, argv, 0, &text, &len) != AX_OK)
+        return;
+    ax_opts opts;
+    if (ax_opts_parse(ctx, argc, argv, 1, bvh_error_keys, &opts))
+        return;
+    affect_bvh_options bo = {1.0, NULL, 0};
+    affect_motion *m = NULL;
+    affect_error err;
+    affect_status st;
+    if (bvh_options(ctx, &opts, &bo))
+        goto done;
+    st = affect_bvh_parse(text, len, &bo, &m, &err);
+    affect_motion_free(m);
+    if (st == AFFECT_OK)
+        sqlite3_result_null(ctx);
+    else if (bvh_text_error(st))
+        sqlite3_result_text(ctx, err.msg, -1, SQLITE_TRANSIENT);
+    else
+        ax_error(ctx, &err);
+done:
+    ax_opts_free(&opts);
+}
+
+static const char *const csv_keys[] = {"header", "delimiter", "unit", "parents", "max_samples",
+                                       NULL};
 
 /* The "parents" option: one item per joint, a parent's index, its name, or null / −1 for a
  * root. */
@@ -137,7 +229,9 @@ void ax_motion_from_csv(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         ax_errorf(ctx, "option \"header\" must be true, false or \"auto\"");
         goto done;
     }
-    if (ax_opt_string(ctx, &opts, "delimiter", &delim) || ax_opt_string(ctx, &opts, "unit", &co.unit))
+    if (ax_opt_string(ctx, &opts, "delimiter", &delim) ||
+        ax_opt_string(ctx, &opts, "unit", &co.unit) ||
+        max_samples_option(ctx, &opts, &co.max_samples))
         goto done;
     if (delim) {
         if (strlen(delim) != 1) {

@@ -8,6 +8,7 @@
 
 #define AX_FN(name) void name(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 AX_FN(ax_motion_from_bvh);
+AX_FN(ax_motion_bvh_error);
 AX_FN(ax_motion_from_csv);
 AX_FN(ax_motion_from_json);
 AX_FN(ax_motion_to_json);

@@ -59,6 +59,9 @@ void ax_seqs_free(ax_seqs *ts)
     affect_free(ts->joints);
     affect_features_free(ts->feat);
     sqlite3_free(ts->opts_text);
+    sqlite3_free(ts->progress);
+    if (ts->probing)
+        ax_monitor_end(&ts->probe);
     sqlite3_free(ts);
 }
 
@@ -138,6 +141,13 @@ ax_arg ax_seqs_options(sqlite3_context *ctx, int argc, sqlite3_value **argv, int
         ax_opt_enum(ctx, opts, "frame", frames, &frame) ||
         ax_opt_bool(ctx, opts, "root", &ts->fo.root))
         goto done;
+    const char *progress = NULL;
+    if (ax_opt_string(ctx, opts, "progress", &progress))
+        goto done;
+    if (progress && !(ts->progress = sqlite3_mprintf("%s", progress))) {
+        sqlite3_result_error_nomem(ctx);
+        goto done;
+    }
     ts->fo.frame = frame ? AFFECT_FEATURES_FRAME_BODY : AFFECT_FEATURES_FRAME_FIRST;
     ts->cfg.cov = cov ? AFFECT_HMM_DIAG : AFFECT_HMM_FULL;
     ts->cfg.topology = topology ? AFFECT_HMM_LEFT_RIGHT : AFFECT_HMM_ERGODIC;
@@ -206,7 +216,7 @@ static ax_arg same_options(sqlite3_context *ctx, int argc, sqlite3_value **argv,
 void ax_seqs_row_error(sqlite3_context *ctx, const ax_seqs *ts, const affect_error *err)
 {
     if (err->status == AFFECT_ERR_NOMEM)
-        sqlite3_result_error_nomem(ctx);
+        ax_error(ctx, err); /* SQLITE_NOMEM, or the large block it could not allocate */
     else
         ax_errorf(ctx, "row %" PRIu64 ": %s", ts->rows, err->msg);
 }
@@ -299,6 +309,27 @@ ax_arg ax_seqs_add(sqlite3_context *ctx, int argc, sqlite3_value **argv, ax_seqs
     }
     if (affect_features_extract(ts->feat, m, &x, &n_frames, &err)) {
         ax_seqs_row_error(ctx, ts, &err);
+        goto done;
+    }
+    /* An interrupt that SQLite notices between rows ends the scan, and SQLite 3.40 then runs
+     * xFinal while resetting the statement, when the interrupt is no longer visible: the
+     * training would run whole for nothing. So every row asks too, and a stopped aggregate
+     * only frees in xFinal (what is left: an interrupt in the microseconds between this
+     * question and SQLite's own). */
+    if (!ts->probing) {
+        char *msg = NULL;
+        if (ax_monitor_begin_db(&ts->probe, sqlite3_context_db_handle(ctx), NULL, &msg) !=
+            SQLITE_OK) {
+            sqlite3_free(msg);
+            affect_free(x);
+            sqlite3_result_error_nomem(ctx);
+            goto done;
+        }
+        ts->probing = true;
+    }
+    if (ax_monitor_interrupted(&ts->probe)) {
+        affect_free(x);
+        ax_interrupted(ctx);
         goto done;
     }
     ts->seqs[ts->n_seqs].x = x;

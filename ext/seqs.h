@@ -35,12 +35,16 @@ typedef struct ax_seqs {
     unsigned desc_mask;      /* set by the caller before the rows: descriptors to compute */
     double *desc;            /* n_seqs × affect_descriptors_dim(desc_mask), or NULL */
     uint64_t rows;           /* rows seen, NULL motions included */
+    char *progress;          /* the "progress" option: an SQL function's name, or NULL */
+    ax_monitor probe;        /* asked after every row (see ax_seqs_add) */
+    bool probing;            /* probe begun */
 } ax_seqs;
 
 /* The HMM and observation option keys (states … seed), for building an allowed-keys list. */
 #define AX_SEQS_KEYS                                                                              \
     "states", "mixtures", "covariance", "topology", "max_jump", "start", "joints", "normalize",  \
-        "scale", "up", "velocity", "frame", "root", "max_iter", "tol", "reg", "seed"
+        "scale", "up", "velocity", "frame", "root", "max_iter", "tol", "reg", "seed", \
+        "progress"
 
 /* Parses the first row's options (argument opt_i; keys must be in allowed) into opts and reads
  * the HMM and observation keys into ts; on AX_OK the caller frees opts. */

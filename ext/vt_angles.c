@@ -97,7 +97,7 @@ static int vtab_error(sqlite3_vtab *vt, const affect_error *err)
     if (err->status == AFFECT_ERR_NOMEM)
         return SQLITE_NOMEM;
     sqlite3_free(vt->zErrMsg);
-    vt->zErrMsg = sqlite3_mprintf("motion_angles: %s", err->msg);
+    vt->zErrMsg = ax_mprintf("motion_angles: %s", err->msg);
     return vt->zErrMsg ? SQLITE_ERROR : SQLITE_NOMEM;
 }
 

@@ -84,11 +84,19 @@
  *                                  -- when the content row is gone or its motion is NULL; a row
  *                                  -- whose motion is byte-identical only gets its label updated)
  *   INSERT INTO motion_laban(motion_laban, rowid) VALUES('delete', 12);
- *   INSERT INTO motion_laban(motion_laban) VALUES('check');  -- fails if any row is stale
+ *   INSERT INTO motion_laban(motion_laban) VALUES('check');  -- fails if anything is wrong
  * Stale handling: the index does not watch the content table. 'check' compares every indexed
  * row with it (rows present, motion length and FNV-1a hash, label) and names the first stale
  * rowid; 'rebuild' fixes everything; sql/laban_triggers.sql installs triggers that issue
  * 'refresh' and 'delete' so the index follows each change.
+ * Corruption: a stored vector is sound when it is a BLOB of 27 × 4 bytes whose every component
+ * is a finite number >= 0 (every Laban component is a magnitude) or the missing marker (NaN,
+ * bits 0x7fc00000 exactly). 'check' validates every stored vector first, then the staleness,
+ * then every cache entry of _info (ax_laban_cache_put; each kind checked by the validator
+ * registered with the module, e.g. the RMLR fit must decode and fit the index's shape), and
+ * names the first rowid or entry that is wrong. Every reader of the vectors (queries, scans,
+ * ax_laban_read) refuses a corrupt one: "stored vector of rowid 17 is corrupt (1 bytes,
+ * expected 108); run INSERT INTO …('rebuild')".
  *
  * Trust. The table reads another table (of its own database only, so a schema cannot use it
  * to reach an attached database) and writes only its shadow tables. It is not marked
@@ -156,6 +164,7 @@ typedef struct lab_vtab {
     affect_laban_options opt;
     lab_cache *cache;
     bool dirty;                    /* _info statistics are out of date until xSync */
+    const ax_laban_cache_kind *caches; /* the module's aux: what 'check' validates in _info */
 } lab_vtab;
 
 typedef struct lab_hit {
@@ -189,8 +198,10 @@ static int lab_error(char **dst, const char *fmt, ...)
     va_start(ap, fmt);
     sqlite3_str_vappendf(s, fmt, ap);
     va_end(ap);
+    char *raw = sqlite3_str_finish(s);
     sqlite3_free(*dst);
-    *dst = sqlite3_str_finish(s);
+    *dst = raw ? ax_mprintf("%s", raw) : NULL; /* valid UTF-8 whatever it quotes */
+    sqlite3_free(raw);
     return *dst ? SQLITE_ERROR : SQLITE_NOMEM;
 }
 
@@ -199,7 +210,8 @@ static int lab_db_error(char **dst, sqlite3 *db, int rc)
 {
     if ((rc & 0xff) == SQLITE_NOMEM)
         return SQLITE_NOMEM;
-    return lab_error(dst, "%s", sqlite3_errmsg(db));
+    int code = lab_error(dst, "%s", sqlite3_errmsg(db));
+    return code != SQLITE_NOMEM && (rc & 0xff) == SQLITE_INTERRUPT ? SQLITE_INTERRUPT : code;
 }
 
 /* A core error: out of memory becomes SQLITE_NOMEM, anything else "laban: <prefix><msg>". */
@@ -283,6 +295,76 @@ static float lab_to_float(double v)
     return fabs(v) <= FLT_MAX ? (float)v : NAN; /* NaN, ±inf and overflow are missing */
 }
 
+
+/* The bits of the missing marker, a quiet NaN. */
+#define LAB_MISSING_BITS 0x7fc00000u
+
+/* Whether a stored vector (a value of _data's vector column: its type, bytes and length) is
+ * corrupt, and then what is wrong in why: not a BLOB, not LAB_VECTOR_BYTES long, or a
+ * component that is neither a finite number >= 0 (every component is a magnitude; -0 is
+ * accepted) nor the missing marker. p may be NULL only when n is 0. */
+static bool lab_vector_corrupt(int type, const unsigned char *p, int n, char *why, int size)
+{
+    static const char *const types[] = {"", "integer", "real", "text", "blob", "null"};
+    if (type != SQLITE_BLOB) {
+        sqlite3_snprintf(size, why, "%s, expected a BLOB of %d bytes",
+                         types[type >= 1 && type <= 5 ? type : 5], LAB_VECTOR_BYTES);
+        return true;
+    }
+    if (n != LAB_VECTOR_BYTES) {
+        sqlite3_snprintf(size, why, "%d bytes, expected %d", n, LAB_VECTOR_BYTES);
+        return true;
+    }
+    for (int j = 0; j < LAB_N; j++) {
+        const unsigned char *b = p + 4 * j;
+        uint32_t bits = (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 |
+                        (uint32_t)b[3] << 24;
+        float f = ax_get_f32(b);
+        if (bits == LAB_MISSING_BITS || (isfinite(f) && f >= 0))
+            continue;
+        char what[40];
+        if (isnan(f))
+            sqlite3_snprintf(sizeof what, what, "NaN 0x%08x", bits);
+        else if (isinf(f))
+            sqlite3_snprintf(sizeof what, what, "%s", f > 0 ? "inf" : "-inf");
+        else
+            sqlite3_snprintf(sizeof what, what, "%.9g", (double)f);
+        sqlite3_snprintf(size, why, "%s is %s, expected a finite number >= 0 or NaN 0x%08x for "
+                                    "missing",
+                         affect_laban_names[j], what, LAB_MISSING_BITS);
+        return true;
+    }
+    return false;
+}
+
+/* An index name for a message: as is when it is a plain identifier, else quoted;
+ * sqlite3_free it (NULL: out of memory). */
+static char *lab_ident(const char *name)
+{
+    bool plain = (name[0] < '0' || name[0] > '9') &&
+                 strspn(name, "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                              "0123456789_") == strlen(name);
+    return sqlite3_mprintf(plain ? "%s" : "\"%w\"", name);
+}
+
+/* "stored vector of rowid 17 is corrupt (1 bytes, expected 108); run INSERT INTO g(g)
+ * VALUES('rebuild')", with prefix in front (and ", and N more are" after the parenthesis when
+ * more > 0); NULL when out of memory. */
+static char *lab_corrupt_message(const char *prefix, const char *name, sqlite3_int64 id,
+                                 const char *why, sqlite3_int64 more)
+{
+    char *ident = lab_ident(name);
+    char others[48] = "";
+    if (more > 0)
+        sqlite3_snprintf(sizeof others, others, ", and %lld more %s", more,
+                         more == 1 ? "is" : "are");
+    char *msg = ident ? sqlite3_mprintf("%sstored vector of rowid %lld is corrupt (%s)%s; run "
+                                        "INSERT INTO %s(%s) VALUES('rebuild')",
+                                        prefix, id, why, others, ident, ident)
+                      : NULL;
+    sqlite3_free(ident);
+    return msg;
+}
 
 /* 64-bit FNV-1a, stored as the signed integer with the same bits. */
 static sqlite3_int64 lab_fnv1a(const unsigned char *p, size_t n)
@@ -487,16 +569,18 @@ static int lab_cache_load(lab_vtab *vt, sqlite3_int64 generation, char **err, la
         if ((rc = lab_cache_grow(c)) != SQLITE_OK)
             goto done;
         sqlite3_int64 id = sqlite3_column_int64(st, 0);
+        int type = sqlite3_column_type(st, 2); /* before the conversions of column_blob */
         const unsigned char *vec = sqlite3_column_blob(st, 2);
         int bytes = sqlite3_column_bytes(st, 2);
         if (!vec && bytes > 0) {
             rc = SQLITE_NOMEM;
             goto done;
         }
-        if (sqlite3_column_type(st, 2) != SQLITE_BLOB || bytes != LAB_VECTOR_BYTES) {
-            rc = lab_error(err, "the index is corrupt: row %lld of %s_data has a vector of %d "
-                                "bytes, expected %d; run 'rebuild'",
-                           id, vt->name, bytes, LAB_VECTOR_BYTES);
+        char why[160];
+        if (lab_vector_corrupt(type, vec, bytes, why, sizeof why)) {
+            char *msg = lab_corrupt_message("", vt->name, id, why, 0);
+            rc = msg ? lab_error(err, "%s", msg) : SQLITE_NOMEM;
+            sqlite3_free(msg);
             goto done;
         }
         size_t i = c->n;
@@ -821,7 +905,8 @@ static bool lab_is_column_name(const char *name)
 }
 
 /* Parses the arguments and declares the schema (shared by xCreate and xConnect). */
-static int lab_init(sqlite3 *db, int argc, const char *const *argv, lab_vtab **out, char **err)
+static int lab_init(sqlite3 *db, void *aux, int argc, const char *const *argv, lab_vtab **out,
+                    char **err)
 {
     lab_args a;
     memset(&a, 0, sizeof a);
@@ -833,6 +918,7 @@ static int lab_init(sqlite3 *db, int argc, const char *const *argv, lab_vtab **o
         return SQLITE_NOMEM;
     memset(vt, 0, sizeof *vt);
     vt->db = db;
+    vt->caches = aux;
     for (int i = 3; i < argc; i++)
         if ((rc = lab_parse_arg(argv[i], &a, err)) != SQLITE_OK)
             goto done;
@@ -1147,18 +1233,22 @@ done:
     return rc;
 }
 
-/* 'check': every indexed row against the content table. */
+static int lab_check_caches(lab_vtab *vt, char **err);
+
+/* 'check': every stored vector sound, every indexed row current with the content table, every
+ * cache entry sound (lab_check_caches), in that order; the first problem is the error. */
 static int lab_check(lab_vtab *vt, char **err)
 {
     sqlite3_stmt *cs = NULL, *is = NULL;
     int rc = lab_prepare(vt->db, err, &cs, "SELECT rowid, \"%w\", \"%w\" FROM \"%w\".\"%w\" "
                                            "WHERE \"%w\" IS NOT NULL ORDER BY rowid",
                          vt->label, vt->motion, vt->schema, vt->content, vt->motion);
-    if (rc || (rc = lab_prepare(vt->db, err, &is, "SELECT id, label, msize, mhash FROM "
+    if (rc || (rc = lab_prepare(vt->db, err, &is, "SELECT id, label, msize, mhash, vector FROM "
                                                   "\"%w\".\"%w_data\" ORDER BY id",
                                 vt->schema, vt->name)) != SQLITE_OK)
         goto done;
-    sqlite3_int64 stale = 0, first = 0;
+    sqlite3_int64 stale = 0, first = 0, corrupt = 0, first_corrupt = 0;
+    char why[160];
     int rc_c = sqlite3_step(cs), rc_i = sqlite3_step(is);
     while (rc_c == SQLITE_ROW || rc_i == SQLITE_ROW) {
         sqlite3_int64 cid = rc_c == SQLITE_ROW ? sqlite3_column_int64(cs, 0) : INT64_MAX;
@@ -1186,6 +1276,20 @@ static int lab_check(lab_vtab *vt, char **err)
         sqlite3_int64 id = cid < iid ? cid : iid;
         if (!ok && stale++ == 0)
             first = id;
+        if (rc_i == SQLITE_ROW && iid == id) {
+            int type = sqlite3_column_type(is, 4); /* before the conversions of column_blob */
+            const unsigned char *vec = sqlite3_column_blob(is, 4);
+            int bytes = sqlite3_column_bytes(is, 4);
+            if (!vec && bytes > 0) {
+                rc = SQLITE_NOMEM;
+                goto done;
+            }
+            char w[sizeof why];
+            if (lab_vector_corrupt(type, vec, bytes, w, sizeof w) && corrupt++ == 0) {
+                first_corrupt = id;
+                memcpy(why, w, sizeof why);
+            }
+        }
         if (rc_c == SQLITE_ROW && cid == id)
             rc_c = sqlite3_step(cs);
         if (rc_i == SQLITE_ROW && iid == id)
@@ -1195,11 +1299,12 @@ static int lab_check(lab_vtab *vt, char **err)
         rc = lab_db_error(err, vt->db, rc_c != SQLITE_DONE ? rc_c : rc_i);
         goto done;
     }
-    if (stale) {
-        bool plain = (vt->name[0] < '0' || vt->name[0] > '9') &&
-                     strspn(vt->name, "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
-                                      "0123456789_") == strlen(vt->name);
-        char *ident = sqlite3_mprintf(plain ? "%s" : "\"%w\"", vt->name);
+    if (corrupt) {
+        char *msg = lab_corrupt_message("", vt->name, first_corrupt, why, corrupt - 1);
+        rc = msg ? lab_error(err, "%s", msg) : SQLITE_NOMEM;
+        sqlite3_free(msg);
+    } else if (stale) {
+        char *ident = lab_ident(vt->name);
         if (!ident) {
             rc = SQLITE_NOMEM;
             goto done;
@@ -1208,6 +1313,8 @@ static int lab_check(lab_vtab *vt, char **err)
                             "VALUES('rebuild')",
                        stale, stale == 1 ? "row is" : "rows are", first, ident, ident);
         sqlite3_free(ident);
+    } else {
+        rc = lab_check_caches(vt, err);
     }
 done:
     sqlite3_finalize(cs);
@@ -1220,7 +1327,7 @@ static int lab_create(sqlite3 *db, void *aux, int argc, const char *const *argv,
 {
     lab_vtab *vt = NULL;
     sqlite3_stmt *st = NULL;
-    int rc = lab_init(db, argc, argv, &vt, err);
+    int rc = lab_init(db, aux, argc, argv, &vt, err);
     if (rc)
         return rc;
     if ((rc = lab_check_content(vt, err)) != SQLITE_OK)
@@ -1263,7 +1370,7 @@ static int lab_connect(sqlite3 *db, void *aux, int argc, const char *const *argv
                        sqlite3_vtab **out, char **err)
 {
     lab_vtab *vt = NULL;
-    int rc = lab_init(db, argc, argv, &vt, err);
+    int rc = lab_init(db, aux, argc, argv, &vt, err);
     if (rc == SQLITE_OK)
         *out = &vt->base;
     return rc;
@@ -1877,9 +1984,9 @@ static sqlite3_module lab_module = {
     .xShadowName = lab_shadow_name,
 };
 
-int ax_register_laban(sqlite3 *db)
+int ax_register_laban(sqlite3 *db, const ax_laban_cache_kind *caches)
 {
-    return sqlite3_create_module(db, "laban", &lab_module, NULL);
+    return sqlite3_create_module(db, "laban", &lab_module, (void *)caches);
 }
 
 /* ---- what the rest of the extension reads of an index (vt_laban.h) ---- */
@@ -1931,7 +2038,8 @@ static int rows_info(sqlite3 *db, const char *name, ax_laban_rows *r, char **err
         rc = sqlite3_step(st);
     if (rc != SQLITE_ROW) {
         sqlite3_finalize(st);
-        return (sqlite3_errcode(db) & 0xff) == SQLITE_NOMEM ? SQLITE_NOMEM : SQLITE_NOTFOUND;
+        int code = sqlite3_errcode(db) & 0xff;
+        return code == SQLITE_NOMEM || code == SQLITE_INTERRUPT ? code : SQLITE_NOTFOUND;
     }
     const char *def = (const char *)sqlite3_column_text(st, 0);
     bool is_laban = def && sqlite3_strlike("%USING laban(%", def, 0) == 0 &&
@@ -1950,30 +2058,47 @@ static int rows_info(sqlite3 *db, const char *name, ax_laban_rows *r, char **err
     return rc;
 }
 
-int ax_laban_read(sqlite3 *db, const char *name, ax_laban_rows *out, char **err)
+/* The labelled rows of _data of index `name` (in schema, or unqualified when schema is NULL)
+ * into out (its ids, labels, vectors and n; out zeroed by the caller), validating every stored
+ * vector, those of unlabelled rows too. On failure out keeps what was read: the caller frees
+ * it. */
+static int rows_load(sqlite3 *db, const char *schema, const char *name, ax_laban_rows *out,
+                     char **err)
 {
-    memset(out, 0, sizeof *out);
-    int rc = rows_info(db, name, out, err);
-    if (rc != SQLITE_OK) {
-        ax_laban_rows_free(out);
-        return rc;
-    }
     sqlite3_stmt *st = NULL;
-    char *sql = sqlite3_mprintf("SELECT id, CAST(label AS TEXT), vector FROM \"%w_data\" "
-                                "WHERE label IS NOT NULL ORDER BY id", name);
-    if (!sql) {
-        ax_laban_rows_free(out);
+    char *sql = schema ? sqlite3_mprintf("SELECT id, label IS NULL, CAST(label AS TEXT), vector "
+                                         "FROM \"%w\".\"%w_data\" ORDER BY id",
+                                         schema, name)
+                       : sqlite3_mprintf("SELECT id, label IS NULL, CAST(label AS TEXT), vector "
+                                         "FROM \"%w_data\" ORDER BY id",
+                                         name);
+    if (!sql)
         return SQLITE_NOMEM;
-    }
-    rc = sqlite3_prepare_v2(db, sql, -1, &st, NULL);
+    int rc = sqlite3_prepare_v2(db, sql, -1, &st, NULL);
     sqlite3_free(sql);
     if (rc != SQLITE_OK) {
         sqlite3_finalize(st);
-        ax_laban_rows_free(out);
         return rows_db_error(err, db, rc);
     }
     uint32_t cap = 0;
     while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
+        sqlite3_int64 id = sqlite3_column_int64(st, 0);
+        int type = sqlite3_column_type(st, 3); /* before the conversions of column_blob */
+        const unsigned char *v = sqlite3_column_blob(st, 3);
+        int bytes = sqlite3_column_bytes(st, 3);
+        char why[160];
+        if (!v && bytes > 0) {
+            rc = SQLITE_NOMEM;
+            goto done;
+        }
+        if (lab_vector_corrupt(type, v, bytes, why, sizeof why)) {
+            char *msg = lab_corrupt_message("", name, id, why, 0);
+            rc = msg ? rows_error(err, "%s", msg) : SQLITE_NOMEM;
+            sqlite3_free(msg);
+            goto done;
+        }
+        if (sqlite3_column_int(st, 1))
+            continue; /* no label */
         if (out->n == UINT32_MAX / 2) {
             rc = rows_error(err, "the index has too many rows");
             goto done;
@@ -1986,24 +2111,18 @@ int ax_laban_read(sqlite3 *db, const char *name, ax_laban_rows *out, char **err)
             char **l = sqlite3_realloc64(out->labels, cap * sizeof *l);
             if (l)
                 out->labels = l;
-            unsigned char *v = sqlite3_realloc64(out->vectors, (sqlite3_uint64)cap *
-                                                                   LAB_VECTOR_BYTES);
-            if (v)
-                out->vectors = v;
-            if (!ids || !l || !v) {
+            unsigned char *vv = sqlite3_realloc64(out->vectors, (sqlite3_uint64)cap *
+                                                                    LAB_VECTOR_BYTES);
+            if (vv)
+                out->vectors = vv;
+            if (!ids || !l || !vv) {
                 rc = SQLITE_NOMEM;
                 goto done;
             }
         }
-        const unsigned char *v = sqlite3_column_blob(st, 2);
-        const char *label = (const char *)sqlite3_column_text(st, 1);
-        if (!label || sqlite3_column_bytes(st, 2) != LAB_VECTOR_BYTES || !v) {
-            if ((sqlite3_errcode(db) & 0xff) == SQLITE_NOMEM) {
-                rc = SQLITE_NOMEM;
-                goto done;
-            }
-            rc = rows_error(err, "row %lld has no valid Laban vector (run 'rebuild')",
-                            (long long)sqlite3_column_int64(st, 0));
+        const char *label = (const char *)sqlite3_column_text(st, 2);
+        if (!label) { /* a label that is not NULL has a text */
+            rc = SQLITE_NOMEM;
             goto done;
         }
         out->labels[out->n] = sqlite3_mprintf("%s", label);
@@ -2011,15 +2130,96 @@ int ax_laban_read(sqlite3 *db, const char *name, ax_laban_rows *out, char **err)
             rc = SQLITE_NOMEM;
             goto done;
         }
-        out->ids[out->n] = sqlite3_column_int64(st, 0);
+        out->ids[out->n] = id;
         memcpy(out->vectors + (size_t)out->n * LAB_VECTOR_BYTES, v, LAB_VECTOR_BYTES);
         out->n++;
     }
     rc = rc == SQLITE_DONE ? SQLITE_OK : rows_db_error(err, db, rc);
 done:
     sqlite3_finalize(st);
+    return rc;
+}
+
+int ax_laban_read(sqlite3 *db, const char *name, ax_laban_rows *out, char **err)
+{
+    memset(out, 0, sizeof *out);
+    int rc = rows_info(db, name, out, err);
+    if (rc == SQLITE_OK)
+        rc = rows_load(db, NULL, name, out, err);
     if (rc != SQLITE_OK)
         ax_laban_rows_free(out);
+    return rc;
+}
+
+/* The cache entries of _info that the module knows (vt->caches) against the index's rows:
+ * an entry is its value (a BLOB) and its tag (TEXT, under "<key>_key"), both or neither. */
+static int lab_check_caches(lab_vtab *vt, char **err)
+{
+    if (!vt->caches || !vt->caches[0].key)
+        return SQLITE_OK;
+    ax_laban_rows rows;
+    memset(&rows, 0, sizeof rows);
+    bool loaded = false;
+    char *why = NULL;
+    sqlite3_stmt *st = NULL;
+    int rc = lab_prepare(vt->db, err, &st,
+                         "SELECT (SELECT value FROM \"%w\".\"%w_info\" WHERE key = ?1), "
+                         "(SELECT value FROM \"%w\".\"%w_info\" WHERE key = ?1 || '_key'), "
+                         "EXISTS (SELECT 1 FROM \"%w\".\"%w_info\" WHERE key = ?1), "
+                         "EXISTS (SELECT 1 FROM \"%w\".\"%w_info\" WHERE key = ?1 || '_key')",
+                         vt->schema, vt->name, vt->schema, vt->name, vt->schema, vt->name,
+                         vt->schema, vt->name);
+    for (const ax_laban_cache_kind *k = vt->caches; rc == SQLITE_OK && k->key; k++) {
+        sqlite3_reset(st);
+        if ((rc = sqlite3_bind_text(st, 1, k->key, -1, SQLITE_STATIC)) != SQLITE_OK ||
+            (rc = sqlite3_step(st)) != SQLITE_ROW) {
+            rc = lab_db_error(err, vt->db, rc);
+            break;
+        }
+        rc = SQLITE_OK;
+        bool has_value = sqlite3_column_int(st, 2), has_tag = sqlite3_column_int(st, 3);
+        if (!has_value && !has_tag)
+            continue;
+        if (!has_value || !has_tag) {
+            rc = lab_error(err, "cache entry '%s' is corrupt: %s_info has its row '%s%s' but "
+                                "not '%s%s'",
+                           k->key, vt->name, k->key, has_value ? "" : "_key", k->key,
+                           has_value ? "_key" : "");
+            break;
+        }
+        int vtype = sqlite3_column_type(st, 0), ttype = sqlite3_column_type(st, 1);
+        if (vtype != SQLITE_BLOB || ttype != SQLITE_TEXT) {
+            rc = lab_error(err, "cache entry '%s' is corrupt: its value is %s and its key %s, "
+                                "expected a blob and text",
+                           k->key, ax_type_name(sqlite3_column_value(st, 0)),
+                           ax_type_name(sqlite3_column_value(st, 1)));
+            break;
+        }
+        const void *blob = sqlite3_column_blob(st, 0);
+        int size = sqlite3_column_bytes(st, 0);
+        const char *tag = (const char *)sqlite3_column_text(st, 1);
+        if ((!blob && size > 0) || !tag) {
+            rc = SQLITE_NOMEM;
+            break;
+        }
+        if (!loaded) {
+            char *msg = NULL;
+            rc = rows_load(vt->db, vt->schema, vt->name, &rows, &msg);
+            if (rc == SQLITE_ERROR)
+                rc = lab_error(err, "%s", msg);
+            sqlite3_free(msg);
+            if (rc)
+                break;
+            loaded = true;
+        }
+        rc = k->check(&rows, tag, blob, size, &why);
+        if (rc == SQLITE_ERROR)
+            rc = why ? lab_error(err, "cache entry '%s' is corrupt: %s", k->key, why)
+                     : SQLITE_NOMEM;
+    }
+    sqlite3_finalize(st);
+    sqlite3_free(why);
+    ax_laban_rows_free(&rows);
     return rc;
 }
 

@@ -7,9 +7,6 @@
 
 #include "common.h"
 
-/* Registers the module "laban" on db. */
-int ax_register_laban(sqlite3 *db);
-
 /* What the rest of the extension reads of an index: the index owns its shadow tables, and no
  * other file reads them. */
 typedef struct ax_laban_rows {
@@ -20,9 +17,26 @@ typedef struct ax_laban_rows {
     unsigned char *vectors;  /* n × 27 little-endian float32 (NaN: missing), as stored */
 } ax_laban_rows;
 
+/* A kind of cache entry that another part of the extension keeps in an index
+ * (ax_laban_cache_put under `key`), for the index's 'check' command: check gets the index's
+ * labelled rows (as ax_laban_read gives them; content and motion NULL) and the entry, and
+ * returns SQLITE_OK when the entry is sound, SQLITE_NOMEM, or SQLITE_ERROR with *why
+ * (sqlite3_malloc'd) saying what is wrong. */
+typedef struct ax_laban_cache_kind {
+    const char *key;
+    int (*check)(const ax_laban_rows *rows, const char *tag, const void *blob, int size,
+                 char **why);
+} ax_laban_cache_kind;
+
+/* Registers the module "laban" on db; caches (ended by an entry with a NULL key, or NULL) are
+ * the cache kinds that 'check' validates; they must outlive the connection. */
+int ax_register_laban(sqlite3 *db, const ax_laban_cache_kind *caches);
+
 /* Reads index `name` of the main schema: SQLITE_OK; SQLITE_NOTFOUND when it is not a laban
- * table; SQLITE_NOMEM; SQLITE_ERROR with *err (sqlite3_malloc'd) saying what is wrong ("row 4
- * has no valid Laban vector (run 'rebuild')", or the database's message). */
+ * table; SQLITE_NOMEM; SQLITE_ERROR with *err (sqlite3_malloc'd) saying what is wrong
+ * ("stored vector of rowid 4 is corrupt (1 bytes, expected 108); run INSERT INTO g(g)
+ * VALUES('rebuild')", or the database's message). Every stored vector is validated, those of
+ * unlabelled rows too. */
 int ax_laban_read(sqlite3 *db, const char *name, ax_laban_rows *out, char **err);
 void ax_laban_rows_free(ax_laban_rows *r);
 

@@ -72,7 +72,7 @@ static int points_close(sqlite3_vtab_cursor *cur)
 static int set_vtab_error(sqlite3_vtab *vt, const char *fmt, const char *detail)
 {
     sqlite3_free(vt->zErrMsg);
-    vt->zErrMsg = sqlite3_mprintf(fmt, detail);
+    vt->zErrMsg = ax_mprintf(fmt, detail);
     return vt->zErrMsg ? SQLITE_ERROR : SQLITE_NOMEM;
 }
 

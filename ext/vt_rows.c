@@ -243,9 +243,12 @@ static int rows_filter(sqlite3_vtab_cursor *cur, int idx_num, const char *idx_st
         rc = SQLITE_NOMEM;
     if (rc != SQLITE_OK) {
         rows_clear(&c->rows);
-        if (msg) {
+        if (msg) { /* valid UTF-8 whatever it quotes (a table name, a label) */
             sqlite3_free(vt->base.zErrMsg);
-            vt->base.zErrMsg = msg;
+            vt->base.zErrMsg = ax_mprintf("%s", msg);
+            sqlite3_free(msg);
+            if (!vt->base.zErrMsg)
+                rc = SQLITE_NOMEM;
         }
         return rc;
     }

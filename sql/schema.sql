@@ -18,3 +18,14 @@ CREATE TABLE IF NOT EXISTS motions(
 );
 CREATE INDEX IF NOT EXISTS motions_emotion ON motions(emotion);
 CREATE INDEX IF NOT EXISTS motions_content ON motions(content);
+
+-- One row per file that sql/import_bvh.sql (or examples/import_folder.py) skipped: the file's
+-- path, the line of the first problem (NULL when the file could not be read at all), the
+-- message ("motion_from_bvh: expected 120 frames, found 57 (data/walk_01.bvh, line 86)") and
+-- when. Importing the same file again replaces or, once it imports, deletes its row.
+CREATE TABLE IF NOT EXISTS import_errors(
+    file    TEXT PRIMARY KEY,
+    line    INTEGER,
+    message TEXT NOT NULL,
+    at      TEXT NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%SZ', 'now'))
+);

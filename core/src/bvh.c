@@ -9,11 +9,14 @@
  *   1. HIERARCHY: ROOT/JOINT blocks with OFFSET and CHANNELS, End Site blocks with OFFSET, read
  *      by a loop with an explicit stack (no recursion, so deep files cannot overflow the C
  *      stack). Several ROOTs are allowed. Keywords are matched case-insensitively; a joint's
- *      name is the rest of its line. End Sites become joints named "<parent>_end"; a name that
- *      repeats an earlier one gets "_2", "_3", … appended.
+ *      name is the rest of its line, and must be valid UTF-8. End Sites become joints named
+ *      "<parent>_end"; a name that repeats an earlier one gets "_2", "_3", … appended.
  *   2. MOTION: "Frames: N", "Frame Time: t" (fps = 1/t, snapped to a whole number when
  *      within 1e-4 relative of one: 0.0333333 s means 30 fps), then N lines of exactly as many
- *      numbers as the channels declared (blank lines are skipped).
+ *      numbers as the channels declared (blank lines are skipped). N is checked against the
+ *      text left before anything is allocated for the frames (two bytes per value and frame;
+ *      a line end per frame when no joint has channels, since those frames take no other
+ *      text) and frames × joints against opt->max_samples (AFFECT_MOTION_MAX_SAMPLES).
  *   3. Per frame, each joint's local translation is its OFFSET with each position channel
  *      replacing the component it names (the real corpus writes the OFFSET into the position
  *      channels of every joint; root position channels carry the global translation), and its
@@ -198,6 +201,10 @@ static affect_status read_name(parser *ps, const char **name, size_t *len)
     if (memchr(s, '\0', (size_t)(e - s)))
         return affect_fail(ps->err, AFFECT_ERR_FORMAT, "line %u: joint name contains a NUL byte",
                            ps->line);
+    affect_status st = affect_utf8_check(ps->err, AFFECT_ERR_FORMAT, s, (size_t)(e - s),
+                                         "line %u: joint name", ps->line);
+    if (st)
+        return st;
     *name = s;
     *len = (size_t)(e - s);
     return AFFECT_OK;
@@ -317,6 +324,15 @@ static bool name_taken(const affect_motion *m, const int32_t *slots, uint32_t ma
     return false;
 }
 
+/* n, or less, so that s[0 .. n) does not end inside a UTF-8 sequence (s has more than n bytes,
+ * all valid UTF-8): a name shortened for a suffix stays valid UTF-8. */
+static size_t utf8_cut(const char *s, size_t n)
+{
+    while (n > 0 && ((unsigned char)s[n] & 0xC0) == 0x80)
+        n--;
+    return n;
+}
+
 /* Gives every joint its final name (End Sites: "<parent>_end"; repeats get "_2", "_3", …). */
 static affect_status name_joints(parser *ps, affect_motion *m)
 {
@@ -340,13 +356,15 @@ static affect_status name_joints(parser *ps, affect_motion *m)
             const char *pn = m->names[j->parent];
             len = strlen(pn);
             if (len > AFFECT_MOTION_MAX_NAME - 4)
-                len = AFFECT_MOTION_MAX_NAME - 4;
+                len = utf8_cut(pn, AFFECT_MOTION_MAX_NAME - 4);
             memcpy(buf, pn, len);
             memcpy(buf + len, "_end", 4);
             len += 4;
         }
         buf[len] = '\0';
-        size_t base = len > AFFECT_MOTION_MAX_NAME - 12 ? AFFECT_MOTION_MAX_NAME - 12 : len;
+        size_t base = len;
+        if (base > AFFECT_MOTION_MAX_NAME - 12)
+            base = utf8_cut(buf, AFFECT_MOTION_MAX_NAME - 12);
         uint32_t slot = 0;
         for (unsigned suffix = 2; name_taken(m, slots, cap - 1, buf, &slot); suffix++)
             len = base + (size_t)snprintf(buf + base, 12, "_%u", suffix);
@@ -604,13 +622,27 @@ affect_status affect_bvh_parse(const char *text, size_t len, const affect_bvh_op
     st = parse_motion_header(&ps, &n_frames, &frame_time);
     if (st)
         goto done;
-    /* a frame line needs at least two bytes per value: refuse impossible counts before
-     * allocating for them */
-    if (ps.n_values > 0 &&
-        (uint64_t)n_frames * ps.n_values > (uint64_t)(ps.end - ps.p) / 2 + ps.n_values) {
+    /* refuse impossible counts before allocating for them: a frame line needs at least two
+     * bytes per value, and a frame without values (no joint has channels) still its line end
+     * (the last line may lack one) */
+    uint64_t left = (uint64_t)(ps.end - ps.p); /* after the Frame Time line's end */
+    if (left > 0 && *ps.p == '\n')
+        left--;
+    if (ps.n_values > 0 ? (uint64_t)n_frames * ps.n_values > left / 2 + ps.n_values
+                        : n_frames > left + 1) {
         st = affect_fail(err, AFFECT_ERR_FORMAT,
                          "line %u: Frames: %u needs more text than the file has left", ps.line,
                          n_frames);
+        goto done;
+    }
+    uint64_t max_samples = opt && opt->max_samples ? opt->max_samples : AFFECT_MOTION_MAX_SAMPLES;
+    if ((uint64_t)n_frames * ps.n_joints > max_samples) {
+        st = affect_fail(err, AFFECT_ERR_RANGE,
+                         "line %u: %u frames x %u joints is %llu samples, above the limit of %llu "
+                         "(option max_samples)",
+                         ps.line, n_frames, ps.n_joints,
+                         (unsigned long long)n_frames * ps.n_joints,
+                         (unsigned long long)max_samples);
         goto done;
     }
     st = affect_motion_create(n_frames, ps.n_joints, snap_fps(1.0 / frame_time), &m, err);

@@ -15,7 +15,8 @@
  *
  * How it works. Training (train_on) never holds the n × D matrix of representations (D = C ×
  * the per-HMM score dimension + the descriptors): it computes it block by block (one class
- * HMM's scores of every motion, or the descriptors), adds each normalized block to the n × n
+ * HMM's scores of every motion, or the descriptors; held in slabs of rows of at most 1 GiB,
+ * block_rows), adds each normalized block to the n × n
  * Gram matrix, fits C, the SVM, the grid and the sPCA in the dual, then computes the blocks again
  * for the SVM's weights and the sPCA's axes. With mirror images (affect_classifier_train) the
  * training set is first doubled. The classifier keeps the HMMs, the normalization (mean and
@@ -282,12 +283,113 @@ static size_t block_col0(const affect_classifier *c, uint32_t b)
     return b < c->n_classes ? (size_t)b * c->part : c->fdim;
 }
 
-/* Fits the normalization of the columns of block B (n × w, starting at column col0). Per
- * column the values are first divided by their largest magnitude a (Fisher scores of tiny
- * probabilities reach 1e200 and more, whose sums of squares would overflow): with u = f / a,
- * mean = a · mean(u) and scale = a · sd(u) (population). A column that is constant over the
- * training set (sd 0) keeps scale 1. Without z-scores: mean 0, scale 1. */
-static void fit_block(affect_classifier *c, const double *B, uint32_t n, size_t w, size_t col0)
+static uint32_t block_count(const affect_classifier *c)
+{
+    return c->n_classes + (c->ddim ? 1 : 0);
+}
+
+/* The rows of a block of the representation (n rows of w values) held in slabs of whole rows,
+ * each one allocation of at most cfg.slab_bytes (AFFECT_CLASSIFIER_SLAB_BYTES): the block is
+ * n × 95,333 values at the thesis's configuration, 3.1 GB for 2,016 motions and their mirror
+ * images, and SQLite refuses any single allocation of 2 GiB or more. Slab s holds rows
+ * s·per .. s·per + per − 1, row-major with the current block's width (at most the widest
+ * block's, which sized the slabs). With one slab (whenever the block fits in one) every
+ * product is the one cblas call on one array, as before slabs existed, and gives the same
+ * bits. */
+typedef struct block_rows {
+    double **slab;  /* n_slabs allocations */
+    uint32_t n_slabs, per;
+    double **row;   /* n pointers: row i of the current block */
+    double *cols;   /* several slabs: n × cols_w, a band of columns for the SVM and sPCA */
+    size_t cols_w;
+} block_rows;
+
+static void rows_free(block_rows *R)
+{
+    for (uint32_t s = 0; R->slab && s < R->n_slabs; s++)
+        affect_free(R->slab[s]);
+    affect_free(R->slab);
+    affect_free(R->row);
+    affect_free(R->cols);
+    memset(R, 0, sizeof *R);
+}
+
+/* Slabs of at most slab bytes (0: AFFECT_CLASSIFIER_SLAB_BYTES) for n rows of up to widest
+ * values (n, widest ≥ 1, n × widest checked by the caller). */
+static affect_status rows_alloc(block_rows *R, uint32_t n, size_t widest, size_t slab,
+                                affect_error *err)
+{
+    memset(R, 0, sizeof *R);
+    if (slab == 0)
+        slab = AFFECT_CLASSIFIER_SLAB_BYTES;
+    size_t per = slab / sizeof(double) / widest;
+    if (per < 1)
+        per = 1;
+    if (per > n)
+        per = n;
+    R->per = (uint32_t)per;
+    R->n_slabs = (uint32_t)((n + per - 1) / per);
+    R->slab = affect_calloc(R->n_slabs, sizeof *R->slab);
+    R->row = affect_malloc_array(n, sizeof *R->row);
+    if (!R->slab || !R->row)
+        return affect_nomem(err);
+    for (uint32_t s = 0; s < R->n_slabs; s++) {
+        size_t rows = s + 1 < R->n_slabs ? per : n - (size_t)s * per;
+        R->slab[s] = affect_malloc_array(rows * widest, sizeof(double));
+        if (!R->slab[s] && R->n_slabs == 1)
+            return affect_nomem_of(err, rows * widest, sizeof(double),
+                                   "the %u x %zu block of Fisher scores", n, widest);
+        if (!R->slab[s])
+            return affect_nomem_of(err, rows * widest, sizeof(double),
+                                   "rows %zu .. %zu of the %u x %zu block of Fisher scores",
+                                   (size_t)s * per, (size_t)s * per + rows - 1, n, widest);
+    }
+    if (R->n_slabs > 1) { /* a band of whole columns, also at most a slab's size */
+        R->cols_w = slab / sizeof(double) / n;
+        if (R->cols_w < 1)
+            R->cols_w = 1;
+        if (R->cols_w > widest)
+            R->cols_w = widest;
+        R->cols = affect_malloc_array((size_t)n * R->cols_w, sizeof(double));
+        if (!R->cols)
+            return affect_nomem_of(err, (size_t)n * R->cols_w, sizeof(double),
+                                   "a %u x %zu band of Fisher scores", n, R->cols_w);
+    }
+    return AFFECT_OK;
+}
+
+/* Points R->row at the rows of a block of width w. */
+static void rows_set(block_rows *R, uint32_t n, size_t w)
+{
+    for (uint32_t i = 0; i < n; i++)
+        R->row[i] = R->slab[i / R->per] + (size_t)(i % R->per) * w;
+}
+
+/* G (n × n, upper triangle) += B Bᵀ for the current block (width w): per slab its own product
+ * (dsyrk) and its products with the later slabs (dgemm). */
+static void rows_gram(const block_rows *R, uint32_t n, int w, double *G)
+{
+    for (uint32_t a = 0; a < R->n_slabs; a++) {
+        size_t ia = (size_t)a * R->per, na = n - ia < R->per ? n - ia : R->per;
+        AFFECT_BLAS(cblas_dsyrk(CblasRowMajor, CblasUpper, CblasNoTrans, (int)na, w, 1.0,
+                                R->row[ia], w, 1.0, G + ia * n + ia, (int)n));
+        for (uint32_t b = a + 1; b < R->n_slabs; b++) {
+            size_t ib = (size_t)b * R->per, nb = n - ib < R->per ? n - ib : R->per;
+            AFFECT_BLAS(cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasTrans, (int)na, (int)nb, w,
+                                    1.0, R->row[ia], w, R->row[ib], w, 1.0, G + ia * n + ib,
+                                    (int)n));
+        }
+    }
+}
+
+/* Fits the normalization of the columns of a block (n rows of w values, starting at column
+ * col0; B[i] is row i). Per column the values are first divided by their largest magnitude a
+ * (Fisher scores of tiny probabilities reach 1e200 and more, whose sums of squares would
+ * overflow): with u = f / a, mean = a · mean(u) and scale = a · sd(u) (population). A column
+ * that is constant over the training set (sd 0) keeps scale 1. Without z-scores: mean 0,
+ * scale 1. */
+static void fit_block(affect_classifier *c, const double *const *B, uint32_t n, size_t w,
+                      size_t col0)
 {
     for (size_t e = 0; e < w; e++) {
         double *mean = &c->mean[col0 + e], *scale = &c->scale[col0 + e];
@@ -297,15 +399,15 @@ static void fit_block(affect_classifier *c, const double *B, uint32_t n, size_t 
             continue;
         double a = 0.0, mu = 0.0, var = 0.0;
         for (uint32_t i = 0; i < n; i++)
-            if (fabs(B[(size_t)i * w + e]) > a)
-                a = fabs(B[(size_t)i * w + e]);
+            if (fabs(B[i][e]) > a)
+                a = fabs(B[i][e]);
         if (a == 0.0)
             continue; /* all 0: mean 0, scale 1 */
         for (uint32_t i = 0; i < n; i++)
-            mu += B[(size_t)i * w + e] / a;
+            mu += B[i][e] / a;
         mu /= n;
         for (uint32_t i = 0; i < n; i++) {
-            double d = B[(size_t)i * w + e] / a - mu;
+            double d = B[i][e] / a - mu;
             var += d * d;
         }
         double sd = sqrt(var / n), s = sd * a;
@@ -441,6 +543,9 @@ static affect_status grid_fold(const affect_classifier *c, const double *G, cons
                                uint32_t n, uint32_t fold, const grid_lists *g, grid_ws *w,
                                affect_error *err)
 {
+    affect_status st0 = affect_monitor_check(c->cfg.hmm.monitor, err);
+    if (st0)
+        return st0;
     uint32_t n_tr = 0, n_te = 0;
     for (uint32_t i = 0; i < n; i++) {
         if (w->fold_of[i] == fold)
@@ -574,7 +679,9 @@ typedef struct train_job {
     uint32_t n;
     const double *desc;
     uint32_t block; /* the block being computed */
-    double *B, *ll; /* ll NULL: the second pass */
+    block_rows *B;  /* the block being computed, in slabs of rows */
+    double *ll;     /* NULL: the second pass */
+    affect_hmm_config hmm; /* the class HMMs' configuration: stopped with the call, silent */
 } train_job;
 
 /* Item k: the HMM of class k on its motions. */
@@ -588,10 +695,11 @@ static affect_status train_class(void *ctx, uint32_t k, affect_error *err)
     for (uint32_t i = 0; i < j->n; i++)
         if (j->y[i] == k)
             mine[count++] = j->seqs[i];
-    affect_status st = affect_hmm_train(&j->c->cfg.hmm, mine, count, &j->c->hmms[k], err);
+    affect_status st = affect_hmm_train(&j->hmm, mine, count, &j->c->hmms[k], err);
     affect_free(mine);
     if (st)
         return affect_prefix(err, "training the HMM of class \"%s\"", j->c->labels[k]);
+    affect_monitor_step(j->c->cfg.hmm.monitor);
     return AFFECT_OK;
 }
 
@@ -600,10 +708,12 @@ static affect_status block_row(void *ctx, uint32_t i, affect_error *err)
 {
     train_job *j = ctx;
     const affect_classifier *c = j->c;
-    size_t w = block_width(c, j->block);
-    double *row = j->B + (size_t)i * w;
-    affect_status st =
-        j->block < c->n_classes
+    double *row = j->B->row[i]; /* the block's width: block_width(c, j->block) */
+    affect_status st = affect_monitor_check(c->cfg.hmm.monitor, err);
+    if (st)
+        return st;
+    affect_monitor_step(c->cfg.hmm.monitor);
+    st = j->block < c->n_classes
             ? score_part(c, j->block, j->seqs[i].x, j->seqs[i].n_frames, row,
                          j->ll ? &j->ll[(size_t)i * c->n_classes + j->block] : NULL, err)
             : copy_descriptors(c, j->desc + (size_t)i * c->ddim, row, err);
@@ -617,13 +727,41 @@ static affect_status compute_block(train_job *j, uint32_t b, bool fit, affect_er
     affect_classifier *c = j->c;
     size_t w = block_width(c, b), col0 = block_col0(c, b);
     j->block = b;
-    affect_status st = affect_parallel_for(j->n, c->cfg.threads, block_row, j, err);
+    rows_set(j->B, j->n, w);
+    affect_monitor_report(c->cfg.hmm.monitor,
+                          fit ? "Fisher scores, first pass" : "Fisher scores, second pass",
+                          (uint64_t)b * j->n, (uint64_t)block_count(c) * j->n);
+    affect_status st = affect_parallel_for(j->n, c->cfg.threads, block_row, j,
+                                           c->cfg.hmm.monitor, err);
     if (st)
         return st;
     if (fit)
-        fit_block(c, j->B, j->n, w, col0);
+        fit_block(c, (const double *const *)j->B->row, j->n, w, col0);
     for (uint32_t i = 0; i < j->n; i++)
-        normalize(c, j->B + (size_t)i * w, w, col0);
+        normalize(c, j->B->row[i], w, col0);
+    return AFFECT_OK;
+}
+
+/* Adds the current block (width w, the representation's columns col0 ..) to the SVM's weights
+ * and the sPCA's axes: the one array of a single slab, else band after band of whole columns
+ * copied into R->cols (every weight and axis entry sums over the rows of its own column, so
+ * the bands give the same sums; the SVM's to the bit). */
+static affect_status rows_add_weights(affect_classifier *c, const block_rows *R, uint32_t n,
+                                      size_t w, size_t col0, affect_error *err)
+{
+    for (size_t e0 = 0; e0 < w; e0 += R->n_slabs == 1 ? w : R->cols_w) {
+        size_t bw = w;
+        const double *band = R->row[0];
+        if (R->n_slabs > 1) {
+            bw = w - e0 < R->cols_w ? w - e0 : R->cols_w;
+            for (uint32_t i = 0; i < n; i++)
+                memcpy(R->cols + (size_t)i * bw, R->row[i] + e0, bw * sizeof *R->cols);
+            band = R->cols;
+        }
+        if (affect_svm_add_rows(c->svm, band, bw, col0 + e0, err))
+            return affect_prefix(err, "the SVM's weights");
+        affect_spca_add_rows(c->spca, band, bw, col0 + e0);
+    }
     return AFFECT_OK;
 }
 
@@ -632,8 +770,9 @@ static affect_status compute_block(train_job *j, uint32_t b, bool fit, affect_er
  * or the descriptors, for every motion), fits each block's normalization and adds the block's
  * products to the Gram matrix G = Z Zᵀ; the SVM, the grid and the sPCA are fitted in the dual
  * on G; a second pass computes the blocks again (the same bits) and adds their columns to the
- * SVM's weights and the sPCA's axes. Memory: n² for G plus n × the largest block, against
- * n × the whole representation before (n × 667,331 doubles at the thesis's configuration). */
+ * SVM's weights and the sPCA's axes. Memory: n² for G plus n × the largest block (in slabs of
+ * at most AFFECT_CLASSIFIER_SLAB_BYTES, block_rows), against n × the whole representation
+ * before (n × 667,331 doubles at the thesis's configuration). */
 static affect_status train_on(const affect_classifier_config *cfg, const affect_features *feat,
                               const affect_hmm_seq *seqs, const double *desc, const uint32_t *y,
                               uint32_t n, const char *const *labels, uint32_t n_classes,
@@ -658,7 +797,8 @@ static affect_status train_on(const affect_classifier_config *cfg, const affect_
         return affect_fail(err, AFFECT_ERR_INVALID,
                            "the configuration appends descriptors but none were given");
     affect_classifier *c = alloc_classifier(n_classes);
-    double *B = NULL, *ll = NULL, *G = NULL;
+    block_rows B = {0};
+    double *ll = NULL, *G = NULL;
     affect_status st;
     if (!c) {
         st = affect_nomem(err);
@@ -674,14 +814,23 @@ static affect_status train_on(const affect_classifier_config *cfg, const affect_
                              labels[k]);
             goto done;
         }
+        /* the decoder refuses a label that is not UTF-8: never write one */
+        st = affect_utf8_check(err, AFFECT_ERR_INVALID, labels[k], strlen(labels[k]),
+                               "the label \"%.64s\" of class %u", labels[k], k);
+        if (st)
+            goto done;
         c->labels[k] = affect_strndup(labels[k], strlen(labels[k]));
         if (!c->labels[k]) {
             st = affect_nomem(err);
             goto done;
         }
     }
-    train_job job = {c, seqs, y, n, desc, 0, NULL, NULL};
-    if ((st = affect_parallel_for(n_classes, cfg->threads, train_class, &job, err)) != AFFECT_OK)
+    affect_monitor child;
+    train_job job = {c, seqs, y, n, desc, 0, NULL, NULL, cfg->hmm};
+    job.hmm.monitor = affect_monitor_child(&child, cfg->hmm.monitor);
+    affect_monitor_report(cfg->hmm.monitor, "class HMMs", 0, n_classes);
+    if ((st = affect_parallel_for(n_classes, cfg->threads, train_class, &job,
+                                   cfg->hmm.monitor, err)) != AFFECT_OK)
         goto done;
     if ((st = copy_features(feat, &c->feat, err)) != AFFECT_OK)
         goto done;
@@ -690,7 +839,7 @@ static affect_status train_on(const affect_classifier_config *cfg, const affect_
         st = affect_nomem(err);
         goto done;
     }
-    uint32_t blocks = n_classes + (c->ddim ? 1 : 0);
+    uint32_t blocks = block_count(c);
     for (uint32_t b = 0; b < blocks; b++)
         if (block_width(c, b) > widest)
             widest = block_width(c, b);
@@ -700,23 +849,31 @@ static affect_status train_on(const affect_classifier_config *cfg, const affect_
                          n, widest);
         goto done;
     }
-    B = affect_malloc_array(cells ? cells : 1, sizeof *B);
+    if ((st = rows_alloc(&B, n ? n : 1, widest ? widest : 1, cfg->slab_bytes, err)) != AFFECT_OK)
+        goto done;
     G = affect_calloc(nn ? nn : 1, sizeof *G);
+    if (!G) {
+        st = affect_nomem_of(err, nn, sizeof *G, "the %u x %u Gram matrix", n, n);
+        goto done;
+    }
     ll = affect_malloc_array((size_t)n * n_classes, sizeof *ll);
     c->mean = affect_malloc_array(c->dim, sizeof *c->mean);
     c->scale = affect_malloc_array(c->dim, sizeof *c->scale);
-    if (!B || !G || !ll || !c->mean || !c->scale) {
+    if (!ll) {
         st = affect_nomem(err);
         goto done;
     }
-    job.B = B;
+    if (!c->mean || !c->scale) {
+        st = affect_nomem_of(err, c->dim, sizeof *c->mean,
+                             "the normalization's %zu-long mean or scale", c->dim);
+        goto done;
+    }
+    job.B = &B;
     job.ll = ll;
     for (uint32_t b = 0; b < blocks; b++) { /* first pass: normalization and G */
         if ((st = compute_block(&job, b, true, err)) != AFFECT_OK)
             goto done;
-        int w = (int)block_width(c, b);
-        cblas_dsyrk(CblasRowMajor, CblasUpper, CblasNoTrans, (int)n, w, 1.0, B, w, 1.0, G,
-                    (int)n);
+        rows_gram(&B, n, (int)block_width(c, b), G);
     }
     for (size_t i = 1; i < n; i++)
         for (size_t k = 0; k < i; k++)
@@ -727,12 +884,9 @@ static affect_status train_on(const affect_classifier_config *cfg, const affect_
     for (uint32_t b = 0; b < blocks; b++) { /* second pass: the primal weights and axes */
         if ((st = compute_block(&job, b, false, err)) != AFFECT_OK)
             goto done;
-        size_t w = block_width(c, b), col0 = block_col0(c, b);
-        if ((st = affect_svm_add_rows(c->svm, B, w, col0, err)) != AFFECT_OK) {
-            st = affect_prefix(err, "the SVM's weights");
+        if ((st = rows_add_weights(c, &B, n, block_width(c, b), block_col0(c, b), err)) !=
+            AFFECT_OK)
             goto done;
-        }
-        affect_spca_add_rows(c->spca, B, w, col0);
     }
     affect_spca_finish(c->spca, c->train_z, n);
     /* the D-long vectors as float32 (half the BLOB; they act on z-scores of at most ±5, so a
@@ -741,7 +895,9 @@ static affect_status train_on(const affect_classifier_config *cfg, const affect_
     affect_spca_round_axes(c->spca);
     st = loo_knn(c, &c->report.train_acc_knn, err);
 done:
-    affect_free(B);
+    if (c)
+        c->cfg.hmm.monitor = NULL; /* the caller's, for this call only */
+    rows_free(&B);
     affect_free(G);
     affect_free(ll);
     if (st == AFFECT_OK)
@@ -1125,8 +1281,9 @@ affect_status affect_classifier_encode(const affect_classifier *c, unsigned char
     if (!w.failed)
         affect_bw_u64(&w, affect_fnv1a64(w.data, w.len));
     if (w.failed) {
+        size_t len = w.len;
         affect_bw_free(&w);
-        return affect_nomem(err);
+        return affect_nomem_of(err, len, 1, "the classifier BLOB beyond its first %zu bytes", len);
     }
     *out = w.data;
     *size = w.len;
@@ -1190,6 +1347,9 @@ static affect_status decode_head(affect_br *r, affect_classifier **out, affect_e
             return truncated(err, r, "the labels");
         if (len == 0 || memchr(p, 0, len))
             return invalid(err, r, "label");
+        if (!affect_utf8_valid((const char *)p, len))
+            return affect_utf8_check(err, AFFECT_ERR_FORMAT, (const char *)p, len,
+                                     "label %u (offset %zu)", k, r->off - len);
         c->labels[k] = affect_strndup((const char *)p, len);
         if (!c->labels[k])
             return affect_nomem(err);

@@ -120,6 +120,7 @@ static void progress(const affect_cv_config *cfg, const affect_cv_fold *f, uint3
 /* What every fold reads (shared, read-only while folds run). */
 typedef struct run_ctx {
     const affect_cv_config *cfg;
+    const affect_classifier_config *cls; /* cfg->cls with a silent child of its monitor */
     const affect_features *feat;
     const affect_hmm_seq *seqs;
     const double *desc;
@@ -137,7 +138,6 @@ typedef struct run_ctx {
 static affect_status run_fold(const run_ctx *rc, uint32_t fold, fold_ws *w, affect_cv_fold *f,
                               affect_error *err)
 {
-    const affect_cv_config *cfg = rc->cfg;
     const affect_features *feat = rc->feat;
     const affect_hmm_seq *seqs = rc->seqs;
     const uint32_t *y = rc->y, *fold_of = rc->fold_of;
@@ -169,7 +169,7 @@ static affect_status run_fold(const run_ctx *rc, uint32_t fold, fold_ws *w, affe
         return affect_fail(err, AFFECT_ERR_INVALID,
                            "fold %u: the training motions have fewer than 2 classes", fold + 1);
     affect_classifier *c = NULL;
-    affect_status st = affect_classifier_train(&cfg->cls, feat, w->seqs, w->desc, w->y, n_tr,
+    affect_status st = affect_classifier_train(rc->cls, feat, w->seqs, w->desc, w->y, n_tr,
                                                w->labels, present, &c, err);
     if (st) {
         if (st != AFFECT_ERR_NOMEM) {
@@ -244,6 +244,7 @@ typedef struct worker {
     mtx_t *lock;
     uint32_t *next;       /* the next fold to take (under lock) */
     bool *stop;           /* set (under lock) by the first failure */
+    uint32_t *finished;   /* workers that returned (under lock) */
     affect_status *status; /* per fold */
     affect_error *errs;    /* per fold */
     fold_ws w;
@@ -256,16 +257,20 @@ static int worker_main(void *arg)
     for (;;) {
         mtx_lock(wk->lock);
         uint32_t i = *wk->stop ? rc->r->n_folds : (*wk->next)++;
+        if (i >= rc->r->n_folds)
+            (*wk->finished)++;
         mtx_unlock(wk->lock);
         if (i >= rc->r->n_folds)
             return 0;
         affect_cv_fold *f = &rc->r->folds[i];
         wk->status[i] = run_fold(rc, f->fold, &wk->w, f, &wk->errs[i]);
         mtx_lock(wk->lock);
-        if (wk->status[i] != AFFECT_OK)
+        if (wk->status[i] != AFFECT_OK) {
             *wk->stop = true;
-        else
+        } else {
             progress(rc->cfg, f, rc->k); /* one line at a time, in completion order */
+            affect_monitor_step(rc->cfg->cls.hmm.monitor);
+        }
         mtx_unlock(wk->lock);
     }
 }
@@ -279,7 +284,7 @@ static affect_status run_parallel(const run_ctx *rc, affect_error *err)
     affect_error *errs = affect_calloc(nf, sizeof *errs);
     affect_status st = AFFECT_OK;
     mtx_t lock;
-    uint32_t next = 0, started = 0;
+    uint32_t next = 0, started = 0, finished = 0;
     bool stop = false, have_lock = false;
     if (!wk || !th || !status || !errs) {
         st = affect_nomem(err);
@@ -296,7 +301,7 @@ static affect_status run_parallel(const run_ctx *rc, affect_error *err)
     }
     have_lock = true;
     for (uint32_t t = 0; t < T; t++) {
-        wk[t] = (worker){rc, &lock, &next, &stop, status, errs, wk[t].w};
+        wk[t] = (worker){rc, &lock, &next, &stop, &finished, status, errs, wk[t].w};
         if (thrd_create(&th[t], worker_main, &wk[t]) != thrd_success)
             break;
         started++;
@@ -304,8 +309,18 @@ static affect_status run_parallel(const run_ctx *rc, affect_error *err)
     if (started == 0) { /* no thread at all: run here */
         worker_main(&wk[0]);
     } else {
+        /* the monitor asks only this thread: ask it while the folds run */
+        affect_monitor *mon = rc->cfg->cls.hmm.monitor;
+        for (bool all = false; mon && !all;) {
+            (void)affect_monitor_stopped(mon);
+            thrd_sleep(&(struct timespec){.tv_nsec = 2000000}, NULL);
+            mtx_lock(&lock);
+            all = finished == started;
+            mtx_unlock(&lock);
+        }
         for (uint32_t t = 0; t < started; t++)
             thrd_join(th[t], NULL);
+        affect_monitor_flush(rc->cfg->cls.hmm.monitor);
     }
     for (uint32_t i = 0; i < nf; i++) /* the first failure in fold order */
         if (status[i] != AFFECT_OK) {
@@ -421,13 +436,19 @@ affect_status affect_crossval(const affect_cv_config *cfg, const affect_features
             }
         }
     }
-    run_ctx rc = {cfg, feat, seqs, desc, ddim, y, n, labels, n_classes, fold_of, k, r};
+    affect_classifier_config cls = cfg->cls;
+    affect_monitor child;
+    cls.hmm.monitor = affect_monitor_child(&child, cfg->cls.hmm.monitor);
+    run_ctx rc = {cfg, &cls, feat, seqs, desc, ddim, y, n, labels, n_classes, fold_of, k, r};
+    affect_monitor_report(cfg->cls.hmm.monitor, "folds", 0, r->n_folds);
     if (cfg->threads > 1 && r->n_folds > 1) {
         st = run_parallel(&rc, err);
     } else {
         for (uint32_t i = 0; i < r->n_folds && st == AFFECT_OK; i++)
-            if ((st = run_fold(&rc, r->folds[i].fold, &w, &r->folds[i], err)) == AFFECT_OK)
+            if ((st = run_fold(&rc, r->folds[i].fold, &w, &r->folds[i], err)) == AFFECT_OK) {
                 progress(cfg, &r->folds[i], k);
+                affect_monitor_step(cfg->cls.hmm.monitor);
+            }
     }
     if (st)
         goto done;

@@ -34,8 +34,8 @@
  *     none, −1 (default) decides: the first row is a header when one of its non-empty fields
  *     is not a number. A header field is "<joint><sep><axis>" where the LAST of '.', '_', ' '
  *     or ':' is the separator and the axis is one letter x, y or z in either case ("Head.x",
- *     "Left_Hand_X", "Head Y", "Neck:z"). Columns come in x, y, z triples of one joint name.
- *     Without a header the joints are named j0, j1, ….
+ *     "Left_Hand_X", "Head Y", "Neck:z"). Columns come in x, y, z triples of one joint name,
+ *     which must be valid UTF-8. Without a header the joints are named j0, j1, ….
  *   - Data: every field is one number, the whole field ([+-]digits[.digits][e[+-]digits], read
  *     by affect_parse_double and rounded to float32), and every row has as many fields as the
  *     first row (with ',' or ';', a trailing delimiter makes an extra, empty field).
@@ -65,6 +65,8 @@
  *     row 1, column 2: the quoted field is not closed          (header row, at the end of text)
  *     row 3, column 2: unexpected text after the closing quote
  *     row 9: more than 16777216 frames                          (AFFECT_ERR_RANGE)
+ *     row 9: 8 frames x 3 joints is 24 samples, above the limit of 20 (option max_samples)
+ *                                         (frames × joints above opt->max_samples, RANGE)
  * Quoted field text in messages is cut to 48 bytes. The status is AFFECT_ERR_FORMAT unless
  * noted, or AFFECT_ERR_NOMEM.
  *
@@ -122,6 +124,7 @@ typedef struct csv_parser {
     size_t first_len;  /* bytes of the first data row and its line end; 0 until known */
     bool estimated;    /* the capacity has been sized from first_len */
     size_t header_row; /* 0 when there is no header */
+    uint64_t max_samples; /* frames × joints at most */
     affect_motion *m;
 } csv_parser;
 
@@ -502,7 +505,7 @@ static affect_status read_header(csv_parser *ps, double fps)
     st = check_column_count(ps);
     if (st)
         return st;
-    /* The joint names: length and NUL checks with the column, before creating anything. */
+    /* The joint names: length, NUL and UTF-8 checks with the column, before creating anything. */
     for (size_t i = 0; i < ps->n_fields; i += 3) {
         size_t len = fs[i].n - 2;
         if (len > AFFECT_MOTION_MAX_NAME)
@@ -513,6 +516,10 @@ static affect_status read_header(csv_parser *ps, double fps)
             return affect_fail(ps->err, AFFECT_ERR_FORMAT,
                                "row %zu, column %zu: the joint name contains a NUL byte",
                                ps->first_row, i + 1);
+        st = affect_utf8_check(ps->err, AFFECT_ERR_FORMAT, fs[i].p, len,
+                               "row %zu, column %zu: the joint name", ps->first_row, i + 1);
+        if (st)
+            return st;
     }
     ps->n_cols = ps->n_fields;
     ps->header_row = ps->first_row;
@@ -543,6 +550,9 @@ static affect_status reserve_frames(csv_parser *ps, size_t n_frames)
     }
     if (frames > AFFECT_MOTION_MAX_FRAMES)
         frames = AFFECT_MOTION_MAX_FRAMES;
+    size_t joints = ps->n_cols / 3 ? ps->n_cols / 3 : 1;
+    if (frames > ps->max_samples / joints) /* more would be refused by check_samples */
+        frames = (size_t)(ps->max_samples / joints);
     if (!affect_mul_size(frames, ps->n_cols, &cap) || cap < need)
         cap = need;
     if (!affect_mul_size(cap, sizeof *ps->pos, &bytes))
@@ -555,6 +565,20 @@ static affect_status reserve_frames(csv_parser *ps, size_t n_frames)
     return AFFECT_OK;
 }
 
+/* n_frames frames of the parser's joints against the limit on frames × joints; the error
+ * names the current row. */
+static affect_status check_samples(const csv_parser *ps, size_t n_frames)
+{
+    size_t joints = ps->n_cols / 3;
+    if ((uint64_t)n_frames * joints <= ps->max_samples)
+        return AFFECT_OK;
+    return affect_fail(ps->err, AFFECT_ERR_RANGE,
+                       "row %zu: %zu frames x %zu joints is %llu samples, above the limit of %llu "
+                       "(option max_samples)",
+                       ps->row, n_frames, joints, (unsigned long long)n_frames * joints,
+                       (unsigned long long)ps->max_samples);
+}
+
 /* The first row as frame 0 (no header): its split fields hold the values. */
 static affect_status read_first_frame(csv_parser *ps, double fps)
 {
@@ -563,6 +587,8 @@ static affect_status read_first_frame(csv_parser *ps, double fps)
         st = field_value(ps, i + 1, &ps->fields[i], &ps->pos[i]);
     if (!st)
         st = check_column_count(ps);
+    if (!st)
+        st = check_samples(ps, 1);
     if (!st)
         st = affect_motion_create(1, (uint32_t)(ps->n_cols / 3), fps, &ps->m, ps->err);
     if (!st)
@@ -579,7 +605,10 @@ static affect_status read_frames(csv_parser *ps)
         if (ps->n_frames == AFFECT_MOTION_MAX_FRAMES)
             return affect_fail(ps->err, AFFECT_ERR_RANGE, "row %zu: more than %u frames", ps->row,
                                AFFECT_MOTION_MAX_FRAMES);
-        affect_status st = reserve_frames(ps, (size_t)ps->n_frames + 1);
+        affect_status st = check_samples(ps, (size_t)ps->n_frames + 1);
+        if (st)
+            return st;
+        st = reserve_frames(ps, (size_t)ps->n_frames + 1);
         if (st)
             return st;
         float *dst = ps->pos + (size_t)ps->n_frames * n_cols;
@@ -641,6 +670,7 @@ void affect_csv_options_default(affect_csv_options *opt)
     opt->delimiter = ',';
     opt->header = -1;
     opt->unit = NULL;
+    opt->max_samples = 0;
 }
 
 /* Checks the arguments; the unit is checked by setting it on a probe motion. */
@@ -691,6 +721,7 @@ affect_status affect_csv_parse(const char *text, size_t len, double fps,
     ps.p = text;
     ps.end = text + len;
     ps.delim = opt->delimiter;
+    ps.max_samples = opt->max_samples ? opt->max_samples : AFFECT_MOTION_MAX_SAMPLES;
     ps.err = err;
     if (len >= 3 && memcmp(text, "\xEF\xBB\xBF", 3) == 0)
         ps.p += 3;

@@ -122,6 +122,10 @@ affect_status affect_features_create(const affect_features_options *opt,
             return affect_fail(err, AFFECT_ERR_INVALID,
                                "joint entry %u: a name must have 1 to %u bytes", j + 1,
                                AFFECT_MOTION_MAX_NAME);
+        affect_status ust = affect_utf8_check(err, AFFECT_ERR_INVALID, e, len,
+                                              "joint entry %u: the name", j + 1);
+        if (ust)
+            return ust;
         for (uint32_t k = 0; k < j; k++)
             if (strcmp(opt->joints[k], e) == 0) {
                 affect_json_quote(q, sizeof q, e, len);
@@ -569,6 +573,10 @@ static affect_status get_name(const unsigned char *data, size_t size, size_t *of
     if (memchr(data + *off + 2, '\0', len))
         return affect_fail(err, AFFECT_ERR_FORMAT, "%s %u contains a NUL byte (offset %zu)", what,
                            j, *off);
+    affect_status st = affect_utf8_check(err, AFFECT_ERR_FORMAT, (const char *)data + *off + 2,
+                                         len, "%s %u", what, j);
+    if (st)
+        return st;
     *out = affect_strndup((const char *)data + *off + 2, len);
     if (!*out)
         return affect_nomem(err);

@@ -30,8 +30,9 @@
  * Cost, full covariances: T·m² per component for the scatter (only frames with γ > 0), plus
  * about 3 m³ (factor, inverse, two symmetric products). Memory: one workspace allocation
  * (γ: T·N·M doubles, plus three m × m matrices and a block of rows; sizes overflow-checked),
- * besides affect_hmm_posteriors's own. Determinism: fixed block sizes and summation orders, so
- * the same model and sequence give bit-identical scores (for a given BLAS thread count).
+ * besides affect_hmm_posteriors's own. Determinism: fixed block sizes and summation orders, and
+ * OpenBLAS on one thread in every call (AFFECT_BLAS, blas.c), so the same model and sequence give
+ * bit-identical scores whatever OPENBLAS_NUM_THREADS says.
  */
 #include "affect/fisher.h"
 #include "internal.h"
@@ -225,15 +226,15 @@ static void gather(const fisher_ws *w, size_t k, bool want_S)
                 row[d] = sq * v;
             }
             if (++nb == w->block) {
-                cblas_dsyrk(CblasRowMajor, CblasUpper, CblasTrans, (int)m, (int)nb, 1.0, w->rows,
-                            (int)m, 1.0, S, (int)m);
+                AFFECT_BLAS(cblas_dsyrk(CblasRowMajor, CblasUpper, CblasTrans, (int)m, (int)nb,
+                                        1.0, w->rows, (int)m, 1.0, S, (int)m));
                 nb = 0;
             }
         }
     }
     if (nb > 0)
-        cblas_dsyrk(CblasRowMajor, CblasUpper, CblasTrans, (int)m, (int)nb, 1.0, w->rows, (int)m,
-                    1.0, S, (int)m);
+        AFFECT_BLAS(cblas_dsyrk(CblasRowMajor, CblasUpper, CblasTrans, (int)m, (int)nb, 1.0,
+                                w->rows, (int)m, 1.0, S, (int)m));
 }
 
 /* The mean (om, m entries) and covariance (oc, cov_entries) scores of component k; either may
@@ -267,15 +268,18 @@ static affect_status component(const fisher_ws *w, size_t k, double *om, double 
     double *P = w->P;
     memcpy(P, cov, m * m * sizeof *P);
     /* column-major 'U' on a symmetric row-major array = row-major 'L', without a copy */
-    lapack_int info = LAPACKE_dpotrf_work(LAPACK_COL_MAJOR, 'U', (lapack_int)m, P, (lapack_int)m);
+    lapack_int info;
+    AFFECT_BLAS(info = LAPACKE_dpotrf_work(LAPACK_COL_MAJOR, 'U', (lapack_int)m, P, (lapack_int)m));
     if (info == 0)
-        info = LAPACKE_dpotri_work(LAPACK_COL_MAJOR, 'U', (lapack_int)m, P, (lapack_int)m);
+        AFFECT_BLAS(info = LAPACKE_dpotri_work(LAPACK_COL_MAJOR, 'U', (lapack_int)m, P,
+                                               (lapack_int)m));
     if (info != 0)
         return affect_fail(err, AFFECT_ERR_RANGE,
                            "covariance of state %zu, mixture %zu is not positive definite", k / M,
                            k % M);
     if (om)
-        cblas_dsymv(CblasRowMajor, CblasLower, (int)m, 1.0, P, (int)m, w->s, 1, 0.0, om, 1);
+        AFFECT_BLAS(cblas_dsymv(CblasRowMajor, CblasLower, (int)m, 1.0, P, (int)m, w->s, 1, 0.0,
+                                om, 1));
     if (!oc)
         return AFFECT_OK;
     /* D = S − n Σ (S's upper triangle, Σ's lower one), made symmetric in place */
@@ -287,10 +291,10 @@ static affect_status component(const fisher_ws *w, size_t k, double *om, double 
             D[c * m + r] = v;
         }
     /* Y = P D, then P D P into D's place */
-    cblas_dsymm(CblasRowMajor, CblasLeft, CblasLower, (int)m, (int)m, 1.0, P, (int)m, D, (int)m,
-                0.0, w->Y, (int)m);
-    cblas_dsymm(CblasRowMajor, CblasRight, CblasLower, (int)m, (int)m, 1.0, P, (int)m, w->Y, (int)m,
-                0.0, D, (int)m);
+    AFFECT_BLAS(cblas_dsymm(CblasRowMajor, CblasLeft, CblasLower, (int)m, (int)m, 1.0, P, (int)m,
+                            D, (int)m, 0.0, w->Y, (int)m));
+    AFFECT_BLAS(cblas_dsymm(CblasRowMajor, CblasRight, CblasLower, (int)m, (int)m, 1.0, P,
+                            (int)m, w->Y, (int)m, 0.0, D, (int)m));
     /* G = ½ P D P: G_rr, and G_rs + G_sr = ½ (Z_rs + Z_sr) for r < s */
     size_t p = 0;
     for (size_t r = 0; r < m; r++) {

@@ -58,6 +58,7 @@ void affect_generate_options_default(affect_generate_options *opt)
     opt->render = AFFECT_GENERATE_STEPS;
     opt->keep_path = true;
     opt->rigid = true;
+    opt->monitor = NULL;
 }
 
 /* The output rows before filtering: with AFFECT_GENERATE_STEPS the mean of state path[t] at
@@ -367,6 +368,7 @@ affect_status affect_generate(const affect_motion *desired, const affect_motion 
     cfg.tol = opt->tol;
     cfg.reg = opt->reg;
     cfg.seed = opt->seed;
+    cfg.monitor = opt->monitor;
     const char *msg = affect_hmm_config_check(&cfg);
     if (msg) {
         st = affect_fail(err, AFFECT_ERR_INVALID, "%s", msg);
@@ -497,7 +499,7 @@ static bool dtw_better(double c1, uint64_t l1, double c2, uint64_t l2)
 }
 
 affect_status affect_dtw_distance(const affect_motion *a, const affect_motion *b, double *dist,
-                                  affect_error *err)
+                                  affect_monitor *mon, affect_error *err)
 {
     if (!a || !b)
         return affect_fail(err, AFFECT_ERR_INVALID, "missing motion");
@@ -537,6 +539,8 @@ affect_status affect_dtw_distance(const affect_motion *a, const affect_motion *b
     double *pc = cost, *cc = cost + Tb; /* previous and current rows */
     uint64_t *pl = len, *cl = len + Tb;
     for (uint32_t i = 0; i < Ta; i++) {
+        if ((st = affect_monitor_check(mon, err)) != AFFECT_OK)
+            goto done;
         const double *ra = xa + (size_t)i * dim;
         for (uint32_t k = 0; k < Tb; k++) {
             double c = frame_cost(ra, xb + (size_t)k * dim, J);
@@ -592,7 +596,8 @@ static affect_status coarse(const affect_motion *m, affect_motion **made, affect
 
 affect_status affect_generate_rank_by_action(const affect_motion *desired,
                                              const affect_motion *const *candidates, uint32_t n,
-                                             uint32_t *order, double *dist, affect_error *err)
+                                             uint32_t *order, double *dist, affect_monitor *mon,
+                                             affect_error *err)
 {
     double *d = affect_malloc_array(n ? n : 1, sizeof *d);
     affect_motion *dc = NULL, *cc = NULL;
@@ -609,10 +614,10 @@ affect_status affect_generate_rank_by_action(const affect_motion *desired,
             continue;
         st = coarse(candidates[i], &cc, err);
         if (st == AFFECT_OK)
-            st = affect_dtw_distance(dm, cc ? cc : candidates[i], &d[i], err);
+            st = affect_dtw_distance(dm, cc ? cc : candidates[i], &d[i], mon, err);
         affect_motion_free(cc);
         cc = NULL;
-        if (st == AFFECT_ERR_NOMEM) {
+        if (st == AFFECT_ERR_NOMEM || st == AFFECT_ERR_INTERRUPTED) {
             affect_free(d);
             affect_motion_free(dc);
             return st;

@@ -73,8 +73,9 @@
  * with, so the last equals the sum of affect_hmm_loglik over the training sequences.
  *
  * Memory: each call makes one workspace allocation (sizes overflow-checked), training one more
- * for the model. Determinism: no threads of our own and fixed block sizes, so the same
- * sequences and configuration give bit-identical parameters (for a given BLAS thread count).
+ * for the model. Determinism: no threads of our own, fixed block sizes and OpenBLAS on one
+ * thread in every call (AFFECT_BLAS, blas.c), so the same sequences and configuration give
+ * bit-identical parameters whatever OPENBLAS_NUM_THREADS says.
  */
 #include "affect/hmm.h"
 
@@ -133,7 +134,8 @@ struct affect_hmm {
     uint32_t reseeded;
     uint32_t n_sequences;
     uint64_t n_frames;
-    double *loglik; /* max_iter + 1 */
+    double *loglik;      /* max_iter + 1 */
+    affect_monitor *mon; /* during training only: the caller's hooks (else NULL) */
 };
 
 /* ------------------------------------------------------------------------------------------ */
@@ -260,6 +262,7 @@ static affect_hmm *model_alloc(const affect_hmm_config *cfg)
         return NULL;
     memset(h, 0, sizeof *h);
     h->cfg = *cfg;
+    h->cfg.monitor = NULL;
     h->cs = cs;
     h->block = block_frames(cfg);
     h->start = p[0];
@@ -296,8 +299,9 @@ static int factor_one(affect_hmm *h, size_t k)
     if (h->cfg.cov == AFFECT_HMM_FULL) {
         memcpy(f, cov, h->cs * sizeof *f);
         /* column-major 'U' on a symmetric row-major array = row-major 'L', without a copy */
-        lapack_int info =
-            LAPACKE_dpotrf_work(LAPACK_COL_MAJOR, 'U', (lapack_int)m, f, (lapack_int)m);
+        lapack_int info;
+        AFFECT_BLAS(info = LAPACKE_dpotrf_work(LAPACK_COL_MAJOR, 'U', (lapack_int)m, f,
+                                               (lapack_int)m));
         if (info != 0)
             return info > 0 ? (int)info : 1;
         for (uint32_t d = 0; d < m; d++) {
@@ -526,8 +530,8 @@ static void densities(const affect_hmm *h, const double *x, uint32_t n, double *
                 y[e] = -ib[e];
             for (uint32_t t = 1; t < nt; t++)
                 memcpy(y + (size_t)t * wide, y, wide * sizeof *y);
-            cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasTrans, (int)nt, (int)wide, (int)r1, 1.0,
-                        xc, (int)m, panel, (int)r1, 1.0, y, (int)wide);
+            AFFECT_BLAS(cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasTrans, (int)nt, (int)wide,
+                                    (int)r1, 1.0, xc, (int)m, panel, (int)r1, 1.0, y, (int)wide));
             for (uint32_t t = 0; t < nt; t++)
                 panel_sums(y + (size_t)t * wide, K, rows, r0 == 0, acc + (size_t)t * K);
             panel += (size_t)wide * r1;
@@ -675,6 +679,10 @@ static void forward_backward(const affect_hmm *h, const double *x, uint32_t T, f
 {
     uint32_t N = h->cfg.n_states, M = h->cfg.n_mix, m = h->cfg.dim;
     for (uint32_t t0 = 0; t0 < T; t0 += h->block) {
+        if (affect_monitor_stopped(h->mon)) { /* the caller checks the monitor */
+            *loglik = NAN;
+            return;
+        }
         uint32_t n = T - t0 < h->block ? T - t0 : h->block;
         densities(h, x + (size_t)t0 * m, n, w->lb + (size_t)t0 * N,
                   rho ? rho + (size_t)t0 * N * M : NULL, w->cbuf, w->dbuf);
@@ -1419,8 +1427,8 @@ static void scatter(const affect_hmm *h, const double *const *rows, const double
             }
         }
         if (kept > 0)
-            cblas_dsyrk(CblasRowMajor, CblasUpper, CblasTrans, (int)m, (int)kept, 1.0, dbuf,
-                        (int)m, 1.0, S, (int)m);
+            AFFECT_BLAS(cblas_dsyrk(CblasRowMajor, CblasUpper, CblasTrans, (int)m, (int)kept, 1.0,
+                                    dbuf, (int)m, 1.0, S, (int)m));
     }
 }
 
@@ -1531,6 +1539,8 @@ static affect_status init_params(affect_hmm *h, const affect_hmm_seq *seqs, uint
     mean_len /= n_seqs;
 
     for (uint32_t i = 0; i < N; i++) {
+        if (affect_monitor_stopped(h->mon))
+            return affect_monitor_check(h->mon, err);
         size_t P = 0;
         for (uint32_t s = 0; s < n_seqs; s++) {
             uint64_t T = seqs[s].n_frames;
@@ -1779,6 +1789,7 @@ affect_status affect_hmm_train(const affect_hmm_config *cfg, const affect_hmm_se
         goto cleanup;
     }
 
+    h->mon = cfg->monitor;
     if ((st = init_params(h, seqs, n, &w, err)))
         goto cleanup;
     uint32_t it = 0, reseeded = 0;
@@ -1794,7 +1805,10 @@ affect_status affect_hmm_train(const affect_hmm_config *cfg, const affect_hmm_se
             memset(w.tr.count, 0, N * sizeof(uint32_t));
         }
         double total = 0.0;
+        affect_monitor_report(h->mon, "Baum-Welch iterations", it, cfg->max_iter);
         for (uint32_t s = 0; s < n; s++) {
+            if ((st = affect_monitor_check(h->mon, err)))
+                goto cleanup;
             double L;
             if (stats) {
                 forward_backward(h, seqs[s].x, seqs[s].n_frames, &w.fb, w.rho, w.xi, w.g0, &w.tr, s,
@@ -1805,6 +1819,8 @@ affect_status affect_hmm_train(const affect_hmm_config *cfg, const affect_hmm_se
                 L = forward_loglik(h, seqs[s].x, seqs[s].n_frames, w.fb.cbuf, w.fb.dbuf, w.fb.lb,
                                    w.fb.v[0], w.fb.v[1], w.fb.v[2]);
             }
+            if ((st = affect_monitor_check(h->mon, err)))
+                goto cleanup;
             if (!isfinite(L)) {
                 st = affect_fail(err, AFFECT_ERR_RANGE,
                                  "sequence %u has probability 0 under the model after %u "
@@ -1825,6 +1841,8 @@ affect_status affect_hmm_train(const affect_hmm_config *cfg, const affect_hmm_se
             goto cleanup;
         it++;
     }
+    affect_monitor_report(h->mon, "Baum-Welch iterations", cfg->max_iter, cfg->max_iter);
+    h->mon = NULL;
     h->has_report = true;
     h->iterations = it;
     h->converged = converged;

@@ -35,8 +35,23 @@ void *affect_ws_alloc(const affect_ws_part *parts, size_t n);
  * AFFECT_OK. threads ≤ 1, or a thread that cannot be created, runs the items in the caller.
  * The allocator and the BLAS must be thread-safe (SQLite's and OpenBLAS's are). */
 #include "affect/base.h"
+#include "affect/monitor.h"
 typedef affect_status (*affect_item_fn)(void *ctx, uint32_t i, affect_error *err);
+/* mon (may be NULL): when the calling thread has taken its last item it keeps asking mon's stop
+ * hook (which only it may call) until the other threads are done. */
 affect_status affect_parallel_for(uint32_t n, uint32_t threads, affect_item_fn fn, void *ctx,
-                                  affect_error *err);
+                                  affect_monitor *mon, affect_error *err);
+
+/* OpenBLAS on one thread during each BLAS or LAPACK call of the core (blas.c), so that results
+ * do not depend on OpenBLAS's thread count: AFFECT_BLAS(cblas_dgemm(...)); or
+ * AFFECT_BLAS(info = LAPACKE_dpotrf_work(...)); around every call (a test checks core/src). */
+void affect_blas_begin(void);
+void affect_blas_end(void);
+#define AFFECT_BLAS(call)                                                                          \
+    do {                                                                                           \
+        affect_blas_begin();                                                                       \
+        call;                                                                                      \
+        affect_blas_end();                                                                         \
+    } while (0)
 
 #endif

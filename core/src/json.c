@@ -149,38 +149,6 @@ static affect_status new_node(parser *p, affect_json_type type, int32_t *out)
 
 /* ---- strings ---- */
 
-/* Length of the valid UTF-8 sequence (2–4 bytes) starting at s[0] ≥ 0x80, or 0 if it is
- * invalid or truncated (RFC 3629, table 3-7 of Unicode: no overlongs, no surrogates, at most
- * U+10FFFF). */
-static size_t utf8_sequence(const unsigned char *s, size_t avail)
-{
-    unsigned char c = s[0];
-    size_t n;
-    unsigned char lo = 0x80, hi = 0xBF; /* range of the second byte */
-    if (c >= 0xC2 && c <= 0xDF)
-        n = 2;
-    else if (c >= 0xE0 && c <= 0xEF) {
-        n = 3;
-        if (c == 0xE0)
-            lo = 0xA0;
-        else if (c == 0xED)
-            hi = 0x9F;
-    } else if (c >= 0xF0 && c <= 0xF4) {
-        n = 4;
-        if (c == 0xF0)
-            lo = 0x90;
-        else if (c == 0xF4)
-            hi = 0x8F;
-    } else
-        return 0;
-    if (avail < n || s[1] < lo || s[1] > hi)
-        return 0;
-    for (size_t i = 2; i < n; i++)
-        if (s[i] < 0x80 || s[i] > 0xBF)
-            return 0;
-    return n;
-}
-
 static size_t utf8_encode(uint32_t cp, char *out)
 {
     if (cp < 0x80) {
@@ -245,7 +213,7 @@ static affect_status parse_string(parser *p, const char **out, size_t *out_len)
         if (c < 0x20) {
             return fail_at(p, i, AFFECT_ERR_FORMAT, "control character in string");
         } else if (c >= 0x80) {
-            size_t n = utf8_sequence(t + i, p->len - i);
+            size_t n = affect_utf8_sequence(t + i, p->len - i); /* base.h */
             if (n == 0)
                 return fail_at(p, i, AFFECT_ERR_FORMAT, "invalid UTF-8");
             memcpy(w, t + i, n);

@@ -30,6 +30,8 @@
 #include <math.h>
 #include <string.h>
 
+#include "internal.h"
+
 const char *const affect_laban_names[AFFECT_LABAN_N] = {
     "WeightAll",   "WeightTorso", "WeightHead",      "WeightLHand",   "WeightRHand",
     "WeightLFoot", "WeightRFoot", "TimeAll",         "TimeTorso",     "TimeHead",
@@ -723,7 +725,8 @@ affect_status affect_laban_shape_directional(const affect_motion *m, const affec
         for (int a = 0; a < 3; a++)
             for (int b = 0; b < 3; b++)
                 cov[a * 3 + b] += (pos[(size_t)t * 3 + a] - mean[a]) * (pos[(size_t)t * 3 + b] - mean[b]);
-    lapack_int info = LAPACKE_dsyev(LAPACK_ROW_MAJOR, 'V', 'U', 3, cov, 3, w);
+    lapack_int info;
+    AFFECT_BLAS(info = LAPACKE_dsyev(LAPACK_ROW_MAJOR, 'V', 'U', 3, cov, 3, w));
     if (info != 0) {
         affect_free(block);
         return info == LAPACK_WORK_MEMORY_ERROR || info == LAPACK_TRANSPOSE_MEMORY_ERROR

@@ -25,7 +25,8 @@
  *                        position channel (in joint order), frame-major
  * The encoder writes version 1 for a motion without a skeleton (unchanged bytes) and version 2
  * otherwise. The decoder checks these in order: length ≥ header, magic, version, flags, sizes,
- * each name's length against the remaining bytes, the exact total length, parents, names,
+ * each name's length against the remaining bytes, the exact total length, names (no NUL,
+ * valid UTF-8: no overlongs, surrogates or code points above U+10FFFF), unique names, parents,
  * finiteness, then the skeleton's channels and End Sites, offsets, quaternion norms
  * (within AFFECT_MOTION_QUAT_NORM_TOL of 1) and translations.
  */
@@ -134,8 +135,13 @@ affect_status affect_motion_create(uint32_t n_frames, uint32_t n_joints, double 
     m->names = affect_calloc(n_joints, sizeof *m->names);
     m->parents = affect_malloc_array(n_joints, sizeof *m->parents);
     m->pos = affect_calloc(n_pos, sizeof *m->pos);
-    if (!m->names || !m->parents || !m->pos)
+    if (!m->names || !m->parents)
         goto nomem;
+    if (!m->pos) {
+        affect_motion_free(m);
+        return affect_nomem_of(err, n_pos, sizeof *m->pos, "the positions of %u frames x %u joints",
+                               n_frames, n_joints);
+    }
     for (uint32_t j = 0; j < n_joints; j++) {
         char name[16];
         int len = snprintf(name, sizeof name, "j%u", j);
@@ -195,8 +201,11 @@ affect_status affect_motion_add_skeleton(affect_motion *m, bool rotations, affec
     m->rot = affect_malloc_array(n, 4 * sizeof *m->rot);
     m->trans = affect_calloc(n, 3 * sizeof *m->trans);
     if (!m->rot || !m->trans) {
+        bool rot = !m->rot;
         affect_motion_drop_skeleton(m);
-        return affect_nomem(err);
+        return affect_nomem_of(err, n, (rot ? 4 : 3) * sizeof(float),
+                               "the %s of %u frames x %u joints",
+                               rot ? "rotations" : "translations", m->n_frames, m->n_joints);
     }
     for (size_t i = 0; i < n; i++) {
         float *q = m->rot + i * 4;
@@ -215,6 +224,9 @@ affect_status affect_motion_set_name(affect_motion *m, uint32_t j, const char *n
                            j, len, AFFECT_MOTION_MAX_NAME);
     if (memchr(name, '\0', len))
         return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u: name contains a NUL byte", j);
+    affect_status st = affect_utf8_check(err, AFFECT_ERR_FORMAT, name, len, "joint %u: name", j);
+    if (st)
+        return st;
     char *copy = affect_strndup(name, len);
     if (!copy)
         return affect_nomem(err);
@@ -457,6 +469,22 @@ static affect_status check_rotations(const affect_motion *m, affect_error *err)
     return AFFECT_OK;
 }
 
+/* Every name 1 .. AFFECT_MOTION_MAX_NAME bytes of valid UTF-8 (the names of a motion built
+ * through this API always are; a caller may have written m->names itself). */
+static affect_status check_names(const affect_motion *m, affect_status status, affect_error *err)
+{
+    for (uint32_t j = 0; j < m->n_joints; j++) {
+        size_t len = m->names[j] ? strlen(m->names[j]) : 0;
+        if (len == 0 || len > AFFECT_MOTION_MAX_NAME)
+            return affect_fail(err, status, "joint %u: name length %zu out of range (1 .. %u)",
+                               j, len, AFFECT_MOTION_MAX_NAME);
+        affect_status st = affect_utf8_check(err, status, m->names[j], len, "joint %u: name", j);
+        if (st)
+            return st;
+    }
+    return AFFECT_OK;
+}
+
 affect_status affect_motion_validate(const affect_motion *m, affect_error *err)
 {
     affect_status st = check_sizes(m->n_frames, m->n_joints, m->fps, err);
@@ -465,12 +493,9 @@ affect_status affect_motion_validate(const affect_motion *m, affect_error *err)
     st = check_unit(m->unit, strlen(m->unit), err);
     if (st)
         return st;
-    for (uint32_t j = 0; j < m->n_joints; j++) {
-        size_t len = m->names[j] ? strlen(m->names[j]) : 0;
-        if (len == 0 || len > AFFECT_MOTION_MAX_NAME)
-            return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u: name length %zu out of range (1 .. %u)",
-                               j, len, AFFECT_MOTION_MAX_NAME);
-    }
+    st = check_names(m, AFFECT_ERR_FORMAT, err);
+    if (st)
+        return st;
     st = check_names_unique(m, err);
     if (st)
         return st;
@@ -576,6 +601,8 @@ static uint32_t count_translated(const affect_motion *m)
 bool affect_motion_encoded_size(const affect_motion *m, size_t *size)
 {
     size_t total = AFFECT_MOTION_HEADER_SIZE + strlen(m->unit), n;
+    if (check_names(m, AFFECT_ERR_INVALID, NULL))
+        return false; /* a name the decoder would refuse */
     for (uint32_t j = 0; j < m->n_joints; j++)
         if (!affect_add_size(total, 2 + strlen(m->names[j]), &total))
             return false;
@@ -673,6 +700,9 @@ affect_status affect_motion_encode(const affect_motion *m, unsigned char **out, 
                                    affect_error *err)
 {
     size_t n;
+    affect_status st = check_names(m, AFFECT_ERR_INVALID, err);
+    if (st)
+        return affect_prefix(err, "cannot encode the motion");
     if (!affect_motion_encoded_size(m, &n))
         return affect_fail(err, AFFECT_ERR_RANGE, "motion too large to encode");
     unsigned char *buf = affect_malloc(n);
@@ -951,6 +981,14 @@ affect_status affect_motion_resample(const affect_motion *m, double fps, affect_
     if (frames > AFFECT_MOTION_MAX_FRAMES)
         return affect_fail(err, AFFECT_ERR_RANGE, "resampling to %g fps gives %.0f frames (at most %u)",
                            fps, frames, AFFECT_MOTION_MAX_FRAMES);
+    /* a rate is no size: the result may not exceed the importers' limit, or the input's size */
+    double samples = frames * m->n_joints, input = (double)m->n_frames * m->n_joints;
+    double limit = input > AFFECT_MOTION_MAX_SAMPLES ? input : AFFECT_MOTION_MAX_SAMPLES;
+    if (samples > limit)
+        return affect_fail(err, AFFECT_ERR_RANGE,
+                           "resampling to %g fps gives %.0f frames x %u joints = %.0f samples, "
+                           "above the limit of %.0f",
+                           fps, frames, m->n_joints, samples, limit);
     affect_motion *c = NULL;
     affect_status st = like(m, (uint32_t)frames, fps, &c, err);
     if (st)

@@ -11,7 +11,9 @@
  * float32, so to_json → from_json reproduces a motion bit for bit.
  *
  * Reading: affect_json_parse (whose "at byte N: …" syntax errors are passed through), then a
- * check of each key in the order fps, unit, joints, parents, frames; errors name the JSON path:
+ * check of each key in the order fps, unit, joints, parents, frames (the counts of joints and
+ * frames, and frames × joints, first, before the motion is allocated; and each frame's joint
+ * count too when the text is too short for frames × joints); errors name the JSON path:
  *     expected an object at the top level, found array
  *     "frams": unknown key (expected fps, unit, joints, parents, frames)
  *     "fps": missing key (required: fps, joints, frames)
@@ -24,6 +26,8 @@
  *     parents: expected 22 integers, found 21
  *     parents[5]: expected an integer from -1 to 21
  *     frames: expected a non-empty array       frames: 20000000 frames (at most 16777216)
+ *     frames: 1000000 frames x 22 joints is 22000000 samples, above the limit of 16777216
+ *                                                (AFFECT_MOTION_MAX_SAMPLES; no option)
  *     frames[4]: expected an array of 22 joints, found number
  *     frames[4]: expected 22 joints, found 21
  *     frames[12][3]: expected an array of 3 numbers
@@ -119,6 +123,30 @@ static affect_status check_shape(const members *mb, affect_error *err)
     if (mb->frames->count > AFFECT_MOTION_MAX_FRAMES)
         return affect_fail(err, AFFECT_ERR_RANGE, "frames: %u frames (at most %u)",
                            mb->frames->count, AFFECT_MOTION_MAX_FRAMES);
+    uint64_t samples = (uint64_t)mb->frames->count * mb->joints->count;
+    if (samples > AFFECT_MOTION_MAX_SAMPLES)
+        return affect_fail(err, AFFECT_ERR_RANGE,
+                           "frames: %u frames x %u joints is %llu samples, above the limit of %u",
+                           mb->frames->count, mb->joints->count, (unsigned long long)samples,
+                           AFFECT_MOTION_MAX_SAMPLES);
+    return AFFECT_OK;
+}
+
+/* Every frame an array of one entry per joint (the first that is not, as an error). */
+static affect_status check_frame_counts(const affect_json_doc *doc, const members *mb,
+                                        affect_error *err)
+{
+    uint32_t t = 0, n = mb->joints->count;
+    for (const affect_json_node *f = affect_json_first(doc, mb->frames); f;
+         f = affect_json_next_sibling(doc, f), t++) {
+        if (f->type != AFFECT_JSON_ARRAY)
+            return affect_fail(err, AFFECT_ERR_FORMAT,
+                               "frames[%u]: expected an array of %u joints, found %s", t, n,
+                               type_name(f));
+        if (f->count != n)
+            return affect_fail(err, AFFECT_ERR_FORMAT, "frames[%u]: expected %u joints, found %u",
+                               t, n, f->count);
+    }
     return AFFECT_OK;
 }
 
@@ -238,6 +266,11 @@ affect_status affect_motion_from_json(const char *text, size_t len, affect_motio
     st = read_members(doc, root, &mb, err);
     if (!st)
         st = check_shape(&mb, err);
+    /* every joint of every frame takes at least a byte of the text: more frames × joints than
+     * that means a frame with fewer joints, reported before allocating for the counts (which
+     * could ask for far more than the document holds); otherwise in the order of the keys */
+    if (!st && (uint64_t)mb.frames->count * mb.joints->count > len)
+        st = check_frame_counts(doc, &mb, err);
     if (!st)
         st = affect_motion_create(mb.frames->count, mb.joints->count, mb.fps->num, &m, err);
     if (!st)

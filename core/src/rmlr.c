@@ -945,6 +945,8 @@ affect_status affect_rmlr_fit_path(const double *x, size_t n, size_t p, const ui
     else
         make_path(lambda_max(fitter_grad_max(&f), alpha), min_ratio(o, n, p), n_lambda, path);
     for (uint32_t l = 0; l < n_lambda; l++) {
+        if ((st = affect_monitor_check(o->monitor, err)) != AFFECT_OK)
+            goto cleanup;
         /* At the automatic path's λ_max the intercept-only start is the exact solution (for
          * α ≥ 1e-3); solving would only add rounding noise at the threshold. */
         bool conv = (l == 0 && !lambdas && alpha >= ALPHA_FLOOR) ||
@@ -1020,8 +1022,9 @@ typedef struct cv_run {
     const double *paths; /* n_alpha × L */
     const affect_rmlr_options *o;
     size_t *miss;  /* n_alpha × L */
-    mtx_t *lock;   /* guards next; NULL when the calling thread works alone */
+    mtx_t *lock;   /* guards next and finished; NULL when the calling thread works alone */
     uint32_t next; /* the next α to take */
+    uint32_t finished; /* workers that returned */
 } cv_run;
 
 /* A worker and its own fitter, allocated for all n rows before any worker starts. */
@@ -1039,6 +1042,8 @@ static void cv_alpha(const cv_run *run, fitter *f, uint32_t a)
     for (uint32_t fo = 0; fo < run->folds; fo++) {
         fitter_load(f, run->x, run->n, run->y, run->fold_of, fo, run->alphas[a], run->o);
         for (uint32_t l = 0; l < run->L; l++) {
+            if (affect_monitor_stopped(run->o->monitor))
+                return; /* affect_rmlr_cv checks the monitor */
             fitter_solve(f, path[l], l > 0 ? path[l - 1] : 0);
             for (size_t i = 0; i < run->n; i++)
                 if (run->fold_of[i] == fo &&
@@ -1058,11 +1063,14 @@ static int cv_worker_main(void *arg)
         if (run->lock)
             mtx_lock(run->lock);
         uint32_t a = run->next < run->n_alpha ? run->next++ : run->n_alpha;
+        if (a >= run->n_alpha)
+            run->finished++;
         if (run->lock)
             mtx_unlock(run->lock);
         if (a >= run->n_alpha)
             return 0;
         cv_alpha(run, &wk->f, a);
+        affect_monitor_step(run->o->monitor);
     }
 }
 
@@ -1077,6 +1085,8 @@ static void cv_run_all(cv_run *run, cv_worker *wk, thrd_t *th, uint32_t T)
         wk[t].run = run;
     run->lock = NULL;
     run->next = 0;
+    run->finished = 0;
+    affect_monitor_report(run->o->monitor, "elastic-net alphas", 0, run->n_alpha);
     if (T > 1 && mtx_init(&lock, mtx_plain) == thrd_success) {
         run->lock = &lock;
         for (uint32_t t = 1; t < T; t++) {
@@ -1086,8 +1096,18 @@ static void cv_run_all(cv_run *run, cv_worker *wk, thrd_t *th, uint32_t T)
         }
     }
     cv_worker_main(&wk[0]);
+    for (bool all = !run->lock; run->o->monitor && !all;) { /* keep asking the monitor */
+        mtx_lock(run->lock);
+        all = run->finished == started + 1;
+        mtx_unlock(run->lock);
+        if (!all) {
+            (void)affect_monitor_stopped(run->o->monitor);
+            thrd_sleep(&(struct timespec){.tv_nsec = 2000000}, NULL);
+        }
+    }
     for (uint32_t t = 0; t < started; t++)
         thrd_join(th[t], NULL);
+    affect_monitor_flush(run->o->monitor);
     if (run->lock)
         mtx_destroy(&lock);
 }
@@ -1175,6 +1195,8 @@ affect_status affect_rmlr_cv(const double *x, size_t n, size_t p, const uint32_t
                   .o = o,
                   .miss = miss};
     cv_run_all(&run, wk, th, T);
+    if ((st = affect_monitor_check(o->monitor, err)) != AFFECT_OK)
+        goto cleanup;
 
     /* The choice: fewest misclassified, then larger λ, then larger α. */
     uint32_t ba = 0, bl = 0;

@@ -55,6 +55,7 @@
 #include <string.h>
 
 #include "affect/hmm_blob.h" /* affect_fnv1a64 */
+#include "internal.h"
 
 #define FLAG_F32 1u /* record flag: the axes are float32 */
 #define BLOCK_DOUBLES 262144u /* doubles in one centred column block of X */
@@ -246,7 +247,7 @@ static affect_status work_alloc(work *w, size_t n, size_t d, uint32_t c, affect_
                            c);
     double *p = affect_calloc(count, sizeof *p);
     if (!p)
-        return affect_nomem(err);
+        return affect_nomem_of(err, count, sizeof *p, "the sPCA's workspace for %zu samples", n);
     w->base = p;
     double **slot[] = {&w->kc,   &w->dt, &w->t,     &w->m,    &w->lam, &w->g,
                        &w->root, &w->mu, &w->lwork, &w->rows, &w->blk, &w->mean};
@@ -265,8 +266,8 @@ static void gram_from_data(work *w, const double *x, size_t n, size_t d)
     for (size_t j0 = 0; j0 < d; j0 += w->bw) {
         size_t b = d - j0 < w->bw ? d - j0 : w->bw;
         centred_block(x, n, d, j0, b, w->blk, w->mean, NULL);
-        cblas_dsyrk(CblasRowMajor, CblasUpper, CblasNoTrans, (int)n, (int)b, 1.0, w->blk, (int)b,
-                    1.0, w->kc, (int)n);
+        AFFECT_BLAS(cblas_dsyrk(CblasRowMajor, CblasUpper, CblasNoTrans, (int)n, (int)b, 1.0,
+                                w->blk, (int)b, 1.0, w->kc, (int)n));
     }
     for (size_t i = 0; i < n; i++)
         for (size_t j = 0; j < i; j++)
@@ -324,8 +325,10 @@ static affect_status label_factor(work *w, const uint32_t *y, size_t n, uint32_t
                 g[(size_t)k * c + l] = exp(-diff * diff / (2.0 * sigma * sigma));
             }
         /* column-major 'U' on the symmetric row-major array: eigenvector r is row r */
-        lapack_int info = LAPACKE_dsyev_work(LAPACK_COL_MAJOR, 'V', 'U', (lapack_int)c, g,
-                                             (lapack_int)c, w->mu, w->lwork, (lapack_int)w->nlwork);
+        lapack_int info;
+        AFFECT_BLAS(info = LAPACKE_dsyev_work(LAPACK_COL_MAJOR, 'V', 'U', (lapack_int)c, g,
+                                              (lapack_int)c, w->mu, w->lwork,
+                                              (lapack_int)w->nlwork));
         if (info != 0)
             return eig_failed((int)info, err);
         for (uint32_t r = 0; r < c; r++)
@@ -367,10 +370,10 @@ static const char OVERFLOW_MSG[] = "the data are too large: the centred Gram mat
 static affect_status dual_solve(work *w, size_t n, uint32_t c, uint32_t dims, uint32_t *p_out,
                                 affect_error *err)
 {
-    cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, (int)n, (int)c, (int)n, 1.0, w->kc,
-                (int)n, w->dt, (int)c, 0.0, w->t, (int)c);
-    cblas_dgemm(CblasRowMajor, CblasTrans, CblasNoTrans, (int)c, (int)c, (int)n, 1.0, w->dt, (int)c,
-                w->t, (int)c, 0.0, w->m, (int)c);
+    AFFECT_BLAS(cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, (int)n, (int)c, (int)n, 1.0,
+                            w->kc, (int)n, w->dt, (int)c, 0.0, w->t, (int)c));
+    AFFECT_BLAS(cblas_dgemm(CblasRowMajor, CblasTrans, CblasNoTrans, (int)c, (int)c, (int)n, 1.0,
+                            w->dt, (int)c, w->t, (int)c, 0.0, w->m, (int)c));
     double *m = w->m;
     for (uint32_t k = 0; k < c; k++)
         for (uint32_t l = k + 1; l < c; l++) {
@@ -379,8 +382,9 @@ static affect_status dual_solve(work *w, size_t n, uint32_t c, uint32_t dims, ui
         }
     if (!all_finite(m, (size_t)c * c))
         return affect_fail(err, AFFECT_ERR_RANGE, "%s", OVERFLOW_MSG);
-    lapack_int info = LAPACKE_dsyev_work(LAPACK_COL_MAJOR, 'V', 'U', (lapack_int)c, m,
-                                         (lapack_int)c, w->lam, w->lwork, (lapack_int)w->nlwork);
+    lapack_int info;
+    AFFECT_BLAS(info = LAPACKE_dsyev_work(LAPACK_COL_MAJOR, 'V', 'U', (lapack_int)c, m,
+                                          (lapack_int)c, w->lam, w->lwork, (lapack_int)w->nlwork));
     if (info != 0)
         return eig_failed((int)info, err);
     double trace = 0.0;
@@ -438,8 +442,8 @@ static void axes_from_data(work *w, const double *x, size_t n, size_t d, affect_
     for (size_t j0 = 0; j0 < d; j0 += w->bw) {
         size_t b = d - j0 < w->bw ? d - j0 : w->bw;
         centred_block(x, n, d, j0, b, w->blk, w->mean, sums);
-        cblas_dgemm(CblasRowMajor, CblasTrans, CblasNoTrans, (int)p, (int)b, (int)n, 1.0, w->t,
-                    (int)p, w->blk, (int)b, 0.0, s->axes + j0, (int)d);
+        AFFECT_BLAS(cblas_dgemm(CblasRowMajor, CblasTrans, CblasNoTrans, (int)p, (int)b, (int)n,
+                                1.0, w->t, (int)p, w->blk, (int)b, 0.0, s->axes + j0, (int)d));
     }
     orient_axes(s, NULL, 0);
 }
@@ -485,7 +489,8 @@ static affect_status fit(const double *x, const double *k, size_t n, size_t d, c
         goto cleanup;
     s = model_alloc(p, d);
     if (!s) {
-        st = affect_nomem(err);
+        st = affect_nomem_of(err, (size_t)p + 1, d * sizeof(double), "the sPCA's %u x %zu axes",
+                             p, d);
         goto cleanup;
     }
     double sums[2] = {0.0, 0.0};
@@ -536,7 +541,12 @@ affect_status affect_spca_fit_dual(const double *k, size_t n, size_t d, const ui
         (st = dual_solve(&w, n, c, dims, &p, err)) != AFFECT_OK)
         goto cleanup;
     s = model_alloc(p, d);
-    if (!s || !(s->coef = affect_malloc_array(n * p, sizeof *s->coef))) {
+    if (!s) {
+        st = affect_nomem_of(err, (size_t)p + 1, d * sizeof(double), "the sPCA's %u x %zu axes",
+                             p, d);
+        goto cleanup;
+    }
+    if (!(s->coef = affect_malloc_array(n * p, sizeof *s->coef))) {
         st = affect_nomem(err);
         goto cleanup;
     }
@@ -568,8 +578,8 @@ void affect_spca_add_rows(affect_spca *s, const double *B, size_t b, size_t col0
 {
     size_t n = (size_t)s->n_train, d = s->input_dim;
     uint32_t p = s->dims;
-    cblas_dgemm(CblasRowMajor, CblasTrans, CblasNoTrans, (int)p, (int)b, (int)n, 1.0, s->coef,
-                (int)p, B, (int)b, 1.0, s->axes + col0, (int)d);
+    AFFECT_BLAS(cblas_dgemm(CblasRowMajor, CblasTrans, CblasNoTrans, (int)p, (int)b, (int)n, 1.0,
+                            s->coef, (int)p, B, (int)b, 1.0, s->axes + col0, (int)d));
 }
 
 void affect_spca_finish(affect_spca *s, double *z, size_t m)

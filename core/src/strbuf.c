@@ -192,8 +192,21 @@ void affect_strbuf_json_string(affect_strbuf *sb, const char *s)
     static const char hex[] = "0123456789abcdef";
     affect_strbuf_putc(sb, '"');
     const char *run = s;
-    for (const char *p = s; *p; p++) {
+    size_t left = strlen(s);
+    for (const char *p = s; *p; p++, left--) {
         unsigned char c = (unsigned char)*p;
+        if (c >= 0x80) { /* a valid sequence as it is; a byte that is not UTF-8 as U+FFFD */
+            size_t k = affect_utf8_sequence((const unsigned char *)p, left);
+            if (k > 0) {
+                p += k - 1;
+                left -= k - 1;
+                continue;
+            }
+            affect_strbuf_append(sb, run, (size_t)(p - run));
+            run = p + 1;
+            affect_strbuf_puts(sb, "\\ufffd");
+            continue;
+        }
         if (c >= 0x20 && c != '"' && c != '\\')
             continue;
         affect_strbuf_append(sb, run, (size_t)(p - run));

@@ -41,6 +41,7 @@
 #include <svm.h>
 
 #include "affect/rng.h"
+#include "internal.h"
 
 struct affect_svm {
     uint32_t c;       /* classes */
@@ -160,8 +161,8 @@ affect_status affect_svm_gram(const double *X, size_t n, size_t d, double *G, af
     affect_status st = check_sizes(n, d, err);
     if (st != AFFECT_OK || n == 0)
         return st;
-    cblas_dsyrk(CblasRowMajor, CblasUpper, CblasNoTrans, (int)n, (int)d, 1.0, X, (int)d, 0.0, G,
-                (int)n);
+    AFFECT_BLAS(cblas_dsyrk(CblasRowMajor, CblasUpper, CblasNoTrans, (int)n, (int)d, 1.0, X,
+                            (int)d, 0.0, G, (int)n));
     for (size_t i = 1; i < n; i++)
         for (size_t j = 0; j < i; j++)
             G[i * n + j] = G[j * n + i];
@@ -177,7 +178,7 @@ static affect_status gram_new(const double *X, size_t n, size_t d, double **out,
         return affect_fail(err, AFFECT_ERR_RANGE, "too many samples: %zu", n);
     double *G = affect_malloc_array(nn, sizeof *G);
     if (!G)
-        return affect_nomem(err);
+        return affect_nomem_of(err, nn, sizeof *G, "the %zu x %zu Gram matrix", n, n);
     affect_status st = affect_svm_gram(X, n, d, G, err);
     if (st != AFFECT_OK) {
         affect_free(G);
@@ -224,7 +225,12 @@ static affect_status problem_build(const double *G, size_t n, const uint32_t *y,
     p->rows = affect_malloc_array(m, sizeof *p->rows);
     p->nodes = affect_malloc_array(count, sizeof *p->nodes);
     if (!p->ids || !p->labels || !p->rows || !p->nodes) {
+        bool nodes = !p->nodes;
         problem_free(p);
+        if (nodes)
+            return affect_nomem_of(err, count, sizeof *p->nodes,
+                                   "libsvm's problem of %zu samples (%zu kernel entries)", m,
+                                   count);
         return affect_nomem(err);
     }
     size_t r = 0;
@@ -471,7 +477,8 @@ affect_status affect_svm_add_rows(affect_svm *m, const double *B, size_t b, size
                                d);
         m->w = affect_calloc(total, sizeof *m->w);
         if (!m->w)
-            return affect_nomem(err);
+            return affect_nomem_of(err, total, sizeof *m->w, "the SVM's %zu x %zu weights", P,
+                                   d);
     }
     uint32_t start[AFFECT_SVM_MAX_CLASSES];
     sv_starts(m, start);

@@ -1041,8 +1041,10 @@ affect_status affect_motion_synth(const char *action, const char *emotion_name, 
         t_end = tl.key[tl.n - 1].t + p.hold1;
     }
     double frames = floor(t_end * opt->fps) + 1.0;
-    if (frames > AFFECT_MOTION_MAX_FRAMES)
-        return affect_fail(err, AFFECT_ERR_RANGE, "motion too long: %.0f frames", frames);
+    if (frames > AFFECT_MOTION_MAX_FRAMES || frames * J_COUNT > AFFECT_MOTION_MAX_SAMPLES)
+        return affect_fail(err, AFFECT_ERR_RANGE,
+                           "motion too long: %.0f frames x %d joints (at most %u samples)", frames,
+                           (int)J_COUNT, AFFECT_MOTION_MAX_SAMPLES);
     uint32_t n_frames = (uint32_t)frames;
 
     st = affect_motion_create(n_frames, J_COUNT, opt->fps, &m, err);

@@ -20,7 +20,8 @@
 # about a minute) with OPENBLAS_NUM_THREADS=1, then its RMLR fit again with {"threads":2},
 # unpinned (--rmlr-only --threads 2; it says so when laban_salient has no threads option),
 # then bench_rmlr (affect_rmlr_cv on the Laban vectors of bandai-namco-1's 44 emotion motions
-# and bandai-namco-2-dev's 504, pinned; about 3 minutes).
+# and bandai-namco-2-dev's 504, pinned; about 3 minutes), then bench_interrupt (the built
+# module; the interrupt latency of every long call, unpinned, about a minute).
 # AFFECT_BENCH_ONLY="bench_hmm ..." runs only the benchmarks it names (default: all).
 # Record the output in docs/BENCHMARKS.md.
 set -euo pipefail
@@ -108,5 +109,13 @@ fi
 if want bench_rmlr; then
     echo "== bench_rmlr"
     "${pin[@]}" "$build/tests/bench/bench_rmlr"
+    echo
+fi
+
+# How fast long calls stop when interrupted (the built module), single-threaded OpenBLAS,
+# unpinned (some calls run 2 threads, and the interrupting thread needs a core too).
+if want bench_interrupt; then
+    echo "== bench_interrupt (unpinned)"
+    OPENBLAS_NUM_THREADS=1 "$build/tests/bench/bench_interrupt"
     echo
 fi

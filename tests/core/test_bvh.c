@@ -124,7 +124,7 @@ static void test_options_and_header_forms(void **state)
                                "1 2 3 90\r\n\r\n4 5 6 0\r\n\r\n";
     affect_motion *m = NULL;
     affect_error err;
-    affect_bvh_options opt = {0.01, "m"};
+    affect_bvh_options opt = {0.01, "m", 0};
     affect_status st = affect_bvh_parse(text, sizeof text - 1, &opt, &m, &err);
     if (st)
         fail_msg("%s", err.msg);
@@ -208,6 +208,8 @@ static void test_errors(void **state)
         {"HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\nCHANNELS 1 Xposition\n}\nMOTION\n"
          "Frames: 1\nFrame Time: 0.1\n1e400\n",
          "line 10: value 1 of frame 0 is not a number: 1e400"},
+        {"HIERARCHY\nROOT a\xFF" "b\n{\n", /* names are UTF-8 (Latin-1 here) */
+         "line 2: joint name is not valid UTF-8 (byte 0xff at offset 1)"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         affect_motion *m = NULL;
@@ -219,6 +221,108 @@ static void test_errors(void **state)
             fail_msg("case %zu:\n  got      %s\n  expected %s", i, err.msg, cases[i].message);
         assert_null(m);
     }
+}
+
+/* ---- sizes from the text (issue 14): "Frames:" against the text left, even when no joint
+ * has channels, and frames × joints against max_samples, both before the frames are
+ * allocated (a 160-byte file without channels made a 604 MB motion, ten joints 3.9 GB) ---- */
+
+/* HIERARCHY with joints j0 … j(n−1), a chain, none with channels; then MOTION with the given
+ * header lines and tail, into buf (malloc'd). */
+static char *no_channels_bvh(unsigned n, const char *frames, const char *tail)
+{
+    size_t cap = 64 * (size_t)n + strlen(frames) + strlen(tail) + 64, len = 0;
+    char *buf = malloc(cap);
+    assert_non_null(buf);
+    len += (size_t)snprintf(buf + len, cap - len, "HIERARCHY\n");
+    for (unsigned j = 0; j < n; j++)
+        len += (size_t)snprintf(buf + len, cap - len, "%s j%u\n{\nOFFSET 0 1 0\nCHANNELS 0\n",
+                                j ? "JOINT" : "ROOT", j);
+    for (unsigned j = 0; j < n; j++)
+        len += (size_t)snprintf(buf + len, cap - len, "}\n");
+    snprintf(buf + len, cap - len, "MOTION\nFrames: %s\nFrame Time: 0.01\n%s", frames, tail);
+    return buf;
+}
+
+static void expect_bvh_error(const char *text, const affect_bvh_options *opt,
+                             affect_status status, const char *message)
+{
+    affect_motion *m = NULL;
+    affect_error err;
+    affect_status st = affect_bvh_parse(text, strlen(text), opt, &m, &err);
+    if (st == AFFECT_OK)
+        fail_msg("parsed %u frames x %u joints, expected: %s", m->n_frames, m->n_joints, message);
+    assert_null(m);
+    if (strcmp(err.msg, message) != 0)
+        fail_msg("\n  got      %s\n  expected %s", err.msg, message);
+    assert_int_equal(st, status);
+}
+
+static void test_frames_need_text(void **state)
+{
+    /* the issue's 160-byte file: one joint and an End Site, no channels */
+    static const char tiny[] = "HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 0\n"
+                               "  End Site\n  {\n    OFFSET 0 10 0\n  }\n}\nMOTION\n"
+                               "Frames: 16777216\nFrame Time: 0.0083333\n";
+    expect_bvh_error(tiny, NULL, AFFECT_ERR_FORMAT,
+                     "line 13: Frames: 16777216 needs more text than the file has left");
+    char *ten = no_channels_bvh(10, "16777216", "");
+    assert_true(strlen(ten) < 476);
+    expect_bvh_error(ten, NULL, AFFECT_ERR_FORMAT,
+                     "line 54: Frames: 16777216 needs more text than the file has left");
+    free(ten);
+    /* one (empty) line per frame; the last may lack its line end */
+    for (unsigned frames = 1; frames <= 5; frames++) {
+        char count[16];
+        snprintf(count, sizeof count, "%u", frames);
+        char *text = no_channels_bvh(10, count, "\n\n\n");
+        if (frames <= 4) {
+            affect_motion *m = parse_ok(text);
+            assert_int_equal(m->n_frames, frames);
+            assert_int_equal(m->n_joints, 10);
+            tu_assert_near(affect_motion_at(m, frames - 1, 9)[1], 10.0, 0);
+            affect_motion_free(m);
+        } else {
+            expect_bvh_error(text, NULL, AFFECT_ERR_FORMAT,
+                             "line 54: Frames: 5 needs more text than the file has left");
+        }
+        free(text);
+    }
+}
+
+static void test_max_samples(void **state)
+{
+    /* the option lowers or raises the limit on frames × joints */
+    char *text = no_channels_bvh(10, "3", "\n\n\n");
+    affect_bvh_options opt = {1.0, NULL, 20};
+    expect_bvh_error(text, &opt, AFFECT_ERR_RANGE,
+                     "line 54: 3 frames x 10 joints is 30 samples, above the limit of 20 "
+                     "(option max_samples)");
+    opt.max_samples = 30;
+    affect_motion *m = NULL;
+    affect_error err;
+    assert_int_equal(affect_bvh_parse(text, strlen(text), &opt, &m, &err), AFFECT_OK);
+    assert_int_equal(m->n_frames, 3);
+    affect_motion_free(m);
+    free(text);
+
+    /* the default, AFFECT_MOTION_MAX_SAMPLES: 4096 roots of one joint and 4097 frames (one
+     * line end each) are refused before anything is allocated for them */
+    size_t cap = 4096 * 48 + 4097 + 64, len = 0;
+    char *big = malloc(cap);
+    assert_non_null(big);
+    len += (size_t)snprintf(big + len, cap - len, "HIERARCHY\n");
+    for (unsigned j = 0; j < 4096; j++)
+        len += (size_t)snprintf(big + len, cap - len,
+                                "ROOT r%u\n{\nOFFSET 0 0 0\nCHANNELS 0\n}\n", j);
+    len += (size_t)snprintf(big + len, cap - len, "MOTION\nFrames: 4097\nFrame Time: 0.01\n");
+    memset(big + len, '\n', 4097);
+    big[len + 4097] = '\0';
+    assert_int_equal(AFFECT_MOTION_MAX_SAMPLES, 16777216);
+    expect_bvh_error(big, NULL, AFFECT_ERR_RANGE,
+                     "line 20484: 4097 frames x 4096 joints is 16781312 samples, above the limit "
+                     "of 16777216 (option max_samples)");
+    free(big);
 }
 
 /* ---- out of memory: every allocation of a parse fails in turn (tu_oom_sweep) ---- */
@@ -252,6 +356,8 @@ int main(void)
         cmocka_unit_test(test_options_and_header_forms),
         cmocka_unit_test(test_duplicate_names_get_suffixes),
         cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_frames_need_text),
+        cmocka_unit_test(test_max_samples),
         cmocka_unit_test(test_out_of_memory),
     };
     return cmocka_run_group_tests_name("bvh", tests, NULL, NULL);

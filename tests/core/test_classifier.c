@@ -553,6 +553,45 @@ static void test_determinism(void **state)
     affect_classifier_free(c);
 }
 
+/* Training with the blocks of Fisher scores in slabs (issue 14: one block of 4,032 × 95,333
+ * doubles is more than SQLite allocates at once): with slabs of one row and bands of one
+ * column the classifier is the one of a single array (the normalization to the bit; the Gram
+ * matrix from dsyrk and dgemm per slab may round differently, so the rest within 1e-9). */
+static void test_slabs(void **state)
+{
+    fixture *fx = *state;
+    affect_classifier_config cfg;
+    small_config(&cfg, fx->small_d.feat);
+    cfg.slab_bytes = 1; /* a row per slab, a column per band */
+    affect_classifier *c = train_ok(&cfg, fx->small_d.feat, fx->small_seqs, fx->small_y,
+                                    fx->small_n, SMALL_LABELS, 2);
+    const affect_classifier *one = fx->small;
+    size_t D = affect_classifier_dim(c);
+    assert_int_equal(D, affect_classifier_dim(one));
+    assert_memory_equal(affect_classifier_norm_mean(c), affect_classifier_norm_mean(one),
+                        D * sizeof(double));
+    assert_memory_equal(affect_classifier_norm_scale(c), affect_classifier_norm_scale(one),
+                        D * sizeof(double));
+    uint32_t n = affect_classifier_n_train(c), p = affect_spca_dims(affect_classifier_spca(c));
+    assert_int_equal(n, fx->small_n);
+    for (size_t e = 0; e < (size_t)n * p; e++)
+        tu_assert_near(affect_classifier_train_embed(c)[e],
+                       affect_classifier_train_embed(one)[e], 1e-9);
+    for (uint32_t i = 0; i < fx->small_n; i++) {
+        eval_res a, b;
+        eval_ok(c, &fx->small_seqs[i], &a);
+        eval_ok(one, &fx->small_seqs[i], &b);
+        assert_memory_equal(a.fisher, b.fisher, D * sizeof(double));
+        assert_int_equal(a.o.svm, b.o.svm);
+        assert_int_equal(a.o.knn, b.o.knn);
+        tu_assert_near(a.decision[0], b.decision[0], 1e-9 * (1 + fabs(b.decision[0])));
+        tu_assert_near(a.embed[0], b.embed[0], 1e-9 * (1 + fabs(b.embed[0])));
+        free(a.fisher);
+        free(b.fisher);
+    }
+    affect_classifier_free(c);
+}
+
 /* Every byte flipped (three ways) is caught: the magic by its check, the rest by the
  * checksum. */
 static void test_corrupted_bytes(void **state)
@@ -1286,6 +1325,7 @@ int main(void)
         cmocka_unit_test(test_train_errors),
         cmocka_unit_test(test_grid),
         cmocka_unit_test(test_salience),
+        cmocka_unit_test(test_slabs),
         cmocka_unit_test(test_out_of_memory),
     };
     return cmocka_run_group_tests(tests, setup, teardown);

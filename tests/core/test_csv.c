@@ -582,6 +582,33 @@ static void set_name(affect_motion *m, uint32_t j, const char *name)
     assert_int_equal(affect_motion_set_name(m, j, name, strlen(name), NULL), AFFECT_OK);
 }
 
+/* Frames × joints against opt->max_samples (AFFECT_MOTION_MAX_SAMPLES by default), checked
+ * before each row is stored; the capacity is never sized beyond it. */
+static void test_max_samples(void **state)
+{
+    static const char text[] = "a.x,a.y,a.z,b.x,b.y,b.z\n1,2,3,4,5,6\n1,2,3,4,5,6\n"
+                               "1,2,3,4,5,6\n1,2,3,4,5,6\n";
+    affect_csv_options o = opts(',', -1);
+    o.max_samples = 6;
+    expect_error(text, &o, AFFECT_ERR_RANGE,
+                 "row 5: 4 frames x 2 joints is 8 samples, above the limit of 6 (option "
+                 "max_samples)");
+    o.max_samples = 8;
+    affect_motion *m = parse_ok(text, &o);
+    assert_int_equal(m->n_frames, 4);
+    affect_motion_free(m);
+    o.max_samples = 0; /* the default */
+    m = parse_ok(text, &o);
+    assert_int_equal(m->n_frames, 4);
+    affect_motion_free(m);
+    /* without a header the first row is a frame too */
+    o = opts(',', 0);
+    o.max_samples = 1;
+    expect_error("1,2,3,4,5,6\n", &o, AFFECT_ERR_RANGE,
+                 "row 1: 1 frames x 2 joints is 2 samples, above the limit of 1 (option "
+                 "max_samples)");
+}
+
 static void test_write_format(void **state)
 {
     (void)state;
@@ -782,6 +809,7 @@ int main(void)
         cmocka_unit_test(test_long_name_and_wide_rows),
         cmocka_unit_test(test_value_errors),
         cmocka_unit_test(test_ragged_rows),
+        cmocka_unit_test(test_max_samples),
         cmocka_unit_test(test_write_format),
         cmocka_unit_test(test_round_trip_awkward),
         cmocka_unit_test(test_round_trip_large),

@@ -61,7 +61,7 @@ static double dtw(const affect_motion *a, const affect_motion *b)
 {
     double d = -1;
     affect_error err;
-    assert_int_equal(affect_dtw_distance(a, b, &d, &err), AFFECT_OK);
+    assert_int_equal(affect_dtw_distance(a, b, &d, NULL, &err), AFFECT_OK);
     return d;
 }
 
@@ -622,13 +622,13 @@ static void test_errors(void **state)
 
     /* DTW */
     double dist;
-    assert_int_equal(affect_dtw_distance(d, nohips, &dist, &err), AFFECT_ERR_INVALID);
+    assert_int_equal(affect_dtw_distance(d, nohips, &dist, NULL, &err), AFFECT_ERR_INVALID);
     assert_string_equal(err.msg, "the motions have different joint names");
-    assert_int_equal(affect_dtw_distance(nohips, nohips2, &dist, &err), AFFECT_ERR_MISSING);
+    assert_int_equal(affect_dtw_distance(nohips, nohips2, &dist, NULL, &err), AFFECT_ERR_MISSING);
     assert_string_equal(err.msg, "first motion: cannot remove the heading: no left/right hip or "
                                  "shoulder roles resolve in the motion (train with "
                                  "{\"normalize\": false})");
-    assert_int_equal(affect_dtw_distance(NULL, d, &dist, &err), AFFECT_ERR_INVALID);
+    assert_int_equal(affect_dtw_distance(NULL, d, &dist, NULL, &err), AFFECT_ERR_INVALID);
     assert_string_equal(err.msg, "missing motion");
 
     affect_motion_free(nohips);
@@ -658,7 +658,7 @@ static affect_status oom_op(void *p, affect_error *err)
                                        &c->out, &c->rep, err);
     if (st)
         return st;
-    return affect_dtw_distance(c->out, c->d, &c->dist, err);
+    return affect_dtw_distance(c->out, c->d, &c->dist, NULL, err);
 }
 
 static void oom_finish(void *p, affect_status st)

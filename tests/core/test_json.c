@@ -749,6 +749,73 @@ static void test_motion_errors(void **state)
 
 /* Error messages that need long inputs: frame and joint indices in the tens, name lengths and
  * joint counts beyond the limits. */
+/* The largest single request made while it is installed (issue 14: sizes from the input are
+ * checked against what the input can hold before anything is allocated for them). */
+static size_t largest_request;
+
+static void *largest_malloc(size_t n)
+{
+    if (n > largest_request)
+        largest_request = n;
+    return malloc(n);
+}
+
+static void *largest_realloc(void *p, size_t n)
+{
+    if (n > largest_request)
+        largest_request = n;
+    return realloc(p, n);
+}
+
+static const affect_allocator largest_allocator = {largest_malloc, largest_realloc, free};
+
+static void test_motion_sizes(void **state)
+{
+    (void)state;
+    affect_strbuf sb;
+    char *text;
+    size_t len;
+
+    /* 4096 joints and 4000 empty frames: 16,384,000 joint entries in 52 kB of text. The first
+     * frame's joint count is the error, found before the 196 MB motion is allocated. */
+    affect_strbuf_init(&sb);
+    affect_strbuf_puts(&sb, "{\"fps\":30,\"joints\":[");
+    for (int j = 0; j < 4096; j++)
+        affect_strbuf_printf(&sb, "%s\"j%d\"", j ? "," : "", j);
+    affect_strbuf_puts(&sb, "],\"frames\":[");
+    for (int t = 0; t < 4000; t++)
+        affect_strbuf_puts(&sb, t ? ",[]" : "[]");
+    affect_strbuf_puts(&sb, "]}");
+    assert_int_equal(affect_strbuf_finish(&sb, &text, &len, NULL), AFFECT_OK);
+    largest_request = 0;
+    affect_set_allocator(&largest_allocator);
+    affect_motion *m = (affect_motion *)&m;
+    affect_error err;
+    affect_status st = affect_motion_from_json(text, len, &m, &err);
+    affect_set_allocator(NULL);
+    assert_int_equal(st, F);
+    assert_null(m);
+    assert_string_equal(err.msg, "frames[0]: expected 4096 joints, found 0");
+    if (largest_request > 32 * len) /* the document's nodes take about 10 bytes per byte */
+        fail_msg("a %zu-byte document made a request of %zu bytes", len, largest_request);
+    affect_free(text);
+
+    /* frames × joints above AFFECT_MOTION_MAX_SAMPLES (no option raises it here) */
+    affect_strbuf_init(&sb);
+    affect_strbuf_puts(&sb, "{\"fps\":30,\"joints\":[");
+    for (int j = 0; j < 4096; j++)
+        affect_strbuf_printf(&sb, "%s\"j%d\"", j ? "," : "", j);
+    affect_strbuf_puts(&sb, "],\"frames\":[");
+    for (int t = 0; t < 4097; t++)
+        affect_strbuf_puts(&sb, t ? ",[]" : "[]");
+    affect_strbuf_puts(&sb, "]}");
+    assert_int_equal(affect_strbuf_finish(&sb, &text, NULL, NULL), AFFECT_OK);
+    expect_motion_error(text, R,
+                        "frames: 4097 frames x 4096 joints is 16781312 samples, above the limit "
+                        "of 16777216");
+    affect_free(text);
+}
+
 static void test_motion_errors_large(void **state)
 {
     (void)state;
@@ -952,6 +1019,7 @@ int main(void)
         cmocka_unit_test(test_motion_defaults),
         cmocka_unit_test(test_motion_errors),
         cmocka_unit_test(test_motion_errors_large),
+        cmocka_unit_test(test_motion_sizes),
         cmocka_unit_test(test_oom_motion_from_json),
         cmocka_unit_test(test_oom_json_parse),
         cmocka_unit_test(test_oom_motion_to_json),

@@ -123,6 +123,8 @@ static void test_corruptions(void **state)
          "trailing bytes: 167 bytes, expected 163 for 3 frames x 3 joints"},
         {"duplicate name", size, 39, 'a', 1, "joints 0 and 1 have the same name \"a\""},
         {"name with NUL", size, 36, 0, 1, "joint 0: name contains a NUL byte"},
+        {"name not UTF-8", size, 36, 0xFF, 1,
+         "joint 0: name is not valid UTF-8 (byte 0xff at offset 0)"},
         {"parent out of range", size, parents_off + 4, 7, 0,
          "joint 1: parent index 7 out of range (-1 .. 2)"},
         {"parent below -1", size, parents_off + 4, 0xFFFFFFFEu, 0,
@@ -284,6 +286,81 @@ static void test_fixture_v1(void **state)
     free(data);
 }
 
+/* ---- sizes (issue 14) ---- */
+
+/* Resampling is bounded by AFFECT_MOTION_MAX_SAMPLES (or the input's size): a rate is no
+ * size, and 2 frames of 4096 joints at 1 fps would become 409,604,096 samples at 100 kHz. */
+static void test_resample_limit(void **state)
+{
+    affect_motion *m = NULL, *r = NULL;
+    affect_error err;
+    assert_int_equal(affect_motion_create(2, 4096, 1.0, &m, &err), AFFECT_OK);
+    assert_int_equal(affect_motion_resample(m, 100000, &r, &err), AFFECT_ERR_RANGE);
+    assert_string_equal(err.msg, "resampling to 100000 fps gives 100001 frames x 4096 joints = "
+                                 "409604096 samples, above the limit of 16777216");
+    assert_null(r);
+    /* 4096 frames (16,777,216 samples, the limit) is fine */
+    assert_int_equal(affect_motion_resample(m, 4095, &r, &err), AFFECT_OK);
+    assert_int_equal(r->n_frames, 4096);
+    affect_motion_free(r);
+    affect_motion_free(m);
+}
+
+/* An allocator that refuses every request of refuse_from bytes or more. */
+static size_t refuse_from;
+
+static void *refusing_malloc(size_t n)
+{
+    return n >= refuse_from ? NULL : malloc(n);
+}
+
+static void *refusing_realloc(void *p, size_t n)
+{
+    return n >= refuse_from ? NULL : realloc(p, n);
+}
+
+static const affect_allocator refusing = {refusing_malloc, refusing_realloc, free};
+
+/* A refused allocation of AFFECT_NOMEM_NAMED_MIN bytes or more says what it was for and how
+ * large it was; a smaller one is the plain "out of memory" (SQLITE_NOMEM in the extension). */
+static void test_large_requests(void **state)
+{
+    affect_error err;
+    assert_int_equal(affect_nomem_of(&err, 560 * (size_t)667331, sizeof(double),
+                                     "the %u x %u Fisher score matrix", 560u, 667331u),
+                     AFFECT_ERR_NOMEM);
+    assert_string_equal(err.msg, "cannot allocate the 560 x 667331 Fisher score matrix (2.8 GiB)");
+    assert_true(affect_nomem_named(&err));
+    assert_int_equal(affect_nomem_of(&err, AFFECT_NOMEM_NAMED_MIN, 1, "a block"),
+                     AFFECT_ERR_NOMEM);
+    assert_string_equal(err.msg, "cannot allocate a block (16.0 MiB)");
+    assert_int_equal(affect_nomem_of(&err, SIZE_MAX, 16, "too much"), AFFECT_ERR_NOMEM);
+    assert_string_equal(err.msg, "cannot allocate too much (256.0 EiB)"); /* overflows size_t */
+    assert_int_equal(affect_nomem_of(&err, AFFECT_NOMEM_NAMED_MIN - 1, 1, "a block"),
+                     AFFECT_ERR_NOMEM);
+    assert_string_equal(err.msg, "out of memory");
+    assert_false(affect_nomem_named(&err));
+    assert_int_equal(affect_nomem_of(NULL, 1, 1, "x"), AFFECT_ERR_NOMEM);
+
+    /* a motion whose positions take 96 MiB, with every request of 16 MiB or more refused */
+    affect_motion *m = NULL;
+    refuse_from = AFFECT_NOMEM_NAMED_MIN;
+    affect_set_allocator(&refusing);
+    affect_status st = affect_motion_create(1u << 20, 8, 30.0, &m, &err);
+    affect_set_allocator(NULL);
+    assert_int_equal(st, AFFECT_ERR_NOMEM);
+    assert_null(m);
+    assert_string_equal(err.msg,
+                        "cannot allocate the positions of 1048576 frames x 8 joints (96.0 MiB)");
+    /* and a small one, with every request of 1 kB or more refused: the plain message */
+    refuse_from = 1024;
+    affect_set_allocator(&refusing);
+    st = affect_motion_create(100, 8, 30.0, &m, &err);
+    affect_set_allocator(NULL);
+    assert_int_equal(st, AFFECT_ERR_NOMEM);
+    assert_string_equal(err.msg, "out of memory");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -291,6 +368,7 @@ int main(void)
         cmocka_unit_test(test_validate),     cmocka_unit_test(test_slice),
         cmocka_unit_test(test_resample),     cmocka_unit_test(test_select),
         cmocka_unit_test(test_bbox_duration), cmocka_unit_test(test_fixture_v1),
+        cmocka_unit_test(test_resample_limit), cmocka_unit_test(test_large_requests),
     };
     return cmocka_run_group_tests_name("motion", tests, NULL, NULL);
 }

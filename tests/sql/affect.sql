@@ -196,6 +196,14 @@ SELECT 'training on 3 threads (class HMMs and Fisher scores in parallel) gives t
 SELECT affect_train(m, emotion, '{"threads":65}') FROM probe;
 -- error: affect_train: option "threads" must be from 1 to 64, got 65
 
+-- a refused allocation of 16 MiB or more is an error naming it, not a bare SQLITE_NOMEM (issue
+-- 14): 96 rows (48 motions and their mirror images) of 25,284 Fisher scores, with 22 MiB left
+SELECT affect_train(m, emotion, '{"states":2,"mixtures":4,"covariance":"full","mirror":true,"max_iter":1,"descriptors":"none","svm_c":1}')
+  FROM s WHERE seed <= 4;
+-- error: affect_train: cannot allocate the 96 x 25284 block of Fisher scores (18.5 MiB): out of memory
+-- heap-limit: 23068672
+-- oom: skip
+
 SELECT 'the small classifier too, and the class order does not depend on the row order',
        (SELECT affect_train(m, emotion, '{"states":2,"mixtures":1,"joints":["right_hand"],"max_iter":2,"svm_c":1,"spca_dims":1,"knn_k":1,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false}')
           FROM probe WHERE seed <= 3) = model
@@ -501,7 +509,7 @@ SELECT affect_train('x', 'sad');
 -- error: affect_train: argument 1 must be a motion BLOB, got text
 
 SELECT affect_train(m, emotion, '{"svm":1,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
--- error: affect_train: unknown option "svm" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, frame, root, max_iter, tol, reg, seed, groups, score_normalization, score_clip, svm_c, svm_folds, spca_dims, spca_kernel, spca_sigma, knn_k, grid, descriptors, descriptor_weight, mirror, threads)
+-- error: affect_train: unknown option "svm" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, frame, root, max_iter, tol, reg, seed, progress, groups, score_normalization, score_clip, svm_c, svm_folds, spca_dims, spca_kernel, spca_sigma, knn_k, grid, descriptors, descriptor_weight, mirror, threads)
 
 SELECT affect_train(m, emotion, '{"svm_c":0,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: option "svm_c" must be a positive number or "auto"
@@ -658,7 +666,7 @@ SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"group":1,"covariance":
 -- error: affect_crossval: affect_crossval_json: option "group" must be a column name
 
 SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"fold":3,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}');
--- error: affect_crossval: affect_crossval_json: unknown option "fold" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, frame, root, max_iter, tol, reg, seed, groups, score_normalization, score_clip, svm_c, svm_folds, spca_dims, spca_kernel, spca_sigma, knn_k, grid, folds, descriptors, descriptor_weight, mirror, group, methods, verbose, threads)
+-- error: affect_crossval: affect_crossval_json: unknown option "fold" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, frame, root, max_iter, tol, reg, seed, progress, groups, score_normalization, score_clip, svm_c, svm_folds, spca_dims, spca_kernel, spca_sigma, knn_k, grid, folds, descriptors, descriptor_weight, mirror, group, methods, verbose, threads)
 
 SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"knn_k":0,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}');
 -- error: affect_crossval: affect_crossval_json: knn_k must be at least 1

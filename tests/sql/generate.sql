@@ -331,19 +331,71 @@ SELECT 'a changed label: refitted under the new label',
   FROM (SELECT laban_salient('idx') AS s);
 -- oom: skip
 
+-- 'check' validates the stored fit: sound, and of the index's shape when its key names the
+-- index's rows
+INSERT INTO idx(idx) VALUES('check');
+
 CREATE VIRTUAL TABLE idx3 USING laban(content=motions, motion=motion, label=emotion);
 INSERT OR REPLACE INTO idx3_info(key, value)
 SELECT key, value FROM idx_info WHERE key IN ('rmlr', 'rmlr_key');
+-- a fit of other rows is not corrupt, only unused
+INSERT INTO idx3(idx3) VALUES('check');
 SELECT 'a fit copied from another index is not used: 3 labels, 24 rows',
        (SELECT count(*) FROM json_each(s, '$.salient')) = 3 AND json_extract(s, '$.rows') = 24
   FROM (SELECT laban_salient('idx3') AS s);
 -- oom: skip
+INSERT INTO idx3(idx3) VALUES('check');
 
-UPDATE idx3_info SET value = (SELECT value FROM idx_info WHERE key = 'rmlr') WHERE key = 'rmlr';
-SELECT 'a fit of another shape under this index''s key is not used either',
-       (SELECT count(*) FROM json_each(s, '$.salient')) = 3
-  FROM (SELECT laban_salient('idx3', '{"seed":7}') AS s);
+-- idx3's fit (3 labels, 24 rows) under idx's current key (4 labels, 28 rows); laban_salient's
+-- own cache holds idx3's fit, so the stored one is read (with fewer classes than the index's
+-- labels it was read past its arrays)
+UPDATE idx_info SET value = (SELECT value FROM idx3_info WHERE key = 'rmlr') WHERE key = 'rmlr';
+INSERT INTO idx(idx) VALUES('check');
+-- error: laban: cache entry 'rmlr' is corrupt: the fit has 24 rows, its key says 28; the next laban_salient or affect_generate on the index replaces it
+SELECT 'a fit of another shape under this index''s key is not used either: 4 labels, 28 rows',
+       (SELECT count(*) FROM json_each(s, '$.salient')) = 4 AND json_extract(s, '$.rows') = 28
+  FROM (SELECT laban_salient('idx') AS s);
 -- oom: skip
+INSERT INTO idx(idx) VALUES('check');
+
+UPDATE idx3_info SET value = CAST(value || x'00' AS BLOB) WHERE key = 'rmlr';
+INSERT INTO idx3(idx3) VALUES('check');
+-- error: laban: cache entry 'rmlr' is corrupt: 1 bytes follow the RMLR fit; the next laban_salient or affect_generate on the index replaces it
+UPDATE idx3_info SET value = substr(value, 1, 100) WHERE key = 'rmlr';
+INSERT INTO idx3(idx3) VALUES('check');
+-- error: laban: cache entry 'rmlr' is corrupt: it is not an RMLR fit (RMLR: truncated in the lambdas (offset 38)); the next laban_salient or affect_generate on the index replaces it
+
+-- ---- an empty index: a clear error (regression: NULL was passed to memcpy) ----
+CREATE TABLE nomotions(id INTEGER PRIMARY KEY, emotion TEXT, motion BLOB);
+CREATE VIRTUAL TABLE idx0 USING laban(content=nomotions, motion=motion, label=emotion);
+
+SELECT laban_salient('idx0');
+-- error: laban_salient: index "idx0" is empty: it holds no row with a label
+
+SELECT affect_generate('idx0', (SELECT motion FROM motions WHERE id = 1), 'sad');
+-- error: affect_generate: index "idx0" is empty: it holds no row with a label
+
+SELECT affect_generate('idx0', (SELECT motion FROM motions WHERE id = 1), 'sad', '{"method":"hmm_nn","components":["TimeAll"],"k":2}');
+-- error: affect_generate: index "idx0" is empty: it holds no row with a label
+
+SELECT affect_generate_explain('idx0', (SELECT motion FROM motions WHERE id = 1), 'sad');
+-- error: affect_generate_explain: index "idx0" is empty: it holds no row with a label
+
+SELECT 'its k-nearest query gives no rows', count(*) = 0
+  FROM idx0 WHERE query = (SELECT motion FROM motions WHERE id = 1) AND k = 3;
+
+-- rows without labels: empty for generation as well
+INSERT INTO nomotions(emotion, motion) SELECT NULL, motion FROM motions WHERE id <= 2;
+INSERT INTO idx0(idx0) VALUES('rebuild');
+
+SELECT laban_salient('idx0');
+-- error: laban_salient: index "idx0" is empty: it holds no row with a label
+
+SELECT affect_generate('idx0', (SELECT motion FROM motions WHERE id = 1), 'sad');
+-- error: affect_generate: index "idx0" is empty: it holds no row with a label
+
+SELECT 'its k-nearest query still finds the unlabelled rows', count(*) = 2
+  FROM idx0 WHERE query = (SELECT motion FROM motions WHERE id = 1) AND k = 3;
 
 SELECT laban_salient('idx', '{"threads":0}');
 -- error: laban_salient: option "threads" must be from 1 to 64, got 0

@@ -287,7 +287,7 @@ SELECT hmm_train(m, '{"up":"w"}') FROM probe;
 -- error: hmm_train: option "up" must be one of "x", "y", "z", got "w"
 
 SELECT hmm_train(m, '{"state":3}') FROM probe;
--- error: hmm_train: unknown option "state" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, frame, root, max_iter, tol, reg, seed)
+-- error: hmm_train: unknown option "state" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, frame, root, max_iter, tol, reg, seed, progress)
 
 SELECT hmm_train(m, '[3]') FROM probe;
 -- error: hmm_train: options (argument 2) must be a JSON object, got array

@@ -668,6 +668,222 @@ SELECT 'a motion set to NULL leaves the index on refresh', count(*) = 0
 
 INSERT INTO small_laban(small_laban) VALUES('check');
 
+-- ---- corrupt stored vectors: 'check' and every reader refuse them, naming the rowid ----
+-- Each is written straight into the shadow table, as a damaged file or a stray UPDATE would
+-- leave it; the generation is bumped too, so that this connection reloads its cached vectors.
+-- A sound vector is a BLOB of 27 float32, each finite and >= 0 or the missing marker NaN
+-- 0x7fc00000 (row 12 has some: the checks above pass with them).
+CREATE TEMP TABLE sound AS SELECT id, laban_vector(m) AS v FROM small WHERE id IN (7, 10);
+
+UPDATE small_laban_data SET vector = x'00' WHERE id = 7;
+UPDATE small_laban_info SET value = value + 1 WHERE key = 'generation';
+
+INSERT INTO small_laban(small_laban) VALUES('check');
+-- error: laban: stored vector of rowid 7 is corrupt (1 bytes, expected 108); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+SELECT rowid FROM small_laban WHERE query = 10 AND k = 1;
+-- error: laban: stored vector of rowid 7 is corrupt (1 bytes, expected 108); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+SELECT rowid FROM small_laban WHERE query = (SELECT m FROM small WHERE id = 10) AND radius = 0.5;
+-- error: laban: stored vector of rowid 7 is corrupt (1 bytes, expected 108); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+SELECT count(*) FROM small_laban;
+-- error: laban: stored vector of rowid 7 is corrupt (1 bytes, expected 108); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+SELECT laban_salient('small_laban');
+-- error: laban_salient: index "small_laban": stored vector of rowid 7 is corrupt (1 bytes, expected 108); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+SELECT affect_generate('small_laban', (SELECT m FROM small WHERE id = 10), 'sad');
+-- error: affect_generate: index "small_laban": stored vector of rowid 7 is corrupt (1 bytes, expected 108); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+SELECT affect_generate_explain('small_laban', (SELECT m FROM small WHERE id = 10), 'sad');
+-- error: affect_generate_explain: index "small_laban": stored vector of rowid 7 is corrupt (1 bytes, expected 108); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+UPDATE small_laban_data SET vector = NULL WHERE id = 7;
+UPDATE small_laban_info SET value = value + 1 WHERE key = 'generation';
+
+INSERT INTO small_laban(small_laban) VALUES('check');
+-- error: laban: stored vector of rowid 7 is corrupt (null, expected a BLOB of 108 bytes); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+SELECT rowid FROM small_laban WHERE query = 10 AND k = 1;
+-- error: laban: stored vector of rowid 7 is corrupt (null, expected a BLOB of 108 bytes); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+SELECT laban_salient('small_laban');
+-- error: laban_salient: index "small_laban": stored vector of rowid 7 is corrupt (null, expected a BLOB of 108 bytes); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+SELECT affect_generate('small_laban', (SELECT m FROM small WHERE id = 10), 'sad');
+-- error: affect_generate: index "small_laban": stored vector of rowid 7 is corrupt (null, expected a BLOB of 108 bytes); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+-- random bytes of a wrong length, and of the right one
+UPDATE small_laban_data SET vector = x'007580875D7F6AA995BC105165BBFBC47DC6A0F9107EDBF0AD2D863442661B486C84F9E540C21A3683BCD9D641E3712E4B58' WHERE id = 7;
+UPDATE small_laban_info SET value = value + 1 WHERE key = 'generation';
+
+INSERT INTO small_laban(small_laban) VALUES('check');
+-- error: laban: stored vector of rowid 7 is corrupt (50 bytes, expected 108); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+SELECT rowid FROM small_laban WHERE query = 10 AND k = 1;
+-- error: laban: stored vector of rowid 7 is corrupt (50 bytes, expected 108); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+SELECT laban_salient('small_laban');
+-- error: laban_salient: index "small_laban": stored vector of rowid 7 is corrupt (50 bytes, expected 108); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+SELECT affect_generate('small_laban', (SELECT m FROM small WHERE id = 10), 'sad');
+-- error: affect_generate: index "small_laban": stored vector of rowid 7 is corrupt (50 bytes, expected 108); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+UPDATE small_laban_data SET vector = x'367E8A829525E69BEECBC93C8672A1B785B84C528C5405233EAC0E2A8C68C3CEE03039BA5C30F9638AE76FF89082343E2D8E8F3C0E52D23A2FD9F556C5E99EF8EBDFD53083F2C978E6FA2249FA88E109CFD80AB1BCF186B69A6015F08330C63211629F0C0090B7803A114A65' WHERE id = 7;
+UPDATE small_laban_info SET value = value + 1 WHERE key = 'generation';
+
+INSERT INTO small_laban(small_laban) VALUES('check');
+-- error: laban: stored vector of rowid 7 is corrupt (WeightAll is -2.03497191e-37, expected a finite number >= 0 or NaN 0x7fc00000 for missing); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+SELECT rowid FROM small_laban WHERE query = 10 AND k = 1;
+-- error: laban: stored vector of rowid 7 is corrupt (WeightAll is -2.03497191e-37, expected a finite number >= 0 or NaN 0x7fc00000 for missing); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+SELECT laban_salient('small_laban');
+-- error: laban_salient: index "small_laban": stored vector of rowid 7 is corrupt (WeightAll is -2.03497191e-37, expected a finite number >= 0 or NaN 0x7fc00000 for missing); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+SELECT affect_generate('small_laban', (SELECT m FROM small WHERE id = 10), 'sad');
+-- error: affect_generate: index "small_laban": stored vector of rowid 7 is corrupt (WeightAll is -2.03497191e-37, expected a finite number >= 0 or NaN 0x7fc00000 for missing); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+-- an oversized zeroblob; two corrupt rows: the first is named, the others counted
+UPDATE small_laban_data SET vector = zeroblob(1000000) WHERE id = 10;
+UPDATE small_laban_info SET value = value + 1 WHERE key = 'generation';
+
+INSERT INTO small_laban(small_laban) VALUES('check');
+-- error: laban: stored vector of rowid 7 is corrupt (WeightAll is -2.03497191e-37, expected a finite number >= 0 or NaN 0x7fc00000 for missing), and 1 more is; run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+UPDATE small_laban_data SET vector = (SELECT v FROM sound WHERE id = 7) WHERE id = 7;
+
+INSERT INTO small_laban(small_laban) VALUES('check');
+-- error: laban: stored vector of rowid 10 is corrupt (1000000 bytes, expected 108); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+SELECT rowid FROM small_laban WHERE query = 7 AND k = 1;
+-- error: laban: stored vector of rowid 10 is corrupt (1000000 bytes, expected 108); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+SELECT laban_salient('small_laban');
+-- error: laban_salient: index "small_laban": stored vector of rowid 10 is corrupt (1000000 bytes, expected 108); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+SELECT affect_generate('small_laban', (SELECT m FROM small WHERE id = 7), 'sad');
+-- error: affect_generate: index "small_laban": stored vector of rowid 10 is corrupt (1000000 bytes, expected 108); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+UPDATE small_laban_data SET vector = (SELECT v FROM sound WHERE id = 10) WHERE id = 10;
+
+-- a NaN other than the missing marker, infinity, a negative value, text
+UPDATE small_laban_data SET vector = CAST(x'0000C0FF' || substr((SELECT v FROM sound WHERE id = 7), 5) AS BLOB) WHERE id = 7;
+UPDATE small_laban_info SET value = value + 1 WHERE key = 'generation';
+
+SELECT 'the row is 108 bytes, NaN first', length(vector) = 108 AND hex(substr(vector, 1, 4)) = '0000C0FF'
+  FROM small_laban_data WHERE id = 7;
+
+INSERT INTO small_laban(small_laban) VALUES('check');
+-- error: laban: stored vector of rowid 7 is corrupt (WeightAll is NaN 0xffc00000, expected a finite number >= 0 or NaN 0x7fc00000 for missing); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+SELECT rowid FROM small_laban WHERE query = 10 AND k = 1;
+-- error: laban: stored vector of rowid 7 is corrupt (WeightAll is NaN 0xffc00000, expected a finite number >= 0 or NaN 0x7fc00000 for missing); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+SELECT laban_salient('small_laban');
+-- error: laban_salient: index "small_laban": stored vector of rowid 7 is corrupt (WeightAll is NaN 0xffc00000, expected a finite number >= 0 or NaN 0x7fc00000 for missing); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+SELECT affect_generate('small_laban', (SELECT m FROM small WHERE id = 10), 'sad');
+-- error: affect_generate: index "small_laban": stored vector of rowid 7 is corrupt (WeightAll is NaN 0xffc00000, expected a finite number >= 0 or NaN 0x7fc00000 for missing); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+UPDATE small_laban_data SET vector = CAST(substr((SELECT v FROM sound WHERE id = 7), 1, 36) || x'0000807F' || substr((SELECT v FROM sound WHERE id = 7), 41) AS BLOB) WHERE id = 7;
+UPDATE small_laban_info SET value = value + 1 WHERE key = 'generation';
+
+INSERT INTO small_laban(small_laban) VALUES('check');
+-- error: laban: stored vector of rowid 7 is corrupt (TimeHead is inf, expected a finite number >= 0 or NaN 0x7fc00000 for missing); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+SELECT rowid FROM small_laban WHERE query = 10 AND k = 1;
+-- error: laban: stored vector of rowid 7 is corrupt (TimeHead is inf, expected a finite number >= 0 or NaN 0x7fc00000 for missing); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+SELECT laban_salient('small_laban');
+-- error: laban_salient: index "small_laban": stored vector of rowid 7 is corrupt (TimeHead is inf, expected a finite number >= 0 or NaN 0x7fc00000 for missing); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+UPDATE small_laban_data SET vector = CAST(x'000080BF' || substr((SELECT v FROM sound WHERE id = 7), 5) AS BLOB) WHERE id = 7;
+UPDATE small_laban_info SET value = value + 1 WHERE key = 'generation';
+
+INSERT INTO small_laban(small_laban) VALUES('check');
+-- error: laban: stored vector of rowid 7 is corrupt (WeightAll is -1, expected a finite number >= 0 or NaN 0x7fc00000 for missing); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+SELECT rowid FROM small_laban WHERE query = 10 AND k = 1;
+-- error: laban: stored vector of rowid 7 is corrupt (WeightAll is -1, expected a finite number >= 0 or NaN 0x7fc00000 for missing); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+UPDATE small_laban_data SET vector = CAST((SELECT v FROM sound WHERE id = 7) AS TEXT) WHERE id = 7;
+UPDATE small_laban_info SET value = value + 1 WHERE key = 'generation';
+
+INSERT INTO small_laban(small_laban) VALUES('check');
+-- error: laban: stored vector of rowid 7 is corrupt (text, expected a BLOB of 108 bytes); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+SELECT laban_salient('small_laban');
+-- error: laban_salient: index "small_laban": stored vector of rowid 7 is corrupt (text, expected a BLOB of 108 bytes); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+-- a corrupt vector of a row without a label is refused too (the queries read every row)
+UPDATE small_laban_data SET vector = (SELECT v FROM sound WHERE id = 7) WHERE id = 7;
+UPDATE small_laban_data SET vector = x'00' WHERE id = 15;
+UPDATE small_laban_info SET value = value + 1 WHERE key = 'generation';
+
+SELECT laban_salient('small_laban');
+-- error: laban_salient: index "small_laban": stored vector of rowid 15 is corrupt (1 bytes, expected 108); run INSERT INTO small_laban(small_laban) VALUES('rebuild')
+
+INSERT INTO small_laban(small_laban) VALUES('rebuild');
+INSERT INTO small_laban(small_laban) VALUES('check');
+
+SELECT 'rebuild repairs the vectors', count(*) = 2 FROM small_laban_data JOIN sound USING (id)
+ WHERE vector = v;
+
+SELECT 'and the readers work again', count(*) = 2 FROM small_laban WHERE query = 10 AND k = 2;
+
+-- ---- cache entries of _info ('check' validates each kind; the RMLR fit's in generate.sql) ----
+INSERT INTO small_laban_info(key, value) VALUES('rmlr', x'00'), ('rmlr_key', 'x');
+
+INSERT INTO small_laban(small_laban) VALUES('check');
+-- error: laban: cache entry 'rmlr' is corrupt: its key "x" is not content:rows:seed:folds as laban_salient writes it; the next laban_salient or affect_generate on the index replaces it
+
+UPDATE small_laban_info SET value = '0123456789abcdef:3:1:10' WHERE key = 'rmlr_key';
+
+INSERT INTO small_laban(small_laban) VALUES('check');
+-- error: laban: cache entry 'rmlr' is corrupt: it is not an RMLR fit (RMLR: unknown format version 0 at offset 0 (this build reads 1)); the next laban_salient or affect_generate on the index replaces it
+
+UPDATE small_laban_info SET value = 'fit' WHERE key = 'rmlr';
+
+INSERT INTO small_laban(small_laban) VALUES('check');
+-- error: laban: cache entry 'rmlr' is corrupt: its value is text and its key text, expected a blob and text
+
+DELETE FROM small_laban_info WHERE key = 'rmlr_key';
+
+INSERT INTO small_laban(small_laban) VALUES('check');
+-- error: laban: cache entry 'rmlr' is corrupt: small_laban_info has its row 'rmlr' but not 'rmlr_key'
+
+DELETE FROM small_laban_info WHERE key = 'rmlr';
+INSERT INTO small_laban(small_laban) VALUES('check');
+
+-- ---- an empty index: no rows, no error ----
+CREATE TABLE nomotions(id INTEGER PRIMARY KEY, tag, m BLOB);
+CREATE VIRTUAL TABLE empty_laban USING laban(content=nomotions, motion=m, label=tag);
+
+SELECT 'an empty index has no rows', count(*) = 0 FROM empty_laban;
+
+SELECT 'k nearest of an empty index: none', count(*) = 0
+  FROM empty_laban WHERE query = (SELECT m FROM small WHERE id = 10) AND k = 3;
+
+SELECT 'a radius query of an empty index: none', count(*) = 0
+  FROM empty_laban WHERE query = (SELECT m FROM small WHERE id = 10) AND label = 'sad'
+   AND radius = 0.5 AND components = '["TimeAll"]';
+
+SELECT rowid FROM empty_laban WHERE query = 10 AND k = 1;
+-- error: laban: no row 10 in the index
+
+SELECT 'its statistics: 0 rows, means null, sds 1',
+       (SELECT value FROM empty_laban_info WHERE key = 'rows') = 0
+   AND (SELECT json_extract(value, '$[0]') IS NULL FROM empty_laban_info WHERE key = 'mean')
+   AND (SELECT json_extract(value, '$[26]') = 1 FROM empty_laban_info WHERE key = 'sd');
+
+INSERT INTO empty_laban(empty_laban) VALUES('check');
+INSERT INTO empty_laban(empty_laban) VALUES('rebuild');
+
+DROP TABLE empty_laban;
+DROP TABLE nomotions;
+
 -- ---- shadow tables: protected, renamed, dropped ----
 SELECT group_concat(type || ' ' || name, ', ') FROM
   (SELECT type, name FROM pragma_table_list WHERE name LIKE 'small\_laban%' ESCAPE '\'

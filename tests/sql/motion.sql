@@ -42,7 +42,7 @@ SELECT group_concat(name || '/' || narg, ' ') FROM (
   SELECT DISTINCT name, narg FROM pragma_function_list
    WHERE name LIKE 'motion\_%' ESCAPE '\' OR name IN ('affect_version', 'affect_build_info')
    ORDER BY name, narg);
--- expect: affect_build_info/0 affect_version/0 motion_dtw/2 motion_duration/1 motion_fps/1 motion_frames/1 motion_from_bvh/1 motion_from_bvh/2 motion_from_csv/2 motion_from_csv/3 motion_from_json/1 motion_info/1 motion_joints/1 motion_kinematics/1 motion_kinematics/2 motion_normalize/1 motion_normalize/2 motion_resample/2 motion_rigid/1 motion_rigid/2 motion_rigid/3 motion_roles/1 motion_roles/2 motion_select/2 motion_slice/3 motion_svg/1 motion_svg/2 motion_synth/3 motion_synth/4 motion_to_bvh/1 motion_to_bvh/2 motion_to_csv/1 motion_to_json/1
+-- expect: affect_build_info/0 affect_version/0 motion_bvh_error/1 motion_bvh_error/2 motion_dtw/2 motion_duration/1 motion_fps/1 motion_frames/1 motion_from_bvh/1 motion_from_bvh/2 motion_from_csv/2 motion_from_csv/3 motion_from_json/1 motion_info/1 motion_joints/1 motion_kinematics/1 motion_kinematics/2 motion_normalize/1 motion_normalize/2 motion_resample/2 motion_rigid/1 motion_rigid/2 motion_rigid/3 motion_roles/1 motion_roles/2 motion_select/2 motion_slice/3 motion_svg/1 motion_svg/2 motion_synth/3 motion_synth/4 motion_to_bvh/1 motion_to_bvh/2 motion_to_csv/1 motion_to_json/1
 
 SELECT 'pure functions are deterministic and innocuous', count(*) = 0 FROM pragma_function_list
  WHERE (name LIKE 'motion\_%' ESCAPE '\' OR name LIKE 'affect\_%' ESCAPE '\')
@@ -98,7 +98,7 @@ SELECT motion_from_bvh(x'00');
 -- error: motion_from_bvh: line 1: expected HIERARCHY, found \x00
 
 SELECT motion_from_bvh('HIERARCHY', '{"units":"cm"}');
--- error: motion_from_bvh: unknown option "units" (expected unit, scale)
+-- error: motion_from_bvh: unknown option "units" (expected unit, scale, max_samples, on_error)
 
 SELECT motion_from_bvh('HIERARCHY', '{"unit":');
 -- error: motion_from_bvh: options (argument 2) are not valid JSON: at byte 8: unexpected end of text
@@ -117,6 +117,89 @@ SELECT motion_from_bvh(NULL) IS NULL;
 
 SELECT motion_from_bvh();
 -- error: wrong number of arguments to function motion_from_bvh()
+
+-- ---- importing without aborting: {"on_error":"null"} and motion_bvh_error ----
+SELECT 'on_error null: a malformed text gives NULL',
+       motion_from_bvh('HIERARCHY', '{"on_error":"null"}') IS NULL
+   AND motion_from_bvh(x'00', '{"on_error":"null"}') IS NULL
+   AND motion_from_bvh('HIERARCHY
+ROOT a
+{
+  OFFSET 0 0 0
+  CHANNELS 1 Xrotation
+}
+MOTION
+Frames: 2
+Frame Time: 0.1
+5
+', '{"on_error":"null"}') IS NULL;
+
+SELECT 'on_error null: a good text imports as without it',
+       motion_from_bvh(motion_to_bvh(m), '{"on_error":"null","unit":"cm"}') =
+       motion_from_bvh(motion_to_bvh(m), '{"unit":"cm"}')
+  FROM t WHERE name = 'small';
+
+SELECT 'on_error raise is the default', motion_from_bvh(motion_to_bvh(m), '{"on_error":"raise"}') =
+       motion_from_bvh(motion_to_bvh(m)) FROM t WHERE name = 'small';
+
+SELECT motion_from_bvh('HIERARCHY', '{"on_error":"raise"}');
+-- error: motion_from_bvh: line 1: expected ROOT, found end of text
+
+SELECT motion_from_bvh('HIERARCHY', '{"on_error":"nul"}');
+-- error: motion_from_bvh: option "on_error" must be one of "raise", "null", got "nul"
+
+SELECT motion_from_bvh('HIERARCHY', '{"on_error":"null","scale":-1}');
+-- error: motion_from_bvh: scale must be a positive number, got -1
+
+SELECT motion_from_bvh('HIERARCHY', '{"on_error":"null","unit":"c m"}');
+-- error: motion_from_bvh: unit has a character other than letters, digits, '_', '.', '-' (byte 1)
+
+SELECT 'motion_bvh_error: NULL when the text imports',
+       motion_bvh_error(motion_to_bvh(m)) IS NULL
+   AND motion_bvh_error(motion_to_bvh(m), '{"unit":"cm","scale":0.01}') IS NULL
+  FROM t WHERE name = 'small';
+
+SELECT motion_bvh_error('HIERARCHY
+ROOT a
+{
+  OFFSET 0 0 0
+  CHANELS 1 Xrotation
+}');
+-- expect: line 5: expected CHANNELS, found CHANELS
+
+SELECT motion_bvh_error('HIERARCHY
+ROOT a
+{
+  OFFSET 0 0 0
+  CHANNELS 1 Xrotation
+}
+MOTION
+Frames: 3
+Frame Time: 0.1
+5
+6
+');
+-- expect: line 12: expected 3 frames, found 2
+
+SELECT motion_bvh_error(x'00');
+-- expect: line 1: expected HIERARCHY, found \x00
+
+SELECT motion_bvh_error(x'48495f52ff');
+-- expect: line 1: expected HIERARCHY, found HI_R\xff
+
+SELECT 'motion_bvh_error of NULL is NULL', motion_bvh_error(NULL) IS NULL;
+
+SELECT motion_bvh_error('HIERARCHY', '{"on_error":"null"}');
+-- error: motion_bvh_error: unknown option "on_error" (expected unit, scale, max_samples)
+
+SELECT motion_bvh_error('HIERARCHY', '{"scale":-1}');
+-- error: motion_bvh_error: scale must be a positive number, got -1
+
+SELECT motion_bvh_error('HIERARCHY', '{"unit":"c m"}');
+-- error: motion_bvh_error: unit has a character other than letters, digits, '_', '.', '-' (byte 1)
+
+SELECT motion_bvh_error();
+-- error: wrong number of arguments to function motion_bvh_error()
 
 -- ---- NULL in, NULL out; wrong types ----
 SELECT 'NULL in gives NULL out',
@@ -298,3 +381,166 @@ SELECT motion_synth('wave', 'sad', 1, '{"intensity":3}');
 
 SELECT motion_synth('wave', 'sad', 1, '{"tempo":2}');
 -- error: motion_synth: unknown option "tempo" (expected fps, intensity, noise)
+
+-- ---- sizes from the input (issue 14): "Frames:" against the text left, even without
+-- channels; frames × joints against max_samples (AFFECT_MOTION_MAX_SAMPLES = 2^24 by default)
+SELECT motion_from_bvh('HIERARCHY
+ROOT Hips
+{
+  OFFSET 0 0 0
+  CHANNELS 0
+  End Site
+  {
+    OFFSET 0 10 0
+  }
+}
+MOTION
+Frames: 16777216
+Frame Time: 0.0083333
+');
+-- error: motion_from_bvh: line 13: Frames: 16777216 needs more text than the file has left
+
+SELECT motion_from_bvh('HIERARCHY
+ROOT j0 {
+OFFSET 0 1 0 CHANNELS 0
+JOINT j1 {
+OFFSET 0 1 0 CHANNELS 0
+JOINT j2 {
+OFFSET 0 1 0 CHANNELS 0
+JOINT j3 {
+OFFSET 0 1 0 CHANNELS 0
+JOINT j4 {
+OFFSET 0 1 0 CHANNELS 0
+JOINT j5 {
+OFFSET 0 1 0 CHANNELS 0
+JOINT j6 {
+OFFSET 0 1 0 CHANNELS 0
+JOINT j7 {
+OFFSET 0 1 0 CHANNELS 0
+JOINT j8 {
+OFFSET 0 1 0 CHANNELS 0
+JOINT j9 {
+OFFSET 0 1 0 CHANNELS 0
+} } } } } } } } } }
+MOTION
+Frames: 16777216
+Frame Time: 0.0083333
+');
+-- error: motion_from_bvh: line 25: Frames: 16777216 needs more text than the file has left
+
+SELECT 'without channels a frame is one line end (the last may lack it)',
+       motion_frames(motion_from_bvh('HIERARCHY
+ROOT a
+{
+  OFFSET 0 0 0
+  CHANNELS 0
+}
+MOTION
+Frames: 3
+Frame Time: 0.1
+
+
+')) = 3;
+
+SELECT motion_from_bvh('HIERARCHY
+ROOT a
+{
+  OFFSET 0 0 0
+  CHANNELS 1 Xrotation
+  End Site
+  {
+    OFFSET 0 10 0
+  }
+}
+MOTION
+Frames: 3
+Frame Time: 0.1
+1
+2
+3
+', '{"max_samples":5}');
+-- error: motion_from_bvh: line 13: 3 frames x 2 joints is 6 samples, above the limit of 5 (option max_samples)
+
+SELECT 'max_samples sets the limit', motion_frames(motion_from_bvh('HIERARCHY
+ROOT a
+{
+  OFFSET 0 0 0
+  CHANNELS 1 Xrotation
+  End Site
+  {
+    OFFSET 0 10 0
+  }
+}
+MOTION
+Frames: 3
+Frame Time: 0.1
+1
+2
+3
+', '{"max_samples":6}')) = 3;
+
+-- 4096 roots without channels and 4097 frames: above the default limit, refused before anything
+-- is allocated for the frames; motion_bvh_error reports it, {"on_error":"null"} gives NULL
+CREATE TABLE big_bvh AS
+WITH RECURSIVE r(i) AS (SELECT 0 UNION ALL SELECT i + 1 FROM r WHERE i < 4095)
+SELECT 'HIERARCHY' || char(10) ||
+       (SELECT group_concat('ROOT r' || i || char(10) || '{' || char(10) || 'OFFSET 0 0 0' ||
+                            char(10) || 'CHANNELS 0' || char(10) || '}', char(10)) FROM r) ||
+       char(10) || 'MOTION' || char(10) || 'Frames: 4097' || char(10) || 'Frame Time: 0.01' ||
+       replace(hex(zeroblob(4097)), '00', char(10)) AS text;
+
+SELECT motion_from_bvh(text) FROM big_bvh;
+-- error: motion_from_bvh: line 20484: 4097 frames x 4096 joints is 16781312 samples, above the limit of 16777216 (option max_samples)
+-- oom: skip
+
+SELECT motion_bvh_error(text) FROM big_bvh;
+-- expect: line 20484: 4097 frames x 4096 joints is 16781312 samples, above the limit of 16777216 (option max_samples)
+-- oom: skip
+
+SELECT 'on_error null: too large gives NULL', motion_from_bvh(text, '{"on_error":"null"}') IS NULL
+  FROM big_bvh;
+-- oom: skip
+
+SELECT motion_from_bvh('HIERARCHY', '{"max_samples":0}');
+-- error: motion_from_bvh: option "max_samples" must be a whole number from 1 to 68719476736, got 0
+
+SELECT motion_from_bvh('HIERARCHY', '{"max_samples":1.5}');
+-- error: motion_from_bvh: option "max_samples" must be a whole number from 1 to 68719476736, got 1.5
+
+SELECT motion_from_bvh('HIERARCHY', '{"max_samples":"many"}');
+-- error: motion_from_bvh: option "max_samples" must be a number, got string
+
+SELECT motion_from_csv('a.x,a.y,a.z,b.x,b.y,b.z
+1,2,3,4,5,6
+1,2,3,4,5,6
+1,2,3,4,5,6
+', 30, '{"max_samples":5}');
+-- error: motion_from_csv: row 4: 3 frames x 2 joints is 6 samples, above the limit of 5 (option max_samples)
+
+SELECT 'motion_from_csv: max_samples sets the limit', motion_frames(motion_from_csv('a.x,a.y,a.z,b.x,b.y,b.z
+1,2,3,4,5,6
+1,2,3,4,5,6
+1,2,3,4,5,6
+', 30, '{"max_samples":6}')) = 3;
+
+SELECT motion_from_csv('a.x,a.y,a.z', 30, '{"max_samples":-1}');
+-- error: motion_from_csv: option "max_samples" must be a whole number from 1 to 68719476736, got -1
+
+-- JSON has no option: its document takes far more memory than the motion
+SELECT motion_from_json('{"fps":30,"joints":' ||
+       (WITH RECURSIVE r(i) AS (SELECT 0 UNION ALL SELECT i + 1 FROM r WHERE i < 4095)
+        SELECT json_group_array('j' || i) FROM r) ||
+       ',"frames":[' || substr(replace(hex(zeroblob(4097)), '00', ',[]'), 2) || ']}');
+-- error: motion_from_json: frames: 4097 frames x 4096 joints is 16781312 samples, above the limit of 16777216
+-- oom: skip
+
+-- resampling: a rate is no size (synthetic motions have 26 joints)
+SELECT motion_resample(motion_synth('wave', 'sad', 1), 100000);
+-- error: motion_resample: resampling to 100000 fps gives 660001 frames x 26 joints = 17160026 samples, above the limit of 16777216
+
+-- a refused allocation of 16 MiB or more says what it was for and how large, as an error
+-- (a bare SQLITE_NOMEM says nothing, and clients such as Python drop its text)
+SELECT motion_resample(motion_synth('walk', 'sad', 1), 100000);
+-- error: motion_resample: cannot allocate the positions of 613334 frames x 26 joints (182.5 MiB): out of memory
+-- heap-limit: 67108864
+-- oom: skip

@@ -28,6 +28,58 @@ q -cmd ".parameter set :dir bvh" < "$src/sql/import_bvh.sql"
 [ "$(q "SELECT ifnull(content, 'NULL') || '|' || ifnull(emotion, 'NULL') FROM motions WHERE name = 'other'")" = "NULL|NULL" ] ||
     fail "a file outside the naming pattern keeps NULL labels"
 
+# a folder with two good files and two bad ones (truncated, garbage), in a database of its own:
+# sql/import_bvh.sql and examples/import_folder.py import the good ones, skip the bad ones and
+# record each with its file, line and message
+mkdir mixed
+q "SELECT writefile('mixed/dataset-1_wave_sad_001.bvh', motion_to_bvh(motion_synth('wave', 'sad', 1)))" >/dev/null
+cp bvh/other.bvh mixed/other.bvh
+head -n -5 mixed/dataset-1_wave_sad_001.bvh > mixed/truncated.bvh
+truncated_line=$(( $(wc -l < mixed/truncated.bvh) + 1 ))  # where the missing frames were due
+printf 'GIF89a\001\000\377 x\n' > mixed/garbage.bvh
+qi() { "$shell" "$1" -cmd ".load $module" "${@:2}"; }
+errors="SELECT file || '|' || line || '|' || message FROM import_errors ORDER BY file"
+"$shell" shell.db < "$src/sql/schema.sql"
+out=$(qi shell.db -cmd ".parameter set :dir mixed" -cmd ".parameter set :unit cm" < "$src/sql/import_bvh.sql") ||
+    fail "sql/import_bvh.sql stopped at a bad file: $out"
+echo "$out" | grep -qx "imported 2 of 4 BVH files from mixed; skipped 2 (recorded in import_errors)" ||
+    fail "sql/import_bvh.sql summary: $out"
+echo "$out" | grep -qx 'skipped: motion_from_bvh: expected HIERARCHY, found GIF89a\\x01\\x00\\xff (mixed/garbage.bvh, line 1)' ||
+    fail "sql/import_bvh.sql lists the skipped files: $out"
+[ "$(qi shell.db "SELECT group_concat(name || ':' || frames || ':' || json_extract(motion_info(motion), '\$.unit'), ' ') FROM (SELECT * FROM motions ORDER BY name)")" = \
+  "dataset-1_wave_sad_001:$(qi shell.db "SELECT motion_frames(motion_from_bvh(readfile('mixed/dataset-1_wave_sad_001.bvh')))"):cm other:2:cm" ] ||
+    fail "sql/import_bvh.sql imports the two good files"
+got=$(qi shell.db "$errors")
+expected="mixed/garbage.bvh|1|motion_from_bvh: expected HIERARCHY, found GIF89a\\x01\\x00\\xff (mixed/garbage.bvh, line 1)"
+[ "$(echo "$got" | head -1)" = "$expected" ] || fail "import_errors: the garbage file: $got"
+echo "$got" | tail -1 | grep -qx "mixed/truncated.bvh|$truncated_line|motion_from_bvh: expected [0-9]* frames, found [0-9]* (mixed/truncated.bvh, line $truncated_line)" ||
+    fail "import_errors: the truncated file (line $truncated_line): $got"
+[ "$(echo "$got" | wc -l)" = 2 ] || fail "import_errors has $(echo "$got" | wc -l) rows"
+[ "$(qi shell.db "SELECT count(*) FROM import_errors WHERE at LIKE '____-__-__T__:__:__Z'")" = 2 ] ||
+    fail "import_errors: the time of each error"
+if /usr/bin/python3 -c 'import sqlite3; sqlite3.connect(":memory:").enable_load_extension' 2>/dev/null; then
+    out=$(/usr/bin/python3 "$src/examples/import_folder.py" mixed py.db --unit cm --module "$module") ||
+        fail "examples/import_folder.py: $out"
+    echo "$out" | grep -qx '\[1/4\] mixed/dataset-1_wave_sad_001.bvh: [0-9]* frames, [0-9]* joints' ||
+        fail "examples/import_folder.py progress: $out"
+    echo "$out" | grep -qx '\[2/4\] mixed/garbage.bvh: skipped: motion_from_bvh: expected HIERARCHY, .* (mixed/garbage.bvh, line 1)' ||
+        fail "examples/import_folder.py progress of a skipped file: $out"
+    echo "$out" | tail -1 | grep -qx "imported 2 of 4 BVH files from mixed; skipped 2 (recorded in import_errors)" ||
+        fail "examples/import_folder.py summary: $out"
+    [ "$(qi py.db "$errors")" = "$got" ] || fail "examples/import_folder.py records other errors: $(qi py.db "$errors")"
+    same="SELECT group_concat(name || quote(content) || quote(emotion) || fps || frames || hex(motion) || source) FROM (SELECT * FROM motions ORDER BY name)"
+    [ "$(qi py.db "$same")" = "$(qi shell.db "$same")" ] || fail "examples/import_folder.py imports other rows"
+else
+    echo "SKIP: /usr/bin/python3 cannot load extensions: examples/import_folder.py not run"
+fi
+# the truncated file mended: re-running imports it and forgets its error
+cp mixed/dataset-1_wave_sad_001.bvh mixed/truncated.bvh
+out=$(qi shell.db -cmd ".parameter set :dir mixed" < "$src/sql/import_bvh.sql")
+echo "$out" | grep -qx "imported 3 of 4 BVH files from mixed; skipped 1 (recorded in import_errors)" ||
+    fail "sql/import_bvh.sql after mending a file: $out"
+[ "$(qi shell.db "SELECT group_concat(file) FROM import_errors")" = mixed/garbage.bvh ] ||
+    fail "a file that imports loses its import_errors row"
+
 if [ -n "$corpus" ] && [ -d "$corpus" ]; then
     q -cmd ".parameter set :dir '$corpus'" -cmd ".parameter set :unit cm" \
       -cmd ".parameter set :source bandai-namco-1" < "$src/sql/import_bvh.sql"

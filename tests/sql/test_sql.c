@@ -14,7 +14,12 @@
  * Without an annotation, every row whose second column exists must have it equal to 1, and
  * the first column names the check in a failure message:
  *     SELECT 'walk is long', motion_duration(:walk) > 3;
- * Statements may use the parameter :corpus (the real corpus's directory, or NULL).
+ * Statements may use the parameter :corpus (the real corpus's directory, or NULL). Whatever
+ * the annotation, an error message that is not valid UTF-8 fails the statement.
+ *
+ * A statement annotated "-- heap-limit: N" runs with SQLite's hard heap limit set to N bytes
+ * more than are in use when it starts (sqlite3_hard_heap_limit64; the limits are restored
+ * after it): for what an allocation refused for its size reports.
  *
  * A statement annotated "-- oom: skip" runs once, normally, in that mode: for checks over a
  * whole table whose functions other, smaller statements already cover under fault injection
@@ -162,11 +167,14 @@ static void run_stmt(sqlite3 *db, sqlite3_stmt *st, outcome *o)
         o->error = dup_text(sqlite3_errmsg(db));
 }
 
-/* The annotation right after a statement: "-- expect: …", "-- error: …", and "-- oom: skip". */
-static void read_annotation(const char *tail, char **expect, char **error, bool *oom_skip)
+/* The annotation right after a statement: "-- expect: …", "-- error: …", "-- oom: skip" and
+ * "-- heap-limit: N" (*heap_limit: N, else 0). */
+static void read_annotation(const char *tail, char **expect, char **error, bool *oom_skip,
+                            long long *heap_limit)
 {
     *expect = *error = NULL;
     *oom_skip = false;
+    *heap_limit = 0;
     const char *p = tail;
     while (*p == ' ' || *p == '\t' || *p == '\r' || *p == '\n')
         p++;
@@ -186,6 +194,8 @@ static void read_annotation(const char *tail, char **expect, char **error, bool 
             *error = dup_text(line + 10);
         else if (strcmp(line, "-- oom: skip") == 0)
             *oom_skip = true;
+        else if (strncmp(line, "-- heap-limit: ", 15) == 0)
+            *heap_limit = atoll(line + 15);
         if (!eol)
             break;
         p = eol + 1;
@@ -204,10 +214,45 @@ static int line_of(const char *text, const char *at)
     return line;
 }
 
+/* Whether s is valid UTF-8 (no overlongs, surrogates or code points above U+10FFFF): every
+ * error message must be, since clients decode it (Python's sqlite3 raises UnicodeDecodeError
+ * instead of showing a message that is not). */
+static bool valid_utf8(const unsigned char *s)
+{
+    while (*s) {
+        unsigned c = *s, n; /* continuation bytes */
+        if (c < 0x80)
+            n = 0;
+        else if (c >= 0xC2 && c <= 0xDF)
+            n = 1;
+        else if (c >= 0xE0 && c <= 0xEF)
+            n = 2;
+        else if (c >= 0xF0 && c <= 0xF4)
+            n = 3;
+        else
+            return false;
+        unsigned long cp = n == 0 ? c : c & (0x3Fu >> n);
+        for (unsigned i = 1; i <= n; i++) {
+            if ((s[i] & 0xC0) != 0x80)
+                return false;
+            cp = (cp << 6) | (s[i] & 0x3Fu);
+        }
+        if ((n == 2 && cp < 0x800) || (n == 3 && (cp < 0x10000 || cp > 0x10FFFF)) ||
+            (cp >= 0xD800 && cp <= 0xDFFF))
+            return false;
+        s += n + 1;
+    }
+    return true;
+}
+
 /* Checks an outcome against the annotation; returns a malloc'd failure text or NULL. */
 static char *judge(const outcome *o, const char *expect, const char *error)
 {
     char buf[8192];
+    if (o->error && !valid_utf8((const unsigned char *)o->error)) {
+        snprintf(buf, sizeof buf, "the error message is not valid UTF-8: %s", o->error);
+        return dup_text(buf);
+    }
     if (error) {
         if (o->rc == SQLITE_OK)
             snprintf(buf, sizeof buf, "expected error \"%s\", got success", error);
@@ -274,13 +319,20 @@ static int run_spec(const char *path, int oom)
             start++;
         char *expect, *error;
         bool oom_skip;
-        read_annotation(tail ? tail : "", &expect, &error, &oom_skip);
+        long long heap_limit;
+        read_annotation(tail ? tail : "", &expect, &error, &oom_skip, &heap_limit);
+        sqlite3_int64 old_hard = sqlite3_hard_heap_limit64(-1),
+                      old_soft = sqlite3_soft_heap_limit64(-1);
+        if (heap_limit > 0)
+            sqlite3_hard_heap_limit64(sqlite3_memory_used() + heap_limit);
         outcome o;
         memset(&o, 0, sizeof o);
         if (rc != SQLITE_OK) {
             o.rc = rc;
             o.error = dup_text(sqlite3_errmsg(db));
         } else if (!st) { /* only comments or white space left */
+            sqlite3_hard_heap_limit64(old_hard);
+            sqlite3_soft_heap_limit64(old_soft);
             free(expect);
             free(error);
             sql = tail;
@@ -312,6 +364,10 @@ static int run_spec(const char *path, int oom)
             }
         } else {
             run_stmt(db, st, &o);
+        }
+        if (heap_limit > 0) {
+            sqlite3_hard_heap_limit64(old_hard);
+            sqlite3_soft_heap_limit64(old_soft);
         }
         statements++;
         char *why = judge(&o, expect, error);

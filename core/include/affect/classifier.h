@@ -78,6 +78,12 @@ extern "C" {
 #define AFFECT_CLASSIFIER_MAGIC "AFCL"
 #define AFFECT_CLASSIFIER_VERSION 2u
 #define AFFECT_CLASSIFIER_MAX_CLASSES 64u
+/* Training holds one block of the representation for every motion (n × one class HMM's Fisher
+ * scores: 4,032 × 95,333 doubles, 3.1 GB, for 2,016 motions and their mirror images at the
+ * thesis's configuration) in slabs of whole rows of at most this many bytes each: SQLite
+ * refuses any single allocation of 2 GiB or more, and a large working set should not need one
+ * block. A block that fits in one slab is computed exactly as with one array. */
+#define AFFECT_CLASSIFIER_SLAB_BYTES ((size_t)1 << 30)
 /* C values tried when svm_c = 0 (chosen by inner cross-validation; ties → the smallest) */
 #define AFFECT_CLASSIFIER_C_GRID {0.001, 0.01, 0.1, 1.0, 10.0, 100.0, 1000.0}
 
@@ -124,6 +130,9 @@ typedef struct affect_classifier_config {
     uint32_t threads;               /* training: class HMMs and motions' Fisher scores on this
                                        many threads (default 1, at most 64; the result does not
                                        depend on it; not stored in the BLOB) */
+    size_t slab_bytes;              /* training: the largest allocation for the rows of a block
+                                       of Fisher scores; 0 (default) =
+                                       AFFECT_CLASSIFIER_SLAB_BYTES (tests set less; not stored) */
 } affect_classifier_config;
 
 /* The measured best (docs/EVALUATION.md, "Choosing the defaults"), not the thesis's: class

@@ -64,6 +64,7 @@
 #ifndef AFFECT_GENERATE_H
 #define AFFECT_GENERATE_H
 
+#include "affect/monitor.h"
 #include "affect/normalize.h"
 
 #ifdef __cplusplus
@@ -95,6 +96,7 @@ typedef struct affect_generate_options {
      * timed. The core has no clock of its own: a benchmark passes one. It never changes the
      * result. */
     double (*clock)(void);
+    affect_monitor *monitor; /* stop hook of the engine's training (default NULL) */
 } affect_generate_options;
 
 void affect_generate_options_default(affect_generate_options *opt);
@@ -140,9 +142,10 @@ void affect_normalize_invert(const affect_normalize_transform *tf, const double 
  * path (ties: the shorter path). So it is the mean per-step joint distance in the normalized
  * unit (right arm lengths when scaled), 0 for a motion and itself, and symmetric. Up axis y.
  * Errors: "the motions have different joint names" (AFFECT_ERR_INVALID), the normalization's
- * errors prefixed with "first motion: " / "second motion: ", "out of memory". */
+ * errors prefixed with "first motion: " / "second motion: ", "out of memory"; mon (may be
+ * NULL) is asked every row and can stop it: AFFECT_ERR_INTERRUPTED. */
 affect_status affect_dtw_distance(const affect_motion *a, const affect_motion *b, double *dist,
-                                  affect_error *err);
+                                  affect_monitor *mon, affect_error *err);
 
 /* Frame rate at which affect_generate_rank_by_action compares motions. */
 #define AFFECT_RANK_FPS 10.0
@@ -153,10 +156,12 @@ affect_status affect_dtw_distance(const affect_motion *a, const affect_motion *b
  * (the action's shape, at a ninth of the cost for 30 fps motions), nearest first (ties: the
  * lower index; a candidate on another skeleton, or NULL, or one that cannot be compared, comes
  * last in its given order). dist (may be NULL) gets each candidate's distance (INFINITY for
- * those). Errors: out of memory, the resampling of the desired motion. */
+ * those). Errors: out of memory, the resampling of the desired motion, AFFECT_ERR_INTERRUPTED
+ * when mon (may be NULL) says stop. */
 affect_status affect_generate_rank_by_action(const affect_motion *desired,
                                              const affect_motion *const *candidates, uint32_t n,
-                                             uint32_t *order, double *dist, affect_error *err);
+                                             uint32_t *order, double *dist, affect_monitor *mon,
+                                             affect_error *err);
 
 #ifdef __cplusplus
 }

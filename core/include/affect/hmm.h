@@ -34,6 +34,7 @@
 #define AFFECT_HMM_H
 
 #include "affect/base.h"
+#include "affect/monitor.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -61,6 +62,8 @@ typedef struct affect_hmm_config {
     double tol;                   /* relative log-likelihood change to stop (default 1e-4) */
     double reg;                   /* covariance diagonal floor, added (default 1e-4) */
     uint64_t seed;                /* k-means++ seeding (default 1) */
+    affect_monitor *monitor;      /* training: stop and progress hooks (default NULL); a model
+                                     keeps none (its copy of the configuration says NULL) */
 } affect_hmm_config;
 
 void affect_hmm_config_default(affect_hmm_config *cfg);

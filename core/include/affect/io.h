@@ -17,12 +17,19 @@ extern "C" {
 typedef struct affect_bvh_options {
     double scale;      /* multiply every position by this (default 1) */
     const char *unit;  /* recorded unit, or NULL/"" for unknown (default) */
+    uint64_t max_samples; /* largest frames × joints accepted; 0 (default) =
+                             AFFECT_MOTION_MAX_SAMPLES */
 } affect_bvh_options;
 
 /* BVH: HIERARCHY with ROOT (one or more), JOINT and End Site; any channel count (0–6) and any
  * order per joint; position channels replace the OFFSET components they name; rotations in
  * degrees composed in the order CHANNELS lists them. End Sites become joints named
- * "<parent>_end". Every frame must be on one line with exactly the declared channel count. */
+ * "<parent>_end". Every frame must be on one line with exactly the declared channel count.
+ * "Frames: N" is checked before anything is allocated for the frames: against the text left
+ * (a frame line takes at least two bytes per value, and its line end even when no joint has
+ * channels; the last line may lack one) and against the limit on frames × joints
+ * ("line 14: 20000 frames x 1000 joints is 20000000 samples, above the limit of 16777216
+ * (option max_samples)", AFFECT_ERR_RANGE). */
 affect_status affect_bvh_parse(const char *text, size_t len, const affect_bvh_options *opt,
                                affect_motion **out, affect_error *err);
 
@@ -50,6 +57,8 @@ typedef struct affect_csv_options {
     char delimiter;    /* ',' (default), ';', '\t' or ' ' */
     int header;        /* −1 detect (default), 0 no header row, 1 header row */
     const char *unit;  /* recorded unit, or NULL/"" */
+    uint64_t max_samples; /* largest frames × joints accepted; 0 (default) =
+                             AFFECT_MOTION_MAX_SAMPLES */
 } affect_csv_options;
 
 void affect_csv_options_default(affect_csv_options *opt);
@@ -66,7 +75,9 @@ affect_status affect_csv_write(const affect_motion *m, char **out, size_t *len,
                                affect_error *err);
 
 /* JSON: {"fps": f, "joints": [names], "parents": [ints] (optional), "unit": "cm" (optional),
- *        "frames": [[[x, y, z], …joints], …frames]}. */
+ *        "frames": [[[x, y, z], …joints], …frames]}. Frames × joints may not exceed
+ * AFFECT_MOTION_MAX_SAMPLES (no option raises it: the parsed document takes far more memory
+ * than the motion, so larger motions come as CSV or BLOBs). */
 affect_status affect_motion_from_json(const char *text, size_t len, affect_motion **out,
                                       affect_error *err);
 affect_status affect_motion_to_json(const affect_motion *m, char **out, size_t *len,

@@ -4,8 +4,8 @@
  * skeleton is unknown) and the coordinate unit when it is known.
  *
  * Positions are a flat row-major float array, frame-major: pos[(t * J + j) * 3 + axis].
- * Every joint name is a NUL-terminated string, unique within the motion. Parent indices form a
- * forest (no cycles); they need not precede their children.
+ * Every joint name is a NUL-terminated string of valid UTF-8, unique within the motion. Parent
+ * indices form a forest (no cycles); they need not precede their children.
  *
  * A motion may also carry a skeleton (docs/FORMATS.md, version 2): per joint its rest offset
  * from the parent and its BVH channel list, and, per frame, every joint's local rotation (a
@@ -30,6 +30,18 @@ extern "C" {
 #define AFFECT_MOTION_MAX_NAME 1024u        /* bytes of one joint name */
 #define AFFECT_MOTION_UNIT_MAX 15u          /* bytes of the unit string */
 #define AFFECT_MOTION_MAX_FPS 100000.0
+
+/* The largest motion the text importers build unless their option max_samples raises it:
+ * frames × joints ("samples"). 2^24 is 39 minutes at 120 fps with 60 joints, 86 minutes with 27,
+ * 7 hours at 30 fps with 22. A BVH import holds 40 bytes per sample (position 12, rotation 16,
+ * translation 12: 640 MiB at the limit) and its BLOB at most as many, which stays under
+ * SQLite's default limit of 10^9 bytes per value whatever the channels (2^25 would not when
+ * every joint has position channels). The limit also bounds what a small text can make the
+ * importers allocate (BVH joints without channels take no text per frame). The BLOB decoder
+ * does not apply it (a BLOB holds every sample it declares), nor do the editing operations
+ * (a result is no larger than its input), except affect_motion_resample, whose result may
+ * reach it or the input's size, whichever is larger. */
+#define AFFECT_MOTION_MAX_SAMPLES 16777216u /* 2^24 */
 
 /* BLOB layout constants (docs/FORMATS.md). */
 #define AFFECT_MOTION_MAGIC "AFMO"
@@ -94,7 +106,9 @@ bool affect_skel_has_position(const affect_skel_joint *j);
 /* Frees a motion and everything it owns; NULL is allowed. */
 void affect_motion_free(affect_motion *m);
 
-/* Replaces the name of joint j with the first len bytes of name. */
+/* Replaces the name of joint j with the first len bytes of name: 1 .. AFFECT_MOTION_MAX_NAME
+ * bytes of valid UTF-8 without NUL (else AFFECT_ERR_FORMAT, "joint 3: name is not valid UTF-8
+ * (byte 0xff at offset 2)"). */
 affect_status affect_motion_set_name(affect_motion *m, uint32_t j, const char *name, size_t len,
                                      affect_error *err);
 
@@ -105,7 +119,7 @@ affect_status affect_motion_set_parents(affect_motion *m, const int32_t *parents
 /* Sets the unit string; it must be at most AFFECT_MOTION_UNIT_MAX bytes of [A-Za-z0-9_.-]. */
 affect_status affect_motion_set_unit(affect_motion *m, const char *unit, affect_error *err);
 
-/* Checks the invariants above: names non-empty, free of NUL and unique; parents in range and
+/* Checks the invariants above: names non-empty, valid UTF-8 free of NUL, and unique; parents in range and
  * acyclic; every coordinate finite (the message names the frame and joint); the skeleton's
  * channels, End Sites, finite offsets, unit quaternions and finite translations. */
 affect_status affect_motion_validate(const affect_motion *m, affect_error *err);
@@ -131,16 +145,20 @@ void affect_motion_bbox(const affect_motion *m, float min[3], float max[3]);
 
 /* ---- the motion BLOB ---- */
 
-/* Size in bytes of the encoded form; false if it would overflow size_t. */
+/* Size in bytes of the encoded form; false if it would overflow size_t, or if a name is not
+ * 1 .. AFFECT_MOTION_MAX_NAME bytes of valid UTF-8 (a caller wrote m->names itself): such a
+ * motion cannot be encoded. */
 bool affect_motion_encoded_size(const affect_motion *m, size_t *size);
 
 /* Encodes into a new buffer of *size bytes (free with affect_free). A motion without a
  * skeleton is written as version 1, byte for byte as before version 2 existed; one with a
- * skeleton as version 2. */
+ * skeleton as version 2. A name the decoder would refuse is AFFECT_ERR_INVALID ("cannot encode
+ * the motion: joint 3: name is not valid UTF-8 (byte 0xff at offset 2)"). */
 affect_status affect_motion_encode(const affect_motion *m, unsigned char **out, size_t *size,
                                    affect_error *err);
 
-/* Encodes into buf, which must hold affect_motion_encoded_size() bytes. */
+/* Encodes into buf, which must hold affect_motion_encoded_size() bytes (so only a motion for
+ * which that returned true). */
 void affect_motion_encode_into(const affect_motion *m, unsigned char *buf);
 
 /* Decodes and validates a BLOB. Never reads outside [data, data + size). */
@@ -157,7 +175,9 @@ affect_status affect_motion_slice(const affect_motion *m, int64_t first, int64_t
 /* Linear interpolation to a new frame rate. The result keeps the time span: it has
  * floor((T − 1) · fps / m->fps + 1e-9) + 1 frames, frame k at time k / fps. With rotations,
  * they are interpolated by slerp and translations linearly, and the positions are their
- * forward kinematics (so the result stays rigid). */
+ * forward kinematics (so the result stays rigid). Frames × joints may not exceed
+ * AFFECT_MOTION_MAX_SAMPLES or the input's frames × joints, whichever is larger
+ * (AFFECT_ERR_RANGE). */
 affect_status affect_motion_resample(const affect_motion *m, double fps, affect_motion **out,
                                      affect_error *err);
 

@@ -48,6 +48,7 @@
 #define AFFECT_RMLR_H
 
 #include "affect/base.h"
+#include "affect/monitor.h"
 #include "affect/bytes.h"
 
 #ifdef __cplusplus
@@ -79,6 +80,7 @@ typedef struct affect_rmlr_options {
     double tol;              /* convergence threshold (1e-7; see above) */
     uint32_t threads;        /* affect_rmlr_cv: α values cross-validated at once, each in its
                                 own thread (1; 1 .. AFFECT_RMLR_MAX_THREADS = 64) */
+    affect_monitor *monitor; /* stop and progress hooks (NULL) */
 } affect_rmlr_options;
 
 /* The defaults above (alphas NULL, n_alpha 20). */

@@ -38,7 +38,8 @@
  * first such on a tie) is positive, so results do not flip sign between LAPACK builds (they
  * still may when two components are equal in magnitude up to rounding, or when M has a
  * repeated eigenvalue, whose eigenvectors are any basis of the eigenspace). The same inputs
- * give bit-identical models for a given BLAS build and thread count.
+ * give bit-identical models for a given BLAS build, whatever its thread count (the core runs
+ * OpenBLAS on one thread in its calls).
  *
  * Embedding: z = U x (p values), with no centring of x: shifting every point by the same
  * vector shifts every embedding by the same vector, which changes no distance, so k-NN does

@@ -39,7 +39,8 @@ void affect_strbuf_double(affect_strbuf *sb, double v);
 /* Fixed-point with `decimals` digits after the point (SVG coordinates). */
 void affect_strbuf_fixed(affect_strbuf *sb, double v, int decimals);
 void affect_strbuf_int(affect_strbuf *sb, long long v);
-/* A JSON string literal with quotes and escapes. */
+/* A JSON string literal with quotes and escapes; a byte that is not part of valid UTF-8 becomes
+ * \ufffd (labels read from tables may be any bytes; JSON text must be Unicode). */
 void affect_strbuf_json_string(affect_strbuf *sb, const char *s);
 /* Text escaped for XML content and attribute values (& < > " '). */
 void affect_strbuf_xml(affect_strbuf *sb, const char *s);
