@@ -92,7 +92,7 @@ tests() {
     cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DAFFECT_WERROR=ON -DAFFECT_SANITIZE=ON >/dev/null
     cmake --build build-asan -j"$(nproc)" >/dev/null
     ASAN_OPTIONS=detect_leaks=1 counted ctest --test-dir build-asan --output-on-failure -j"$(nproc)" \
-        -E '^fuzz/|^examples/|^sql/scripts|^client/' || status=1
+        -E '^fuzz/|^examples/|^sql/scripts|^sql/blas-threads|^client/' || status=1
     echo "== fuzzers (build-fuzz/, clang + libFuzzer)"
     counted bash tests/fuzz/run.sh "${AFFECT_FUZZ_SECONDS:-20}" || status=1
     echo
