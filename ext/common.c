@@ -287,7 +287,7 @@ ax_arg ax_opts_parse(sqlite3_context *ctx, int argc, sqlite3_value **argv, int i
         return AX_ERROR;
     }
     affect_error err;
-    if (affect_json_parse(text, (size_t)sqlite3_value_bytes(argv[i]), &opts->doc, &err)) {
+    if (affect_json_parse(text, (size_t)sqlite3_value_bytes(argv[i]), &opts->doc, NULL, &err)) {
         if (err.status == AFFECT_ERR_NOMEM)
             sqlite3_result_error_nomem(ctx);
         else

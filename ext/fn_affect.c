@@ -530,9 +530,13 @@ static ax_arg arg_observations(sqlite3_context *ctx, sqlite3_value **argv,
     if (r != AX_OK)
         return r;
     affect_error err;
-    if (affect_classifier_observe(c, m, x, n_frames, desc, &err)) {
-        ax_error(ctx, &err);
-        r = AX_ERROR;
+    ax_monitor am;
+    if ((r = ax_monitor_begin(&am, ctx, NULL)) == AX_OK) {
+        if (affect_classifier_observe(c, m, x, n_frames, desc, &am.mon, &err)) {
+            ax_error(ctx, &err);
+            r = AX_ERROR;
+        }
+        ax_monitor_end(&am);
     }
     affect_motion_free(m);
     return r;
@@ -546,7 +550,7 @@ typedef struct eval_buf {
 
 static affect_status eval_all(const affect_classifier *c, const double *x, uint32_t T,
                               const double *desc, bool ml_only, bool want_fisher, eval_buf *b,
-                              affect_error *err)
+                              affect_monitor *mon, affect_error *err)
 {
     uint32_t C = affect_classifier_n_classes(c), p = affect_spca_dims(affect_classifier_spca(c));
     size_t D = want_fisher ? affect_classifier_dim(c) : 0, pairs = (size_t)C * (C - 1) / 2;
@@ -561,7 +565,7 @@ static affect_status eval_all(const affect_classifier *c, const double *x, uint3
     b->o.decision = d + C + D;
     b->o.embed = d + C + D + pairs;
     b->o.votes = (uint32_t *)(void *)(d + doubles);
-    return affect_classifier_eval(c, x, T, desc, ml_only, &b->o, err);
+    return affect_classifier_eval(c, x, T, desc, ml_only, &b->o, mon, err);
 }
 
 static ax_arg evaluate(sqlite3_context *ctx, sqlite3_value **argv, bool ml_only,
@@ -573,12 +577,16 @@ static ax_arg evaluate(sqlite3_context *ctx, sqlite3_value **argv, bool ml_only,
     ax_arg r = arg_classifier(ctx, argv, c);
     if (r == AX_OK)
         r = arg_observations(ctx, argv, *c, &x, &T, &desc);
+    ax_monitor am;
+    if (r == AX_OK)
+        r = ax_monitor_begin(&am, ctx, NULL);
     if (r == AX_OK) {
         affect_error err;
-        if (eval_all(*c, x, T, desc, ml_only, want_fisher, b, &err)) {
+        if (eval_all(*c, x, T, desc, ml_only, want_fisher, b, &am.mon, &err)) {
             ax_error(ctx, &err);
             r = AX_ERROR;
         }
+        ax_monitor_end(&am);
     }
     affect_free(x);
     affect_free(desc);

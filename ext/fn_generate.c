@@ -848,8 +848,14 @@ static ax_arg classify_source(sqlite3_context *ctx, const char *hex, const affec
                        "(json_object('classifier', hex(model)))");
         goto done;
     }
-    if (affect_classifier_decode(blob, len / 2, &c, &err) ||
-        affect_classifier_observe(c, m, &x, &T, &desc, &err)) {
+    ax_monitor am;
+    if (ax_monitor_begin(&am, ctx, NULL) != AX_OK)
+        goto done;
+    affect_status st = affect_classifier_decode(blob, len / 2, &c, &err);
+    if (!st)
+        st = affect_classifier_observe(c, m, &x, &T, &desc, &am.mon, &err);
+    if (st && st != AFFECT_ERR_INTERRUPTED) {
+        ax_monitor_end(&am);
         if (err.status == AFFECT_ERR_NOMEM)
             sqlite3_result_error_nomem(ctx);
         else
@@ -857,7 +863,10 @@ static ax_arg classify_source(sqlite3_context *ctx, const char *hex, const affec
         goto done;
     }
     affect_classifier_out o = {0};
-    if (affect_classifier_eval(c, x, T, desc, false, &o, &err)) {
+    if (!st)
+        st = affect_classifier_eval(c, x, T, desc, false, &o, &am.mon, &err);
+    ax_monitor_end(&am);
+    if (st) {
         ax_error(ctx, &err);
         goto done;
     }
@@ -1509,9 +1518,16 @@ static void run_transfer(sqlite3_context *ctx, const gen_index *ix, const gen_op
         goto done;
     affect_transfer_report rep;
     affect_error err;
-    if (affect_transfer(m, (const affect_motion *const *)motions,
-                        (const affect_motion *const *)motions + dn->n, dn->n, &o->tr, &out,
-                        &rep, &err)) {
+    ax_monitor am;
+    if (ax_monitor_begin(&am, ctx, NULL) != AX_OK)
+        goto done;
+    affect_transfer_options tr = o->tr;
+    tr.monitor = &am.mon;
+    affect_status st = affect_transfer(m, (const affect_motion *const *)motions,
+                                       (const affect_motion *const *)motions + dn->n, dn->n, &tr,
+                                       &out, &rep, &err);
+    ax_monitor_end(&am);
+    if (st) {
         ax_error(ctx, &err);
         goto done;
     }

@@ -211,9 +211,13 @@ static ax_arg arg_observations(sqlite3_context *ctx, sqlite3_value **argv, const
     if (r != AX_OK)
         return r;
     affect_error err;
-    if (affect_features_extract(ref->f, m, x, n_frames, &err)) {
-        ax_error(ctx, &err);
-        r = AX_ERROR;
+    ax_monitor am;
+    if ((r = ax_monitor_begin(&am, ctx, NULL)) == AX_OK) {
+        if (affect_features_extract(ref->f, m, x, n_frames, &am.mon, &err)) {
+            ax_error(ctx, &err);
+            r = AX_ERROR;
+        }
+        ax_monitor_end(&am);
     }
     affect_motion_free(m);
     return r;
@@ -243,7 +247,12 @@ void ax_hmm_loglik(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         goto done;
     double ll;
     affect_error err;
-    if (affect_hmm_loglik(ma.ref->h, x, n_frames, &ll, &err))
+    ax_monitor am;
+    if (ax_monitor_begin(&am, ctx, NULL) != AX_OK)
+        goto done;
+    affect_status st = affect_hmm_loglik(ma.ref->h, x, n_frames, &ll, &am.mon, &err);
+    ax_monitor_end(&am);
+    if (st)
         ax_error(ctx, &err);
     else
         result_real(ctx, per_frame ? ll / n_frames : ll);
@@ -270,7 +279,12 @@ static void viterbi(sqlite3_context *ctx, sqlite3_value **argv, bool want_path)
     }
     double lp;
     affect_error err;
-    if (affect_hmm_viterbi(ma.ref->h, x, n_frames, path, &lp, &err)) {
+    ax_monitor am;
+    if (ax_monitor_begin(&am, ctx, NULL) != AX_OK)
+        goto done;
+    affect_status st = affect_hmm_viterbi(ma.ref->h, x, n_frames, path, &lp, &am.mon, &err);
+    ax_monitor_end(&am);
+    if (st) {
         ax_error(ctx, &err);
     } else if (!want_path) {
         result_real(ctx, lp);

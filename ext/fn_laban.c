@@ -23,10 +23,13 @@ typedef struct laban_call {
     ax_opts opts;
     affect_roles roles;
     affect_laban_options lo;
+    ax_monitor am; /* lo.monitor: the statement's interrupt (begun last in call_begin) */
 } laban_call;
 
 static void call_free(laban_call *c)
 {
+    if (c->lo.monitor)
+        ax_monitor_end(&c->am);
     ax_opts_free(&c->opts);
     affect_motion_free(c->m);
 }
@@ -58,6 +61,11 @@ static ax_arg call_begin(sqlite3_context *ctx, int argc, sqlite3_value **argv, i
     }
     c->lo.missing_null = miss == 1;
     c->lo.hull_box = hull == 1;
+    if (ax_monitor_begin(&c->am, ctx, NULL) != AX_OK) {
+        call_free(c);
+        return AX_ERROR;
+    }
+    c->lo.monitor = &c->am.mon;
     return AX_OK;
 }
 
@@ -329,10 +337,13 @@ void ax_motion_kinematics(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     ax_opts opts;
     int up = 1;
     if (ax_opts_parse(ctx, argc, argv, 1, keys, &opts) == AX_OK) {
-        if (ax_opt_up(ctx, &opts, &up) == AX_OK) {
+        ax_monitor am;
+        if (ax_opt_up(ctx, &opts, &up) == AX_OK && ax_monitor_begin(&am, ctx, NULL) == AX_OK) {
             double v[AFFECT_SUMMARY_N];
             affect_error err;
-            if (affect_motion_summary(m, up, v, &err)) {
+            affect_status st = affect_motion_summary(m, up, v, &am.mon, &err);
+            ax_monitor_end(&am);
+            if (st) {
                 ax_error(ctx, &err);
             } else {
                 affect_strbuf sb;

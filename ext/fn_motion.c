@@ -95,10 +95,12 @@ static ax_arg bvh_options(sqlite3_context *ctx, const ax_opts *opts, affect_bvh_
 
 /* Whether a failed import is the text's fault (malformed, or too large) rather than the
  * call's: the options are checked first (bvh_options; the core reports a bad scale as
- * AFFECT_ERR_INVALID before reading), and running out of memory is never the text's. */
+ * AFFECT_ERR_INVALID before reading); running out of memory or an interrupt is never the
+ * text's. */
 static bool bvh_text_error(affect_status st)
 {
-    return st != AFFECT_OK && st != AFFECT_ERR_NOMEM && st != AFFECT_ERR_INVALID;
+    return st != AFFECT_OK && st != AFFECT_ERR_NOMEM && st != AFFECT_ERR_INVALID &&
+           st != AFFECT_ERR_INTERRUPTED;
 }
 
 void ax_motion_from_bvh(sqlite3_context *ctx, int argc, sqlite3_value **argv)
@@ -110,7 +112,7 @@ void ax_motion_from_bvh(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     ax_opts opts;
     if (ax_opts_parse(ctx, argc, argv, 1, bvh_keys, &opts))
         return;
-    affect_bvh_options bo = {1.0, NULL, 0};
+    affect_bvh_options bo = {1.0, NULL, 0, NULL};
     affect_motion *m = NULL;
     affect_error err;
     affect_status st;
@@ -118,7 +120,12 @@ void ax_motion_from_bvh(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     if (ax_opt_enum(ctx, &opts, "on_error", on_error_choices, &on_error) ||
         bvh_options(ctx, &opts, &bo))
         goto done;
+    ax_monitor am;
+    if (ax_monitor_begin(&am, ctx, NULL) != AX_OK)
+        goto done;
+    bo.monitor = &am.mon;
     st = affect_bvh_parse(text, len, &bo, &m, &err);
+    ax_monitor_end(&am);
     if (on_error == 1 && bvh_text_error(st))
         sqlite3_result_null(ctx); /* m is NULL: the core sets it only on success */
     else
@@ -139,13 +146,18 @@ void ax_motion_bvh_error(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     ax_opts opts;
     if (ax_opts_parse(ctx, argc, argv, 1, bvh_error_keys, &opts))
         return;
-    affect_bvh_options bo = {1.0, NULL, 0};
+    affect_bvh_options bo = {1.0, NULL, 0, NULL};
     affect_motion *m = NULL;
     affect_error err;
     affect_status st;
     if (bvh_options(ctx, &opts, &bo))
         goto done;
+    ax_monitor am;
+    if (ax_monitor_begin(&am, ctx, NULL) != AX_OK)
+        goto done;
+    bo.monitor = &am.mon;
     st = affect_bvh_parse(text, len, &bo, &m, &err);
+    ax_monitor_end(&am);
     affect_motion_free(m);
     if (st == AFFECT_OK)
         sqlite3_result_null(ctx);
@@ -240,7 +252,13 @@ void ax_motion_from_csv(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         }
         co.delimiter = delim[0];
     }
-    if (affect_csv_parse(text, len, fps, &co, &m, &err)) {
+    ax_monitor am;
+    if (ax_monitor_begin(&am, ctx, NULL) != AX_OK)
+        goto done;
+    co.monitor = &am.mon;
+    affect_status st = affect_csv_parse(text, len, fps, &co, &m, &err);
+    ax_monitor_end(&am);
+    if (st) {
         ax_error(ctx, &err);
         goto done;
     }
@@ -259,12 +277,18 @@ void ax_motion_from_json(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         return;
     affect_motion *m = NULL;
     affect_error err;
-    finish_motion(ctx, affect_motion_from_json(text, len, &m, &err), &m, &err);
+    ax_monitor am;
+    if (ax_monitor_begin(&am, ctx, NULL) != AX_OK)
+        return;
+    affect_status st = affect_motion_from_json(text, len, &m, &am.mon, &err);
+    ax_monitor_end(&am);
+    finish_motion(ctx, st, &m, &err);
 }
 
 /* ---- export and inspection ---- */
 
-typedef affect_status (*motion_writer)(const affect_motion *, char **, size_t *, affect_error *);
+typedef affect_status (*motion_writer)(const affect_motion *, char **, size_t *,
+                                       affect_monitor *, affect_error *);
 
 /* Writes the motion argument as text with a core writer. */
 static void write_motion(sqlite3_context *ctx, sqlite3_value **argv, motion_writer writer,
@@ -276,7 +300,12 @@ static void write_motion(sqlite3_context *ctx, sqlite3_value **argv, motion_writ
     char *text = NULL;
     size_t len = 0;
     affect_error err;
-    finish_text(ctx, writer(m, &text, &len, &err), &text, &len, &err, json);
+    ax_monitor am;
+    if (ax_monitor_begin(&am, ctx, NULL) == AX_OK) {
+        affect_status st = writer(m, &text, &len, &am.mon, &err);
+        ax_monitor_end(&am);
+        finish_text(ctx, st, &text, &len, &err, json);
+    }
     affect_motion_free(m);
 }
 
@@ -412,7 +441,7 @@ void ax_motion_select(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     affect_error err;
     if (ax_arg_text(ctx, argv, 1, &text, &len) != AX_OK || ax_arg_motion(ctx, argv, 0, &m) != AX_OK)
         return;
-    if (affect_json_parse(text, len, &doc, &err)) {
+    if (affect_json_parse(text, len, &doc, NULL, &err)) {
         if (err.status == AFFECT_ERR_NOMEM)
             sqlite3_result_error_nomem(ctx);
         else

@@ -124,7 +124,7 @@ affect_status ax_skel_opts_parse(const char *text, size_t len, const char *const
     if (!text)
         return AFFECT_OK;
     affect_json_doc *doc = NULL;
-    if (affect_json_parse(text, len, &doc, err)) {
+    if (affect_json_parse(text, len, &doc, NULL, err)) {
         if (err->status == AFFECT_ERR_NOMEM)
             return AFFECT_ERR_NOMEM;
         char msg[AFFECT_ERROR_MSG_MAX];
@@ -220,13 +220,20 @@ void ax_motion_to_bvh(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     affect_error err;
     char *bvh = NULL;
     size_t n = 0;
+    ax_monitor am;
+    if (ax_monitor_begin(&am, ctx, NULL) != AX_OK) {
+        affect_motion_free(m);
+        return;
+    }
     affect_status st = ax_skel_opts_parse(text, len, bvh_keys, m, &so, &err);
     if (!st) {
+        so.ik.rigid.monitor = so.bvh.monitor = &am.mon; /* inverse kinematics and the text */
         st = ax_skeletal(m, &so, &sk, &err);
         if (!st)
             st = affect_bvh_write(sk, &so.bvh, &bvh, &n, &err);
         ax_skel_opts_free(&so);
     }
+    ax_monitor_end(&am);
     if (st)
         ax_error(ctx, &err);
     else
@@ -299,7 +306,13 @@ void ax_motion_rigid(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         free_link = so.free_link;
         ro.free_link = free_link;
     }
-    if (affect_motion_rigid(m, &ro, &out, &err))
+    ax_monitor am;
+    if (ax_monitor_begin(&am, ctx, NULL) != AX_OK)
+        goto done;
+    ro.monitor = &am.mon;
+    affect_status st = affect_motion_rigid(m, &ro, &out, &err);
+    ax_monitor_end(&am);
+    if (st)
         ax_error(ctx, &err);
     else
         ax_result_motion(ctx, out);

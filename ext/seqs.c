@@ -303,11 +303,11 @@ ax_arg ax_seqs_add(sqlite3_context *ctx, int argc, sqlite3_value **argv, ax_seqs
     }
     uint32_t dd = affect_descriptors_dim(ts->desc_mask);
     if (dd && affect_descriptors(ts->desc_mask, m, ts->feat->up_axis,
-                                 ts->desc + (size_t)ts->n_seqs * dd, &err)) {
+                                 ts->desc + (size_t)ts->n_seqs * dd, NULL, &err)) {
         ax_seqs_row_error(ctx, ts, &err);
         goto done;
     }
-    if (affect_features_extract(ts->feat, m, &x, &n_frames, &err)) {
+    if (affect_features_extract(ts->feat, m, &x, &n_frames, NULL, &err)) {
         ax_seqs_row_error(ctx, ts, &err);
         goto done;
     }

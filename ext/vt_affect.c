@@ -19,7 +19,8 @@
  * a string; options {"group": "content"} selects leave-one-group-out over that column,
  * otherwise stratified k-fold with "folds" (10) and "seed"), then turns the JSON's rows
  * into table rows; its errors are that statement's (for instance "affect_crossval_json: row 3:
- * …"), prefixed with "affect_crossval: ". The options are affect_train's plus folds, group,
+ * …"), prefixed with "affect_crossval: ", except an interrupt: "affect_crossval: interrupted".
+ * The options are affect_train's plus folds, group,
  * methods (["ml", "svm", "knn"]) and verbose (progress lines on stderr).
  */
 #include "fn_affect.h"
@@ -44,7 +45,7 @@ static int group_column(const char *options, size_t len, char **out)
     *out = NULL;
     if (!options)
         return SQLITE_OK;
-    if (affect_json_parse(options, len, &doc, &err))
+    if (affect_json_parse(options, len, &doc, NULL, &err))
         return err.status == AFFECT_ERR_NOMEM ? SQLITE_NOMEM : SQLITE_OK;
     const affect_json_node *root = affect_json_root(doc);
     int rc = SQLITE_OK;
@@ -138,6 +139,8 @@ static int cv_fill(sqlite3 *db, int argc, sqlite3_value **argv, ax_rows *rows, c
     }
     if (rc == SQLITE_DONE)
         rc = SQLITE_OK;
+    else if (rc == SQLITE_INTERRUPT) /* not "affect_crossval: affect_crossval_json: …" */
+        *msg = sqlite3_mprintf("affect_crossval: interrupted");
     else if (rc != SQLITE_NOMEM)
         *msg = sqlite3_mprintf("affect_crossval: %s", sqlite3_errmsg(db));
     sqlite3_finalize(st);

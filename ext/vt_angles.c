@@ -30,6 +30,11 @@ enum {
     COL_RZ, COL_SPEED, COL_MOTION, COL_OPTIONS
 };
 
+typedef struct angles_vtab {
+    sqlite3_vtab base;
+    sqlite3 *db; /* for the monitor of inverse kinematics (ax_monitor) */
+} angles_vtab;
+
 typedef struct angles_cursor {
     sqlite3_vtab_cursor base;
     affect_motion *m, *sk;   /* the argument and its skeletal form (may be the same) */
@@ -47,12 +52,13 @@ static int angles_connect(sqlite3 *db, void *aux, int argc, const char *const *a
                                       "ry REAL, rz REAL, speed REAL, motion HIDDEN, options HIDDEN)");
     if (rc != SQLITE_OK)
         return rc;
-    sqlite3_vtab *vt = sqlite3_malloc(sizeof *vt);
+    angles_vtab *vt = sqlite3_malloc(sizeof *vt);
     if (!vt)
         return SQLITE_NOMEM;
     memset(vt, 0, sizeof *vt);
+    vt->db = db;
     sqlite3_vtab_config(db, SQLITE_VTAB_INNOCUOUS);
-    *out = vt;
+    *out = &vt->base;
     return SQLITE_OK;
 }
 
@@ -96,6 +102,8 @@ static int vtab_error(sqlite3_vtab *vt, const affect_error *err)
 {
     if (err->status == AFFECT_ERR_NOMEM)
         return SQLITE_NOMEM;
+    if (err->status == AFFECT_ERR_INTERRUPTED)
+        return SQLITE_INTERRUPT;
     sqlite3_free(vt->zErrMsg);
     vt->zErrMsg = ax_mprintf("motion_angles: %s", err->msg);
     return vt->zErrMsg ? SQLITE_ERROR : SQLITE_NOMEM;
@@ -175,7 +183,16 @@ static int angles_filter(sqlite3_vtab_cursor *cur, int idx_num, const char *idx_
     ax_skel_opts so;
     if (ax_skel_opts_parse(text, len, angle_keys, c->m, &so, &err))
         return vtab_error(cur->pVtab, &err);
+    ax_monitor am;
+    char *msg = NULL;
+    if (ax_monitor_begin_db(&am, ((angles_vtab *)cur->pVtab)->db, NULL, &msg) != SQLITE_OK) {
+        sqlite3_free(msg); /* no progress function: cannot fail */
+        ax_skel_opts_free(&so);
+        return SQLITE_NOMEM;
+    }
+    so.ik.rigid.monitor = &am.mon; /* inverse kinematics of a long motion */
     affect_status st = ax_skeletal(c->m, &so, &c->sk, &err);
+    ax_monitor_end(&am);
     if (!st) {
         size_t nj = c->sk->n_joints;
         c->orders = sqlite3_malloc64(nj * 3 * sizeof *c->orders);

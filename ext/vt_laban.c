@@ -214,11 +214,22 @@ static int lab_db_error(char **dst, sqlite3 *db, int rc)
     return code != SQLITE_NOMEM && (rc & 0xff) == SQLITE_INTERRUPT ? SQLITE_INTERRUPT : code;
 }
 
-/* A core error: out of memory becomes SQLITE_NOMEM, anything else "laban: <prefix><msg>". */
+/* "laban: interrupted" with SQLITE_INTERRUPT, as lab_db_error reports an interrupted statement
+ * of the index. */
+static int lab_interrupted(char **dst)
+{
+    int code = lab_error(dst, "interrupted");
+    return code == SQLITE_NOMEM ? code : SQLITE_INTERRUPT;
+}
+
+/* A core error: out of memory becomes SQLITE_NOMEM, an interrupt lab_interrupted, anything else
+ * "laban: <prefix><msg>". */
 static int lab_core_error(char **dst, const affect_error *err, const char *prefix)
 {
     if (err->status == AFFECT_ERR_NOMEM)
         return SQLITE_NOMEM;
+    if (err->status == AFFECT_ERR_INTERRUPTED)
+        return lab_interrupted(dst);
     return lab_error(dst, "%s%s", prefix, err->msg);
 }
 
@@ -392,7 +403,17 @@ static affect_status lab_vector(const lab_vtab *vt, const unsigned char *data, s
     affect_roles roles;
     affect_roles_resolve(m, &roles);
     double v[LAB_N];
-    st = affect_laban_vector(m, &roles, &vt->opt, v, err);
+    affect_laban_options opt = vt->opt;
+    ax_monitor am; /* a long motion stops on the statement's interrupt */
+    char *msg = NULL;
+    if (ax_monitor_begin_db(&am, vt->db, NULL, &msg) != SQLITE_OK) { /* no progress function */
+        sqlite3_free(msg);
+        affect_motion_free(m);
+        return affect_nomem(err);
+    }
+    opt.monitor = &am.mon;
+    st = affect_laban_vector(m, &roles, &opt, v, err);
+    ax_monitor_end(&am);
     affect_motion_free(m);
     if (!st)
         for (int i = 0; i < LAB_N; i++)
@@ -776,7 +797,7 @@ static int lab_parse_options(lab_vtab *vt, const char *text, char **err)
     char q[80];
     if (text) {
         affect_error e;
-        if (affect_json_parse(text, strlen(text), &doc, &e))
+        if (affect_json_parse(text, strlen(text), &doc, NULL, &e))
             return e.status == AFFECT_ERR_NOMEM
                        ? SQLITE_NOMEM
                        : lab_error(err, "options are not valid JSON: %s", e.msg);
@@ -1095,6 +1116,8 @@ static int lab_store_row(lab_vtab *vt, sqlite3_stmt *ins, sqlite3_int64 id, sqli
     if (lab_vector(vt, data, (size_t)n, v, &bad, &e)) {
         if (e.status == AFFECT_ERR_NOMEM)
             return SQLITE_NOMEM;
+        if (e.status == AFFECT_ERR_INTERRUPTED)
+            return lab_interrupted(err);
         return lab_error(err, "row %lld of %s: %s%s", id, vt->content,
                          bad ? "not a valid motion: " : "", e.msg);
     }
@@ -1639,7 +1662,7 @@ static int lab_arg_components(sqlite3_value *v, int out[LAB_N], int *n, char **e
         return SQLITE_NOMEM;
     affect_json_doc *doc = NULL;
     affect_error e;
-    if (affect_json_parse(text, (size_t)sqlite3_value_bytes(v), &doc, &e))
+    if (affect_json_parse(text, (size_t)sqlite3_value_bytes(v), &doc, NULL, &e))
         return e.status == AFFECT_ERR_NOMEM
                    ? SQLITE_NOMEM
                    : lab_error(err, "components must be a JSON array of component names: %s",

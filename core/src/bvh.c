@@ -483,7 +483,11 @@ static void keep_skeleton(const parser *ps, affect_motion *m, double scale)
 }
 
 /* Reads the frame lines and runs forward kinematics into m. */
-static affect_status parse_frames(parser *ps, affect_motion *m, double scale)
+/* parse_frames polls the monitor every this many frames */
+#define POLL_FRAMES 1024
+
+static affect_status parse_frames(parser *ps, affect_motion *m, double scale,
+                                  affect_monitor *mon)
 {
     uint32_t nv = ps->n_values, nj = ps->n_joints;
     double *values = affect_malloc_array(nv ? nv : 1, sizeof *values);
@@ -503,6 +507,8 @@ static affect_status parse_frames(parser *ps, affect_motion *m, double scale)
         ps->line++;
     }
     for (uint32_t f = 0; f < m->n_frames; f++) {
+        if (f % POLL_FRAMES == 0 && (st = affect_monitor_check(mon, ps->err)))
+            goto done;
         if (nv > 0) {
             /* skip blank lines */
             for (;;) {
@@ -658,7 +664,7 @@ affect_status affect_bvh_parse(const char *text, size_t len, const affect_bvh_op
     if (!st && opt && opt->unit)
         st = affect_motion_set_unit(m, opt->unit, err);
     if (!st)
-        st = parse_frames(&ps, m, scale);
+        st = parse_frames(&ps, m, scale, opt ? opt->monitor : NULL);
     if (!st)
         st = affect_motion_validate(m, err);
     if (st)

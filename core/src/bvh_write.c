@@ -27,6 +27,7 @@ void affect_bvh_write_options_default(affect_bvh_write_options *opt)
     opt->frame_time = 0;
     opt->precision = 6;
     opt->root_name = NULL;
+    opt->monitor = NULL;
 }
 
 typedef struct out_buf {
@@ -307,6 +308,9 @@ static void joint_euler(const double q[4], const int order[3], int n_rot, const 
         deg[k] = prev ? unwrap_deg(deg[k], prev[k]) : unwrap_deg(deg[k], 0);
 }
 
+/* write_frames polls the monitor every this many frames */
+#define POLL_FRAMES 1024
+
 static affect_status write_frames(writer *w, affect_error *err)
 {
     const affect_motion *m = w->m;
@@ -316,6 +320,12 @@ static affect_status write_frames(writer *w, affect_error *err)
         return affect_nomem(err);
     size_t per_frame = (size_t)w->n_seq * 6 * NUMBER_MAX_BYTES + 1;
     for (uint32_t t = 0; t < m->n_frames; t++) {
+        affect_status st = t % POLL_FRAMES == 0 ? affect_monitor_check(w->opt->monitor, err)
+                                                : AFFECT_OK;
+        if (st) {
+            affect_free(prev);
+            return st;
+        }
         if (!reserve(&w->b, per_frame)) {
             affect_free(prev);
             return affect_nomem(err);

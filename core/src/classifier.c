@@ -214,9 +214,10 @@ static bool set_dims(affect_classifier *c)
 /* The Fisher scores of x under class HMM k into out (part values), its log-likelihood into
  * *ll (ll may be NULL). */
 static affect_status score_part(const affect_classifier *c, uint32_t k, const double *x,
-                                uint32_t T, double *out, double *ll, affect_error *err)
+                                uint32_t T, double *out, double *ll, affect_monitor *mon,
+                                affect_error *err)
 {
-    if (affect_fisher_score(c->hmms[k], x, T, c->cfg.groups, out, ll, err))
+    if (affect_fisher_score(c->hmms[k], x, T, c->cfg.groups, out, ll, mon, err))
         return affect_prefix(err, "Fisher score under the HMM of class \"%s\"", c->labels[k]);
     for (size_t e = 0; e < c->part; e++) {
         if (isnan(out[e]))
@@ -244,11 +245,12 @@ static affect_status copy_descriptors(const affect_classifier *c, const double *
 /* The raw representation of x (and its descriptors desc) into f (dim): the Fisher scores under
  * every class HMM, then the descriptors; the log-likelihoods into ll (n_classes). */
 static affect_status represent(const affect_classifier *c, const double *x, uint32_t T,
-                               const double *desc, double *f, double *ll, affect_error *err)
+                               const double *desc, double *f, double *ll, affect_monitor *mon,
+                               affect_error *err)
 {
     affect_status st = copy_descriptors(c, desc, f + c->fdim, err);
     for (uint32_t k = 0; k < c->n_classes && st == AFFECT_OK; k++)
-        st = score_part(c, k, x, T, f + (size_t)k * c->part, &ll[k], err);
+        st = score_part(c, k, x, T, f + (size_t)k * c->part, &ll[k], mon, err);
     return st;
 }
 
@@ -365,21 +367,55 @@ static void rows_set(block_rows *R, uint32_t n, size_t w)
         R->row[i] = R->slab[i / R->per] + (size_t)(i % R->per) * w;
 }
 
-/* G (n × n, upper triangle) += B Bᵀ for the current block (width w): per slab its own product
- * (dsyrk) and its products with the later slabs (dgemm). */
-static void rows_gram(const block_rows *R, uint32_t n, int w, double *G)
+/* G (n × n, upper triangle) += B Bᵀ for rows r0 .. r1 − 1 of G and the block's columns k0 ..
+ * k1 − 1 (B row-major, width w): per slab the band's product with its own later rows (dsyrk on
+ * the diagonal, dgemm beside it) and with the later slabs' rows (dgemm). */
+static void gram_piece(const block_rows *R, uint32_t n, size_t w, size_t r0, size_t r1, size_t k0,
+                       size_t k1, double *G)
 {
-    for (uint32_t a = 0; a < R->n_slabs; a++) {
-        size_t ia = (size_t)a * R->per, na = n - ia < R->per ? n - ia : R->per;
-        AFFECT_BLAS(cblas_dsyrk(CblasRowMajor, CblasUpper, CblasNoTrans, (int)na, w, 1.0,
-                                R->row[ia], w, 1.0, G + ia * n + ia, (int)n));
-        for (uint32_t b = a + 1; b < R->n_slabs; b++) {
-            size_t ib = (size_t)b * R->per, nb = n - ib < R->per ? n - ib : R->per;
-            AFFECT_BLAS(cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasTrans, (int)na, (int)nb, w,
-                                    1.0, R->row[ia], w, R->row[ib], w, 1.0, G + ia * n + ib,
-                                    (int)n));
+    size_t a = r0 / R->per, end_a = (a + 1) * (size_t)R->per < n ? (a + 1) * (size_t)R->per : n;
+    int K = (int)(k1 - k0), lda = (int)w, ldg = (int)n, m = (int)(r1 - r0);
+    const double *band = R->row[r0] + k0;
+    AFFECT_BLAS(cblas_dsyrk(CblasRowMajor, CblasUpper, CblasNoTrans, m, K, 1.0, band, lda, 1.0,
+                            G + r0 * n + r0, ldg));
+    if (r1 < end_a)
+        AFFECT_BLAS(cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasTrans, m, (int)(end_a - r1), K,
+                                1.0, band, lda, R->row[r1] + k0, lda, 1.0, G + r0 * n + r1, ldg));
+    for (size_t ib = end_a; ib < n; ib += R->per) {
+        size_t nb = n - ib < R->per ? n - ib : R->per;
+        AFFECT_BLAS(cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasTrans, m, (int)nb, K, 1.0, band,
+                                lda, R->row[ib] + k0, lda, 1.0, G + r0 * n + ib, ldg));
+    }
+}
+
+/* G (n × n, upper triangle) += B Bᵀ for the current block (width w). A product of up to
+ * GRAM_WHOLE_FLOPS multiply-adds is one piece per slab (the results of the small trainings are
+ * those of earlier versions to the bit); a larger one (thousands of motions at the thesis's
+ * configuration: 4,032 × 95,333 is 1.5e12, half a minute) goes in pieces of GRAM_ROWS rows and
+ * GRAM_COLS columns, with a poll of mon between them, so that it stops when asked. */
+#define GRAM_WHOLE_FLOPS 2e9
+#define GRAM_ROWS 256
+#define GRAM_COLS 1024
+
+static affect_status rows_gram(const block_rows *R, uint32_t n, size_t w, double *G,
+                               affect_monitor *mon, affect_error *err)
+{
+    bool whole = (double)n * n * (double)w <= GRAM_WHOLE_FLOPS;
+    size_t rows = whole ? R->per : GRAM_ROWS, cols = whole ? w : GRAM_COLS;
+    for (size_t k0 = 0; k0 < w; k0 += cols) {
+        size_t k1 = w - k0 < cols ? w : k0 + cols;
+        for (size_t r0 = 0; r0 < n;) {
+            size_t slab_end = (r0 / R->per + 1) * (size_t)R->per;
+            size_t r1 = r0 + rows < slab_end ? r0 + rows : slab_end;
+            r1 = r1 < n ? r1 : n;
+            affect_status st = affect_monitor_check(mon, err);
+            if (st)
+                return st;
+            gram_piece(R, n, w, r0, r1, k0, k1, G);
+            r0 = r1;
         }
     }
+    return AFFECT_OK;
 }
 
 /* Fits the normalization of the columns of a block (n rows of w values, starting at column
@@ -388,10 +424,12 @@ static void rows_gram(const block_rows *R, uint32_t n, int w, double *G)
  * overflow): with u = f / a, mean = a · mean(u) and scale = a · sd(u) (population). A column
  * that is constant over the training set (sd 0) keeps scale 1. Without z-scores: mean 0,
  * scale 1. */
-static void fit_block(affect_classifier *c, const double *const *B, uint32_t n, size_t w,
-                      size_t col0)
+static affect_status fit_block(affect_classifier *c, const double *const *B, uint32_t n,
+                               size_t w, size_t col0, affect_error *err)
 {
     for (size_t e = 0; e < w; e++) {
+        if (e % 256 == 0 && affect_monitor_stopped(c->cfg.hmm.monitor))
+            return affect_monitor_check(c->cfg.hmm.monitor, err);
         double *mean = &c->mean[col0 + e], *scale = &c->scale[col0 + e];
         *mean = 0.0;
         *scale = 1.0;
@@ -415,6 +453,7 @@ static void fit_block(affect_classifier *c, const double *const *B, uint32_t n, 
         if (sd > 0 && s > 0 && isfinite(s))
             *scale = s;
     }
+    return AFFECT_OK;
 }
 
 /* The normalization of the representation's entries e0 .. e0 + w − 1 in place (v: w values):
@@ -565,7 +604,10 @@ static affect_status grid_fold(const affect_classifier *c, const double *G, cons
     }
     for (uint32_t s = 0; s < g->n_sigma; s++) {
         affect_spca *sp = NULL;
-        affect_status st = affect_spca_fit_dual(w->sub_gram, n_tr, c->dim, w->tr_y, c->n_classes,
+        affect_status st = affect_monitor_check(c->cfg.hmm.monitor, err);
+        if (st)
+            return st;
+        st = affect_spca_fit_dual(w->sub_gram, n_tr, c->dim, w->tr_y, c->n_classes,
                                                 c->cfg.spca_kernel, g->sigma[s], g->max_dims,
                                                 &sp, err);
         if (st)
@@ -638,15 +680,23 @@ static affect_status fit_dual(affect_classifier *c, const double *G, const uint3
     if (C == 0) {
         static const double grid[] = AFFECT_CLASSIFIER_C_GRID;
         if (affect_svm_select_c_gram(G, n, D, y, c->n_classes, grid, sizeof grid / sizeof grid[0],
-                                     cfg->svm_folds, cfg->hmm.seed, &C, &cv, err))
+                                     cfg->svm_folds, cfg->hmm.seed, &C, &cv, cfg->hmm.monitor,
+                                     err))
             return affect_prefix(err, "choosing the SVM's C");
     }
+    affect_status st = affect_monitor_check(cfg->hmm.monitor, err);
+    if (st)
+        return st;
     if (affect_svm_train_gram(G, n, D, y, c->n_classes, C, &c->svm, err))
         return affect_prefix(err, "training the SVM");
+    if ((st = affect_monitor_check(cfg->hmm.monitor, err)))
+        return st;
     c->report.grid_cv_acc = NAN;
     const affect_classifier_grid *gr = &cfg->grid;
     if ((gr->n_dims || gr->n_sigma || gr->n_k) && grid_search(c, G, y, n, err))
         return affect_prefix(err, "searching the sPCA/kNN grid");
+    if ((st = affect_monitor_check(cfg->hmm.monitor, err)))
+        return st;
     if (affect_spca_fit_dual(G, n, D, y, c->n_classes, cfg->spca_kernel, cfg->spca_sigma,
                              cfg->spca_dims, &c->spca, err))
         return affect_prefix(err, "fitting the supervised PCA");
@@ -715,7 +765,8 @@ static affect_status block_row(void *ctx, uint32_t i, affect_error *err)
     affect_monitor_step(c->cfg.hmm.monitor);
     st = j->block < c->n_classes
             ? score_part(c, j->block, j->seqs[i].x, j->seqs[i].n_frames, row,
-                         j->ll ? &j->ll[(size_t)i * c->n_classes + j->block] : NULL, err)
+                         j->ll ? &j->ll[(size_t)i * c->n_classes + j->block] : NULL,
+                         c->cfg.hmm.monitor, err)
             : copy_descriptors(c, j->desc + (size_t)i * c->ddim, row, err);
     return st ? affect_prefix(err, "motion %u", i) : AFFECT_OK;
 }
@@ -735,10 +786,13 @@ static affect_status compute_block(train_job *j, uint32_t b, bool fit, affect_er
                                            c->cfg.hmm.monitor, err);
     if (st)
         return st;
-    if (fit)
-        fit_block(c, (const double *const *)j->B->row, j->n, w, col0);
-    for (uint32_t i = 0; i < j->n; i++)
+    if (fit && (st = fit_block(c, (const double *const *)j->B->row, j->n, w, col0, err)))
+        return st;
+    for (uint32_t i = 0; i < j->n; i++) {
+        if (i % 64 == 0 && (st = affect_monitor_check(c->cfg.hmm.monitor, err)))
+            return st;
         normalize(c, j->B->row[i], w, col0);
+    }
     return AFFECT_OK;
 }
 
@@ -873,7 +927,8 @@ static affect_status train_on(const affect_classifier_config *cfg, const affect_
     for (uint32_t b = 0; b < blocks; b++) { /* first pass: normalization and G */
         if ((st = compute_block(&job, b, true, err)) != AFFECT_OK)
             goto done;
-        rows_gram(&B, n, (int)block_width(c, b), G);
+        if ((st = rows_gram(&B, n, block_width(c, b), G, cfg->hmm.monitor, err)) != AFFECT_OK)
+            goto done;
     }
     for (size_t i = 1; i < n; i++)
         for (size_t k = 0; k < i; k++)
@@ -984,8 +1039,8 @@ done:
 }
 
 affect_status affect_classifier_eval(const affect_classifier *c, const double *x, uint32_t T,
-                                     const double *desc,
-                                     bool ml_only, affect_classifier_out *out, affect_error *err)
+                                     const double *desc, bool ml_only, affect_classifier_out *out,
+                                     affect_monitor *mon, affect_error *err)
 {
     uint32_t C = c->n_classes;
     double *ll = affect_malloc_array(C, sizeof *ll), *f = NULL;
@@ -996,7 +1051,7 @@ affect_status affect_classifier_eval(const affect_classifier *c, const double *x
     }
     if (ml_only) {
         for (uint32_t k = 0; k < C; k++)
-            if ((st = affect_hmm_loglik(c->hmms[k], x, T, &ll[k], err)) != AFFECT_OK) {
+            if ((st = affect_hmm_loglik(c->hmms[k], x, T, &ll[k], mon, err)) != AFFECT_OK) {
                 st = affect_prefix(err, "scoring under the HMM of class \"%s\"", c->labels[k]);
                 goto done;
             }
@@ -1011,7 +1066,7 @@ affect_status affect_classifier_eval(const affect_classifier *c, const double *x
                              "the classifier appends descriptors but none were given");
             goto done;
         }
-        if ((st = represent(c, x, T, desc, f, ll, err)) != AFFECT_OK)
+        if ((st = represent(c, x, T, desc, f, ll, mon, err)) != AFFECT_OK)
             goto done;
         normalize(c, f, c->dim, 0); /* as training's second pass */
         out->svm = affect_svm_predict(c->svm, f, out->decision);
@@ -1044,18 +1099,18 @@ void affect_classifier_features_default(affect_features_options *opt)
 
 affect_status affect_classifier_observe(const affect_classifier *c, const affect_motion *m,
                                         double **x, uint32_t *n_frames, double **desc,
-                                        affect_error *err)
+                                        affect_monitor *mon, affect_error *err)
 {
     *x = NULL;
     *desc = NULL;
-    affect_status st = affect_features_extract(c->feat, m, x, n_frames, err);
+    affect_status st = affect_features_extract(c->feat, m, x, n_frames, mon, err);
     if (st || !c->ddim)
         return st;
     *desc = affect_malloc_array(c->ddim, sizeof **desc);
     if (!*desc)
         st = affect_nomem(err);
     else
-        st = affect_descriptors(c->cfg.descriptors, m, c->feat->up_axis, *desc, err);
+        st = affect_descriptors(c->cfg.descriptors, m, c->feat->up_axis, *desc, mon, err);
     if (st) {
         affect_free(*x);
         affect_free(*desc);

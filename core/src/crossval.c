@@ -192,7 +192,8 @@ static affect_status run_fold(const run_ctx *rc, uint32_t fold, fold_ws *w, affe
             continue;
         affect_classifier_out o = {0};
         st = affect_classifier_eval(c, seqs[i].x, seqs[i].n_frames,
-                                    dd ? rc->desc + i * dd : NULL, false, &o, err);
+                                    dd ? rc->desc + i * dd : NULL, false, &o, rc->cls->hmm.monitor,
+                                    err);
         if (st) {
             if (st != AFFECT_ERR_NOMEM) {
                 char msg[AFFECT_ERROR_MSG_MAX];

@@ -10,7 +10,7 @@
  *     affect_error err;
  *     if (affect_csv_parse(text, len, 30.0, &opt, &m, &err)) ... err.msg ...
  *     char *csv; size_t n;
- *     affect_csv_write(m, &csv, &n, &err);        // "Hips.x,Hips.y,Hips.z,…\n0,91.5,0,…\n"
+ *     affect_csv_write(m, &csv, &n, NULL, &err);        // "Hips.x,Hips.y,Hips.z,…\n0,91.5,0,…\n"
  *
  * What CSV carries: joint names and positions only. It has no place for the skeleton
  * (parents), the frame rate or the unit, so the writer drops them and the reader takes fps
@@ -106,12 +106,16 @@ typedef struct csv_field {
     bool escaped;
 } csv_field;
 
+/* The reader polls the monitor every this many rows, the writer every this many frames. */
+#define POLL_FRAMES 1024
+
 typedef struct csv_parser {
     const char *p, *end;
     char delim;
     size_t row;       /* line number of the current row (its last line, for a header) */
     size_t first_row; /* line number where the first row starts */
     affect_error *err;
+    affect_monitor *mon; /* the caller's (may be NULL) */
 
     csv_field *fields; /* the first row, split */
     size_t n_fields, cap_fields;
@@ -606,6 +610,8 @@ static affect_status read_frames(csv_parser *ps)
             return affect_fail(ps->err, AFFECT_ERR_RANGE, "row %zu: more than %u frames", ps->row,
                                AFFECT_MOTION_MAX_FRAMES);
         affect_status st = check_samples(ps, (size_t)ps->n_frames + 1);
+        if (!st && ps->n_frames % POLL_FRAMES == 0)
+            st = affect_monitor_check(ps->mon, ps->err);
         if (st)
             return st;
         st = reserve_frames(ps, (size_t)ps->n_frames + 1);
@@ -671,6 +677,7 @@ void affect_csv_options_default(affect_csv_options *opt)
     opt->header = -1;
     opt->unit = NULL;
     opt->max_samples = 0;
+    opt->monitor = NULL;
 }
 
 /* Checks the arguments; the unit is checked by setting it on a probe motion. */
@@ -723,6 +730,7 @@ affect_status affect_csv_parse(const char *text, size_t len, double fps,
     ps.delim = opt->delimiter;
     ps.max_samples = opt->max_samples ? opt->max_samples : AFFECT_MOTION_MAX_SAMPLES;
     ps.err = err;
+    ps.mon = opt->monitor;
     if (len >= 3 && memcmp(text, "\xEF\xBB\xBF", 3) == 0)
         ps.p += 3;
 
@@ -790,7 +798,8 @@ static void put_header_field(affect_strbuf *sb, const char *name, char axis, boo
     affect_strbuf_putc(sb, '"');
 }
 
-affect_status affect_csv_write(const affect_motion *m, char **out, size_t *len, affect_error *err)
+affect_status affect_csv_write(const affect_motion *m, char **out, size_t *len,
+                               affect_monitor *mon, affect_error *err)
 {
     *out = NULL;
     if (len)
@@ -809,6 +818,10 @@ affect_status affect_csv_write(const affect_motion *m, char **out, size_t *len, 
     affect_strbuf_putc(&sb, '\n');
     const size_t n_cols = (size_t)m->n_joints * 3;
     for (uint32_t t = 0; t < m->n_frames && !sb.failed; t++) {
+        if (t % POLL_FRAMES == 0 && affect_monitor_stopped(mon)) {
+            affect_strbuf_free(&sb);
+            return affect_monitor_check(mon, err);
+        }
         const float *row = affect_motion_at(m, t, 0);
         for (size_t c = 0; c < n_cols; c++) {
             if (c)

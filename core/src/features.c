@@ -275,7 +275,8 @@ static void velocities(const affect_features *f, const affect_motion *m, double 
 }
 
 affect_status affect_features_extract(const affect_features *f, const affect_motion *m,
-                                      double **x, uint32_t *n_frames, affect_error *err)
+                                      double **x, uint32_t *n_frames, affect_monitor *mon,
+                                      affect_error *err)
 {
     uint32_t J = f->n_joints, T = m->n_frames, dim = affect_features_dim(f);
     size_t n_vals;
@@ -305,6 +306,8 @@ affect_status affect_features_extract(const affect_features *f, const affect_mot
                          "\"normalize\": false})");
         goto fail;
     }
+    if ((st = affect_monitor_check(mon, err)) != AFFECT_OK) /* between the passes */
+        goto fail;
     if (f->normalize || f->scale_arm) {
         double lat[3];
         if (f->normalize && !affect_roles_lateral(m, &roles, 0, lat)) {
@@ -333,6 +336,8 @@ affect_status affect_features_extract(const affect_features *f, const affect_mot
         st = affect_nomem(err);
         goto fail;
     }
+    if ((st = affect_monitor_check(mon, err)) != AFFECT_OK)
+        goto fail;
     if (body) {
         int32_t root = roles.joint[AFFECT_ROLE_PELVIS];
         if (root < 0 || (uint32_t)root >= m->n_joints)
@@ -341,6 +346,8 @@ affect_status affect_features_extract(const affect_features *f, const affect_mot
     } else {
         first_positions(f, m, idx, &tf, obs);
     }
+    if ((st = affect_monitor_check(mon, err)) != AFFECT_OK)
+        goto fail;
     if (f->velocity)
         velocities(f, m, obs);
     affect_free(idx);

@@ -190,7 +190,11 @@ typedef struct fisher_ws {
     double *P;     /* m × m: Σ⁻¹ (row-major lower triangle) */
     double *Y;     /* m × m: P D */
     double *rows;  /* block × m: √γ (x − μ) */
+    affect_monitor *mon; /* the caller's (may be NULL) */
 } fisher_ws;
+
+/* gather polls the monitor every this many frames */
+#define POLL_FRAMES 1024
 
 /* n, s and (when want_S) S of component k over the frames with γ > 0; n is w->n[k]. */
 static void gather(const fisher_ws *w, size_t k, bool want_S)
@@ -205,6 +209,8 @@ static void gather(const fisher_ws *w, size_t k, bool want_S)
         memset(S, 0, (full ? m * m : m) * sizeof *S);
     size_t nb = 0;
     for (uint32_t t = 0; t < w->T; t++) {
+        if (t % POLL_FRAMES == 0 && affect_monitor_stopped(w->mon))
+            return; /* component checks the monitor */
         double g = w->gamma[(size_t)t * K + k];
         if (g == 0.0)
             continue;
@@ -253,6 +259,9 @@ static affect_status component(const fisher_ws *w, size_t k, double *om, double 
         return AFFECT_OK;
     }
     gather(w, k, oc != NULL);
+    affect_status st = affect_monitor_check(w->mon, err);
+    if (st)
+        return st;
     if (cfg->cov != AFFECT_HMM_FULL) {
         const double *var = affect_hmm_covariances(w->h) + k * m;
         for (size_t d = 0; d < m; d++) {
@@ -306,7 +315,8 @@ static affect_status component(const fisher_ws *w, size_t k, double *om, double 
 }
 
 affect_status affect_fisher_score(const affect_hmm *h, const double *x, uint32_t n_frames,
-                                  unsigned groups, double *out, double *loglik, affect_error *err)
+                                  unsigned groups, double *out, double *loglik,
+                                  affect_monitor *mon, affect_error *err)
 {
     if (!h)
         return affect_fail(err, AFFECT_ERR_INVALID, "no model");
@@ -330,6 +340,7 @@ affect_status affect_fisher_score(const affect_hmm *h, const double *x, uint32_t
     w.h = h;
     w.x = x;
     w.T = n_frames;
+    w.mon = mon;
     w.block = BLOCK_DOUBLES / m < BLOCK_ROWS ? BLOCK_DOUBLES / m : BLOCK_ROWS; /* ≥ 64 */
     if (w.block > n_frames)
         w.block = n_frames;
@@ -348,7 +359,7 @@ affect_status affect_fisher_score(const affect_hmm *h, const double *x, uint32_t
     if (!ws)
         return affect_nomem(err);
     double L;
-    affect_status st = affect_hmm_posteriors(h, x, n_frames, w.gamma, w.xi, &L, err);
+    affect_status st = affect_hmm_posteriors(h, x, n_frames, w.gamma, w.xi, &L, mon, err);
     if (st)
         goto cleanup;
 

@@ -321,7 +321,7 @@ affect_status affect_generate(const affect_motion *desired, const affect_motion 
     if ((st = make_features(desired, opt->up_axis, &f, err)) != AFFECT_OK)
         goto done;
     dim = affect_features_dim(f);
-    if ((st = affect_features_extract(f, desired, &xd, &frames, err)) != AFFECT_OK) {
+    if ((st = affect_features_extract(f, desired, &xd, &frames, opt->monitor, err)) != AFFECT_OK) {
         st = prefixed(err, st, "desired motion", -1);
         goto done;
     }
@@ -340,7 +340,8 @@ affect_status affect_generate(const affect_motion *desired, const affect_motion 
     for (uint32_t i = 0, k = 0; i < n_neighbours; i++) {
         if (!same_joint_names(desired, neighbours[i]))
             continue;
-        if ((st = affect_features_extract(f, neighbours[i], &xs[k], &frames, err)) != AFFECT_OK) {
+        if ((st = affect_features_extract(f, neighbours[i], &xs[k], &frames, opt->monitor,
+                                          err)) != AFFECT_OK) {
             st = prefixed(err, st, "neighbour", i);
             goto done;
         }
@@ -381,7 +382,8 @@ affect_status affect_generate(const affect_motion *desired, const affect_motion 
         (st = scaled_model(h, opt->covariance_scale, &hs, err)) != AFFECT_OK)
         goto done;
     double logprob = 0;
-    if ((st = affect_hmm_viterbi(hs ? hs : h, xd, T, path, &logprob, err)) != AFFECT_OK)
+    if ((st = affect_hmm_viterbi(hs ? hs : h, xd, T, path, &logprob, opt->monitor, err)) !=
+        AFFECT_OK)
         goto done;
     t3 = now(opt);
 
@@ -434,6 +436,7 @@ affect_status affect_generate(const affect_motion *desired, const affect_motion 
         ro.model = AFFECT_RIGID_SKELETON;
         ro.lengths = AFFECT_RIGID_REFERENCE;
         ro.reference = desired;
+        ro.monitor = opt->monitor;
         affect_motion *r = NULL;
         if ((st = affect_motion_rigid(m, &ro, &r, err)) != AFFECT_OK) {
             st = prefixed(err, st, "making the output rigid", -1);
@@ -512,11 +515,11 @@ affect_status affect_dtw_distance(const affect_motion *a, const affect_motion *b
     affect_status st = make_features(a, 1, &f, err);
     if (st)
         goto done;
-    if ((st = affect_features_extract(f, a, &xa, &Ta, err)) != AFFECT_OK) {
+    if ((st = affect_features_extract(f, a, &xa, &Ta, mon, err)) != AFFECT_OK) {
         st = prefixed(err, st, "first motion", -1);
         goto done;
     }
-    if ((st = affect_features_extract(f, b, &xb, &Tb, err)) != AFFECT_OK) {
+    if ((st = affect_features_extract(f, b, &xb, &Tb, mon, err)) != AFFECT_OK) {
         st = prefixed(err, st, "second motion", -1);
         goto done;
     }

@@ -675,11 +675,11 @@ static void track(tracker *tr, uint32_t M, uint32_t i, double lb, uint32_t seq, 
  * tr (may be NULL) records the frames of each state worst explained by it. */
 static void forward_backward(const affect_hmm *h, const double *x, uint32_t T, fb_ws *w,
                              double *rho, double *xi, double *g0, tracker *tr, uint32_t seq,
-                             double *loglik)
+                             affect_monitor *mon, double *loglik)
 {
     uint32_t N = h->cfg.n_states, M = h->cfg.n_mix, m = h->cfg.dim;
     for (uint32_t t0 = 0; t0 < T; t0 += h->block) {
-        if (affect_monitor_stopped(h->mon)) { /* the caller checks the monitor */
+        if (affect_monitor_stopped(mon)) { /* the caller checks the monitor */
             *loglik = NAN;
             return;
         }
@@ -832,10 +832,13 @@ static affect_status check_frames(const affect_hmm *h, const double *x, uint32_t
 
 /* Forward log-likelihood with block-sized scratch: cbuf, dbuf, lb (block × N), a0, a1, p (N). */
 static double forward_loglik(const affect_hmm *h, const double *x, uint32_t T, double *cbuf,
-                             double *dbuf, double *lb, double *a0, double *a1, double *p)
+                             double *dbuf, double *lb, double *a0, double *a1, double *p,
+                             affect_monitor *mon)
 {
     uint32_t N = h->cfg.n_states, m = h->cfg.dim;
     for (uint32_t t0 = 0; t0 < T; t0 += h->block) {
+        if (affect_monitor_stopped(mon)) /* the caller checks the monitor */
+            return NAN;
         uint32_t n = T - t0 < h->block ? T - t0 : h->block;
         densities(h, x + (size_t)t0 * m, n, lb, NULL, cbuf, dbuf);
         for (uint32_t t = 0; t < n; t++) {
@@ -853,7 +856,7 @@ static double forward_loglik(const affect_hmm *h, const double *x, uint32_t T, d
 }
 
 affect_status affect_hmm_loglik(const affect_hmm *h, const double *x, uint32_t n_frames,
-                                double *loglik, affect_error *err)
+                                double *loglik, affect_monitor *mon, affect_error *err)
 {
     affect_status st = check_frames(h, x, n_frames, err);
     if (st)
@@ -869,13 +872,17 @@ affect_status affect_hmm_loglik(const affect_hmm *h, const double *x, uint32_t n
     void *ws = affect_ws_alloc(parts, sizeof parts / sizeof parts[0]);
     if (!ws)
         return affect_nomem(err);
-    *loglik = forward_loglik(h, x, n_frames, cbuf, dbuf, lb, a0, a1, p);
+    double L = forward_loglik(h, x, n_frames, cbuf, dbuf, lb, a0, a1, p, mon);
     affect_free(ws);
+    if ((st = affect_monitor_check(mon, err)))
+        return st;
+    *loglik = L;
     return AFFECT_OK;
 }
 
 affect_status affect_hmm_viterbi(const affect_hmm *h, const double *x, uint32_t n_frames,
-                                 int32_t *path, double *logprob, affect_error *err)
+                                 int32_t *path, double *logprob, affect_monitor *mon,
+                                 affect_error *err)
 {
     affect_status st = check_frames(h, x, n_frames, err);
     if (st)
@@ -898,6 +905,10 @@ affect_status affect_hmm_viterbi(const affect_hmm *h, const double *x, uint32_t 
     if (!ws)
         return affect_nomem(err);
     for (uint32_t t0 = 0; t0 < n_frames; t0 += h->block) {
+        if ((st = affect_monitor_check(mon, err))) {
+            affect_free(ws);
+            return st;
+        }
         uint32_t n = n_frames - t0 < h->block ? n_frames - t0 : h->block;
         densities(h, x + (size_t)t0 * m, n, lb, NULL, cbuf, dbuf);
         for (uint32_t t = 0; t < n; t++) {
@@ -959,7 +970,8 @@ static void fb_parts(const affect_hmm *h, size_t T, fb_ws *w, affect_ws_part *pa
 }
 
 affect_status affect_hmm_posteriors(const affect_hmm *h, const double *x, uint32_t n_frames,
-                                    double *gamma, double *xi, double *loglik, affect_error *err)
+                                    double *gamma, double *xi, double *loglik, affect_monitor *mon,
+                                    affect_error *err)
 {
     affect_status st = check_frames(h, x, n_frames, err);
     if (st)
@@ -979,8 +991,10 @@ affect_status affect_hmm_posteriors(const affect_hmm *h, const double *x, uint32
     if (xi)
         memset(xi, 0, N * N * sizeof *xi);
     double L;
-    forward_backward(h, x, n_frames, &w, gamma, xi, NULL, NULL, 0, &L);
+    forward_backward(h, x, n_frames, &w, gamma, xi, NULL, NULL, 0, mon, &L);
     affect_free(ws);
+    if ((st = affect_monitor_check(mon, err)))
+        return st;
     if (!isfinite(L))
         return affect_fail(err, AFFECT_ERR_RANGE,
                            "the sequence has probability 0 under the model: no posteriors");
@@ -1811,13 +1825,13 @@ affect_status affect_hmm_train(const affect_hmm_config *cfg, const affect_hmm_se
                 goto cleanup;
             double L;
             if (stats) {
-                forward_backward(h, seqs[s].x, seqs[s].n_frames, &w.fb, w.rho, w.xi, w.g0, &w.tr, s,
-                                 &L);
+                forward_backward(h, seqs[s].x, seqs[s].n_frames, &w.fb, w.rho, w.xi, w.g0, &w.tr,
+                                 s, h->mon, &L);
                 if (isfinite(L))
                     accumulate(h, seqs[s].x, seqs[s].n_frames, &w);
             } else {
                 L = forward_loglik(h, seqs[s].x, seqs[s].n_frames, w.fb.cbuf, w.fb.dbuf, w.fb.lb,
-                                   w.fb.v[0], w.fb.v[1], w.fb.v[2]);
+                                   w.fb.v[0], w.fb.v[1], w.fb.v[2], h->mon);
             }
             if ((st = affect_monitor_check(h->mon, err)))
                 goto cleanup;

@@ -67,7 +67,11 @@ typedef struct parser {
     affect_json_doc *doc;
     size_t arena_used;
     affect_error *err;
+    affect_monitor *mon; /* the caller's (may be NULL) */
 } parser;
+
+/* new_node polls the monitor every this many values */
+#define POLL_NODES 16384
 
 typedef struct key_slot {
     uint32_t hash;
@@ -123,6 +127,11 @@ static int hex_value(char c)
 static affect_status new_node(parser *p, affect_json_type type, int32_t *out)
 {
     affect_json_doc *d = p->doc;
+    if (d->n_nodes % POLL_NODES == 0 && p->mon) {
+        affect_status st = affect_monitor_check(p->mon, p->err);
+        if (st)
+            return st;
+    }
     if (d->n_nodes >= MAX_NODES)
         return affect_fail(p->err, AFFECT_ERR_RANGE, "at byte %zu: more than %zu values", p->pos,
                            MAX_NODES);
@@ -642,12 +651,12 @@ static affect_status parse_value(parser *p, int depth, int32_t *out)
 /* ---- public API ---- */
 
 affect_status affect_json_parse(const char *text, size_t len, affect_json_doc **out,
-                                affect_error *err)
+                                affect_monitor *mon, affect_error *err)
 {
     *out = NULL;
     if (!text)
         len = 0;
-    parser p = {text, len, 0, NULL, 0, err};
+    parser p = {text, len, 0, NULL, 0, err, mon};
     skip_ws(&p);
     if (p.pos >= len)
         return fail_eof(&p);

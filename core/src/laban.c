@@ -69,6 +69,16 @@ void affect_laban_options_default(affect_laban_options *opt)
     opt->time_per_second = false;
     opt->speed_floor = 0.05;
     opt->max_ratio = 100.0;
+    opt->monitor = NULL;
+}
+
+/* The frame loops poll the monitor every this many frames (a few milliseconds of work). */
+#define POLL_FRAMES 4096
+
+/* True when frame t of a loop is a polling point and the caller asked to stop. */
+static bool stop_at(const affect_laban_options *opt, size_t t)
+{
+    return t % POLL_FRAMES == 0 && affect_monitor_stopped(opt->monitor);
 }
 
 static affect_status check_options(const affect_laban_options *opt, affect_error *err)
@@ -501,6 +511,10 @@ static affect_status vector_kinematics(const affect_motion *m, const affect_part
     for (size_t j = 0; j < c; j++)
         vel[j] = (ring[1][j] - ring[0][j]) * fps;
     for (size_t t = 1; t + 1 < n; t++) {
+        if (stop_at(opt, t)) {
+            affect_free(b);
+            return affect_monitor_check(opt->monitor, err);
+        }
         const double *lo = ring[(t - 1) % 3];
         double *hi = ring[(t + 1) % 3];
         centroid_row(m, parts, have, slot, t + 1, hi);
@@ -512,6 +526,11 @@ static affect_status vector_kinematics(const affect_motion *m, const affect_part
     lowpass_channels(vel, n, c, m->fps, opt->cutoff_hz);
     gradient_channels(vel, n, c, m->fps, acc);
     lowpass_channels(acc, n, c, m->fps, opt->cutoff_hz);
+    affect_status st = affect_monitor_check(opt->monitor, err);
+    if (st) {
+        affect_free(b);
+        return st;
+    }
     memset(s, 0, sizeof *s);
     s->n_frames = (uint32_t)n;
     s->n_parts = (uint32_t)(c / 3);
@@ -591,7 +610,7 @@ static affect_status kinematics_all(const affect_motion *m, const affect_part *p
         memset(&ks[k], 0, sizeof ks[k]);
     for (uint32_t k = 0; k < n; k++) {
         affect_status st = affect_kinematics_compute(m, &parts[k], opt, &ks[k], err);
-        if (st)
+        if (st || (st = affect_monitor_check(opt->monitor, err)))
             return st;
     }
     return AFFECT_OK;
@@ -763,7 +782,7 @@ affect_status affect_laban_shape_directional(const affect_motion *m, const affec
     }
     *out = used ? sum / used : 0.0;
     affect_free(block);
-    return AFFECT_OK;
+    return affect_monitor_check(opt->monitor, err);
 }
 
 /* Joints the body hull uses: all but the pelvis's ancestors (a reference root such as the
@@ -879,11 +898,11 @@ affect_status affect_laban_shape_shaping(const affect_motion *m, const affect_ro
      * area so far (the others cannot change the maximum, so the result is the same) */
     double *bound = pos; /* the torso's positions are no longer needed */
     uint32_t first = 0;
-    for (uint32_t t = 0; t < n; t++) {
+    for (uint32_t t = 0; t < n && !stop_at(opt, t); t++) {
         bound[t] = area_bound_2d(m, t, joints, nb, a, b);
         first = bound[t] > bound[first] ? t : first;
     }
-    for (uint32_t k = 0; k <= n; k++) {
+    for (uint32_t k = 0; k <= n && !stop_at(opt, k); k++) {
         uint32_t t = k == 0 ? first : k - 1;
         if ((k > 0 && t == first) || !(bound[t] > horizontal))
             continue;
@@ -899,7 +918,7 @@ affect_status affect_laban_shape_shaping(const affect_motion *m, const affect_ro
     out[2] = horizontal;
     affect_free(block);
     affect_free(joints);
-    return AFFECT_OK;
+    return affect_monitor_check(opt->monitor, err);
 }
 
 /* Frame t's body joints as doubles (xyz, 3 · nb). */
@@ -941,7 +960,7 @@ static affect_status shape_flow(const affect_motion *m, int32_t pelvis,
     uint32_t nb = body_joints(m, pelvis, joints);
     double best = 0;
     if (opt->hull_box) {
-        for (uint32_t t = 0; t < m->n_frames; t++) {
+        for (uint32_t t = 0; t < m->n_frames && !stop_at(opt, t); t++) {
             gather_body(m, t, joints, nb, xyz);
             double v = box_volume(xyz, nb);
             best = v > best ? v : best;
@@ -952,13 +971,13 @@ static affect_status shape_flow(const affect_motion *m, int32_t pelvis,
          * frame of the largest bounding box goes first, a good guess of the maximum */
         uint32_t first = 0;
         double box_best = -1;
-        for (uint32_t t = 0; t < m->n_frames; t++) {
+        for (uint32_t t = 0; t < m->n_frames && !stop_at(opt, t); t++) {
             gather_body(m, t, joints, nb, xyz);
             double v = box_volume(xyz, nb);
             first = v > box_best ? t : first;
             box_best = v > box_best ? v : box_best;
         }
-        for (uint32_t k = 0; k <= m->n_frames && m->n_frames > 0; k++) {
+        for (uint32_t k = 0; k <= m->n_frames && m->n_frames > 0 && !stop_at(opt, k); k++) {
             uint32_t t = k == 0 ? first : k - 1;
             if (k > 0 && t == first)
                 continue;
@@ -970,6 +989,7 @@ static affect_status shape_flow(const affect_motion *m, int32_t pelvis,
         }
     }
     *out = best;
+    st = affect_monitor_check(opt->monitor, err);
 done:
     affect_hull3d_free(hull);
     affect_free(xyz);

@@ -248,12 +248,12 @@ static affect_status read_frames(const affect_json_doc *doc, affect_motion *m,
 }
 
 affect_status affect_motion_from_json(const char *text, size_t len, affect_motion **out,
-                                      affect_error *err)
+                                      affect_monitor *mon, affect_error *err)
 {
     *out = NULL;
     affect_json_doc *doc = NULL;
     affect_motion *m = NULL;
-    affect_status st = affect_json_parse(text, len, &doc, err);
+    affect_status st = affect_json_parse(text, len, &doc, mon, err);
     if (st)
         return st;
     const affect_json_node *root = affect_json_root(doc);
@@ -293,8 +293,11 @@ done:
     return st;
 }
 
+/* The writer polls the monitor every this many frames. */
+#define POLL_FRAMES 1024
+
 affect_status affect_motion_to_json(const affect_motion *m, char **out, size_t *len,
-                                    affect_error *err)
+                                    affect_monitor *mon, affect_error *err)
 {
     affect_strbuf sb;
     affect_strbuf_init(&sb);
@@ -318,6 +321,10 @@ affect_status affect_motion_to_json(const affect_motion *m, char **out, size_t *
     }
     affect_strbuf_puts(&sb, "],\"frames\":[");
     for (uint32_t t = 0; t < m->n_frames && !sb.failed; t++) {
+        if (t % POLL_FRAMES == 0 && affect_monitor_stopped(mon)) {
+            affect_strbuf_free(&sb);
+            return affect_monitor_check(mon, err);
+        }
         affect_strbuf_puts(&sb, t ? ",[" : "[");
         const float *p = affect_motion_at(m, t, 0);
         for (uint32_t j = 0; j < m->n_joints; j++, p += 3) {

@@ -44,6 +44,7 @@ void affect_rigid_options_default(affect_rigid_options *opt)
     opt->max_sweeps = 200;
     opt->tolerance = 1e-9;
     opt->free_link = NULL;
+    opt->monitor = NULL;
 }
 
 void affect_ik_options_default(affect_ik_options *opt)
@@ -223,8 +224,9 @@ affect_status affect_motion_fk(affect_motion *m, affect_error *err)
     return AFFECT_OK;
 }
 
-affect_status affect_motion_fk_error(const affect_motion *m, double *max_dist, uint32_t *frame,
-                                     uint32_t *joint, affect_error *err)
+/* affect_motion_fk_error, polling mon (may be NULL) every few thousand frames. */
+static affect_status fk_error(const affect_motion *m, double *max_dist, uint32_t *frame,
+                              uint32_t *joint, affect_monitor *mon, affect_error *err)
 {
     *max_dist = 0;
     *frame = *joint = 0;
@@ -235,6 +237,10 @@ affect_status affect_motion_fk_error(const affect_motion *m, double *max_dist, u
     if (st)
         return st;
     for (uint32_t t = 0; t < m->n_frames; t++) {
+        if (t % 4096 == 0 && (st = affect_monitor_check(mon, err))) {
+            affect_free(w.block);
+            return st;
+        }
         fk_frame(m, w.order, t, w.wrot, w.pos);
         for (uint32_t j = 0; j < m->n_joints; j++) {
             const float *p = affect_motion_at(m, t, j);
@@ -249,6 +255,12 @@ affect_status affect_motion_fk_error(const affect_motion *m, double *max_dist, u
     }
     affect_free(w.block);
     return AFFECT_OK;
+}
+
+affect_status affect_motion_fk_error(const affect_motion *m, double *max_dist, uint32_t *frame,
+                                     uint32_t *joint, affect_error *err)
+{
+    return fk_error(m, max_dist, frame, joint, NULL, err);
 }
 
 /* ---- bones ---- */
@@ -350,13 +362,19 @@ static int cmp_double(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
-/* Median length of every bone of m into len (0 for roots). */
-static affect_status median_lengths(const affect_motion *m, double *len, affect_error *err)
+/* Median length of every bone of m into len (0 for roots); mon is polled per bone. */
+static affect_status median_lengths(const affect_motion *m, double *len, affect_monitor *mon,
+                                    affect_error *err)
 {
     double *v = affect_malloc_array(m->n_frames, sizeof *v);
     if (!v)
         return affect_nomem(err);
     for (uint32_t j = 0; j < m->n_joints; j++) {
+        affect_status st = affect_monitor_check(mon, err);
+        if (st) {
+            affect_free(v);
+            return st;
+        }
         len[j] = 0;
         if (m->parents[j] < 0)
             continue;
@@ -487,12 +505,12 @@ static affect_status rigid_plan_make(const affect_motion *m, const affect_rigid_
         return st;
     if (opt->lengths == AFFECT_RIGID_REFERENCE) {
         if ((st = same_joints(m, opt->reference, err)) ||
-            (st = median_lengths(opt->reference, p->len, err)))
+            (st = median_lengths(opt->reference, p->len, opt->monitor, err)))
             return st;
     } else if (opt->lengths == AFFECT_RIGID_FIRST) {
         for (uint32_t j = 0; j < n; j++)
             p->len[j] = m->parents[j] < 0 ? 0 : bone_length(m, 0, j);
-    } else if ((st = median_lengths(m, p->len, err))) {
+    } else if ((st = median_lengths(m, p->len, opt->monitor, err))) {
         return st;
     }
     if ((st = children_build(m, &p->ch, err)))
@@ -591,13 +609,15 @@ static affect_status rigid_positions(const affect_motion *m, const affect_rigid_
         return affect_nomem(err);
     double size = affect_motion_body_size(m);
     for (uint32_t t = 0; t < m->n_frames; t++) {
+        if ((st = affect_monitor_check(opt->monitor, err))) /* a frame is ~0.1 ms of work */
+            break;
         const float *src = affect_motion_at(m, t, 0);
         for (size_t i = 0; i < nv; i++)
             q[i] = src[i];
         rigid_frame(m, pl, opt, size, q, t ? out + (t - 1) * nv : NULL, out + t * nv);
     }
     affect_free(q);
-    return AFFECT_OK;
+    return st;
 }
 
 /* Rounds one frame of rigid positions (doubles) to float32, parents first, choosing for every
@@ -670,9 +690,16 @@ affect_status affect_motion_rigid(const affect_motion *m, const affect_rigid_opt
     if (!st) {
         affect_motion_drop_skeleton(c);
         size_t per = (size_t)m->n_joints * 3;
-        for (uint32_t t = 0; t < m->n_frames; t++)
-            round_rigid_frame(m, &pl, pos + t * per, c->pos + t * per);
-        *out = c;
+        for (uint32_t t = 0; t < m->n_frames && !st; t++) {
+            if (t % 256 == 0) /* a frame is ~5 µs of work */
+                st = affect_monitor_check(opt->monitor, err);
+            if (!st)
+                round_rigid_frame(m, &pl, pos + t * per, c->pos + t * per);
+        }
+        if (st)
+            affect_motion_free(c);
+        else
+            *out = c;
     }
     rigid_plan_free(&pl);
     affect_free(pos);
@@ -1014,12 +1041,20 @@ affect_status affect_motion_ik(const affect_motion *m, const affect_ik_options *
         goto done;
     double min_len = BONE_MIN_REL * affect_motion_body_size(m);
     ik_offsets(m, &pl, w.g + (size_t)opt->rest_frame * nv, c);
+    if ((st = affect_monitor_check(opt->rigid.monitor, err)))
+        goto done;
     ik_mean_shapes(m, &pl, w.g, min_len, &w, c);
+    if ((st = affect_monitor_check(opt->rigid.monitor, err)))
+        goto done;
     ik_mark_moved(m, &pl, opt, w.g, min_len, &w, c);
+    if ((st = affect_monitor_check(opt->rigid.monitor, err)))
+        goto done;
     ik_channels(m, opt, w.moved, c);
     for (uint32_t j = 0; j < nj; j++)
         w.prevq[j * 4] = 1, w.prevq[j * 4 + 1] = w.prevq[j * 4 + 2] = w.prevq[j * 4 + 3] = 0;
     for (uint32_t t = 0; t < m->n_frames; t++) {
+        if ((st = affect_monitor_check(opt->rigid.monitor, err)))
+            goto done;
         const double *g = w.g + t * nv;
         for (uint32_t i = 0; i < nj; i++) {
             uint32_t j = pl.order[i];
@@ -1056,8 +1091,7 @@ affect_status affect_motion_ik(const affect_motion *m, const affect_ik_options *
                 memcpy(w.wrot + (size_t)j * 4, q, sizeof q);
         }
     }
-    st = affect_motion_fk(c, err);
-    if (st)
+    if ((st = affect_monitor_check(opt->rigid.monitor, err)) || (st = affect_motion_fk(c, err)))
         goto done;
     *out = c;
     c = NULL;
@@ -1077,7 +1111,7 @@ affect_status affect_motion_skeletal(const affect_motion *m, affect_rotation_sou
     if (m->rot && source != AFFECT_ROTATIONS_IK) {
         double dist;
         uint32_t frame, joint;
-        affect_status st = affect_motion_fk_error(m, &dist, &frame, &joint, err);
+        affect_status st = fk_error(m, &dist, &frame, &joint, opt ? opt->rigid.monitor : NULL, err);
         if (st)
             return st;
         if (dist <= AFFECT_STORED_FK_TOL_REL * affect_motion_body_size(m))

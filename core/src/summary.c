@@ -91,7 +91,7 @@ static double body_size(const affect_motion *m, const affect_roles *roles)
 }
 
 affect_status affect_motion_summary(const affect_motion *m, int up, double out[AFFECT_SUMMARY_N],
-                                    affect_error *err)
+                                    affect_monitor *mon, affect_error *err)
 {
     if (up < 0 || up > 2)
         return affect_fail(err, AFFECT_ERR_INVALID, "up axis must be x, y or z");
@@ -115,6 +115,8 @@ affect_status affect_motion_summary(const affect_motion *m, int up, double out[A
     int ha = (up + 1) % 3, hb = (up + 2) % 3, fwd = up == 2 ? 1 : 2;
     double fwd_sign = up == 1 ? 1.0 : -1.0;
     for (uint32_t t = 0; t < T; t++) {
+        if (t % 4096 == 0 && affect_monitor_stopped(mon))
+            break; /* checked below */
         double r[9], *row = buf + (size_t)t * STRIDE;
         affect_normalize_axis_rotation(up, ang[t], r);
         const float *o = affect_motion_at(m, t, (uint32_t)root);
@@ -127,6 +129,11 @@ affect_status affect_motion_summary(const affect_motion *m, int up, double out[A
         }
         for (int i = 0; i < 3; i++)
             row[N_EFF * 3 + i] = (double)o[i] * inv;
+    }
+    affect_status st = affect_monitor_check(mon, err); /* between passes over the frames */
+    if (st) {
+        affect_free(buf);
+        return st;
     }
     memset(out, 0, AFFECT_SUMMARY_N * sizeof *out);
     out[0] = T / m->fps;
@@ -158,6 +165,10 @@ affect_status affect_motion_summary(const affect_motion *m, int up, double out[A
         speeds(buf + e * 3, T, STRIDE, all, 3, m->fps, tmp);
         out[6 + e] = mean(tmp, T);
         out[11 + e] = p90(tmp, T);
+        if ((st = affect_monitor_check(mon, err))) {
+            affect_free(buf);
+            return st;
+        }
     }
     bool head = roles.joint[AFFECT_ROLE_HEAD] >= 0,
          hands =
@@ -202,14 +213,14 @@ static double signed_log(double v)
 }
 
 affect_status affect_descriptors(unsigned mask, const affect_motion *m, int up_axis, double *out,
-                                 affect_error *err)
+                                 affect_monitor *mon, affect_error *err)
 {
     if (affect_descriptors_dim(mask) == 0)
         return affect_fail(err, AFFECT_ERR_INVALID,
                            "descriptors must be a combination of kinematics and laban");
     uint32_t n = 0;
     if (mask & AFFECT_DESC_KINEMATICS) {
-        affect_status st = affect_motion_summary(m, up_axis, out, err);
+        affect_status st = affect_motion_summary(m, up_axis, out, mon, err);
         if (st)
             return st;
         n = AFFECT_SUMMARY_N;
@@ -221,6 +232,7 @@ affect_status affect_descriptors(unsigned mask, const affect_motion *m, int up_a
         affect_laban_options_default(&lo);
         lo.up_axis = up_axis;
         lo.missing_null = true;
+        lo.monitor = mon;
         affect_status st = affect_laban_vector(m, &roles, &lo, out + n, err);
         if (st)
             return st;

@@ -703,7 +703,8 @@ static affect_status check_select(size_t n, size_t d, const uint32_t *y, uint32_
 
 static affect_status select_c(const double *G, size_t n, const uint32_t *y, uint32_t c,
                               const double *candidates, size_t n_cand, uint32_t folds,
-                              uint64_t seed, double *best_c, double *best_acc, affect_error *err);
+                              uint64_t seed, double *best_c, double *best_acc,
+                              affect_monitor *mon, affect_error *err);
 
 affect_status affect_svm_select_c(const double *X, size_t n, size_t d, const uint32_t *y,
                                   uint32_t c, const double *candidates, size_t n_cand,
@@ -717,7 +718,7 @@ affect_status affect_svm_select_c(const double *X, size_t n, size_t d, const uin
     if (st == AFFECT_OK)
         st = gram_new(X, n, d, &G, err);
     if (st == AFFECT_OK)
-        st = select_c(G, n, y, c, candidates, n_cand, folds, seed, best_c, best_acc, err);
+        st = select_c(G, n, y, c, candidates, n_cand, folds, seed, best_c, best_acc, NULL, err);
     affect_free(G);
     return st;
 }
@@ -725,20 +726,22 @@ affect_status affect_svm_select_c(const double *X, size_t n, size_t d, const uin
 affect_status affect_svm_select_c_gram(const double *G, size_t n, size_t d, const uint32_t *y,
                                        uint32_t c, const double *candidates, size_t n_cand,
                                        uint32_t folds, uint64_t seed, double *best_c,
-                                       double *best_acc, affect_error *err)
+                                       double *best_acc, affect_monitor *mon, affect_error *err)
 {
     affect_status st = check_select(n, d, y, c, candidates, n_cand, folds, err);
     if (st == AFFECT_OK)
         st = check_gram(G, n, err);
     if (st == AFFECT_OK)
-        st = select_c(G, n, y, c, candidates, n_cand, folds, seed, best_c, best_acc, err);
+        st = select_c(G, n, y, c, candidates, n_cand, folds, seed, best_c, best_acc, mon, err);
     return st;
 }
 
-/* The cross-validation of affect_svm_select_c on the Gram matrix. */
+/* The cross-validation of affect_svm_select_c on the Gram matrix; mon is polled before each
+ * fit (a libsvm fit itself cannot be stopped). */
 static affect_status select_c(const double *G, size_t n, const uint32_t *y, uint32_t c,
                               const double *candidates, size_t n_cand, uint32_t folds,
-                              uint64_t seed, double *best_c, double *best_acc, affect_error *err)
+                              uint64_t seed, double *best_c, double *best_acc,
+                              affect_monitor *mon, affect_error *err)
 {
     affect_status st;
     uint32_t *fold_of = NULL;
@@ -774,7 +777,8 @@ static affect_status select_c(const double *G, size_t n, const uint32_t *y, uint
                         (*hits)++;
                 continue;
             }
-            if ((st = fit(&p, candidates[ci], &sm, err)) != AFFECT_OK)
+            if ((st = affect_monitor_check(mon, err)) != AFFECT_OK ||
+                (st = fit(&p, candidates[ci], &sm, err)) != AFFECT_OK)
                 goto cleanup;
             st = extract(sm, &p, d, candidates[ci], &m, err);
             svm_free_and_destroy_model(&sm);

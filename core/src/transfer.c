@@ -34,6 +34,7 @@ void affect_transfer_options_default(affect_transfer_options *opt)
     opt->keep_contacts = true;
     opt->amplitude = AFFECT_TRANSFER_VELOCITY;
     opt->pooled = false;
+    opt->monitor = NULL;
 }
 
 const char *affect_transfer_options_check(const affect_transfer_options *opt)
@@ -412,6 +413,7 @@ affect_status affect_transfer(const affect_motion *desired, const affect_motion 
         return affect_fail(err, AFFECT_ERR_INVALID, "no donor pairs");
     affect_ik_options io;
     affect_ik_options_default(&io);
+    io.rigid.monitor = opt->monitor;
     affect_status st;
     affect_motion *dmade = NULL, **made = affect_calloc(2 * (size_t)n_pairs, sizeof *made);
     const affect_motion **sk = affect_calloc(2 * (size_t)n_pairs, sizeof *sk);
@@ -469,7 +471,11 @@ affect_status affect_transfer(const affect_motion *desired, const affect_motion 
                                                   "motion's skeleton (joint names)");
         goto done;
     }
+    if ((st = affect_monitor_check(opt->monitor, err)))
+        goto done;
     apply(d, ch, opt, &s, res, rep);
+    if ((st = affect_monitor_check(opt->monitor, err)))
+        goto done;
     if (opt->keep_contacts) {
         uint32_t contacts[2] = {0, 0};
         hold_legs(d, res, s.tmp, contacts);

@@ -345,7 +345,7 @@ static int prepare(dataset *d)
                     e->m->fps, d->feat->fps, e->m->n_frames);
             return 1;
         }
-        if (affect_features_extract(d->feat, e->m, &e->x, &e->T, &err)) {
+        if (affect_features_extract(d->feat, e->m, &e->x, &e->T, NULL, &err)) {
             fprintf(stderr, "bench_affect: %s: %s\n", e->stem, err.msg);
             return 1;
         }
@@ -426,7 +426,7 @@ static int eval_pass(thr_ctx *t, bool ml_only)
         affect_classifier_out o = {
             .loglik = t->loglik, .decision = t->dec, .embed = t->embed, .votes = t->votes};
         affect_error err;
-        if (affect_classifier_eval(t->c, t->d->seqs[i].x, t->d->seqs[i].n_frames, NULL, ml_only, &o,
+        if (affect_classifier_eval(t->c, t->d->seqs[i].x, t->d->seqs[i].n_frames, NULL, ml_only, &o, NULL,
                                    &err)) {
             fprintf(stderr, "bench_affect: eval of %s: %s\n", t->d->it[i].stem, err.msg);
             return 1;
@@ -454,7 +454,7 @@ static int pass_fisher(void *arg)
         affect_error err;
         double ll;
         if (affect_fisher_score(affect_classifier_hmm(t->c, 0), t->d->seqs[i].x,
-                                t->d->seqs[i].n_frames, cc->groups, t->fisher, &ll, &err)) {
+                                t->d->seqs[i].n_frames, cc->groups, t->fisher, &ll, NULL, &err)) {
             fprintf(stderr, "bench_affect: Fisher score of %s: %s\n", t->d->it[i].stem, err.msg);
             return 1;
         }
@@ -704,7 +704,7 @@ static int fisher_rows(const dataset *d, affect_hmm *const *h, const uint32_t *i
             affect_error err;
             double *row = f + (size_t)i * D + k * part;
             if (affect_fisher_score(h[k], s->x, s->n_frames, d->cfg.groups, row,
-                                    &ll[(size_t)i * N_CLASSES + k], &err)) {
+                                    &ll[(size_t)i * N_CLASSES + k], NULL, &err)) {
                 fprintf(stderr, "bench_affect: Fisher score of %s under class %s: %s\n",
                         d->it[idx[i]].stem, emotions[k], err.msg);
                 return 1;
@@ -924,7 +924,7 @@ static int fold_library(const dataset *d, const uint32_t *fold_of, uint32_t fold
         if (fold_of[i] != fold)
             continue;
         affect_classifier_out out = {0};
-        if (affect_classifier_eval(c, d->seqs[i].x, d->seqs[i].n_frames, NULL, false, &out, &err)) {
+        if (affect_classifier_eval(c, d->seqs[i].x, d->seqs[i].n_frames, NULL, false, &out, NULL, &err)) {
             fprintf(stderr, "bench_affect: affect_classifier_eval: %s\n", err.msg);
             goto done;
         }

@@ -474,7 +474,7 @@ static int k_score(bench_ctx *c)
     double acc = 0.0;
     for (uint32_t s = 0; s < c->d->n_seqs; s++) {
         affect_error err;
-        if (affect_hmm_loglik(c->h, c->d->seqs[s].x, c->d->seqs[s].n_frames, &c->ll[s], &err)) {
+        if (affect_hmm_loglik(c->h, c->d->seqs[s].x, c->d->seqs[s].n_frames, &c->ll[s], NULL, &err)) {
             fprintf(stderr, "sequence %u: %s\n", s, err.msg);
             return 1;
         }

@@ -58,8 +58,9 @@ int main(int argc, char **argv)
     const char *blas = getenv("OPENBLAS_NUM_THREADS");
     double t0 = ir_now();
     ir_open(module);
-    printf("corpus: 80 motions, 8 walks at 1000 fps and their laban indexes in %.1f s; "
-           "OPENBLAS_NUM_THREADS=%s; %d runs per call\n",
+    ir_open_big();
+    printf("corpus: 80 motions, 8 walks at 1000 fps, their laban indexes and the large motions "
+           "(" IR_BIG ") in %.1f s; OPENBLAS_NUM_THREADS=%s; %d runs per call\n",
            ir_now() - t0, blas ? blas : "(unset)", runs);
     if (full > 0) {
         printf("each call uninterrupted, up to %.0f s:\n", full);
@@ -70,6 +71,7 @@ int main(int argc, char **argv)
             c.delay = full;
             sqlite3_close(ir_db); /* a fresh connection: no cached RMLR fit */
             ir_open(module);
+            ir_open_big();
             ir_result res;
             if (!ir_run(&c, &res))
                 printf("%-48s cannot prepare: %s\n", c.name, res.msg);

@@ -117,11 +117,11 @@ static void run_all(int threads, results *res)
     affect_hmm *h = train();
     assert_int_equal(openblas_get_num_threads(), host);
     res->hmm_len = hmm_bytes(h, res->hmm);
-    assert_int_equal(affect_hmm_loglik(h, data, FRAMES, &res->loglik, &err), AFFECT_OK);
+    assert_int_equal(affect_hmm_loglik(h, data, FRAMES, &res->loglik, NULL, &err), AFFECT_OK);
     res->fisher_len = affect_fisher_dim(affect_hmm_get_config(h), AFFECT_FISHER_ALL);
     res->fisher = malloc(res->fisher_len * sizeof *res->fisher);
     assert_int_equal(affect_fisher_score(h, data + FRAMES * DIM, FRAMES, AFFECT_FISHER_ALL,
-                                         res->fisher, NULL, &err),
+                                         res->fisher, NULL, NULL, &err),
                      AFFECT_OK);
     affect_hmm_free(h);
     assert_int_equal(openblas_get_num_threads(), host);

@@ -124,7 +124,7 @@ static void test_options_and_header_forms(void **state)
                                "1 2 3 90\r\n\r\n4 5 6 0\r\n\r\n";
     affect_motion *m = NULL;
     affect_error err;
-    affect_bvh_options opt = {0.01, "m", 0};
+    affect_bvh_options opt = {0.01, "m", 0, NULL};
     affect_status st = affect_bvh_parse(text, sizeof text - 1, &opt, &m, &err);
     if (st)
         fail_msg("%s", err.msg);
@@ -294,7 +294,7 @@ static void test_max_samples(void **state)
 {
     /* the option lowers or raises the limit on frames × joints */
     char *text = no_channels_bvh(10, "3", "\n\n\n");
-    affect_bvh_options opt = {1.0, NULL, 20};
+    affect_bvh_options opt = {1.0, NULL, 20, NULL};
     expect_bvh_error(text, &opt, AFFECT_ERR_RANGE,
                      "line 54: 3 frames x 10 joints is 30 samples, above the limit of 20 "
                      "(option max_samples)");

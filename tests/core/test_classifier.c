@@ -79,7 +79,7 @@ static void dataset_load(dataset *d, const char *const *joints, uint32_t n_joint
                         fail_msg("features: %s", err.msg);
                 }
                 uint32_t i = d->n++;
-                if (affect_features_extract(d->feat, m, &d->x[i], &d->seqs[i].n_frames, &err))
+                if (affect_features_extract(d->feat, m, &d->x[i], &d->seqs[i].n_frames, NULL, &err))
                     fail_msg("extract: %s", err.msg);
                 d->seqs[i].x = d->x[i];
                 d->y[i] = e;
@@ -160,7 +160,7 @@ static void eval_ok(const affect_classifier *c, const affect_hmm_seq *s, eval_re
     r->o.decision = r->decision;
     r->o.embed = r->embed;
     r->o.votes = r->votes;
-    if (affect_classifier_eval(c, s->x, s->n_frames, NULL, false, &r->o, &err))
+    if (affect_classifier_eval(c, s->x, s->n_frames, NULL, false, &r->o, NULL, &err))
         fail_msg("eval: %s", err.msg);
 }
 
@@ -301,7 +301,7 @@ static void test_recognition(void **state)
         o.loglik = ll;
         affect_error err;
         assert_int_equal(affect_classifier_eval(c, fx->d.seqs[i].x, fx->d.seqs[i].n_frames, NULL,
-                                                true, &o, &err),
+                                                true, &o, NULL, &err),
                          AFFECT_OK);
         assert_int_equal(o.ml, r.o.ml);
         assert_memory_equal(ll, r.loglik, sizeof ll);
@@ -357,7 +357,7 @@ static void raw_fisher(const affect_classifier *c, const affect_hmm_seq *s, doub
     for (uint32_t k = 0; k < affect_classifier_n_classes(c); k++) {
         double ll;
         if (affect_fisher_score(affect_classifier_hmm(c, k), s->x, s->n_frames, groups,
-                                f + k * part, &ll, &err))
+                                f + k * part, &ll, NULL, &err))
             fail_msg("fisher: %s", err.msg);
     }
     for (size_t e = 0; e < affect_classifier_dim(c); e++)
@@ -933,12 +933,12 @@ static void test_descriptors(void **state)
     for (uint32_t i = 0; i < n; i++) {
         affect_classifier_out o = {0};
         assert_int_equal(affect_classifier_eval(d, same[i].x, same[i].n_frames, desc + i * dd,
-                                                false, &o, &err),
+                                                false, &o, NULL, &err),
                          AFFECT_OK);
         assert_int_equal(o.svm, fx->small_y[i]);
     }
     affect_classifier_out o = {0};
-    assert_int_equal(affect_classifier_eval(d, same[0].x, same[0].n_frames, NULL, false, &o, &err),
+    assert_int_equal(affect_classifier_eval(d, same[0].x, same[0].n_frames, NULL, false, &o, NULL, &err),
                      AFFECT_ERR_INVALID);
     assert_string_equal(err.msg, "the classifier appends descriptors but none were given");
     free(blob);
@@ -991,9 +991,9 @@ static void test_fixture_v1(void **state)
         a.decision = da;
         b.decision = db;
         const affect_hmm_seq *q = &fx->small_seqs[i];
-        assert_int_equal(affect_classifier_eval(c, q->x, q->n_frames, NULL, false, &a, &err),
+        assert_int_equal(affect_classifier_eval(c, q->x, q->n_frames, NULL, false, &a, NULL, &err),
                          AFFECT_OK);
-        assert_int_equal(affect_classifier_eval(d, q->x, q->n_frames, NULL, false, &b, &err),
+        assert_int_equal(affect_classifier_eval(d, q->x, q->n_frames, NULL, false, &b, NULL, &err),
                          AFFECT_OK);
         assert_true(a.svm == b.svm && a.knn == b.knn && a.ml == b.ml && da[0] == db[0]);
     }
@@ -1268,7 +1268,7 @@ static affect_status oom_eval(void *ctx, affect_error *err)
     oom_ctx *o = ctx;
     const affect_hmm_seq *s = &o->fx->small_seqs[1];
     affect_classifier_out out = {0}; /* nothing wanted: eval allocates its own buffers */
-    return affect_classifier_eval(o->fx->small, s->x, s->n_frames, NULL, false, &out, err);
+    return affect_classifier_eval(o->fx->small, s->x, s->n_frames, NULL, false, &out, NULL, err);
 }
 
 static void test_out_of_memory(void **state)

@@ -66,7 +66,7 @@ static void dataset_load(dataset *d)
                     d->dim = affect_features_dim(d->feat);
                 }
                 uint32_t i = d->n++;
-                if (affect_features_extract(d->feat, m, &d->x[i], &d->seqs[i].n_frames, &err))
+                if (affect_features_extract(d->feat, m, &d->x[i], &d->seqs[i].n_frames, NULL, &err))
                     fail_msg("extract: %s", err.msg);
                 d->seqs[i].x = d->x[i];
                 d->y[i] = e;
@@ -472,7 +472,7 @@ static void direct_fold(const affect_cv_config *cfg, const dataset *d, const uin
         if (fold_of[i] != F)
             continue;
         affect_classifier_out o = {0};
-        if (affect_classifier_eval(c, seqs[i].x, seqs[i].n_frames, NULL, false, &o, &err))
+        if (affect_classifier_eval(c, seqs[i].x, seqs[i].n_frames, NULL, false, &o, NULL, &err))
             fail_msg("eval: %s", err.msg);
         cm[AFFECT_CV_ML][d->y[i] * N_EMOTIONS + o.ml]++;
         cm[AFFECT_CV_SVM][d->y[i] * N_EMOTIONS + o.svm]++;

@@ -95,7 +95,7 @@ static void assert_round_trip(const affect_motion *m)
     char *text = NULL;
     size_t len = 0;
     affect_error err;
-    affect_status st = affect_csv_write(m, &text, &len, &err);
+    affect_status st = affect_csv_write(m, &text, &len, NULL, &err);
     if (st)
         fail_msg("write failed: %s", err.msg);
     assert_int_equal(strlen(text), len);
@@ -620,7 +620,7 @@ static void test_write_format(void **state)
     char *text;
     size_t len;
     affect_error err;
-    assert_int_equal(affect_csv_write(m, &text, &len, &err), AFFECT_OK);
+    assert_int_equal(affect_csv_write(m, &text, &len, NULL, &err), AFFECT_OK);
     assert_string_equal(text, "Hips.x,Hips.y,Hips.z,\"a,\"\"b\"\".x\",\"a,\"\"b\"\".y\","
                               "\"a,\"\"b\"\".z\"\n"
                               "0.1,-0,1e-07,1,2.5,-3\n"
@@ -631,7 +631,7 @@ static void test_write_format(void **state)
     /* a non-finite value cannot be written */
     m->pos[4] = NAN;
     text = (char *)&text;
-    assert_int_equal(affect_csv_write(m, &text, &len, &err), AFFECT_ERR_FORMAT);
+    assert_int_equal(affect_csv_write(m, &text, &len, NULL, &err), AFFECT_ERR_FORMAT);
     assert_null(text);
     assert_string_equal(err.msg, "non-finite coordinate at frame 0, joint 1 (a,\"b\"), y");
     affect_motion_free(m);
@@ -744,7 +744,7 @@ static affect_status oom_write(void *ctx, affect_error *err)
 {
     csv_oom *c = ctx;
     c->out = NULL;
-    return affect_csv_write(c->m, &c->out, &c->out_len, err);
+    return affect_csv_write(c->m, &c->out, &c->out_len, NULL, err);
 }
 
 static void oom_write_finish(void *ctx, affect_status st)

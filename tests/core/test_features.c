@@ -62,7 +62,7 @@ static double *extract(const affect_features *f, const affect_motion *m, uint32_
 {
     double *x = NULL;
     affect_error err;
-    affect_status st = affect_features_extract(f, m, &x, n_frames, &err);
+    affect_status st = affect_features_extract(f, m, &x, n_frames, NULL, &err);
     if (st)
         fail_msg("extract: %s", err.msg);
     return x;
@@ -335,7 +335,7 @@ static void test_roles_and_skeleton(void **state)
     affect_motion *m = make_motion(0, 0, 0);
     double *x = NULL;
     uint32_t T;
-    assert_int_equal(affect_features_extract(f, m, &x, &T, &err), AFFECT_ERR_MISSING);
+    assert_int_equal(affect_features_extract(f, m, &x, &T, NULL, &err), AFFECT_ERR_MISSING);
     assert_string_equal(err.msg, "no joint of the motion has the head role (used by the model)");
     affect_features_free(f);
     const char *entries2[] = {"right_hand", "Chest", "pelvis"};
@@ -368,7 +368,7 @@ static void expect_extract_error(const affect_features *f, const affect_motion *
     double *x = NULL;
     uint32_t T = 0;
     affect_error err;
-    assert_int_equal(affect_features_extract(f, m, &x, &T, &err), AFFECT_ERR_MISSING);
+    assert_int_equal(affect_features_extract(f, m, &x, &T, NULL, &err), AFFECT_ERR_MISSING);
     assert_null(x);
     assert_string_equal(err.msg, msg);
 }
@@ -635,7 +635,7 @@ static affect_status oom_extract(void *ctx, affect_error *err)
     oom_ctx *c = ctx;
     uint32_t T;
     c->x = NULL;
-    affect_status st = affect_features_extract(c->f, c->m, &c->x, &T, err);
+    affect_status st = affect_features_extract(c->f, c->m, &c->x, &T, NULL, err);
     if (!st)
         st = affect_features_posture_motion(c->f, c->x, T, &c->posture, err);
     return st;

@@ -204,7 +204,7 @@ static double loglik_of(const params *p, const double *x, uint32_t T)
     affect_hmm *h = build(p);
     double ll;
     affect_error err;
-    assert_int_equal(affect_hmm_loglik(h, x, T, &ll, &err), AFFECT_OK);
+    assert_int_equal(affect_hmm_loglik(h, x, T, &ll, NULL, &err), AFFECT_OK);
     affect_hmm_free(h);
     assert_true(isfinite(ll));
     return ll;
@@ -297,8 +297,8 @@ static size_t check_model(params *p, const double *x, uint32_t T)
     size_t d = affect_fisher_dim(&p->cfg, AFFECT_FISHER_ALL);
     assert_true(d > 0 && d <= 512);
     double f[512], g[512], ll, ref;
-    assert_int_equal(affect_fisher_score(h, x, T, AFFECT_FISHER_ALL, f, &ll, &err), AFFECT_OK);
-    assert_int_equal(affect_hmm_loglik(h, x, T, &ref, &err), AFFECT_OK);
+    assert_int_equal(affect_fisher_score(h, x, T, AFFECT_FISHER_ALL, f, &ll, NULL, &err), AFFECT_OK);
+    assert_int_equal(affect_hmm_loglik(h, x, T, &ref, NULL, &err), AFFECT_OK);
     tu_assert_near(ll, ref, 1e-10 * fabs(ref));
     size_t zeros = 0;
     for (size_t i = 0; i < d; i++) {
@@ -315,7 +315,7 @@ static size_t check_model(params *p, const double *x, uint32_t T)
             continue;
         }
         assert_true(n > 0);
-        assert_int_equal(affect_fisher_score(h, x, T, bit, g, NULL, &err), AFFECT_OK);
+        assert_int_equal(affect_fisher_score(h, x, T, bit, g, NULL, NULL, &err), AFFECT_OK);
         assert_memory_equal(g, f + off, n * sizeof(double));
         off += n;
     }
@@ -327,7 +327,7 @@ static size_t check_model(params *p, const double *x, uint32_t T)
            nm = affect_fisher_dim(&p->cfg, AFFECT_FISHER_MEANS),
            nc = affect_fisher_dim(&p->cfg, AFFECT_FISHER_COVS);
     assert_int_equal(affect_fisher_dim(&p->cfg, mix), ns + nw + nc);
-    assert_int_equal(affect_fisher_score(h, x, T, mix, g, NULL, &err), AFFECT_OK);
+    assert_int_equal(affect_fisher_score(h, x, T, mix, g, NULL, NULL, &err), AFFECT_OK);
     assert_memory_equal(g, f, ns * sizeof(double));
     assert_memory_equal(g + ns, f + ns + nt, nw * sizeof(double));
     assert_memory_equal(g + ns + nw, f + ns + nt + nw + nm, nc * sizeof(double));
@@ -548,7 +548,7 @@ static void test_realistic(void **state)
     size_t d = affect_fisher_dim(&p.cfg, AFFECT_FISHER_ALL);
     assert_int_equal(d, 30317);
     double ll, ll2;
-    assert_int_equal(affect_fisher_score(h, big_x, BIG_T, AFFECT_FISHER_ALL, big_f, &ll, &err),
+    assert_int_equal(affect_fisher_score(h, big_x, BIG_T, AFFECT_FISHER_ALL, big_f, &ll, NULL, &err),
                      AFFECT_OK);
     assert_true(isfinite(ll));
     size_t nonzero = 0;
@@ -558,14 +558,14 @@ static void test_realistic(void **state)
     }
     assert_true(nonzero > d / 2);
     /* bit-identical a second time */
-    assert_int_equal(affect_fisher_score(h, big_x, BIG_T, AFFECT_FISHER_ALL, big_g, &ll2, &err),
+    assert_int_equal(affect_fisher_score(h, big_x, BIG_T, AFFECT_FISHER_ALL, big_g, &ll2, NULL, &err),
                      AFFECT_OK);
     assert_memory_equal(big_f, big_g, d * sizeof(double));
     assert_memory_equal(&ll, &ll2, sizeof ll);
     /* entries of the most visited component: a mean, a variance, a covariance, its weight, and
      * a transition */
     double *wts = big_g;
-    assert_int_equal(affect_fisher_score(h, big_x, BIG_T, AFFECT_FISHER_WEIGHTS, wts, NULL, &err),
+    assert_int_equal(affect_fisher_score(h, big_x, BIG_T, AFFECT_FISHER_WEIGHTS, wts, NULL, NULL, &err),
                      AFFECT_OK);
     size_t best = 0;
     for (size_t k = 1; k < BIG_N * BIG_M; k++)
@@ -606,8 +606,8 @@ static void test_deterministic(void **state)
     memset(a, 0, sizeof a);
     for (size_t i = 0; i < 200; i++)
         b[i] = NAN;
-    assert_int_equal(affect_fisher_score(h, x, 40, AFFECT_FISHER_ALL, a, NULL, &err), AFFECT_OK);
-    assert_int_equal(affect_fisher_score(h, x, 40, AFFECT_FISHER_ALL, b, NULL, &err), AFFECT_OK);
+    assert_int_equal(affect_fisher_score(h, x, 40, AFFECT_FISHER_ALL, a, NULL, NULL, &err), AFFECT_OK);
+    assert_int_equal(affect_fisher_score(h, x, 40, AFFECT_FISHER_ALL, b, NULL, NULL, &err), AFFECT_OK);
     assert_memory_equal(a, b, d * sizeof(double));
     assert_true(isnan(b[d])); /* nothing written past the end */
     affect_hmm_free(h);
@@ -628,35 +628,35 @@ static void test_errors(void **state)
     affect_error err;
     double x[6] = {0.1, 0.2, 0.3, 0.4, 0.5, 0.6}, f[64], ll = 7.0;
 
-    expect_msg(affect_fisher_score(h, x, 3, 0, f, &ll, &err), &err, AFFECT_ERR_INVALID, GROUPS_MSG);
-    expect_msg(affect_fisher_score(h, x, 3, 32, f, &ll, &err), &err, AFFECT_ERR_INVALID,
+    expect_msg(affect_fisher_score(h, x, 3, 0, f, &ll, NULL, &err), &err, AFFECT_ERR_INVALID, GROUPS_MSG);
+    expect_msg(affect_fisher_score(h, x, 3, 32, f, &ll, NULL, &err), &err, AFFECT_ERR_INVALID,
                GROUPS_MSG);
-    expect_msg(affect_fisher_score(h, x, 3, AFFECT_FISHER_ALL | 128, f, &ll, &err), &err,
+    expect_msg(affect_fisher_score(h, x, 3, AFFECT_FISHER_ALL | 128, f, &ll, NULL, &err), &err,
                AFFECT_ERR_INVALID, GROUPS_MSG);
-    expect_msg(affect_fisher_score(h, x, 3, AFFECT_FISHER_START, f, &ll, &err), &err,
+    expect_msg(affect_fisher_score(h, x, 3, AFFECT_FISHER_START, f, &ll, NULL, &err), &err,
                AFFECT_ERR_INVALID, "start scores need a model with a learned start");
-    expect_msg(affect_fisher_score(NULL, x, 3, AFFECT_FISHER_ALL, f, &ll, &err), &err,
+    expect_msg(affect_fisher_score(NULL, x, 3, AFFECT_FISHER_ALL, f, &ll, NULL, &err), &err,
                AFFECT_ERR_INVALID, "no model");
-    expect_msg(affect_fisher_score(h, x, 3, AFFECT_FISHER_ALL, NULL, &ll, &err), &err,
+    expect_msg(affect_fisher_score(h, x, 3, AFFECT_FISHER_ALL, NULL, &ll, NULL, &err), &err,
                AFFECT_ERR_INVALID, "no room for the score");
-    expect_msg(affect_fisher_score(h, x, 0, AFFECT_FISHER_ALL, f, &ll, &err), &err,
+    expect_msg(affect_fisher_score(h, x, 0, AFFECT_FISHER_ALL, f, &ll, NULL, &err), &err,
                AFFECT_ERR_INVALID, "the sequence has no frames");
-    expect_msg(affect_fisher_score(h, NULL, 3, AFFECT_FISHER_ALL, f, &ll, &err), &err,
+    expect_msg(affect_fisher_score(h, NULL, 3, AFFECT_FISHER_ALL, f, &ll, NULL, &err), &err,
                AFFECT_ERR_INVALID, "the sequence has no data");
     x[5] = NAN;
-    expect_msg(affect_fisher_score(h, x, 3, AFFECT_FISHER_ALL, f, &ll, &err), &err,
+    expect_msg(affect_fisher_score(h, x, 3, AFFECT_FISHER_ALL, f, &ll, NULL, &err), &err,
                AFFECT_ERR_INVALID, "frame 2: value 1 is not finite");
     /* every density underflows: probability 0, the posteriors' error passed through */
     x[5] = 1e200;
-    expect_msg(affect_fisher_score(h, x, 3, AFFECT_FISHER_ALL, f, &ll, &err), &err,
+    expect_msg(affect_fisher_score(h, x, 3, AFFECT_FISHER_ALL, f, &ll, NULL, &err), &err,
                AFFECT_ERR_RANGE, "the sequence has probability 0 under the model: no posteriors");
     assert_true(ll == 7.0); /* untouched on error */
     /* with a fixed start the start bit alongside others selects nothing more */
     x[5] = 0.6;
     double g[64];
-    assert_int_equal(affect_fisher_score(h, x, 3, AFFECT_FISHER_ALL, f, NULL, &err), AFFECT_OK);
+    assert_int_equal(affect_fisher_score(h, x, 3, AFFECT_FISHER_ALL, f, NULL, NULL, &err), AFFECT_OK);
     assert_int_equal(
-        affect_fisher_score(h, x, 3, AFFECT_FISHER_ALL & ~AFFECT_FISHER_START, g, &ll, &err),
+        affect_fisher_score(h, x, 3, AFFECT_FISHER_ALL & ~AFFECT_FISHER_START, g, &ll, NULL, &err),
         AFFECT_OK);
     assert_memory_equal(f, g, affect_fisher_dim(&p.cfg, AFFECT_FISHER_ALL) * sizeof(double));
     assert_true(isfinite(ll));
@@ -697,7 +697,7 @@ typedef struct oom_ctx {
 static affect_status oom_score(void *ctx, affect_error *err)
 {
     oom_ctx *c = ctx;
-    return affect_fisher_score(c->h, c->x, c->T, c->groups, c->out, NULL, err);
+    return affect_fisher_score(c->h, c->x, c->T, c->groups, c->out, NULL, NULL, err);
 }
 
 static void test_out_of_memory(void **state)

@@ -422,7 +422,7 @@ static void test_denormalize_round_trip(void **state)
     assert_int_equal(affect_features_create(&fo, m, &f, &err), AFFECT_OK);
     double *x = NULL;
     uint32_t T = 0;
-    assert_int_equal(affect_features_extract(f, m, &x, &T, &err), AFFECT_OK);
+    assert_int_equal(affect_features_extract(f, m, &x, &T, NULL, &err), AFFECT_OK);
 
     size_t n = (size_t)T * m->n_joints;
     double *y = test_malloc(n * 3 * sizeof *y);

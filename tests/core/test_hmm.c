@@ -356,13 +356,13 @@ static void test_brute_force(void **state)
             affect_error err;
             double ll, lp, ll2, gamma[8 * 9], xi[9];
             int32_t path[8];
-            assert_int_equal(affect_hmm_loglik(h, x, T, &ll, &err), AFFECT_OK);
+            assert_int_equal(affect_hmm_loglik(h, x, T, &ll, NULL, &err), AFFECT_OK);
             tu_assert_near(ll, b.loglik, 1e-10 * fabs(b.loglik) + 1e-12);
-            assert_int_equal(affect_hmm_viterbi(h, x, T, path, &lp, &err), AFFECT_OK);
+            assert_int_equal(affect_hmm_viterbi(h, x, T, path, &lp, NULL, &err), AFFECT_OK);
             tu_assert_near(lp, b.vit_logprob, 1e-10 * fabs(b.vit_logprob) + 1e-12);
             for (uint32_t t = 0; t < T; t++)
                 assert_int_equal(path[t], b.vit_path[t]);
-            assert_int_equal(affect_hmm_posteriors(h, x, T, gamma, xi, &ll2, &err), AFFECT_OK);
+            assert_int_equal(affect_hmm_posteriors(h, x, T, gamma, xi, &ll2, NULL, &err), AFFECT_OK);
             tu_assert_near(ll2, b.loglik, 1e-10 * fabs(b.loglik) + 1e-12);
             for (uint32_t e = 0; e < T * N * M; e++)
                 tu_assert_near(gamma[e], b.gamma[e], 1e-10);
@@ -473,7 +473,7 @@ static void recover(affect_hmm_topology top)
     affect_error err;
     for (int s = 0; s < REC_SEQS; s++) {
         double ll;
-        assert_int_equal(affect_hmm_loglik(h, x[s], REC_T, &ll, &err), AFFECT_OK);
+        assert_int_equal(affect_hmm_loglik(h, x[s], REC_T, &ll, NULL, &err), AFFECT_OK);
         total += ll;
     }
     assert_true(rep.loglik[rep.iterations] == total);
@@ -521,7 +521,7 @@ static void recover(affect_hmm_topology top)
     int32_t truth_states[400], path[400];
     double xs[400 * 2], lp;
     sample(truth, &rng, 400, xs, truth_states);
-    assert_int_equal(affect_hmm_viterbi(h, xs, 400, path, &lp, &err), AFFECT_OK);
+    assert_int_equal(affect_hmm_viterbi(h, xs, 400, path, &lp, NULL, &err), AFFECT_OK);
     int agree = 0;
     for (int t = 0; t < 400; t++)
         agree += path[t] == perm[truth_states[t]];
@@ -629,7 +629,7 @@ static void test_wide_full(void **state)
         }
     }
     double ll;
-    assert_int_equal(affect_hmm_loglik(h, x, T, &ll, &err), AFFECT_OK);
+    assert_int_equal(affect_hmm_loglik(h, x, T, &ll, NULL, &err), AFFECT_OK);
     tu_assert_near(ll, ref, 1e-13 * fabs(ref)); /* 8e-12 without the centring */
     affect_hmm_free(h);
 }
@@ -671,7 +671,7 @@ static void test_long_sequence(void **state)
                          AFFECT_OK);
         sample(iid, &rng, LONG_T, x, NULL);
         double ll, want = 0.0;
-        assert_int_equal(affect_hmm_loglik(iid, x, LONG_T, &ll, &err), AFFECT_OK);
+        assert_int_equal(affect_hmm_loglik(iid, x, LONG_T, &ll, NULL, &err), AFFECT_OK);
         for (int t = 0; t < LONG_T; t++) {
             double terms[6], mx = -INFINITY, s = 0.0;
             for (int k = 0; k < 6; k++) {
@@ -700,10 +700,10 @@ static void test_long_sequence(void **state)
     affect_hmm *truth = truth_model();
     double ll_long, ll_short;
     sample(truth, &rng, LONG_T, x, NULL);
-    assert_int_equal(affect_hmm_loglik(truth, x, LONG_T, &ll_long, &err), AFFECT_OK);
+    assert_int_equal(affect_hmm_loglik(truth, x, LONG_T, &ll_long, NULL, &err), AFFECT_OK);
     assert_true(isfinite(ll_long));
     sample(truth, &rng, SHORT_T, x, NULL);
-    assert_int_equal(affect_hmm_loglik(truth, x, SHORT_T, &ll_short, &err), AFFECT_OK);
+    assert_int_equal(affect_hmm_loglik(truth, x, SHORT_T, &ll_short, NULL, &err), AFFECT_OK);
     tu_assert_near(ll_long / LONG_T, ll_short / SHORT_T, 0.2);
     free(x);
     affect_hmm_free(truth);
@@ -724,8 +724,8 @@ static void test_posteriors(void **state)
     sample(truth, &rng, T, x, NULL);
     affect_error err;
     double ll, ll2;
-    assert_int_equal(affect_hmm_posteriors(truth, x, T, gamma, xi, &ll, &err), AFFECT_OK);
-    assert_int_equal(affect_hmm_loglik(truth, x, T, &ll2, &err), AFFECT_OK);
+    assert_int_equal(affect_hmm_posteriors(truth, x, T, gamma, xi, &ll, NULL, &err), AFFECT_OK);
+    assert_int_equal(affect_hmm_loglik(truth, x, T, &ll2, NULL, &err), AFFECT_OK);
     assert_true(ll == ll2); /* the same blocks, the same recursion */
     for (int t = 0; t < T; t++) {
         double s = 0.0;
@@ -747,9 +747,9 @@ static void test_posteriors(void **state)
         tu_assert_near(a, g, 1e-9 * T);
     }
     /* either output may be NULL */
-    assert_int_equal(affect_hmm_posteriors(truth, x, T, NULL, NULL, &ll2, &err), AFFECT_OK);
+    assert_int_equal(affect_hmm_posteriors(truth, x, T, NULL, NULL, &ll2, NULL, &err), AFFECT_OK);
     assert_true(ll2 == ll);
-    assert_int_equal(affect_hmm_posteriors(truth, x, T, NULL, xi, NULL, &err), AFFECT_OK);
+    assert_int_equal(affect_hmm_posteriors(truth, x, T, NULL, xi, NULL, NULL, &err), AFFECT_OK);
     free(x);
     free(gamma);
     affect_hmm_free(truth);
@@ -822,7 +822,7 @@ static void test_mstep_sharp(void **state)
     for (int pass = 0; pass < 2; pass++)
         for (uint32_t s = 0; s < S; s++) {
             double ll;
-            assert_int_equal(affect_hmm_posteriors(h0, seqs[s].x, T, gamma, xi, &ll, &err),
+            assert_int_equal(affect_hmm_posteriors(h0, seqs[s].x, T, gamma, xi, &ll, NULL, &err),
                              AFFECT_OK);
             for (uint32_t t = 0; t < T; t++)
                 for (uint32_t k = 0; k < K; k++) {
@@ -934,7 +934,7 @@ static void test_degenerate(void **state)
         assert_true(v >= cfg.reg * 0.999 && v <= cfg.reg * 10.0 + 1e-9);
     }
     double ll;
-    assert_int_equal(affect_hmm_loglik(h, x[0], 120, &ll, &err), AFFECT_OK);
+    assert_int_equal(affect_hmm_loglik(h, x[0], 120, &ll, NULL, &err), AFFECT_OK);
     assert_true(isfinite(ll));
     affect_hmm_free(h);
     cfg.cov = AFFECT_HMM_DIAG;
@@ -1027,7 +1027,7 @@ static void test_reseed(void **state)
     tu_assert_near(w[0] + w[1] + w[2], 1.0, 1e-12);
     double ll;
     affect_error err;
-    assert_int_equal(affect_hmm_loglik(h, x, 100, &ll, &err), AFFECT_OK);
+    assert_int_equal(affect_hmm_loglik(h, x, 100, &ll, NULL, &err), AFFECT_OK);
     assert_true(isfinite(ll));
     affect_hmm_free(h);
 }
@@ -1050,14 +1050,14 @@ static void test_impossible(void **state)
         x[t] = t < 2 ? 10.0 * t : 20.0;
     double ll, lp, gamma[1200], xi[9];
     int32_t path[400];
-    assert_int_equal(affect_hmm_loglik(h, x, 400, &ll, &err), AFFECT_OK);
+    assert_int_equal(affect_hmm_loglik(h, x, 400, &ll, NULL, &err), AFFECT_OK);
     assert_true(isfinite(ll));
-    assert_int_equal(affect_hmm_viterbi(h, x, 400, path, &lp, &err), AFFECT_OK);
+    assert_int_equal(affect_hmm_viterbi(h, x, 400, path, &lp, NULL, &err), AFFECT_OK);
     assert_int_equal(path[0], 0);
     assert_int_equal(path[1], 1);
     assert_int_equal(path[2], 2);
     assert_int_equal(path[399], 2);
-    assert_int_equal(affect_hmm_posteriors(h, x, 400, gamma, xi, &ll, &err), AFFECT_OK);
+    assert_int_equal(affect_hmm_posteriors(h, x, 400, gamma, xi, &ll, NULL, &err), AFFECT_OK);
     for (int k = 0; k < 1200; k++)
         assert_false(isnan(gamma[k]));
     tu_assert_near(gamma[0], 1.0, 1e-12);
@@ -1067,11 +1067,11 @@ static void test_impossible(void **state)
     tu_assert_near(xi[0] + xi[1] + xi[2] + xi[4] + xi[5] + xi[8], 399.0, 1e-9);
     /* a value so large that every density underflows: −∞, and no posteriors */
     double far[3] = {0.0, 1e200, 20.0};
-    assert_int_equal(affect_hmm_loglik(h, far, 3, &ll, &err), AFFECT_OK);
+    assert_int_equal(affect_hmm_loglik(h, far, 3, &ll, NULL, &err), AFFECT_OK);
     assert_true(ll == -INFINITY);
-    assert_int_equal(affect_hmm_viterbi(h, far, 3, path, &lp, &err), AFFECT_OK);
+    assert_int_equal(affect_hmm_viterbi(h, far, 3, path, &lp, NULL, &err), AFFECT_OK);
     assert_true(lp == -INFINITY);
-    expect_msg(affect_hmm_posteriors(h, far, 3, gamma, xi, &ll, &err), &err, AFFECT_ERR_RANGE,
+    expect_msg(affect_hmm_posteriors(h, far, 3, gamma, xi, &ll, NULL, &err), &err, AFFECT_ERR_RANGE,
                "the sequence has probability 0 under the model: no posteriors");
     /* mean durations: 1/(1 − a_ii) */
     double per[3];
@@ -1182,19 +1182,19 @@ static void test_train_errors(void **state)
     double ll, g[6], xi[9];
     int32_t path[3];
     double y[6] = {0, 0, 1, 1, 2, 2};
-    expect_msg(affect_hmm_loglik(h, y, 0, &ll, &err), &err, AFFECT_ERR_INVALID,
+    expect_msg(affect_hmm_loglik(h, y, 0, &ll, NULL, &err), &err, AFFECT_ERR_INVALID,
                "the sequence has no frames");
-    expect_msg(affect_hmm_loglik(h, NULL, 3, &ll, &err), &err, AFFECT_ERR_INVALID,
+    expect_msg(affect_hmm_loglik(h, NULL, 3, &ll, NULL, &err), &err, AFFECT_ERR_INVALID,
                "the sequence has no data");
     y[5] = NAN;
-    expect_msg(affect_hmm_loglik(h, y, 3, &ll, &err), &err, AFFECT_ERR_INVALID,
+    expect_msg(affect_hmm_loglik(h, y, 3, &ll, NULL, &err), &err, AFFECT_ERR_INVALID,
                "frame 2: value 1 is not finite");
-    expect_msg(affect_hmm_viterbi(h, y, 3, path, &ll, &err), &err, AFFECT_ERR_INVALID,
+    expect_msg(affect_hmm_viterbi(h, y, 3, path, &ll, NULL, &err), &err, AFFECT_ERR_INVALID,
                "frame 2: value 1 is not finite");
-    expect_msg(affect_hmm_posteriors(h, y, 3, g, xi, &ll, &err), &err, AFFECT_ERR_INVALID,
+    expect_msg(affect_hmm_posteriors(h, y, 3, g, xi, &ll, NULL, &err), &err, AFFECT_ERR_INVALID,
                "frame 2: value 1 is not finite");
     y[5] = 2;
-    expect_msg(affect_hmm_viterbi(h, y, 3, NULL, &ll, &err), &err, AFFECT_ERR_INVALID,
+    expect_msg(affect_hmm_viterbi(h, y, 3, NULL, &ll, NULL, &err), &err, AFFECT_ERR_INVALID,
                "no room for the path");
     affect_hmm_free(h);
 }
@@ -1376,10 +1376,10 @@ static affect_status oom_score(void *ctx, affect_error *err)
     double ll, g[40 * 6], xi[9];
     int32_t path[40];
     if (c->what == 0)
-        return affect_hmm_loglik(c->h, c->x, c->T, &ll, err);
+        return affect_hmm_loglik(c->h, c->x, c->T, &ll, NULL, err);
     if (c->what == 1)
-        return affect_hmm_viterbi(c->h, c->x, c->T, path, &ll, err);
-    return affect_hmm_posteriors(c->h, c->x, c->T, g, xi, &ll, err);
+        return affect_hmm_viterbi(c->h, c->x, c->T, path, &ll, NULL, err);
+    return affect_hmm_posteriors(c->h, c->x, c->T, g, xi, &ll, NULL, err);
 }
 
 static affect_hmm *oom_built;

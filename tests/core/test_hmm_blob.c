@@ -263,7 +263,7 @@ static void test_trained_round_trip(void **state)
         if (!f)
             assert_int_equal(affect_features_create(&opt, m, &f, &err), AFFECT_OK);
         uint32_t T;
-        assert_int_equal(affect_features_extract(f, m, &xs[k], &T, &err), AFFECT_OK);
+        assert_int_equal(affect_features_extract(f, m, &xs[k], &T, NULL, &err), AFFECT_OK);
         seqs[k].x = xs[k];
         seqs[k].n_frames = T;
         affect_motion_free(m);
@@ -288,8 +288,8 @@ static void test_trained_round_trip(void **state)
         affect_features *fb = NULL;
         decode_ok(blob, size, &back, &fb);
         double a, b;
-        assert_int_equal(affect_hmm_loglik(h, xs[0], seqs[0].n_frames, &a, &err), AFFECT_OK);
-        assert_int_equal(affect_hmm_loglik(back, xs[0], seqs[0].n_frames, &b, &err), AFFECT_OK);
+        assert_int_equal(affect_hmm_loglik(h, xs[0], seqs[0].n_frames, &a, NULL, &err), AFFECT_OK);
+        assert_int_equal(affect_hmm_loglik(back, xs[0], seqs[0].n_frames, &b, NULL, &err), AFFECT_OK);
         assert_memory_equal(&a, &b, sizeof a);
         affect_free(blob);
         affect_hmm_free(back);

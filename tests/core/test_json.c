@@ -24,7 +24,7 @@ static affect_json_doc *parse_ok(const char *text, size_t len)
     affect_json_doc *doc = NULL;
     affect_error err;
     affect_error_clear(&err);
-    affect_status st = affect_json_parse(text, len, &doc, &err);
+    affect_status st = affect_json_parse(text, len, &doc, NULL, &err);
     if (st != AFFECT_OK)
         fail_msg("parsing <%.60s> failed: %s", text, err.msg);
     assert_non_null(doc);
@@ -38,7 +38,7 @@ static void expect_json_error(const char *text, size_t len, affect_status status
     affect_json_doc *doc = (affect_json_doc *)&doc; /* must be reset to NULL */
     affect_error err;
     affect_error_clear(&err);
-    affect_status st = affect_json_parse(text, len, &doc, &err);
+    affect_status st = affect_json_parse(text, len, &doc, NULL, &err);
     if (st == AFFECT_OK)
         fail_msg("<%.60s> was accepted, expected \"%s\"", text, msg);
     assert_null(doc);
@@ -507,7 +507,7 @@ static affect_motion *from_json_ok(const char *text)
     affect_motion *m = NULL;
     affect_error err;
     affect_error_clear(&err);
-    if (affect_motion_from_json(text, strlen(text), &m, &err) != AFFECT_OK)
+    if (affect_motion_from_json(text, strlen(text), &m, NULL, &err) != AFFECT_OK)
         fail_msg("from_json <%.80s>: %s", text, err.msg);
     assert_non_null(m);
     return m;
@@ -518,7 +518,7 @@ static void expect_motion_error(const char *text, affect_status status, const ch
     affect_motion *m = (affect_motion *)&m;
     affect_error err;
     affect_error_clear(&err);
-    affect_status st = affect_motion_from_json(text, strlen(text), &m, &err);
+    affect_status st = affect_motion_from_json(text, strlen(text), &m, NULL, &err);
     if (st == AFFECT_OK)
         fail_msg("<%.80s> was accepted, expected \"%s\"", text, msg);
     assert_null(m);
@@ -545,11 +545,11 @@ static void test_motion_round_trip(void **state)
 
     char *text = NULL;
     size_t len = 0;
-    assert_int_equal(affect_motion_to_json(m, &text, &len, NULL), AFFECT_OK);
+    assert_int_equal(affect_motion_to_json(m, &text, &len, NULL, NULL), AFFECT_OK);
     assert_int_equal(len, strlen(text));
     affect_motion *back = NULL;
     affect_error err;
-    if (affect_motion_from_json(text, len, &back, &err) != AFFECT_OK)
+    if (affect_motion_from_json(text, len, &back, NULL, &err) != AFFECT_OK)
         fail_msg("%s\n%s", err.msg, text);
 
     assert_int_equal(back->n_frames, 3);
@@ -565,7 +565,7 @@ static void test_motion_round_trip(void **state)
 
     /* writing the result again gives the same text */
     char *again = NULL;
-    assert_int_equal(affect_motion_to_json(back, &again, NULL, NULL), AFFECT_OK);
+    assert_int_equal(affect_motion_to_json(back, &again, NULL, NULL, NULL), AFFECT_OK);
     assert_string_equal(again, text);
     affect_free(again);
     affect_free(text);
@@ -584,7 +584,7 @@ static void test_motion_exact_output(void **state)
     memcpy(m->pos, pos, sizeof pos);
     char *text = NULL;
     size_t len = 0;
-    assert_int_equal(affect_motion_to_json(m, &text, &len, NULL), AFFECT_OK);
+    assert_int_equal(affect_motion_to_json(m, &text, &len, NULL, NULL), AFFECT_OK);
     const char *want = "{\"fps\":30,\"unit\":\"cm\",\"joints\":[\"Hips\",\"Left\\\"Foot\"],"
                        "\"parents\":[-1,0],\"frames\":[[[0,1.5,-2],[0.1,100,1e-07]],"
                        "[[-0,3.25,1e+20],[-1,16777216,0.3]]]}";
@@ -596,7 +596,7 @@ static void test_motion_exact_output(void **state)
     m->unit[0] = '\0';
     m->fps = 29.97;
     m->parents[1] = -1;
-    assert_int_equal(affect_motion_to_json(m, &text, NULL, NULL), AFFECT_OK);
+    assert_int_equal(affect_motion_to_json(m, &text, NULL, NULL, NULL), AFFECT_OK);
     assert_string_equal(text, "{\"fps\":29.97,\"joints\":[\"Hips\",\"Left\\\"Foot\"],"
                               "\"parents\":[-1,-1],\"frames\":[[[0,1.5,-2],[0.1,100,1e-07]],"
                               "[[-0,3.25,1e+20],[-1,16777216,0.3]]]}");
@@ -740,7 +740,7 @@ static void test_motion_errors(void **state)
     const char *tie = HEAD "\"frames\":[[[0,0,0],[3.4028235677973366e38,0,0]]]}";
     affect_motion *m = NULL;
     affect_error err;
-    assert_int_equal(affect_motion_from_json(tie, strlen(tie), &m, &err), R);
+    assert_int_equal(affect_motion_from_json(tie, strlen(tie), &m, NULL, &err), R);
     assert_null(m);
     assert_true(strncmp(err.msg, "frames[0][1][0]: 3.40282356779733", 33) == 0);
 #undef HEAD
@@ -791,7 +791,7 @@ static void test_motion_sizes(void **state)
     affect_set_allocator(&largest_allocator);
     affect_motion *m = (affect_motion *)&m;
     affect_error err;
-    affect_status st = affect_motion_from_json(text, len, &m, &err);
+    affect_status st = affect_motion_from_json(text, len, &m, NULL, &err);
     affect_set_allocator(NULL);
     assert_int_equal(st, F);
     assert_null(m);
@@ -910,7 +910,7 @@ static affect_status oom_from_json(void *ctx, affect_error *err)
 {
     affect_motion **m = ctx;
     *m = NULL;
-    return affect_motion_from_json(oom_motion, strlen(oom_motion), m, err);
+    return affect_motion_from_json(oom_motion, strlen(oom_motion), m, NULL, err);
 }
 
 static void oom_from_json_finish(void *ctx, affect_status st)
@@ -942,7 +942,7 @@ static affect_status oom_parse(void *ctx, affect_error *err)
 {
     json_oom *j = ctx;
     j->doc = NULL;
-    return affect_json_parse(j->text, j->len, &j->doc, err);
+    return affect_json_parse(j->text, j->len, &j->doc, NULL, err);
 }
 
 static void oom_parse_finish(void *ctx, affect_status st)
@@ -983,7 +983,7 @@ static affect_status oom_to_json(void *ctx, affect_error *err)
 {
     json_write_oom *w = ctx;
     w->text = NULL;
-    return affect_motion_to_json(w->m, &w->text, NULL, err);
+    return affect_motion_to_json(w->m, &w->text, NULL, NULL, err);
 }
 
 static void oom_to_json_finish(void *ctx, affect_status st)

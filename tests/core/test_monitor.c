@@ -43,6 +43,9 @@
 #include "affect/crossval.h"
 #include "affect/generate.h"
 #include "affect/hmm_blob.h"
+#include "affect/io.h"
+#include "affect/laban.h"
+#include "affect/skeleton.h"
 #include "affect/monitor.h"
 #include "affect/rmlr.h"
 #include "affect/rng.h"
@@ -303,7 +306,7 @@ static void dataset_load(dataset *d, uint32_t n_seeds, const char *const *joints
                 }
                 assert_true(d->n < MAX_MOTIONS);
                 uint32_t i = d->n++;
-                if (affect_features_extract(d->feat, m, &d->x[i], &d->seqs[i].n_frames, &err))
+                if (affect_features_extract(d->feat, m, &d->x[i], &d->seqs[i].n_frames, NULL, &err))
                     fail_msg("extract: %s", err.msg);
                 d->seqs[i].x = d->x[i];
                 d->y[i] = e;
@@ -459,6 +462,146 @@ static void test_dtw_stops(void **state)
     affect_status st = affect_dtw_distance(a, b, &dist, &mon, &err);
     double t1 = now_s(), c1 = cpu_s();
     check_stopped("affect_dtw_distance, stop at 0.3 s", &w, st, &err, t1, c1, 1, base, true);
+}
+
+/* The calls on one long motion (a walk at 20,000 fps, 123,140 frames): each polls as it reads
+ * the frames, so it stops soon after the stop comes due, here at the second poll (10-20 ms in,
+ * the calls run for 0.1 s to minutes uninterrupted). */
+typedef enum one_call {
+    ONE_LOGLIK, ONE_VITERBI, ONE_FISHER, ONE_LABAN, ONE_RIGID, ONE_IK, ONE_BVH_WRITE,
+    ONE_BVH_PARSE, ONE_JSON_WRITE, ONE_JSON_PARSE, ONE_CSV_WRITE, ONE_CSV_PARSE, ONE_N
+} one_call;
+
+static const char *const ONE_NAMES[ONE_N] = {
+    "affect_hmm_loglik", "affect_hmm_viterbi", "affect_fisher_score", "affect_laban_vector",
+    "affect_motion_rigid", "affect_motion_ik", "affect_bvh_write", "affect_bvh_parse",
+    "affect_motion_to_json", "affect_motion_from_json", "affect_csv_write", "affect_csv_parse"};
+
+static affect_status one_run(one_call k, const affect_motion *m, const affect_hmm *h,
+                             const double *x, const affect_motion *sk, const char *text,
+                             size_t len, affect_monitor *mon, affect_error *err)
+{
+    affect_status st = AFFECT_OK;
+    double ll;
+    char *out = NULL;
+    size_t n = 0;
+    affect_motion *r = NULL;
+    switch (k) {
+    case ONE_LOGLIK: return affect_hmm_loglik(h, x, m->n_frames, &ll, mon, err);
+    case ONE_VITERBI: {
+        int32_t *path = malloc(sizeof *path * m->n_frames);
+        assert_non_null(path);
+        st = affect_hmm_viterbi(h, x, m->n_frames, path, &ll, mon, err);
+        free(path);
+        return st;
+    }
+    case ONE_FISHER: {
+        size_t D = affect_fisher_dim(affect_hmm_get_config(h), AFFECT_FISHER_ALL);
+        double *f = malloc(sizeof *f * D);
+        assert_non_null(f);
+        st = affect_fisher_score(h, x, m->n_frames, AFFECT_FISHER_ALL, f, &ll, mon, err);
+        free(f);
+        return st;
+    }
+    case ONE_LABAN: {
+        affect_laban_options lo;
+        affect_laban_options_default(&lo);
+        lo.monitor = mon;
+        affect_roles roles;
+        affect_roles_resolve(m, &roles);
+        double v[AFFECT_LABAN_N];
+        return affect_laban_vector(m, &roles, &lo, v, err);
+    }
+    case ONE_RIGID:
+    case ONE_IK: {
+        affect_ik_options io;
+        affect_ik_options_default(&io);
+        io.rigid.monitor = mon;
+        st = k == ONE_RIGID ? affect_motion_rigid(m, &io.rigid, &r, err)
+                            : affect_motion_ik(m, &io, &r, err);
+        break;
+    }
+    case ONE_BVH_WRITE: {
+        affect_bvh_write_options bo;
+        affect_bvh_write_options_default(&bo);
+        bo.monitor = mon;
+        st = affect_bvh_write(sk, &bo, &out, &n, err);
+        break;
+    }
+    case ONE_BVH_PARSE: {
+        affect_bvh_options bo = {1.0, NULL, 0, mon};
+        st = affect_bvh_parse(text, len, &bo, &r, err);
+        break;
+    }
+    case ONE_JSON_WRITE: st = affect_motion_to_json(m, &out, &n, mon, err); break;
+    case ONE_JSON_PARSE: st = affect_motion_from_json(text, len, &r, mon, err); break;
+    case ONE_CSV_WRITE: st = affect_csv_write(m, &out, &n, mon, err); break;
+    default: {
+        affect_csv_options co;
+        affect_csv_options_default(&co);
+        co.monitor = mon;
+        st = affect_csv_parse(text, len, m->fps, &co, &r, err);
+    }
+    }
+    affect_free(out);
+    affect_motion_free(r);
+    return st;
+}
+
+static void test_one_motion_calls_stop(void **state)
+{
+    (void)state;
+    dataset *d = &S.d;
+    dataset_load(d, 1, NULL, 0, false); /* 16 motions, 78 dimensions: the model */
+    affect_hmm_config cfg;
+    big_hmm_config(&cfg, d);
+    cfg.max_iter = 1;
+    affect_error err;
+    if (affect_hmm_train(&cfg, d->seqs, d->n, &S.h0, &err))
+        fail_msg("train: %s", err.msg);
+    affect_motion *walk = long_walk("sad", 1, 1000);
+    S.a = walk;
+    if (affect_motion_resample(walk, 20000, &S.b, &err))
+        fail_msg("resample: %s", err.msg);
+    const affect_motion *m = S.b;
+    assert_int_equal(affect_features_dim(d->feat), 78);
+    double *x = NULL; /* the positions as observations */
+    uint32_t T = 0;
+    if (affect_features_extract(d->feat, m, &x, &T, NULL, &err))
+        fail_msg("extract: %s", err.msg);
+    affect_motion *sk = NULL;
+    if (affect_motion_ik(walk, NULL, &sk, &err))
+        fail_msg("ik: %s", err.msg);
+    affect_motion_free(S.a);
+    S.a = NULL;
+    if (affect_motion_resample(sk, 20000, &S.a, &err))
+        fail_msg("resample: %s", err.msg);
+    affect_motion_free(sk);
+    printf("    %u frames x %u joints\n", m->n_frames, m->n_joints);
+    for (int k = 0; k < ONE_N; k++) {
+        char *text = NULL;
+        size_t len = 0;
+        if (k == ONE_BVH_PARSE)
+            assert_int_equal(affect_bvh_write(S.a, NULL, &text, &len, &err), AFFECT_OK);
+        else if (k == ONE_JSON_PARSE)
+            assert_int_equal(affect_motion_to_json(m, &text, &len, NULL, &err), AFFECT_OK);
+        else if (k == ONE_CSV_PARSE)
+            assert_int_equal(affect_csv_write(m, &text, &len, NULL, &err), AFFECT_OK);
+        watch w;
+        watch_init(&w);
+        affect_monitor mon;
+        monitor_on(&mon, &w);
+        w.stop_after = 2;
+        long base = atomic_load(&live_blocks);
+        affect_error_clear(&err);
+        affect_status st = one_run((one_call)k, m, S.h0, x, S.a, text, len, &mon, &err);
+        double t1 = now_s(), c1 = cpu_s();
+        char name[64];
+        snprintf(name, sizeof name, "%s, stop at the 2nd poll", ONE_NAMES[k]);
+        check_stopped(name, &w, st, &err, t1, c1, 1, base, false);
+        affect_free(text);
+    }
+    affect_free(x);
 }
 
 static void rmlr_stops(uint32_t threads)
@@ -830,6 +973,7 @@ int main(int argc, char **argv)
         cmocka_unit_test_teardown(test_monitor_basics, teardown),
         cmocka_unit_test_teardown(test_hmm_train_stops, teardown),
         cmocka_unit_test_teardown(test_dtw_stops, teardown),
+        cmocka_unit_test_teardown(test_one_motion_calls_stop, teardown),
         cmocka_unit_test_teardown(test_rmlr_cv_stops_1, teardown),
         cmocka_unit_test_teardown(test_rmlr_cv_stops_2, teardown),
         cmocka_unit_test_teardown(test_classifier_train_stops_1, teardown),

@@ -113,7 +113,7 @@ static affect_motion *parse_fixture_bvh(void)
 {
     affect_motion *m = NULL;
     affect_error err;
-    affect_bvh_options opt = {1.0, "cm", 0};
+    affect_bvh_options opt = {1.0, "cm", 0, NULL};
     if (affect_bvh_parse(fixture_bvh, sizeof fixture_bvh - 1, &opt, &m, &err) != AFFECT_OK)
         fail_msg("fixture BVH: %s", err.msg);
     return m;

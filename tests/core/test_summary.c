@@ -67,7 +67,7 @@ static void test_walking_straight(void **state)
     affect_motion *m = make_body(2.0, 0.0);
     double v[AFFECT_SUMMARY_N];
     affect_error err;
-    assert_int_equal(affect_motion_summary(m, 1, v, &err), AFFECT_OK);
+    assert_int_equal(affect_motion_summary(m, 1, v, NULL, &err), AFFECT_OK);
     tu_assert_near(get(v, "duration"), 1.1, 1e-12);
     tu_assert_near(get(v, "root_speed"), 2.0 / 0.5, 1e-5); /* 2 m/s in arms of 0.5 m */
     tu_assert_near(get(v, "root_speed_p90"), 4.0, 1e-5);
@@ -95,7 +95,7 @@ static void test_turning_in_place(void **state)
     affect_motion *m = make_body(0.0, 0.1);
     double v[AFFECT_SUMMARY_N];
     affect_error err;
-    assert_int_equal(affect_motion_summary(m, 1, v, &err), AFFECT_OK);
+    assert_int_equal(affect_motion_summary(m, 1, v, NULL, &err), AFFECT_OK);
     tu_assert_near(get(v, "turn_rate"), 0.1 * 10.0, 1e-5);
     tu_assert_near(get(v, "net_turn"), 0.1 * (T - 1), 1e-5);
     tu_assert_near(get(v, "root_speed"), 0.0, 1e-5);
@@ -116,8 +116,8 @@ static void test_descriptors(void **state)
     double s[AFFECT_SUMMARY_N], d[AFFECT_SUMMARY_N + AFFECT_LABAN_N],
         e[AFFECT_SUMMARY_N + AFFECT_LABAN_N];
     affect_error err;
-    assert_int_equal(affect_motion_summary(m, 1, s, &err), AFFECT_OK);
-    assert_int_equal(affect_descriptors(AFFECT_DESC_ALL, m, 1, d, &err), AFFECT_OK);
+    assert_int_equal(affect_motion_summary(m, 1, s, NULL, &err), AFFECT_OK);
+    assert_int_equal(affect_descriptors(AFFECT_DESC_ALL, m, 1, d, NULL, &err), AFFECT_OK);
     for (int i = 0; i < AFFECT_SUMMARY_N; i++)
         tu_assert_near(d[i], log1p(s[i]), 1e-12); /* all summaries are ≥ 0 */
     for (int i = 0; i < AFFECT_SUMMARY_N + AFFECT_LABAN_N; i++)
@@ -131,9 +131,9 @@ static void test_descriptors(void **state)
     assert_true(e[lh] == d[rh] && e[rh] == d[lh] && e[dl] == d[dr]);
     affect_descriptors_mirror(AFFECT_DESC_ALL, e, e); /* in place, twice = the identity */
     assert_memory_equal(e, d, sizeof d);
-    assert_int_equal(affect_descriptors(4, m, 1, d, &err), AFFECT_ERR_INVALID);
+    assert_int_equal(affect_descriptors(4, m, 1, d, NULL, &err), AFFECT_ERR_INVALID);
     assert_string_equal(err.msg, "descriptors must be a combination of kinematics and laban");
-    assert_int_equal(affect_motion_summary(m, 3, s, &err), AFFECT_ERR_INVALID);
+    assert_int_equal(affect_motion_summary(m, 3, s, NULL, &err), AFFECT_ERR_INVALID);
     assert_string_equal(err.msg, "up axis must be x, y or z");
     affect_motion_free(m);
 }

@@ -734,7 +734,7 @@ static void test_gram_blocks(void **state)
     double c1, a1, c2, a2;
     assert_int_equal(affect_svm_select_c(X, N, DD, y, C3, cands, 3, 5, 3, &c1, &a1, &err),
                      AFFECT_OK);
-    assert_int_equal(affect_svm_select_c_gram(G, N, DD, y, C3, cands, 3, 5, 3, &c2, &a2, &err),
+    assert_int_equal(affect_svm_select_c_gram(G, N, DD, y, C3, cands, 3, 5, 3, &c2, &a2, NULL, &err),
                      AFFECT_OK);
     assert_true(c1 == c2 && a1 == a2);
     /* float32 weights: version 2, 4 bytes a weight, the same weights after a round trip */

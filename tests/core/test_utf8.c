@@ -335,7 +335,7 @@ static void test_csv_json(void **state)
     assert_non_null(strstr(err.msg, "\\xff"));
     /* JSON refuses such text already (the parser checks UTF-8) */
     const char json[] = "{\"fps\":30,\"joints\":[\"a\xFF\"],\"frames\":[[[1,2,3]]]}";
-    assert_int_equal(affect_motion_from_json(json, sizeof json - 1, &m, &err), AFFECT_ERR_FORMAT);
+    assert_int_equal(affect_motion_from_json(json, sizeof json - 1, &m, NULL, &err), AFFECT_ERR_FORMAT);
     assert_string_equal(err.msg, "at byte 22: invalid UTF-8");
 }
 

@@ -70,7 +70,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (dim <= 64) {
         double x[3 * 64] = {0};
         affect_classifier_out o = {0};
-        st = affect_classifier_eval(c, x, 3, NULL, false, &o, &err);
+        st = affect_classifier_eval(c, x, 3, NULL, false, &o, NULL, &err);
         uint32_t C = affect_classifier_n_classes(c);
         if (st == AFFECT_OK && (o.svm >= C || o.knn >= C || o.ml >= C))
             abort();

@@ -60,7 +60,7 @@ static void check_round_trip(const affect_motion *m, const char *unit)
     char *text = NULL;
     size_t len = 0;
     affect_motion *back = NULL;
-    affect_status st = affect_csv_write(m, &text, &len, &err);
+    affect_status st = affect_csv_write(m, &text, &len, NULL, &err);
     if (st == AFFECT_ERR_NOMEM)
         return;
     if (st != AFFECT_OK)

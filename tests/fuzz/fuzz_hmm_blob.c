@@ -54,7 +54,7 @@ static affect_status check_decode(const uint8_t *data, size_t size, affect_error
         double x[4 * 64] = {0};
         double ll = 0;
         affect_error e2;
-        if (affect_hmm_loglik(h, x, 4, &ll, &e2) == AFFECT_OK && isnan(ll))
+        if (affect_hmm_loglik(h, x, 4, &ll, NULL, &e2) == AFFECT_OK && isnan(ll))
             abort();
     }
     affect_hmm_free(h);

@@ -105,7 +105,7 @@ static void fuzz_json_parse(const char *text, size_t len)
     affect_json_doc *doc = NULL;
     affect_error err;
     affect_error_clear(&err);
-    affect_status st = affect_json_parse(text, len, &doc, &err);
+    affect_status st = affect_json_parse(text, len, &doc, NULL, &err);
     if (st != AFFECT_OK) {
         if (doc)
             abort();
@@ -141,7 +141,7 @@ static void fuzz_motion_from_json(const char *text, size_t len)
     affect_error_clear(&err);
     char *json = NULL;
     size_t json_len = 0;
-    affect_status st = affect_motion_from_json(text, len, &m, &err);
+    affect_status st = affect_motion_from_json(text, len, &m, NULL, &err);
     if (st != AFFECT_OK) {
         if (m)
             abort();
@@ -150,9 +150,9 @@ static void fuzz_motion_from_json(const char *text, size_t len)
     }
     if (affect_motion_validate(m, &err) != AFFECT_OK)
         abort();
-    st = affect_motion_to_json(m, &json, &json_len, &err);
+    st = affect_motion_to_json(m, &json, &json_len, NULL, &err);
     if (st == AFFECT_OK) {
-        st = affect_motion_from_json(json, json_len, &back, &err);
+        st = affect_motion_from_json(json, json_len, &back, NULL, &err);
         if (st == AFFECT_OK && !same_blob(m, back))
             abort();
     }

@@ -290,7 +290,7 @@ static void check_bvh(const affect_motion *m)
         return;
     }
     affect_motion *p = NULL;
-    affect_bvh_options opt = {1.0, "cm", 0};
+    affect_bvh_options opt = {1.0, "cm", 0, NULL};
     affect_status st = affect_bvh_parse(text, len, &opt, &p, &err);
     if (st != AFFECT_OK) {
         if (st != AFFECT_ERR_NOMEM)

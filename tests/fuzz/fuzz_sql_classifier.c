@@ -52,9 +52,9 @@ static int core_label(sqlite3 *db, const unsigned char *blob, size_t size, char 
     if (sqlite3_step(st) == SQLITE_ROW &&
         affect_motion_decode(sqlite3_column_blob(st, 0), (size_t)sqlite3_column_bytes(st, 0), &m,
                              &err) == AFFECT_OK &&
-        affect_classifier_observe(c, m, &x, &T, &desc, &err) == AFFECT_OK) {
+        affect_classifier_observe(c, m, &x, &T, &desc, NULL, &err) == AFFECT_OK) {
         affect_classifier_out o = {0};
-        if (affect_classifier_eval(c, x, T, desc, false, &o, &err) == AFFECT_OK) {
+        if (affect_classifier_eval(c, x, T, desc, false, &o, NULL, &err) == AFFECT_OK) {
             snprintf(label, cap, "%s", affect_classifier_label(c, o.svm));
             r = 1;
         }

@@ -175,10 +175,11 @@ typedef struct affect_classifier_out {
 
 /* Evaluates a sequence (T × dim, from affect_features_extract with the classifier's
  * definition) with its motion's descriptors desc (as for training; NULL when the classifier
- * has none). With ml_only, only loglik and ml are filled (no Fisher scores: much faster). */
+ * has none). With ml_only, only loglik and ml are filled (no Fisher scores: much faster).
+ * mon (may be NULL) is polled per block of frames: AFFECT_ERR_INTERRUPTED once it says stop. */
 affect_status affect_classifier_eval(const affect_classifier *c, const double *x, uint32_t T,
-                                     const double *desc,
-                                     bool ml_only, affect_classifier_out *out, affect_error *err);
+                                     const double *desc, bool ml_only, affect_classifier_out *out,
+                                     affect_monitor *mon, affect_error *err);
 
 /* What evaluating a motion needs: its observations (*x, *n_frames, from affect_features_extract
  * with the classifier's definition) and, when the classifier appends descriptors, *desc
@@ -186,7 +187,7 @@ affect_status affect_classifier_eval(const affect_classifier *c, const double *x
  * with affect_free. Errors: the extraction's and the descriptors'. */
 affect_status affect_classifier_observe(const affect_classifier *c, const affect_motion *m,
                                         double **x, uint32_t *n_frames, double **desc,
-                                        affect_error *err);
+                                        affect_monitor *mon, affect_error *err);
 
 /* ---- read-only views ---- */
 const affect_classifier_config *affect_classifier_get_config(const affect_classifier *c);

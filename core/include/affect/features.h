@@ -34,6 +34,7 @@
 #ifndef AFFECT_FEATURES_H
 #define AFFECT_FEATURES_H
 
+#include "affect/monitor.h"
 #include "affect/roles.h"
 
 #ifdef __cplusplus
@@ -94,9 +95,11 @@ uint32_t affect_features_dim(const affect_features *f);
 /* The observations of m: *x receives n_frames × dim doubles, row-major (free with
  * affect_free), *n_frames the motion's frame count. Errors (AFFECT_ERR_MISSING):
  * 'joint "Hand_L" of the model is not in the motion', 'no joint of the motion has the
- * left_hand role (used by the model)', and the normalization's missing roles. */
+ * left_hand role (used by the model)', and the normalization's missing roles; mon (may be
+ * NULL) is polled between the passes over the frames (AFFECT_ERR_INTERRUPTED). */
 affect_status affect_features_extract(const affect_features *f, const affect_motion *m,
-                                      double **x, uint32_t *n_frames, affect_error *err);
+                                      double **x, uint32_t *n_frames, affect_monitor *mon,
+                                      affect_error *err);
 
 /* ---- mirror images (training-set augmentation, affect/classifier.h) ----
  * The mirror image of a motion swaps its left and right: each entry's partner is the entry

@@ -85,22 +85,28 @@ affect_status affect_hmm_train(const affect_hmm_config *cfg, const affect_hmm_se
                                uint32_t n, affect_hmm **out, affect_error *err);
 void affect_hmm_free(affect_hmm *h);
 
+/* Scoring (the three functions below) takes an optional monitor (NULL: none): its stop hook is
+ * polled once per block of frames (at most 128), so a long sequence returns
+ * AFFECT_ERR_INTERRUPTED ("interrupted") soon after the caller asks; nothing is written then. */
+
 /* Total natural-log likelihood log P(x | Λ) by the forward algorithm. −∞ when impossible.
  * Any n_frames ≥ 1 (shorter than N is fine); every value must be finite. */
 affect_status affect_hmm_loglik(const affect_hmm *h, const double *x, uint32_t n_frames,
-                                double *loglik, affect_error *err);
+                                double *loglik, affect_monitor *mon, affect_error *err);
 
 /* Most likely state path (n_frames entries; ties go to the lower state) and its
  * log-probability (logprob may be NULL). */
 affect_status affect_hmm_viterbi(const affect_hmm *h, const double *x, uint32_t n_frames,
-                                 int32_t *path, double *logprob, affect_error *err);
+                                 int32_t *path, double *logprob, affect_monitor *mon,
+                                 affect_error *err);
 
 /* Posteriors for Fisher scores: gamma = T × N × M (state i and mixture j at t), xi = N × N
  * (Σ_t ξ_t(i, l), the expected transition counts); either may be NULL. Returns log P(x | Λ).
  * γ_t and ξ_t are normalised frame by frame (Σ_ij γ_t = 1, Σ xi = T − 1). A sequence of
  * probability 0 has no posteriors: AFFECT_ERR_RANGE. */
 affect_status affect_hmm_posteriors(const affect_hmm *h, const double *x, uint32_t n_frames,
-                                    double *gamma, double *xi, double *loglik, affect_error *err);
+                                    double *gamma, double *xi, double *loglik, affect_monitor *mon,
+                                    affect_error *err);
 
 /* ---- parameters (read-only views, row-major) ---- */
 const affect_hmm_config *affect_hmm_get_config(const affect_hmm *h);

@@ -8,6 +8,7 @@
 #ifndef AFFECT_IO_H
 #define AFFECT_IO_H
 
+#include "affect/monitor.h"
 #include "affect/motion.h"
 
 #ifdef __cplusplus
@@ -19,6 +20,8 @@ typedef struct affect_bvh_options {
     const char *unit;  /* recorded unit, or NULL/"" for unknown (default) */
     uint64_t max_samples; /* largest frames × joints accepted; 0 (default) =
                              AFFECT_MOTION_MAX_SAMPLES */
+    affect_monitor *monitor; /* polled every few thousand frames (may be NULL): the parse
+                                stops with AFFECT_ERR_INTERRUPTED once it says so */
 } affect_bvh_options;
 
 /* BVH: HIERARCHY with ROOT (one or more), JOINT and End Site; any channel count (0–6) and any
@@ -39,6 +42,8 @@ typedef struct affect_bvh_write_options {
     double frame_time;     /* seconds per frame; 0 (default) = 1 / fps */
     int precision;         /* decimals of every number, 1 .. 9 (default 6) */
     const char *root_name; /* name written for the first root, or NULL (default) */
+    affect_monitor *monitor; /* polled every few thousand frames (default NULL): the export
+                                stops with AFFECT_ERR_INTERRUPTED once it says so */
 } affect_bvh_write_options;
 
 void affect_bvh_write_options_default(affect_bvh_write_options *opt);
@@ -59,6 +64,8 @@ typedef struct affect_csv_options {
     const char *unit;  /* recorded unit, or NULL/"" */
     uint64_t max_samples; /* largest frames × joints accepted; 0 (default) =
                              AFFECT_MOTION_MAX_SAMPLES */
+    affect_monitor *monitor; /* polled every few thousand rows (default NULL): the parse stops
+                                with AFFECT_ERR_INTERRUPTED once it says so */
 } affect_csv_options;
 
 void affect_csv_options_default(affect_csv_options *opt);
@@ -70,18 +77,20 @@ affect_status affect_csv_parse(const char *text, size_t len, double fps,
                                const affect_csv_options *opt, affect_motion **out,
                                affect_error *err);
 
-/* CSV with a "name.x,name.y,name.z,…" header, one line per frame, '\n' line ends. */
+/* CSV with a "name.x,name.y,name.z,…" header, one line per frame, '\n' line ends. The text
+ * writers and the JSON reader poll mon (may be NULL) every few thousand frames and stop with
+ * AFFECT_ERR_INTERRUPTED once it says so. */
 affect_status affect_csv_write(const affect_motion *m, char **out, size_t *len,
-                               affect_error *err);
+                               affect_monitor *mon, affect_error *err);
 
 /* JSON: {"fps": f, "joints": [names], "parents": [ints] (optional), "unit": "cm" (optional),
  *        "frames": [[[x, y, z], …joints], …frames]}. Frames × joints may not exceed
  * AFFECT_MOTION_MAX_SAMPLES (no option raises it: the parsed document takes far more memory
  * than the motion, so larger motions come as CSV or BLOBs). */
 affect_status affect_motion_from_json(const char *text, size_t len, affect_motion **out,
-                                      affect_error *err);
+                                      affect_monitor *mon, affect_error *err);
 affect_status affect_motion_to_json(const affect_motion *m, char **out, size_t *len,
-                                    affect_error *err);
+                                    affect_monitor *mon, affect_error *err);
 
 #ifdef __cplusplus
 }

@@ -10,6 +10,7 @@
 #define AFFECT_JSON_H
 
 #include "affect/base.h"
+#include "affect/monitor.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -41,9 +42,10 @@ typedef struct affect_json_node {
 
 typedef struct affect_json_doc affect_json_doc;
 
-/* Parses text[0..len). The root is node 0. */
+/* Parses text[0..len). The root is node 0. mon (may be NULL) is polled every few thousand
+ * values: AFFECT_ERR_INTERRUPTED once it says stop (long documents such as a motion's). */
 affect_status affect_json_parse(const char *text, size_t len, affect_json_doc **out,
-                                affect_error *err);
+                                affect_monitor *mon, affect_error *err);
 void affect_json_free(affect_json_doc *doc);
 
 const affect_json_node *affect_json_root(const affect_json_doc *doc);

@@ -31,6 +31,7 @@
 #ifndef AFFECT_LABAN_H
 #define AFFECT_LABAN_H
 
+#include "affect/monitor.h"
 #include "affect/roles.h"
 
 #ifdef __cplusplus
@@ -55,6 +56,8 @@ typedef struct affect_laban_options {
     bool time_per_second;/* Time Q2 divided by the duration */
     double speed_floor;  /* Shape Directional: ignore frames slower than this × peak (0.05) */
     double max_ratio;    /* Space Q2 cap when the net displacement is near zero (100) */
+    affect_monitor *monitor; /* polled every few thousand frames (default NULL): a component
+                                or vector stops with AFFECT_ERR_INTERRUPTED once it says so */
 } affect_laban_options;
 
 void affect_laban_options_default(affect_laban_options *opt);

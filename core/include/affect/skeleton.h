@@ -20,6 +20,7 @@
 #ifndef AFFECT_SKELETON_H
 #define AFFECT_SKELETON_H
 
+#include "affect/monitor.h"
 #include "affect/motion.h"
 
 #ifdef __cplusplus
@@ -74,6 +75,9 @@ typedef struct affect_rigid_options {
     double tolerance;               /* stop when no joint moves more than this × body size
                                        (default 1e-9) */
     const bool *free_link;          /* n_joints flags, or NULL to detect them */
+    affect_monitor *monitor;        /* polled frame by frame (default NULL): the call stops
+                                       with AFFECT_ERR_INTERRUPTED once it says so (also for
+                                       affect_motion_ik, through its rigid options) */
 } affect_rigid_options;
 
 void affect_rigid_options_default(affect_rigid_options *opt);

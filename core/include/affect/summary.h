@@ -33,6 +33,7 @@
 #ifndef AFFECT_SUMMARY_H
 #define AFFECT_SUMMARY_H
 
+#include "affect/monitor.h"
 #include "affect/roles.h"
 
 #ifdef __cplusplus
@@ -44,9 +45,11 @@ extern "C" {
 extern const char *const affect_summary_names[AFFECT_SUMMARY_N];
 
 /* The summary of m (up axis 0 = x, 1 = y, 2 = z) into out. Errors: "up axis must be x, y or z";
- * AFFECT_ERR_NOMEM. */
+ * AFFECT_ERR_NOMEM; AFFECT_ERR_INTERRUPTED when mon (may be NULL), polled between the passes
+ * over the frames, says stop. */
 affect_status affect_motion_summary(const affect_motion *m, int up_axis,
-                                    double out[AFFECT_SUMMARY_N], affect_error *err);
+                                    double out[AFFECT_SUMMARY_N], affect_monitor *mon,
+                                    affect_error *err);
 
 /* ---- motion-level descriptors for the recognizer ----
  * A combination of blocks, in this order: the kinematic summary above (AFFECT_SUMMARY_N
@@ -62,7 +65,7 @@ uint32_t affect_descriptors_dim(unsigned mask);
  * values). Errors: "descriptors must be a combination of kinematics and laban", the summary's,
  * and the Laban vector's (AFFECT_ERR_NOMEM; roles are not required: missing ones give 0). */
 affect_status affect_descriptors(unsigned mask, const affect_motion *m, int up_axis, double *out,
-                                 affect_error *err);
+                                 affect_monitor *mon, affect_error *err);
 
 /* The descriptors of the mirror image (affect_features_mirror) from those of the motion: the
  * left and right entries swap (hand and foot speeds; the Laban LHand/RHand and LFoot/RFoot

@@ -36,6 +36,7 @@
 #define AFFECT_SVM_H
 
 #include "affect/base.h"
+#include "affect/monitor.h"
 #include "affect/bytes.h"
 
 #ifdef __cplusplus
@@ -105,7 +106,8 @@ affect_status affect_svm_train(const double *X, size_t n, size_t d, const uint32
  * (AFFECT_ERR_RANGE), AFFECT_ERR_NOMEM.
  * affect_svm_predict_gram: the prediction of a sample from its kernel values g with every
  * training sample (a row of G), libsvm's sums and vote.
- * affect_svm_select_c_gram: affect_svm_select_c on the Gram matrix. */
+ * affect_svm_select_c_gram: affect_svm_select_c on the Gram matrix, polling mon (may be NULL)
+ * before each fit of the cross-validation: AFFECT_ERR_INTERRUPTED once it says stop. */
 affect_status affect_svm_train_gram(const double *G, size_t n, size_t d, const uint32_t *y,
                                     uint32_t c, double C, affect_svm **out, affect_error *err);
 affect_status affect_svm_add_rows(affect_svm *m, const double *B, size_t b, size_t col0,
@@ -114,7 +116,7 @@ uint32_t affect_svm_predict_gram(const affect_svm *m, const double *g);
 affect_status affect_svm_select_c_gram(const double *G, size_t n, size_t d, const uint32_t *y,
                                        uint32_t c, const double *candidates, size_t n_cand,
                                        uint32_t folds, uint64_t seed, double *best_c,
-                                       double *best_acc, affect_error *err);
+                                       double *best_acc, affect_monitor *mon, affect_error *err);
 
 /* Rounds every weight to the nearest float32 value, so that the model is encoded with float32
  * weights (format version 2, half the bytes) and decodes to exactly these weights; false (and

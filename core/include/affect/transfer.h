@@ -73,6 +73,7 @@
 #ifndef AFFECT_TRANSFER_H
 #define AFFECT_TRANSFER_H
 
+#include "affect/monitor.h"
 #include "affect/motion.h"
 
 #ifdef __cplusplus
@@ -99,6 +100,8 @@ typedef struct affect_transfer_options {
     bool keep_contacts; /* (default true) */
     affect_transfer_amplitude amplitude; /* what the ratios compare (default: velocity) */
     bool pooled; /* one ratio per band for the whole body instead of one per joint (false) */
+    affect_monitor *monitor; /* polled through inverse kinematics and between the stages
+                                (default NULL): AFFECT_ERR_INTERRUPTED once it says stop */
 } affect_transfer_options;
 
 void affect_transfer_options_default(affect_transfer_options *opt);
