@@ -93,8 +93,13 @@ ax_arg ax_arg_motion(sqlite3_context *ctx, sqlite3_value **argv, int i, affect_m
         return AX_ERROR;
     }
     affect_error err;
-    if (affect_motion_decode(data, (size_t)n, out, &err)) {
-        if (err.status == AFFECT_ERR_NOMEM)
+    ax_monitor am; /* a motion at the size limit takes tenths of a second to decode */
+    if (ax_monitor_begin(&am, ctx, NULL) != AX_OK)
+        return AX_ERROR;
+    affect_status st = affect_motion_decode_monitored(data, (size_t)n, &am.mon, out, &err);
+    ax_monitor_end(&am);
+    if (st) {
+        if (err.status == AFFECT_ERR_NOMEM || err.status == AFFECT_ERR_INTERRUPTED)
             ax_error(ctx, &err);
         else
             ax_errorf(ctx, "argument %d is not a valid motion: %s", i + 1, err.msg);

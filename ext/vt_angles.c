@@ -172,23 +172,26 @@ static int angles_filter(sqlite3_vtab_cursor *cur, int idx_num, const char *idx_
     int n = sqlite3_value_bytes(argv[0]);
     if (!data && n > 0)
         return SQLITE_NOMEM;
-    if (affect_motion_decode(data, (size_t)n, &c->m, &err)) {
-        if (err.status != AFFECT_ERR_NOMEM) {
-            char msg[AFFECT_ERROR_MSG_MAX];
-            memcpy(msg, err.msg, sizeof msg);
-            affect_fail(&err, AFFECT_ERR_FORMAT, "the argument is not a valid motion: %.200s", msg);
+    ax_monitor am; /* the decoding and inverse kinematics of a long motion stop when asked */
+    char *msg = NULL;
+    if (ax_monitor_begin_db(&am, ((angles_vtab *)cur->pVtab)->db, NULL, &msg) != SQLITE_OK) {
+        sqlite3_free(msg); /* no progress function: cannot fail */
+        return SQLITE_NOMEM;
+    }
+    if (affect_motion_decode_monitored(data, (size_t)n, &am.mon, &c->m, &err)) {
+        ax_monitor_end(&am);
+        if (err.status != AFFECT_ERR_NOMEM && err.status != AFFECT_ERR_INTERRUPTED) {
+            char emsg[AFFECT_ERROR_MSG_MAX];
+            memcpy(emsg, err.msg, sizeof emsg);
+            affect_fail(&err, AFFECT_ERR_FORMAT, "the argument is not a valid motion: %.200s",
+                        emsg);
         }
         return vtab_error(cur->pVtab, &err);
     }
     ax_skel_opts so;
-    if (ax_skel_opts_parse(text, len, angle_keys, c->m, &so, &err))
+    if (ax_skel_opts_parse(text, len, angle_keys, c->m, &so, &err)) {
+        ax_monitor_end(&am);
         return vtab_error(cur->pVtab, &err);
-    ax_monitor am;
-    char *msg = NULL;
-    if (ax_monitor_begin_db(&am, ((angles_vtab *)cur->pVtab)->db, NULL, &msg) != SQLITE_OK) {
-        sqlite3_free(msg); /* no progress function: cannot fail */
-        ax_skel_opts_free(&so);
-        return SQLITE_NOMEM;
     }
     so.ik.rigid.monitor = &am.mon; /* inverse kinematics of a long motion */
     affect_status st = ax_skeletal(c->m, &so, &c->sk, &err);

@@ -395,22 +395,22 @@ static affect_status lab_vector(const lab_vtab *vt, const unsigned char *data, s
 {
     affect_motion *m = NULL;
     *bad_blob = false;
-    affect_status st = affect_motion_decode(data, n, &m, err);
+    ax_monitor am; /* a long motion stops on the statement's interrupt */
+    char *msg = NULL;
+    if (ax_monitor_begin_db(&am, vt->db, NULL, &msg) != SQLITE_OK) { /* no progress function */
+        sqlite3_free(msg);
+        return affect_nomem(err);
+    }
+    affect_status st = affect_motion_decode_monitored(data, n, &am.mon, &m, err);
     if (st) {
-        *bad_blob = st != AFFECT_ERR_NOMEM;
+        ax_monitor_end(&am);
+        *bad_blob = st != AFFECT_ERR_NOMEM && st != AFFECT_ERR_INTERRUPTED;
         return st;
     }
     affect_roles roles;
     affect_roles_resolve(m, &roles);
     double v[LAB_N];
     affect_laban_options opt = vt->opt;
-    ax_monitor am; /* a long motion stops on the statement's interrupt */
-    char *msg = NULL;
-    if (ax_monitor_begin_db(&am, vt->db, NULL, &msg) != SQLITE_OK) { /* no progress function */
-        sqlite3_free(msg);
-        affect_motion_free(m);
-        return affect_nomem(err);
-    }
     opt.monitor = &am.mon;
     st = affect_laban_vector(m, &roles, &opt, v, err);
     ax_monitor_end(&am);

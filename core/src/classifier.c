@@ -684,22 +684,26 @@ static affect_status fit_dual(affect_classifier *c, const double *G, const uint3
                                      err))
             return affect_prefix(err, "choosing the SVM's C");
     }
+    affect_monitor_report(cfg->hmm.monitor, "SVM, sPCA grid and sPCA", 0, 3);
     affect_status st = affect_monitor_check(cfg->hmm.monitor, err);
     if (st)
         return st;
     if (affect_svm_train_gram(G, n, D, y, c->n_classes, C, &c->svm, err))
         return affect_prefix(err, "training the SVM");
+    affect_monitor_report(cfg->hmm.monitor, "SVM, sPCA grid and sPCA", 1, 3);
     if ((st = affect_monitor_check(cfg->hmm.monitor, err)))
         return st;
     c->report.grid_cv_acc = NAN;
     const affect_classifier_grid *gr = &cfg->grid;
     if ((gr->n_dims || gr->n_sigma || gr->n_k) && grid_search(c, G, y, n, err))
         return affect_prefix(err, "searching the sPCA/kNN grid");
+    affect_monitor_report(cfg->hmm.monitor, "SVM, sPCA grid and sPCA", 2, 3);
     if ((st = affect_monitor_check(cfg->hmm.monitor, err)))
         return st;
     if (affect_spca_fit_dual(G, n, D, y, c->n_classes, cfg->spca_kernel, cfg->spca_sigma,
                              cfg->spca_dims, &c->spca, err))
         return affect_prefix(err, "fitting the supervised PCA");
+    affect_monitor_report(cfg->hmm.monitor, "SVM, sPCA grid and sPCA", 3, 3);
     uint32_t p = affect_spca_dims(c->spca);
     c->n_train = n;
     c->train_y = affect_malloc_array(n, sizeof *c->train_y);

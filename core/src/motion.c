@@ -717,6 +717,13 @@ affect_status affect_motion_encode(const affect_motion *m, unsigned char **out, 
 affect_status affect_motion_decode(const unsigned char *data, size_t size, affect_motion **out,
                                    affect_error *err)
 {
+    return affect_motion_decode_monitored(data, size, NULL, out, err);
+}
+
+affect_status affect_motion_decode_monitored(const unsigned char *data, size_t size,
+                                             affect_monitor *mon, affect_motion **out,
+                                             affect_error *err)
+{
     if (size < AFFECT_MOTION_HEADER_SIZE)
         return affect_fail(err, AFFECT_ERR_FORMAT, "truncated: %zu bytes is shorter than the %u-byte header",
                            size, AFFECT_MOTION_HEADER_SIZE);
@@ -811,6 +818,8 @@ affect_status affect_motion_decode(const unsigned char *data, size_t size, affec
         m->parents[j] = (int32_t)get_u32(data + off);
     get_floats(data + off, m->pos, n_vals);
     off += n_vals * 4;
+    if ((st = affect_monitor_check(mon, err)))
+        goto fail;
     if (flags & AFFECT_MOTION_FLAG_SKELETON) {
         st = affect_motion_add_skeleton(m, (flags & AFFECT_MOTION_FLAG_ROTATIONS) != 0, err);
         if (st)
@@ -836,6 +845,8 @@ affect_status affect_motion_decode(const unsigned char *data, size_t size, affec
         size_t nq = (size_t)n_frames * n_joints;
         get_floats(data + off, m->rot, nq * 4);
         off += nq * 16;
+        if ((st = affect_monitor_check(mon, err)))
+            goto fail;
         /* per joint once: stored translations, or the offset (as float) for every frame */
         float *rest = m->trans; /* frame 0's row holds each joint's fallback until it is read */
         uint8_t moving[AFFECT_MOTION_MAX_JOINTS];
@@ -862,9 +873,13 @@ affect_status affect_motion_decode(const unsigned char *data, size_t size, affec
     if (!st)
         st = check_parents(m, err);
     if (!st)
+        st = affect_monitor_check(mon, err);
+    if (!st)
         st = check_finite(m, err);
     if (!st && m->skel)
         st = check_skeleton(m, err);
+    if (!st)
+        st = affect_monitor_check(mon, err);
     if (!st && m->rot)
         st = check_rotations(m, err);
     if (st)

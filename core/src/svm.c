@@ -777,6 +777,8 @@ static affect_status select_c(const double *G, size_t n, const uint32_t *y, uint
                         (*hits)++;
                 continue;
             }
+            affect_monitor_report(mon, "SVM C cross-validation", (uint64_t)f * n_cand + ci,
+                                  (uint64_t)k * n_cand);
             if ((st = affect_monitor_check(mon, err)) != AFFECT_OK ||
                 (st = fit(&p, candidates[ci], &sm, err)) != AFFECT_OK)
                 goto cleanup;

@@ -20,6 +20,7 @@
 #define AFFECT_MOTION_H
 
 #include "affect/base.h"
+#include "affect/monitor.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -164,6 +165,11 @@ void affect_motion_encode_into(const affect_motion *m, unsigned char *buf);
 /* Decodes and validates a BLOB. Never reads outside [data, data + size). */
 affect_status affect_motion_decode(const unsigned char *data, size_t size, affect_motion **out,
                                    affect_error *err);
+/* The same, polling mon (may be NULL) between its passes over the frames (a motion at the size
+ * limit takes tenths of a second): AFFECT_ERR_INTERRUPTED once it says stop. */
+affect_status affect_motion_decode_monitored(const unsigned char *data, size_t size,
+                                             affect_monitor *mon, affect_motion **out,
+                                             affect_error *err);
 
 /* ---- editing; each returns a new motion ---- */
 
