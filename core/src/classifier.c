@@ -608,8 +608,7 @@ static affect_status grid_fold(const affect_classifier *c, const double *G, cons
         if (st)
             return st;
         st = affect_spca_fit_dual(w->sub_gram, n_tr, c->dim, w->tr_y, c->n_classes,
-                                                c->cfg.spca_kernel, g->sigma[s], g->max_dims,
-                                                &sp, err);
+                                  c->cfg.spca_kernel, g->sigma[s], g->max_dims, &sp, err);
         if (st)
             return st;
         uint32_t q = affect_spca_dims(sp);
