@@ -66,6 +66,10 @@ extern "C" {
 #define AFFECT_RMLR_DEFAULT_N_ALPHA 20u
 /* Threads of affect_rmlr_cv at most. */
 #define AFFECT_RMLR_MAX_THREADS 64u
+/* options.solver: coordinate descent with Newton steps on the non-zero coefficients (0, the
+ * default), or coordinate descent alone (1, the method before those steps; slower). */
+#define AFFECT_RMLR_SOLVER_NEWTON 0u
+#define AFFECT_RMLR_SOLVER_CD 1u
 /* Version of the encoding written by affect_rmlr_encode. */
 #define AFFECT_RMLR_FORMAT_VERSION 1u
 
@@ -81,6 +85,7 @@ typedef struct affect_rmlr_options {
     uint32_t threads;        /* affect_rmlr_cv: α values cross-validated at once, each in its
                                 own thread (1; 1 .. AFFECT_RMLR_MAX_THREADS = 64) */
     affect_monitor *monitor; /* stop and progress hooks (NULL) */
+    uint32_t solver;         /* AFFECT_RMLR_SOLVER_NEWTON (the default) or _CD (see above) */
 } affect_rmlr_options;
 
 /* The defaults above (alphas NULL, n_alpha 20). */
