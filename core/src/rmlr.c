@@ -60,15 +60,48 @@
  *     neither the probabilities nor which one is the row's maximum, so the row maximum moves
  *     by the same value and the exp terms are kept (the intercepts' centring likewise).
  * These last two (the strong set and the kept cache) change the result in its last bits only.
- * What bounds the time is the number of cycles over the classes, not their cost: on the
- * corpus's Laban vectors a λ takes 13 cycles on average, and up to 80 towards the small-λ end of
- * the lasso path, where the objective falls by a constant factor of about 0.99 per cycle. There
- * the data are nearly separable and most samples share their probability between two classes,
- * whose Newton blocks are then almost collinear, and class-by-class (block Gauss–Seidel) steps
- * crawl; the screening above only makes each cycle cheaper. A proximal Newton loop with joint
- * per-feature K × K steps was tried and was about 2× slower (docs/BENCHMARKS.md): the flat
- * directions run across features (two classes' coefficient vectors moving together), so any
- * coordinate-wise inner solver crawls along them as well.
+ * Newton steps on the non-zero coefficients (options.solver AFFECT_RMLR_SOLVER_NEWTON, the
+ * default). The cycles alone are slow where the data are nearly separable (small λ): most
+ * samples share their probability between two classes, moving both classes' coefficient
+ * vectors together hardly changes the likelihood, and class-by-class steps crawl along those
+ * directions (the objective fell by a factor of about 0.99 per cycle for 60 cycles; a λ took
+ * 13 cycles on average). Those directions run across features, so no coordinate-wise solver
+ * escapes them (a proximal Newton loop with per-feature K × K blocks was tried and was 2×
+ * slower, docs/BENCHMARKS.md). Once the signs of the coefficients have settled the problem is
+ * smooth: with the zeros held at 0 and the signs s held, the objective is
+ *     −(1/n) log-likelihood + λα Σ s β + λ(1−α)/2 Σ β²
+ * in the m = (non-zero coefficients) + (K − 1 intercepts) variables (the last intercept is
+ * held: a shift common to all intercepts changes nothing), and Newton's method takes it in a
+ * few steps (newton_solve). Its Hessian, Σ_i (diag(p_i) − p_i p_iᵀ) ⊗ u_i u_iᵀ over the
+ * variables' features u_i (1 for an intercept), plus λ(1−α) on the coefficients' diagonal, is
+ * built sample by sample (n m²/2 multiply-adds) and factored by Cholesky (m³/6), with a tiny
+ * damping raised if a pivot fails (at α = 1 a feature whose K coefficients are all non-zero
+ * has an exactly flat direction). The factor is then kept: the next steps, and the next λ
+ * values while the variables stay the same, reuse it with a fresh gradient each step (a
+ * simplified Newton iteration; it is rebuilt when the decrement no longer falls by
+ * NEWTON_SLOW per step), a coefficient that reaches 0 is removed from it by Givens rotations
+ * (O(m²)), and one that must enter is appended by a bordering step (its Hessian column, n m,
+ * and one triangular solve, m²/2). Each step is halved until the objective falls, projected
+ * onto the signs' orthant (a coefficient that would change sign stops at 0). It converges
+ * when half the decrement gᵀH⁻¹g (the decrease the quadratic model promises) is at most
+ * NEWTON_TOL × tol × the objective; then the zero coefficients' KKT conditions are checked on
+ * the full gradient (computed anyway for the next λ's screening): those that fail (beyond
+ * KKT_SLACK √tol relative) join as variables with the sign of their gradient and Newton goes on;
+ * after KKT_ENTER_MAX such rounds the cycles take over. So a λ costs a few gradients and
+ * triangular solves when its pattern is the last one's, where it took 13 cycles.
+ * When to use it (fitter_solve, fitter_cycles): first at a λ whose predecessor converged by
+ * Newton or whose factor is still that of the non-zero coefficients, or when the cycles of
+ * the predecessor cost more than one factorisation; else after a cycle that changed no sign,
+ * when the cycles still expected (from the ratio of the last two decreases of the objective)
+ * cost more than a factorisation. Beyond NEWTON_MAX variables only the cycles run.
+ * At α = 1 the solution need not be unique: a feature whose K coefficients have as many
+ * positive as negative signs can be shifted along a stretch of equal objective. After each
+ * λ (with the Newton solver), newton_sparsify moves such a feature to the end of the stretch of
+ * smallest shift, where one coefficient is 0 (the sparsest point, as the cycles' coordinate moves
+ * tend to reach); the zero it leaves is exempt from the KKT check (flat_zero: there its gradient is
+ * within ±λ by the classes' gradients summing to 0).
+ * All of it is plain loops in fixed orders (sums with four partial accumulators in a fixed
+ * assignment), so results stay the same bytes for the same inputs and whatever the threads.
  *
  * Cross-validation keeps one fitter per worker and, after each λ, predicts the held-out
  * samples, so no path of coefficients is stored. Counts of misclassified samples are integers,
@@ -100,25 +133,30 @@
 #define DESCENT_SLACK 1e-13
 /* Sums over the samples computed together (see block_sums). */
 #define GRAD_BLOCK 4
-#ifndef NEWTON_MAX
+/* Newton steps (see newton_solve): variables at most (the Hessian's factor has this many
+ * squared doubles, 512 KiB per fitter); beyond, coordinate descent alone. */
 #define NEWTON_MAX 256
-#endif
-#define KKT_SLACK 1e-6
-#define KKT_ENTER_MAX 4
+/* Newton's stop: half the decrement at most NEWTON_TOL × tol × the objective (stricter than the
+ * cycles' tol: the rest of a Newton step is about the square of the last). */
+#define NEWTON_TOL 0.01
+/* Steps per call at most. */
+#define NEWTON_ITERS 20
+/* A kept factor is refreshed when the decrement falls by less than this factor in a step. */
+#define NEWTON_SLOW 0.25
+/* Damping added to the Hessian's diagonal, relative to its largest entry, and the tries (each
+ * 1000 times more) before giving up on a factorisation. */
 #define NEWTON_DAMP 1e-10
 #define NEWTON_DAMP_TRIES 6
-#ifndef NEWTON_ITERS
-#define NEWTON_ITERS 20
-#endif
-#ifndef NEWTON_SLOW
-#define NEWTON_SLOW 0.25
-#endif
-#ifndef NEWTON_GAIN
+/* A zero coefficient's KKT condition, |g| ≤ λα, is taken as met within KKT_SLACK × √tol
+ * relative after Newton's method, whose gradients are accurate to about the square root of its
+ * decrement (1e-4 at the default tol 1e-7). */
+#define KKT_SLACK 0.3
+/* Rounds of Newton steps with entering coefficients per λ before the cycles take over. */
+#define KKT_ENTER_MAX 4
+/* The cycles switch to Newton when (cycles still expected) × (a cycle's work) exceeds
+ * NEWTON_GAIN × (a factorisation's work); a cycle's fixed work per class and sample. */
 #define NEWTON_GAIN 1.0
-#endif
-#ifndef CYCLE_FIXED
 #define CYCLE_FIXED 20.0
-#endif
 
 struct affect_rmlr {
     uint32_t K, n_train, n_lambda, lambda_index;
@@ -172,6 +210,7 @@ typedef struct fitter {
     size_t nv;                   /* the Newton variables' count */
     double *vs;                  /* nv_cap: their signs (0: intercept) */
     bool newton_on;              /* options.solver: Newton steps allowed */
+    double kkt_slack;            /* KKT_SLACK √tol */
     bool fac_ok;                 /* hess holds the factor for the variables vk, vj, vs */
     double fac_mu;               /* the μ added to its diagonal */
     bool newton_last;            /* the last λ converged by Newton steps */
@@ -286,6 +325,7 @@ static void fitter_load(fitter *f, const double *x, size_t n_all, const uint32_t
     f->max_iter = o->max_iter;
     f->tol = o->tol;
     f->newton_on = o->solver == AFFECT_RMLR_SOLVER_NEWTON;
+    f->kkt_slack = KKT_SLACK * sqrt(o->tol);
     f->cached = false;
     f->grad_ok = false;
     f->fac_ok = false;
@@ -793,13 +833,6 @@ static void take_trial(fitter *f, double loss)
     f->loss = loss;
 }
 
-#ifdef RMLR_STATS
-extern unsigned long rmlr_stat_cycles, rmlr_stat_solves, rmlr_stat_extra, rmlr_stat_trials,
-    rmlr_stat_newton, rmlr_stat_factor, rmlr_stat_nconv, rmlr_stat_kktfail;
-unsigned long rmlr_stat_cycles, rmlr_stat_solves, rmlr_stat_extra, rmlr_stat_trials,
-    rmlr_stat_newton, rmlr_stat_factor, rmlr_stat_nconv, rmlr_stat_kktfail;
-#endif
-
 /* Whether the coefficients have the signs (and zeros) of the state s0. */
 static bool same_pattern(const fitter *f, const double *s0)
 {
@@ -838,12 +871,35 @@ static double sign_of(double b)
     return b > 0 ? 1 : b < 0 ? -1 : 0;
 }
 
+/* Whether the zero coefficient (k0, j) needs no KKT check at α = 1: the feature's other K − 1
+ * coefficients are all non-zero with signs s_k summing to −1, 0 or 1. The log-likelihood's
+ * gradient sums to 0 over the classes (Σ_k (1{y = k} − p_k) = 0), so where the others are
+ * stationary (g_k = λ s_k) g_k0 = −λ Σ s_k, within [−λ, λ]: such a zero is at the end of a
+ * flat stretch (newton_sparsify puts it there) and entering it cannot lower the objective. */
+static bool flat_zero(const fitter *f, uint32_t k0, size_t j)
+{
+    if (f->alpha < 1)
+        return false;
+    double sum = 0;
+    for (uint32_t k = 0; k < f->K; k++) {
+        double b = f->beta[(size_t)k * f->p + j];
+        if (k == k0)
+            continue;
+        if (b == 0)
+            return false;
+        sum += sign_of(b);
+    }
+    return fabs(sum) <= 1;
+}
+
 /* The sign an entering zero coefficient (class k, feature j of the strong set) would move to:
- * that of its log-likelihood gradient when it exceeds λα (beyond KKT_SLACK), else 0. */
+ * that of its log-likelihood gradient when it exceeds λα (beyond the slack), else 0. */
 static double entering_sign(const fitter *f, uint32_t k, size_t j)
 {
     double la = f->lambda_now * f->alpha, g = f->grad[(size_t)k * f->p + j];
-    return g > la * (1 + KKT_SLACK) ? 1 : g < -la * (1 + KKT_SLACK) ? -1 : 0;
+    if (flat_zero(f, k, j))
+        return 0;
+    return g > la * (1 + f->kkt_slack) ? 1 : g < -la * (1 + f->kkt_slack) ? -1 : 0;
 }
 
 /* The Newton variables: the non-zero coefficients (with enter, also the zero ones of the
@@ -1016,9 +1072,6 @@ static bool newton_factor(fitter *f, double lambda)
             break;
         }
     }
-#ifdef RMLR_STATS
-    rmlr_stat_factor++;
-#endif
     return f->fac_ok;
 }
 
@@ -1227,10 +1280,7 @@ static bool newton_solve(fitter *f, double lambda, double *obj, bool enter)
             fresh = true;
             dec = newton_dir(f);
         }
-#ifdef RMLR_STATS
-        rmlr_stat_newton++;
-#endif
-        if (!(dec > 2 * f->tol * *obj))
+        if (!(dec > 2 * NEWTON_TOL * f->tol * *obj))
             return true;
         if (!newton_line(f, lambda, obj)) {
             f->fac_ok = false;
@@ -1332,9 +1382,6 @@ static int fitter_cycles(fitter *f, double lambda, uint32_t *passes, bool newton
     loss = f->loss;
     for (;;) {
         uint32_t passes_before = *passes;
-#ifdef RMLR_STATS
-        rmlr_stat_cycles++;
-#endif
         memcpy(f->s0, f->beta, kp * sizeof *f->beta);
         memcpy(f->s0 + kp, f->beta0, f->K * sizeof *f->beta0);
         for (uint32_t k = 0; k < f->K; k++)
@@ -1394,9 +1441,6 @@ static bool fitter_solve(fitter *f, double lambda, double lambda_prev)
 {
     uint32_t passes = 0;
     bool converged;
-#ifdef RMLR_STATS
-    rmlr_stat_solves++;
-#endif
     double la = f->alpha * lambda;
     double thr = lambda_prev > lambda ? f->alpha * (2 * lambda - lambda_prev) : la;
     if (!f->grad_ok)
@@ -1409,7 +1453,7 @@ static bool fitter_solve(fitter *f, double lambda, double lambda_prev)
     }
     bool newton_first = f->newton_on && (f->newton_last || (f->fac_ok && newton_vars_current(f)) ||
                                          f->work_last > NEWTON_GAIN * newton_work(f));
-    bool enter = newton_first; /* f->grad is current: the zeros that would enter join now */
+    bool enter = false;
     f->work_now = 0;
     int kkt_fails = 0;
     for (;;) {
@@ -1433,12 +1477,10 @@ static bool fitter_solve(fitter *f, double lambda, double lambda_prev)
             for (size_t j = 0; j < f->p && ok; j++)
                 for (uint32_t k = 0; k < f->K && f->strong[j] && ok; k++)
                     ok = f->beta[(size_t)k * f->p + j] != 0 ||
-                         fabs(f->grad[(size_t)k * f->p + j]) <= la * (1 + KKT_SLACK);
+                         fabs(f->grad[(size_t)k * f->p + j]) <= la * (1 + f->kkt_slack) ||
+                         flat_zero(f, k, j);
             if (ok)
                 break;
-#ifdef RMLR_STATS
-            rmlr_stat_kktfail++;
-#endif
             converged = false;
             f->newton_last = false;
             if (passes >= f->max_iter)
