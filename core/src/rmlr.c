@@ -416,25 +416,33 @@ static double penalty(const fitter *f, const double *b)
     return s;
 }
 
-/* Fills the softmax cache from η and returns −(1/n) log-likelihood (also kept in f->loss). */
-static double softmax_fresh(fitter *f)
+/* The softmax cache of the linear predictors e (n × K) into ex, mx, sum; returns −(1/n)
+ * log-likelihood. */
+static double softmax_into(const fitter *f, const double *e, double *ex, double *mx, double *sum)
 {
     uint32_t K = f->K;
     double s = 0;
     for (size_t i = 0; i < f->n; i++) {
-        const double *e = f->eta + i * K;
-        double *x = f->ex + i * K, mx = e[0], sum = 0;
+        const double *r = e + i * K;
+        double *x = ex + i * K, m = r[0], t = 0;
         for (uint32_t l = 1; l < K; l++)
-            if (e[l] > mx)
-                mx = e[l];
+            if (r[l] > m)
+                m = r[l];
         for (uint32_t l = 0; l < K; l++)
-            sum += x[l] = exp(e[l] - mx);
-        f->mx[i] = mx;
-        f->sum[i] = sum;
-        s += mx + log(sum) - e[f->y[i]];
+            t += x[l] = exp(r[l] - m);
+        mx[i] = m;
+        sum[i] = t;
+        s += m + log(t) - r[f->y[i]];
     }
+    return s / (double)f->n;
+}
+
+/* Fills the softmax cache from η and returns −(1/n) log-likelihood (also kept in f->loss). */
+static double softmax_fresh(fitter *f)
+{
+    f->loss = softmax_into(f, f->eta, f->ex, f->mx, f->sum);
     f->cached = true;
-    return f->loss = s / (double)f->n;
+    return f->loss;
 }
 
 /* −(1/n) log-likelihood with class k's linear predictor replaced by ek (n values), the cache
@@ -803,21 +811,7 @@ static void shift_rows(fitter *f, const double *c, size_t step)
  * softmax_fresh computes it) goes to f->tex, f->tmx, f->tsum. */
 static double loss_at(fitter *f, const double *e)
 {
-    uint32_t K = f->K;
-    double s = 0;
-    for (size_t i = 0; i < f->n; i++) {
-        const double *r = e + i * K;
-        double *x = f->tex + i * K, mx = r[0], sum = 0;
-        for (uint32_t l = 1; l < K; l++)
-            if (r[l] > mx)
-                mx = r[l];
-        for (uint32_t l = 0; l < K; l++)
-            sum += x[l] = exp(r[l] - mx);
-        f->tmx[i] = mx;
-        f->tsum[i] = sum;
-        s += mx + log(sum) - r[f->y[i]];
-    }
-    return s / (double)f->n;
+    return softmax_into(f, e, f->tex, f->tmx, f->tsum);
 }
 
 /* Makes the trial of loss_at (η in f->et, its cache in tex, tmx, tsum) the current state, by
@@ -1150,8 +1144,9 @@ static void newton_remove(fitter *f, size_t r)
     f->nv = m - 1;
 }
 
-/* The Newton direction f->hd = −(UᵀU)⁻¹ g; returns the decrement gᵀ(UᵀU)⁻¹g. */
-static double newton_dir(fitter *f)
+/* The first half of the Newton direction: f->hd = y with Uᵀy = −g; returns the decrement
+ * gᵀ(UᵀU)⁻¹g = |y|² (enough to decide convergence; newton_back finishes the direction). */
+static double newton_fwd(fitter *f)
 {
     size_t m = f->nv, S = f->nv_cap;
     const double *H = f->hess, *g = f->hg;
@@ -1165,7 +1160,16 @@ static double newton_dir(fitter *f)
     }
     for (size_t a = 0; a < m; a++)
         dec += d[a] * d[a];
-    for (size_t a = m; a-- > 0;) { /* U d = y, four partial sums (they overlap) */
+    return dec;
+}
+
+/* The Newton direction f->hd = −(UᵀU)⁻¹ g from newton_fwd's y: U d = y. */
+static void newton_back(fitter *f)
+{
+    size_t m = f->nv, S = f->nv_cap;
+    const double *H = f->hess;
+    double *d = f->hd;
+    for (size_t a = m; a-- > 0;) { /* four partial sums (they overlap) */
         const double *u = H + a * S;
         double s0 = 0, s1 = 0, s2 = 0, s3 = 0;
         size_t b = a + 1;
@@ -1179,7 +1183,6 @@ static double newton_dir(fitter *f)
             s0 += u[b] * d[b];
         d[a] = (d[a] - ((s0 + s1) + (s2 + s3))) / u[a];
     }
-    return dec;
 }
 
 /* The step along f->hd, halved until the objective (*obj now) falls, each coefficient that
@@ -1272,16 +1275,17 @@ static bool newton_solve(fitter *f, double lambda, double *obj, bool enter)
             newton_grad(f, lambda, true); /* the order of the variables may have changed */
             fresh = true;
         }
-        double dec = newton_dir(f);
+        double dec = newton_fwd(f);
+        if (!(dec > 2 * NEWTON_TOL * f->tol * *obj))
+            return true;
         if (!fresh && !(dec <= NEWTON_SLOW * dec_prev)) { /* the old factor is too far off */
             if (!newton_factor(f, lambda))
                 return false;
             newton_grad(f, lambda, true);
             fresh = true;
-            dec = newton_dir(f);
+            dec = newton_fwd(f);
         }
-        if (!(dec > 2 * NEWTON_TOL * f->tol * *obj))
-            return true;
+        newton_back(f);
         if (!newton_line(f, lambda, obj)) {
             f->fac_ok = false;
             if (fresh)
