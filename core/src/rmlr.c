@@ -60,15 +60,48 @@
  *     neither the probabilities nor which one is the row's maximum, so the row maximum moves
  *     by the same value and the exp terms are kept (the intercepts' centring likewise).
  * These last two (the strong set and the kept cache) change the result in its last bits only.
- * What bounds the time is the number of cycles over the classes, not their cost: on the
- * corpus's Laban vectors a λ takes 13 cycles on average, and up to 80 towards the small-λ end of
- * the lasso path, where the objective falls by a constant factor of about 0.99 per cycle. There
- * the data are nearly separable and most samples share their probability between two classes,
- * whose Newton blocks are then almost collinear, and class-by-class (block Gauss–Seidel) steps
- * crawl; the screening above only makes each cycle cheaper. A proximal Newton loop with joint
- * per-feature K × K steps was tried and was about 2× slower (docs/BENCHMARKS.md): the flat
- * directions run across features (two classes' coefficient vectors moving together), so any
- * coordinate-wise inner solver crawls along them as well.
+ * Newton steps on the non-zero coefficients (options.solver AFFECT_RMLR_SOLVER_NEWTON, the
+ * default). The cycles alone are slow where the data are nearly separable (small λ): most
+ * samples share their probability between two classes, moving both classes' coefficient
+ * vectors together hardly changes the likelihood, and class-by-class steps crawl along those
+ * directions (the objective fell by a factor of about 0.99 per cycle for 60 cycles; a λ took
+ * 13 cycles on average). Those directions run across features, so no coordinate-wise solver
+ * escapes them (a proximal Newton loop with per-feature K × K blocks was tried and was 2×
+ * slower, docs/BENCHMARKS.md). Once the signs of the coefficients have settled the problem is
+ * smooth: with the zeros held at 0 and the signs s held, the objective is
+ *     −(1/n) log-likelihood + λα Σ s β + λ(1−α)/2 Σ β²
+ * in the m = (non-zero coefficients) + (K − 1 intercepts) variables (the last intercept is
+ * held: a shift common to all intercepts changes nothing), and Newton's method takes it in a
+ * few steps (newton_solve). Its Hessian, Σ_i (diag(p_i) − p_i p_iᵀ) ⊗ u_i u_iᵀ over the
+ * variables' features u_i (1 for an intercept), plus λ(1−α) on the coefficients' diagonal, is
+ * built sample by sample (n m²/2 multiply-adds) and factored by Cholesky (m³/6), with a tiny
+ * damping raised if a pivot fails (at α = 1 a feature whose K coefficients are all non-zero
+ * has an exactly flat direction). The factor is then kept: the next steps, and the next λ
+ * values while the variables stay the same, reuse it with a fresh gradient each step (a
+ * simplified Newton iteration; it is rebuilt when the decrement no longer falls by
+ * NEWTON_SLOW per step), a coefficient that reaches 0 is removed from it by Givens rotations
+ * (O(m²)), and one that must enter is appended by a bordering step (its Hessian column, n m,
+ * and one triangular solve, m²/2). Each step is halved until the objective falls, projected
+ * onto the signs' orthant (a coefficient that would change sign stops at 0). It converges
+ * when half the decrement gᵀH⁻¹g (the decrease the quadratic model promises) is at most
+ * NEWTON_TOL × tol × the objective; then the zero coefficients' KKT conditions are checked on
+ * the full gradient (computed anyway for the next λ's screening): those that fail (beyond
+ * KKT_SLACK √tol relative) join as variables with the sign of their gradient and Newton goes on;
+ * after KKT_ENTER_MAX such rounds the cycles take over. So a λ costs a few gradients and
+ * triangular solves when its pattern is the last one's, where it took 13 cycles.
+ * When to use it (fitter_solve, fitter_cycles): first at a λ whose predecessor converged by
+ * Newton or whose factor is still that of the non-zero coefficients, or when the cycles of
+ * the predecessor cost more than one factorisation; else after a cycle that changed no sign,
+ * when the cycles still expected (from the ratio of the last two decreases of the objective)
+ * cost more than a factorisation. Beyond NEWTON_MAX variables only the cycles run.
+ * At α = 1 the solution need not be unique: a feature whose K coefficients have as many
+ * positive as negative signs can be shifted along a stretch of equal objective. After each
+ * λ (with the Newton solver), newton_sparsify moves such a feature to the end of the stretch of
+ * smallest shift, where one coefficient is 0 (the sparsest point, as the cycles' coordinate moves
+ * tend to reach); the zero it leaves is exempt from the KKT check (flat_zero: there its gradient is
+ * within ±λ by the classes' gradients summing to 0).
+ * All of it is plain loops in fixed orders (sums with four partial accumulators in a fixed
+ * assignment), so results stay the same bytes for the same inputs and whatever the threads.
  *
  * Cross-validation keeps one fitter per worker and, after each λ, predicts the held-out
  * samples, so no path of coefficients is stored. Counts of misclassified samples are integers,
@@ -100,6 +133,30 @@
 #define DESCENT_SLACK 1e-13
 /* Sums over the samples computed together (see block_sums). */
 #define GRAD_BLOCK 4
+/* Newton steps (see newton_solve): variables at most (the Hessian's factor has this many
+ * squared doubles, 512 KiB per fitter); beyond, coordinate descent alone. */
+#define NEWTON_MAX 256
+/* Newton's stop: half the decrement at most NEWTON_TOL × tol × the objective (stricter than the
+ * cycles' tol: the rest of a Newton step is about the square of the last). */
+#define NEWTON_TOL 0.01
+/* Steps per call at most. */
+#define NEWTON_ITERS 20
+/* A kept factor is refreshed when the decrement falls by less than this factor in a step. */
+#define NEWTON_SLOW 0.25
+/* Damping added to the Hessian's diagonal, relative to its largest entry, and the tries (each
+ * 1000 times more) before giving up on a factorisation. */
+#define NEWTON_DAMP 1e-10
+#define NEWTON_DAMP_TRIES 6
+/* A zero coefficient's KKT condition, |g| ≤ λα, is taken as met within KKT_SLACK × √tol
+ * relative after Newton's method, whose gradients are accurate to about the square root of its
+ * decrement (1e-4 at the default tol 1e-7). */
+#define KKT_SLACK 0.3
+/* Rounds of Newton steps with entering coefficients per λ before the cycles take over. */
+#define KKT_ENTER_MAX 4
+/* The cycles switch to Newton when (cycles still expected) × (a cycle's work) exceeds
+ * NEWTON_GAIN × (a factorisation's work); a cycle's fixed work per class and sample. */
+#define NEWTON_GAIN 1.0
+#define CYCLE_FIXED 20.0
 
 struct affect_rmlr {
     uint32_t K, n_train, n_lambda, lambda_index;
@@ -144,6 +201,24 @@ typedef struct fitter {
     double *w, *r, *deta, *etak; /* n each */
     double *v, *bold;            /* p each */
     double *grad;                /* K × p: (1/n) Σ_i z_ij (y_ik − p_ik) at η (when grad_ok) */
+    double *s0;                  /* K × p + K: the state before a cycle */
+    double *et;                  /* n × K: a trial η, or the residuals (class-major) */
+    double *tex, *tmx, *tsum;    /* n × K, n, n: the trial's softmax cache (see loss_at) */
+    size_t nv_cap;               /* Newton variables at most (see fitter_newton) */
+    uint32_t *vk, *vj;           /* nv_cap each: variable q is β_{vk,vj} (vj = p: intercept) */
+    uint32_t *vend;              /* K: the end of class k's variables */
+    size_t nv;                   /* the Newton variables' count */
+    double *vs;                  /* nv_cap: their signs (0: intercept) */
+    bool newton_on;              /* options.solver: Newton steps allowed */
+    double kkt_slack;            /* KKT_SLACK √tol */
+    bool fac_ok;                 /* hess holds the factor for the variables vk, vj, vs */
+    double fac_mu;               /* the μ added to its diagonal */
+    bool newton_last;            /* the last λ converged by Newton steps */
+    double lambda_now;           /* the λ being fitted */
+    double work_now, work_last;  /* cycles' estimated work at this λ, at the last one */
+    double *hess, *hg, *hd, *hu; /* nv_cap², nv_cap, nv_cap, nv_cap */
+    double *hc;                  /* K */
+    double *prob, *one;          /* K × n (class-major), n */
     bool grad_ok;                /* grad is that of the current probabilities */
     bool cached;                 /* ex, mx, sum and loss are those of η */
     double loss;                 /* −(1/n) log-likelihood at η (when cached) */
@@ -168,10 +243,22 @@ static affect_status fitter_alloc(fitter *f, size_t n_cap, size_t p, uint32_t K,
         !affect_mul_size(p, 4, &t) || !affect_add_size(total, t, &total) ||
         !affect_mul_size(n_cap, 6, &t) || !affect_add_size(total, t, &total) ||
         !affect_add_size(total, K, &total) || !affect_add_size(total, kp, &total) ||
-        !affect_add_size(n_cap, p, &t))
+        !affect_add_size(total, nk, &total) || !affect_add_size(kp, K, &t) ||
+        !affect_add_size(total, t, &total) || !affect_add_size(n_cap, p, &t))
         return affect_fail(err, AFFECT_ERR_RANGE, "too many values: %zu samples × %zu features",
                            n_cap, p);
-    f->y = affect_malloc_array(t, sizeof *f->y); /* the labels, then the strong set */
+    size_t nv = kp + K - 1, nt, nn;
+    if (nv > NEWTON_MAX)
+        nv = NEWTON_MAX;
+    if (!affect_mul_size(nv, nv, &nn) || !affect_add_size(nn, 4 * nv, &nn) ||
+        !affect_add_size(nn, K, &nn) || !affect_add_size(nn, nk, &nn) ||
+        !affect_add_size(nn, n_cap, &nn) || !affect_add_size(nn, nk, &nn) ||
+        !affect_mul_size(n_cap, 2, &nt) || !affect_add_size(nn, nt, &nn) ||
+        !affect_add_size(total, nn, &total) || !affect_add_size(t, 2 * nv, &nt) ||
+        !affect_add_size(nt, K, &nt))
+        return affect_fail(err, AFFECT_ERR_RANGE, "too many values: %zu samples × %zu features",
+                           n_cap, p);
+    f->y = affect_malloc_array(nt, sizeof *f->y); /* the labels, the strong set, vk, vj */
     f->z = affect_malloc_array(total, sizeof *f->z);
     if (!f->y || !f->z) {
         fitter_free(f);
@@ -180,6 +267,10 @@ static affect_status fitter_alloc(fitter *f, size_t n_cap, size_t p, uint32_t K,
     f->p = p;
     f->K = K;
     f->strong = f->y + n_cap;
+    f->nv_cap = nv;
+    f->vk = f->strong + p;
+    f->vj = f->vk + nv;
+    f->vend = f->vj + nv;
     double *q = f->z + np;
     f->mean = q, q += p;
     f->sd = q, q += p;
@@ -195,7 +286,22 @@ static affect_status fitter_alloc(fitter *f, size_t n_cap, size_t p, uint32_t K,
     f->w = q, q += n_cap;
     f->r = q, q += n_cap;
     f->deta = q, q += n_cap;
-    f->etak = q;
+    f->etak = q, q += n_cap;
+    f->et = q, q += nk;
+    f->s0 = q, q += kp + K;
+    f->hess = q, q += nv * nv;
+    f->hg = q, q += nv;
+    f->hd = q, q += nv;
+    f->hu = q, q += nv;
+    f->vs = q, q += nv;
+    f->hc = q, q += K;
+    f->prob = q, q += nk;
+    f->tex = q, q += nk;
+    f->tmx = q, q += n_cap;
+    f->tsum = q, q += n_cap;
+    f->one = q;
+    for (size_t i = 0; i < n_cap; i++)
+        f->one[i] = 1.0;
     return AFFECT_OK;
 }
 
@@ -218,8 +324,13 @@ static void fitter_load(fitter *f, const double *x, size_t n_all, const uint32_t
     f->alpha = alpha;
     f->max_iter = o->max_iter;
     f->tol = o->tol;
+    f->newton_on = o->solver == AFFECT_RMLR_SOLVER_NEWTON;
+    f->kkt_slack = KKT_SLACK * sqrt(o->tol);
     f->cached = false;
     f->grad_ok = false;
+    f->fac_ok = false;
+    f->newton_last = false;
+    f->work_last = 0;
     for (size_t i = 0, row = 0; i < n_all; i++) {
         if (fold_of && fold_of[i] == skip)
             continue;
@@ -305,25 +416,33 @@ static double penalty(const fitter *f, const double *b)
     return s;
 }
 
-/* Fills the softmax cache from η and returns −(1/n) log-likelihood (also kept in f->loss). */
-static double softmax_fresh(fitter *f)
+/* The softmax cache of the linear predictors e (n × K) into ex, mx, sum; returns −(1/n)
+ * log-likelihood. */
+static double softmax_into(const fitter *f, const double *e, double *ex, double *mx, double *sum)
 {
     uint32_t K = f->K;
     double s = 0;
     for (size_t i = 0; i < f->n; i++) {
-        const double *e = f->eta + i * K;
-        double *x = f->ex + i * K, mx = e[0], sum = 0;
+        const double *r = e + i * K;
+        double *x = ex + i * K, m = r[0], t = 0;
         for (uint32_t l = 1; l < K; l++)
-            if (e[l] > mx)
-                mx = e[l];
+            if (r[l] > m)
+                m = r[l];
         for (uint32_t l = 0; l < K; l++)
-            sum += x[l] = exp(e[l] - mx);
-        f->mx[i] = mx;
-        f->sum[i] = sum;
-        s += mx + log(sum) - e[f->y[i]];
+            t += x[l] = exp(r[l] - m);
+        mx[i] = m;
+        sum[i] = t;
+        s += m + log(t) - r[f->y[i]];
     }
+    return s / (double)f->n;
+}
+
+/* Fills the softmax cache from η and returns −(1/n) log-likelihood (also kept in f->loss). */
+static double softmax_fresh(fitter *f)
+{
+    f->loss = softmax_into(f, f->eta, f->ex, f->mx, f->sum);
     f->cached = true;
-    return f->loss = s / (double)f->n;
+    return f->loss;
 }
 
 /* −(1/n) log-likelihood with class k's linear predictor replaced by ek (n values), the cache
@@ -688,13 +807,587 @@ static void shift_rows(fitter *f, const double *c, size_t step)
     }
 }
 
+/* −(1/n) log-likelihood at the linear predictors e (n × K); the trial's softmax cache (as
+ * softmax_fresh computes it) goes to f->tex, f->tmx, f->tsum. */
+static double loss_at(fitter *f, const double *e)
+{
+    return softmax_into(f, e, f->tex, f->tmx, f->tsum);
+}
+
+/* Makes the trial of loss_at (η in f->et, its cache in tex, tmx, tsum) the current state, by
+ * swapping the buffers. */
+static void take_trial(fitter *f, double loss)
+{
+    double *t;
+    t = f->eta, f->eta = f->et, f->et = t;
+    t = f->ex, f->ex = f->tex, f->tex = t;
+    t = f->mx, f->mx = f->tmx, f->tmx = t;
+    t = f->sum, f->sum = f->tsum, f->tsum = t;
+    f->cached = true;
+    f->loss = loss;
+}
+
+/* Whether the coefficients have the signs (and zeros) of the state s0. */
+static bool same_pattern(const fitter *f, const double *s0)
+{
+    size_t kp = (size_t)f->K * f->p;
+    for (size_t q = 0; q < kp; q++)
+        if ((f->beta[q] > 0) != (s0[q] > 0) || (f->beta[q] < 0) != (s0[q] < 0))
+            return false;
+    return true;
+}
+
+/* In-place Cholesky factor U (upper, UᵀU = A + μI) of the m × m matrix a (row-major with row
+ * stride S, upper triangle read and written); false when a pivot is not positive. The updates
+ * run along rows (contiguous, independent: they vectorise), each entry's in a fixed order. */
+static bool cholesky_upper(double *a, size_t m, size_t S, double mu)
+{
+    for (size_t c = 0; c < m; c++) {
+        double *uc = a + c * S, d = uc[c] + mu;
+        if (!(d > 0))
+            return false;
+        d = sqrt(d);
+        uc[c] = d;
+        for (size_t s = c + 1; s < m; s++)
+            uc[s] /= d;
+        for (size_t r = c + 1; r < m; r++) {
+            double fr = uc[r], *ur = a + r * S;
+            for (size_t s = r; s < m; s++)
+                ur[s] -= fr * uc[s];
+        }
+    }
+    return true;
+}
+
+/* Sign of a coefficient's variable: +1, −1, or 0 (zero: not a variable). */
+static double sign_of(double b)
+{
+    return b > 0 ? 1 : b < 0 ? -1 : 0;
+}
+
+/* Whether the zero coefficient (k0, j) needs no KKT check at α = 1: the feature's other K − 1
+ * coefficients are all non-zero with signs s_k summing to −1, 0 or 1. The log-likelihood's
+ * gradient sums to 0 over the classes (Σ_k (1{y = k} − p_k) = 0), so where the others are
+ * stationary (g_k = λ s_k) g_k0 = −λ Σ s_k, within [−λ, λ]: such a zero is at the end of a
+ * flat stretch (newton_sparsify puts it there) and entering it cannot lower the objective. */
+static bool flat_zero(const fitter *f, uint32_t k0, size_t j)
+{
+    if (f->alpha < 1)
+        return false;
+    double sum = 0;
+    for (uint32_t k = 0; k < f->K; k++) {
+        double b = f->beta[(size_t)k * f->p + j];
+        if (k == k0)
+            continue;
+        if (b == 0)
+            return false;
+        sum += sign_of(b);
+    }
+    return fabs(sum) <= 1;
+}
+
+/* The sign an entering zero coefficient (class k, feature j of the strong set) would move to:
+ * that of its log-likelihood gradient when it exceeds λα (beyond the slack), else 0. */
+static double entering_sign(const fitter *f, uint32_t k, size_t j)
+{
+    double la = f->lambda_now * f->alpha, g = f->grad[(size_t)k * f->p + j];
+    if (flat_zero(f, k, j))
+        return 0;
+    return g > la * (1 + f->kkt_slack) ? 1 : g < -la * (1 + f->kkt_slack) ? -1 : 0;
+}
+
+/* The Newton variables: the non-zero coefficients (with enter, also the zero ones of the
+ * strong set whose KKT condition fails, f->grad being current), class by class, and every
+ * class's intercept but the last (the softmax ignores a common shift), with their signs;
+ * false when there are more than nv_cap. */
+static bool newton_vars(fitter *f, bool enter)
+{
+    size_t p = f->p, m = 0;
+    uint32_t K = f->K;
+    for (uint32_t k = 0; k < K; k++)
+        for (size_t j = 0; j <= p; j++) {
+            double sg = 0;
+            if (j < p) {
+                sg = sign_of(f->beta[(size_t)k * p + j]);
+                if (sg == 0 && enter && f->strong[j])
+                    sg = entering_sign(f, k, j);
+                if (sg == 0)
+                    continue;
+            } else if (k + 1 == K) {
+                continue;
+            }
+            if (m == f->nv_cap)
+                return false;
+            f->vk[m] = k;
+            f->vj[m] = (uint32_t)j;
+            f->vs[m] = sg;
+            m++;
+        }
+    f->nv = m;
+    return true;
+}
+
+/* Whether the factor's variables are still the non-zero coefficients, signs and all. */
+static bool newton_vars_current(const fitter *f)
+{
+    size_t p = f->p, kp = (size_t)f->K * p, nz = 0, coef = 0;
+    for (size_t q = 0; q < kp; q++)
+        nz += f->beta[q] != 0;
+    for (size_t a = 0; a < f->nv; a++) {
+        if (f->vj[a] == p)
+            continue;
+        if (sign_of(f->beta[(size_t)f->vk[a] * p + f->vj[a]]) != f->vs[a])
+            return false;
+        coef++;
+    }
+    return coef == nz;
+}
+
+/* The probabilities (class-major, f->prob) at η (the softmax cache current) and, with g, the
+ * gradient of the objective in the Newton variables (f->hg; the penalty's from the signs). */
+static void newton_grad(fitter *f, double lambda, bool g_too)
+{
+    size_t n = f->n, p = f->p, m = f->nv;
+    uint32_t K = f->K;
+    double la = lambda * f->alpha, l2 = lambda * (1 - f->alpha);
+    double *P = f->prob, *R = f->et, *g = f->hg;
+    for (size_t i = 0; i < n; i++)
+        for (uint32_t k = 0; k < K; k++) {
+            double pk = f->ex[i * K + k] / f->sum[i];
+            P[(size_t)k * n + i] = pk;
+            R[(size_t)k * n + i] = (f->y[i] == k) - pk;
+        }
+    if (!g_too)
+        return;
+    for (size_t a = 0; a < m; a++) {
+        uint32_t ka = f->vk[a], ja = f->vj[a];
+        const double *za = ja < p ? f->z + (size_t)ja * n : f->one, *ra = R + (size_t)ka * n;
+        double s0 = 0, s1 = 0, s2 = 0, s3 = 0;
+        size_t i = 0;
+        for (; i + 4 <= n; i += 4) {
+            s0 += za[i] * ra[i];
+            s1 += za[i + 1] * ra[i + 1];
+            s2 += za[i + 2] * ra[i + 2];
+            s3 += za[i + 3] * ra[i + 3];
+        }
+        for (; i < n; i++)
+            s0 += za[i] * ra[i];
+        g[a] = -((s0 + s1) + (s2 + s3)) / (double)n;
+        if (ja < p)
+            g[a] += f->vs[a] * la + l2 * f->beta[(size_t)ka * p + ja];
+    }
+}
+
+/* The Hessian of the objective in the Newton variables at f->prob, factored (UᵀU, upper, in
+ * f->hess, row stride nv_cap); false when it cannot be (f->fac_ok tells). The variables are
+ * first ordered by class (a stable counting sort: appends may have mixed them). */
+static bool newton_factor(fitter *f, double lambda)
+{
+    size_t n = f->n, p = f->p, m = f->nv, S = f->nv_cap;
+    uint32_t K = f->K;
+    double l2 = lambda * (1 - f->alpha), *P = f->prob, *H = f->hess, *u = f->hu, *cls = f->hc;
+    double *dg = f->hd;
+    f->fac_ok = false;
+    bool sorted = true;
+    for (size_t a = 1; a < m && sorted; a++)
+        sorted = f->vk[a - 1] <= f->vk[a];
+    if (!sorted) { /* through the Hessian's rows as scratch (rebuilt below) */
+        uint32_t *tk = (uint32_t *)(void *)H, *tj = tk + m;
+        double *ts = H + m;
+        size_t q = 0;
+        for (uint32_t k = 0; k < K; k++)
+            for (size_t a = 0; a < m; a++)
+                if (f->vk[a] == k) {
+                    tk[q] = k;
+                    tj[q] = f->vj[a];
+                    ts[q] = f->vs[a];
+                    q++;
+                }
+        memcpy(f->vk, tk, m * sizeof *tk);
+        memcpy(f->vj, tj, m * sizeof *tj);
+        memcpy(f->vs, ts, m * sizeof *ts);
+    }
+    for (uint32_t k = 0, a = 0; k < K; k++) {
+        while (a < m && f->vk[a] == k)
+            a++;
+        f->vend[k] = a;
+    }
+    /* The upper triangle, sample by sample: H_ab += A_i[k_a][k_b] u_a u_b with
+     * A_i = diag(p_i) − p_i p_iᵀ and u_a = z_{i, j_a} (1 for an intercept); along a row the
+     * factor A_i[k_a][k_b] u_a is constant within each class's range and the update is an
+     * axpy. Every entry sums its samples in order. */
+    for (size_t a = 0; a < m; a++)
+        memset(H + a * S + a, 0, (m - a) * sizeof *H);
+    for (size_t i = 0; i < n; i++) {
+        for (size_t a = 0; a < m; a++)
+            u[a] = f->vj[a] < p ? f->z[(size_t)f->vj[a] * n + i] : 1.0;
+        for (size_t a = 0; a < m; a++) {
+            uint32_t ka = f->vk[a];
+            double pa = P[(size_t)ka * n + i];
+            for (uint32_t l = ka; l < K; l++)
+                cls[l] = (l == ka ? pa * (1 - pa) : -pa * P[(size_t)l * n + i]) * u[a];
+            double *h = H + a * S;
+            size_t b = a;
+            for (uint32_t l = ka; l < K; l++) {
+                double c = cls[l];
+                for (size_t e = f->vend[l]; b < e; b++)
+                    h[b] += c * u[b];
+            }
+        }
+    }
+    double hmax = 0;
+    for (size_t a = 0; a < m; a++) {
+        for (size_t b = a; b < m; b++)
+            H[a * S + b] /= (double)n;
+        if (f->vj[a] < p)
+            H[a * S + a] += l2;
+        if (H[a * S + a] > hmax)
+            hmax = H[a * S + a];
+    }
+    /* Cholesky of H + μI, μ tiny and raised while a pivot fails (at α = 1 a feature whose K
+     * coefficients are all non-zero has a flat direction); the lower triangle keeps H for a
+     * retry, dg its diagonal. */
+    for (size_t a = 0; a < m; a++) {
+        dg[a] = H[a * S + a];
+        for (size_t b = a + 1; b < m; b++)
+            H[b * S + a] = H[a * S + b];
+    }
+    double mu = NEWTON_DAMP * hmax;
+    for (int tries = 0; tries < NEWTON_DAMP_TRIES; tries++, mu *= 1e3) {
+        if (tries > 0)
+            for (size_t a = 0; a < m; a++) {
+                H[a * S + a] = dg[a];
+                for (size_t b = a + 1; b < m; b++)
+                    H[a * S + b] = H[b * S + a];
+            }
+        if (cholesky_upper(H, m, S, mu)) {
+            f->fac_ok = true;
+            f->fac_mu = mu;
+            break;
+        }
+    }
+    return f->fac_ok;
+}
+
+/* Appends the zero coefficient (k, j) with sign sg to the factor: its Hessian column at
+ * f->prob (n m multiply-adds) and one forward substitution (m²/2). False when it cannot be
+ * (no room, or the new pivot is not positive: the factor being of an older point, the
+ * bordered matrix need not be positive definite); the factor is then left as it was. */
+static bool newton_append(fitter *f, double lambda, uint32_t k, size_t j, double sg)
+{
+    size_t n = f->n, p = f->p, m = f->nv, S = f->nv_cap;
+    double *H = f->hess, *c = f->hu, *P = f->prob;
+    const double *zj = f->z + j * n, *pk = P + (size_t)k * n;
+    if (m == S)
+        return false;
+    for (size_t a = 0; a < m; a++) {
+        uint32_t ka = f->vk[a];
+        const double *za = f->vj[a] < p ? f->z + (size_t)f->vj[a] * n : f->one;
+        const double *pa = P + (size_t)ka * n;
+        double s = 0;
+        if (ka == k)
+            for (size_t i = 0; i < n; i++)
+                s += pk[i] * (1 - pk[i]) * za[i] * zj[i];
+        else
+            for (size_t i = 0; i < n; i++)
+                s -= pa[i] * pk[i] * za[i] * zj[i];
+        c[a] = s / (double)n;
+    }
+    double hnn = 0;
+    for (size_t i = 0; i < n; i++)
+        hnn += pk[i] * (1 - pk[i]) * zj[i] * zj[i];
+    hnn = hnn / (double)n + lambda * (1 - f->alpha) + f->fac_mu;
+    for (size_t a = 0; a < m; a++) { /* Uᵀc = h, by columns */
+        c[a] /= H[a * S + a];
+        for (size_t b = a + 1; b < m; b++)
+            c[b] -= H[a * S + b] * c[a];
+    }
+    double d = hnn;
+    for (size_t a = 0; a < m; a++)
+        d -= c[a] * c[a];
+    if (!(d > NEWTON_DAMP * hnn))
+        return false;
+    for (size_t a = 0; a < m; a++)
+        H[a * S + m] = c[a];
+    H[m * S + m] = sqrt(d);
+    f->vk[m] = k;
+    f->vj[m] = (uint32_t)j;
+    f->vs[m] = sg;
+    f->nv = m + 1;
+    return true;
+}
+
+/* Removes variable r from the factor: its column deleted, the rows below made triangular
+ * again by Givens rotations (the product UᵀU is that of the other variables). O(m²). */
+static void newton_remove(fitter *f, size_t r)
+{
+    size_t m = f->nv, S = f->nv_cap;
+    double *H = f->hess;
+    for (size_t i = 0; i < m; i++) {
+        double *row = H + i * S;
+        memmove(row + r, row + r + 1, (m - 1 - r) * sizeof *row);
+    }
+    for (size_t c = r; c + 1 < m; c++) {
+        double *rc = H + c * S, *rn = H + (c + 1) * S;
+        double x = rc[c], y = rn[c], h = hypot(x, y);
+        double cs = x / h, sn = y / h;
+        for (size_t q = c; q + 1 < m; q++) {
+            double a = rc[q], b = rn[q];
+            rc[q] = cs * a + sn * b;
+            rn[q] = -sn * a + cs * b;
+        }
+        rn[c] = 0;
+    }
+    memmove(f->vk + r, f->vk + r + 1, (m - 1 - r) * sizeof *f->vk);
+    memmove(f->vj + r, f->vj + r + 1, (m - 1 - r) * sizeof *f->vj);
+    memmove(f->vs + r, f->vs + r + 1, (m - 1 - r) * sizeof *f->vs);
+    f->nv = m - 1;
+}
+
+/* The first half of the Newton direction: f->hd = y with Uᵀy = −g; returns the decrement
+ * gᵀ(UᵀU)⁻¹g = |y|² (enough to decide convergence; newton_back finishes the direction). */
+static double newton_fwd(fitter *f)
+{
+    size_t m = f->nv, S = f->nv_cap;
+    const double *H = f->hess, *g = f->hg;
+    double *d = f->hd, dec = 0;
+    for (size_t a = 0; a < m; a++)
+        d[a] = -g[a];
+    for (size_t a = 0; a < m; a++) { /* Uᵀy = −g, by columns */
+        d[a] /= H[a * S + a];
+        for (size_t b = a + 1; b < m; b++)
+            d[b] -= H[a * S + b] * d[a];
+    }
+    for (size_t a = 0; a < m; a++)
+        dec += d[a] * d[a];
+    return dec;
+}
+
+/* The Newton direction f->hd = −(UᵀU)⁻¹ g from newton_fwd's y: U d = y. */
+static void newton_back(fitter *f)
+{
+    size_t m = f->nv, S = f->nv_cap;
+    const double *H = f->hess;
+    double *d = f->hd;
+    for (size_t a = m; a-- > 0;) { /* four partial sums (they overlap) */
+        const double *u = H + a * S;
+        double s0 = 0, s1 = 0, s2 = 0, s3 = 0;
+        size_t b = a + 1;
+        for (; b + 4 <= m; b += 4) {
+            s0 += u[b] * d[b];
+            s1 += u[b + 1] * d[b + 1];
+            s2 += u[b + 2] * d[b + 2];
+            s3 += u[b + 3] * d[b + 3];
+        }
+        for (; b < m; b++)
+            s0 += u[b] * d[b];
+        d[a] = (d[a] - ((s0 + s1) + (s2 + s3))) / u[a];
+    }
+}
+
+/* The step along f->hd, halved until the objective (*obj now) falls, each coefficient that
+ * would leave its sign stopping at 0 (the step projected onto the signs' orthant). Returns
+ * whether a step was taken. */
+static bool newton_line(fitter *f, double lambda, double *obj)
+{
+    size_t n = f->n, p = f->p, m = f->nv;
+    uint32_t K = f->K;
+    const double *d = f->hd;
+    double *et = f->et, pen0 = total_penalty(f), o0 = *obj;
+    for (int h = 0; h <= MAX_HALVINGS; h++) {
+        double t = ldexp(1.0, -h), pen = pen0;
+        memcpy(et, f->eta, n * K * sizeof *et);
+        for (size_t a = 0; a < m; a++) {
+            uint32_t ka = f->vk[a], ja = f->vj[a];
+            double delta = t * d[a];
+            if (ja < p) {
+                double b = f->beta[(size_t)ka * p + ja], nb = b + delta;
+                if (f->vs[a] * nb <= 0)
+                    nb = 0;
+                delta = nb - b;
+                pen += f->alpha * (fabs(nb) - fabs(b)) + 0.5 * (1 - f->alpha) * (nb * nb - b * b);
+            }
+            const double *za = ja < p ? f->z + (size_t)ja * n : f->one;
+            for (size_t i = 0; i < n; i++)
+                et[i * K + ka] += za[i] * delta;
+        }
+        double lo = loss_at(f, et), o = lo + lambda * pen;
+        if (!(o < o0 - DESCENT_SLACK * (1 + fabs(o0))))
+            continue;
+        for (size_t a = 0; a < m; a++) {
+            uint32_t ka = f->vk[a], ja = f->vj[a];
+            if (ja == p) {
+                f->beta0[ka] += t * d[a];
+                continue;
+            }
+            double *bp = f->beta + (size_t)ka * p + ja, nb = *bp + t * d[a];
+            *bp = f->vs[a] * nb <= 0 ? 0 : nb;
+        }
+        take_trial(f, lo);
+        f->grad_ok = false;
+        *obj = lo + lambda * total_penalty(f);
+        return true;
+    }
+    return false;
+}
+
+/* Newton's method on the smooth problem that holds the coefficients' signs (the zeros at 0),
+ * from the current state; *obj: the objective, updated. The factor of the Hessian is kept
+ * while the variables are the same (a simplified Newton iteration: the gradient is new at
+ * every step) and rebuilt when the decrement does not fall fast enough or a step fails; a
+ * coefficient that reaches 0 leaves the variables (the factor downdated). With enter, the zero
+ * coefficients of the strong set whose KKT condition fails (f->grad current) join them first
+ * (the factor bordered). Returns true when converged: the decrement's half (the decrease the
+ * quadratic model predicts) is at most tol × the objective; false when a step fails on a
+ * fresh factor, there are too many variables, or after NEWTON_ITERS steps. The caller then
+ * checks the zero coefficients' KKT conditions. */
+static bool newton_solve(fitter *f, double lambda, double *obj, bool enter)
+{
+    f->lambda_now = lambda;
+    if (!f->cached)
+        softmax_fresh(f);
+    if (!f->fac_ok || !newton_vars_current(f)) {
+        f->fac_ok = false;
+        if (!newton_vars(f, enter))
+            return false;
+    } else if (enter) {
+        newton_grad(f, lambda, false);
+        for (uint32_t k = 0; k < f->K && f->fac_ok; k++)
+            for (size_t j = 0; j < f->p && f->fac_ok; j++) {
+                double sg;
+                if (!f->strong[j] || f->beta[(size_t)k * f->p + j] != 0 ||
+                    (sg = entering_sign(f, k, j)) == 0)
+                    continue;
+                if (!newton_append(f, lambda, k, j, sg)) {
+                    f->fac_ok = false;
+                    if (!newton_vars(f, true))
+                        return false;
+                }
+            }
+    }
+    double dec_prev = INFINITY;
+    for (int it = 0; it < NEWTON_ITERS; it++) {
+        bool fresh = false;
+        newton_grad(f, lambda, true);
+        if (!f->fac_ok) {
+            if (!newton_factor(f, lambda))
+                return false;
+            newton_grad(f, lambda, true); /* the order of the variables may have changed */
+            fresh = true;
+        }
+        double dec = newton_fwd(f);
+        if (!(dec > 2 * NEWTON_TOL * f->tol * *obj))
+            return true;
+        if (!fresh && !(dec <= NEWTON_SLOW * dec_prev)) { /* the old factor is too far off */
+            if (!newton_factor(f, lambda))
+                return false;
+            newton_grad(f, lambda, true);
+            fresh = true;
+            dec = newton_fwd(f);
+        }
+        newton_back(f);
+        if (!newton_line(f, lambda, obj)) {
+            f->fac_ok = false;
+            if (fresh)
+                return false;
+            continue;
+        }
+        for (size_t a = f->nv; a-- > 0;) /* the coefficients that reached 0 leave */
+            if (f->vj[a] < f->p && f->beta[(size_t)f->vk[a] * f->p + f->vj[a]] == 0)
+                newton_remove(f, a);
+        dec_prev = dec;
+    }
+    return false;
+}
+
+/* After Newton's method converged: a feature whose K coefficients are all non-zero may sit
+ * inside a flat stretch of the penalty (at α = 1 with as many positive as negative
+ * coefficients, any common shift between the two middle values leaves the objective
+ * unchanged). Coordinate descent stops at an end of it, where one coefficient is 0; this
+ * moves there too (the shift to the coefficient value of smallest magnitude among those that
+ * do not raise the penalty beyond rounding), so the solution is as sparse. The
+ * probabilities do not change (η's rows shift by a common value); the coefficient that
+ * becomes 0 leaves Newton's variables (the factor downdated). */
+static void newton_sparsify(fitter *f)
+{
+    size_t p = f->p, n = f->n;
+    uint32_t K = f->K;
+    for (size_t j = 0; j < p; j++) {
+        const double *b = f->beta + j;
+        bool all = f->strong[j];
+        for (uint32_t k = 0; k < K && all; k++)
+            all = b[(size_t)k * p] != 0;
+        if (!all)
+            continue;
+        double p0 = 0;
+        for (uint32_t k = 0; k < K; k++)
+            p0 += f->alpha * fabs(b[(size_t)k * p]) +
+                  0.5 * (1 - f->alpha) * b[(size_t)k * p] * b[(size_t)k * p];
+        double bar = p0 + DESCENT_SLACK * (1 + p0), best = 0;
+        bool found = false;
+        for (uint32_t m = 0; m < K; m++) {
+            double c = b[(size_t)m * p], pc = 0;
+            for (uint32_t k = 0; k < K; k++) {
+                double d = b[(size_t)k * p] - c;
+                pc += f->alpha * fabs(d) + 0.5 * (1 - f->alpha) * d * d;
+            }
+            if (pc <= bar && (!found || fabs(c) < fabs(best))) {
+                best = c;
+                found = true;
+            }
+        }
+        if (!found)
+            continue;
+        for (uint32_t k = 0; k < K; k++) {
+            double *bk = f->beta + (size_t)k * p + j;
+            *bk = *bk == best ? 0 : *bk - best;
+        }
+        const double *zc = f->z + j * n;
+        for (size_t i = 0; i < n; i++)
+            f->deta[i] = best * zc[i];
+        shift_rows(f, f->deta, 1);
+        for (size_t a = f->nv; f->fac_ok && a-- > 0;)
+            if (f->vj[a] == j && f->beta[(size_t)f->vk[a] * p + j] == 0)
+                newton_remove(f, a);
+    }
+}
+
+/* The work of a factorisation for the current non-zero coefficients (n m²/2 + m³/6, in
+ * multiply-adds) and of a cycle that made `passes` passes over ns features. */
+static double newton_work(const fitter *f)
+{
+    size_t nz = 0, kp = (size_t)f->K * f->p;
+    for (size_t q = 0; q < kp; q++)
+        nz += f->beta[q] != 0;
+    double mv = (double)(nz + f->K - 1), nd = (double)f->n;
+    return nd * mv * mv / 2 + mv * mv * mv / 6;
+}
+
+static double cycle_work(const fitter *f, uint32_t passes)
+{
+    size_t ns = 0;
+    for (size_t j = 0; j < f->p; j++)
+        ns += f->strong[j];
+    return (double)passes * (double)f->n * (double)ns + (double)f->K * (double)f->n * CYCLE_FIXED;
+}
+
 /* Cycles over the classes of the strong set at λ until the penalised objective settles (or
- * *passes reaches max_iter); returns whether it settled. */
-static bool fitter_cycles(fitter *f, double lambda, uint32_t *passes)
+ * *passes reaches max_iter), switching to Newton's method (newton_solve) when its signs hold
+ * and it is expected to be cheaper (see below). Returns 0: not converged, 1: converged by the
+ * cycles, 2: converged by Newton (the zero coefficients' KKT conditions still to check). With
+ * newton_first, Newton's method is tried before the first cycle. */
+static int fitter_cycles(fitter *f, double lambda, uint32_t *passes, bool newton_first, bool enter)
 {
     double obj = (f->cached ? f->loss : softmax_fresh(f)) + lambda * total_penalty(f);
-    double loss = obj;
+    double loss = obj, prev_delta = -1;
+    size_t kp = (size_t)f->K * f->p;
+    if (newton_first && newton_solve(f, lambda, &obj, enter))
+        return 2;
+    loss = f->loss;
     for (;;) {
+        uint32_t passes_before = *passes;
+        memcpy(f->s0, f->beta, kp * sizeof *f->beta);
+        memcpy(f->s0 + kp, f->beta0, f->K * sizeof *f->beta0);
         for (uint32_t k = 0; k < f->K; k++)
             class_step(f, k, lambda, passes, &loss);
         /* Adding c_j to feature j's coefficients of every class leaves the probabilities
@@ -715,11 +1408,29 @@ static bool fitter_cycles(fitter *f, double lambda, uint32_t *passes)
             shift_rows(f, d, 1);
         }
         double now = loss + lambda * total_penalty(f); /* centring keeps the loss */
+        double cw = cycle_work(f, *passes - passes_before);
+        f->work_now += cw;
         if (fabs(obj - now) <= f->tol * now)
-            return true;
+            return 1;
+        /* Newton when the signs held through the cycle and the cycles still expected (from
+         * the last two decreases' ratio) cost more than a factorisation. */
+        double delta = obj - now;
+        bool newton = false;
+        if (f->newton_on && prev_delta > 0 && delta > 0 && same_pattern(f, f->s0)) {
+            double rho = delta / prev_delta;
+            double left = rho >= 1 ? 1e30 : log(f->tol * now / delta) / log(rho);
+            newton = left * cw > NEWTON_GAIN * newton_work(f);
+        }
+        prev_delta = delta;
+        if (newton) {
+            if (newton_solve(f, lambda, &now, false))
+                return 2;
+            prev_delta = -1;
+            loss = f->loss;
+        }
         obj = now;
         if (*passes >= f->max_iter)
-            return false;
+            return 0;
     }
 }
 
@@ -744,23 +1455,54 @@ static bool fitter_solve(fitter *f, double lambda, double lambda_prev)
             nz = f->beta[(size_t)k * f->p + j] != 0;
         f->strong[j] = f->sd[j] != 0 && (nz || grad_max(f, j) >= thr);
     }
+    bool newton_first = f->newton_on && (f->newton_last || (f->fac_ok && newton_vars_current(f)) ||
+                                         f->work_last > NEWTON_GAIN * newton_work(f));
+    bool enter = false;
+    f->work_now = 0;
+    int kkt_fails = 0;
     for (;;) {
-        converged = fitter_cycles(f, lambda, &passes);
+        int how = fitter_cycles(f, lambda, &passes, newton_first, enter);
+        converged = how != 0;
+        if (how != 0 && f->newton_on)
+            newton_sparsify(f);
         fitter_gradients(f, 2); /* the next λ's screening needs them all */
         f->grad_ok = true;
+        newton_first = enter = false;
+        f->newton_last = how == 2;
         size_t added = 0;
         for (size_t j = 0; j < f->p; j++)
             if (!f->strong[j] && f->sd[j] != 0 && grad_max(f, j) > la) {
                 f->strong[j] = 1;
                 added++;
             }
+        if (how == 2) {
+            /* Newton held the zeros at 0: their KKT conditions, as a cycle would see them */
+            bool ok = added == 0;
+            for (size_t j = 0; j < f->p && ok; j++)
+                for (uint32_t k = 0; k < f->K && f->strong[j] && ok; k++)
+                    ok = f->beta[(size_t)k * f->p + j] != 0 ||
+                         fabs(f->grad[(size_t)k * f->p + j]) <= la * (1 + f->kkt_slack) ||
+                         flat_zero(f, k, j);
+            if (ok)
+                break;
+            converged = false;
+            f->newton_last = false;
+            if (passes >= f->max_iter)
+                break;
+            /* the failing ones join Newton's variables; after KKT_ENTER_MAX rounds the
+             * cycles take over */
+            newton_first = enter = ++kkt_fails <= KKT_ENTER_MAX;
+            continue;
+        }
         if (added == 0)
             break;
+        f->newton_last = false;
         if (passes >= f->max_iter) {
             converged = false;
             break;
         }
     }
+    f->work_last = f->work_now;
     double m = 0;
     for (uint32_t k = 0; k < f->K; k++)
         m += f->beta0[k];
@@ -839,6 +1581,9 @@ static affect_status check_options(const affect_rmlr_options *o, bool cv, affect
     if (!(o->tol > 0 && isfinite(o->tol)))
         return affect_fail(err, AFFECT_ERR_INVALID, "tol must be a positive finite number, got %g",
                            o->tol);
+    if (o->solver > AFFECT_RMLR_SOLVER_CD)
+        return affect_fail(err, AFFECT_ERR_INVALID, "solver must be 0 (Newton) or 1 (CD), got %u",
+                           o->solver);
     return AFFECT_OK;
 }
 
@@ -1021,9 +1766,9 @@ typedef struct cv_run {
     uint32_t n_alpha, L;
     const double *paths; /* n_alpha × L */
     const affect_rmlr_options *o;
-    size_t *miss;  /* n_alpha × L */
-    mtx_t *lock;   /* guards next and finished; NULL when the calling thread works alone */
-    uint32_t next; /* the next α to take */
+    size_t *miss;      /* n_alpha × L */
+    mtx_t *lock;       /* guards next and finished; NULL when the calling thread works alone */
+    uint32_t next;     /* the next α to take */
     uint32_t finished; /* workers that returned */
 } cv_run;
 

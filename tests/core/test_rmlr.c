@@ -196,9 +196,12 @@ static void test_strong_rule_kkt(void **state)
     for (uint32_t l = 0; l < L; l++)
         assert_int_equal(conv[l], 1);
     check_kkt(x, N, y, K, 1.0, lam, L, beta, beta0, 2e-6);
-    /* both in at the end of the path, with opposite signs (feature 1 cancels s) */
+    /* both in at the end of the path, with opposite signs (feature 1 cancels s); with 2
+     * classes and α = 1 only the differences β_1j − β_0j are identified (any split of one
+     * between the two classes has the same penalty), so those are compared */
     const double *last = beta + (size_t)(L - 1) * K * P;
-    assert_true(last[P] != 0 && last[P + 1] != 0 && (last[P] > 0) != (last[P + 1] > 0));
+    double d0 = last[P] - last[0], d1 = last[P + 1] - last[1];
+    assert_true(d0 != 0 && d1 != 0 && (d0 > 0) != (d1 > 0));
     /* correlated features (three latent factors, one carrying the class) along whole paths */
     enum { N2 = 100, K2 = 3, L2 = 30 };
     static const double alphas[] = {0.1, 0.5, 1.0};
@@ -227,6 +230,107 @@ static void test_strong_rule_kkt(void **state)
     }
     free(x);
     free(beta);
+}
+
+/* The penalised objective of one fit (β K × P, β0 K) on standardized z. */
+static double objective(const double *z, size_t n, const uint32_t *y, uint32_t K, double alpha,
+                        double lam, const double *b, const double *b0)
+{
+    double loss = 0, pen = 0;
+    for (size_t i = 0; i < n; i++) {
+        double e[8], mx = -INFINITY, s = 0;
+        for (uint32_t k = 0; k < K; k++) {
+            e[k] = b0[k];
+            for (size_t j = 0; j < P; j++)
+                e[k] += b[k * P + j] * z[i * P + j];
+            if (e[k] > mx)
+                mx = e[k];
+        }
+        for (uint32_t k = 0; k < K; k++)
+            s += exp(e[k] - mx);
+        loss += mx + log(s) - e[y[i]];
+    }
+    for (size_t q = 0; q < K * (size_t)P; q++)
+        pen += alpha * fabs(b[q]) + 0.5 * (1 - alpha) * b[q] * b[q];
+    return loss / (double)n + lam * pen;
+}
+
+/* The Newton solver (the default) against coordinate descent alone (options.solver CD, the
+ * method before it) on random problems, some nearly separable (where Newton's steps take
+ * over): both meet the KKT conditions, reach the same objective, and where the solution is
+ * unique (α < 1: the ridge makes the objective strictly convex) the same coefficients. At
+ * α = 1 the Newton solver leaves, in every feature, at least one class's coefficient at 0 (a
+ * shift common to a feature's K coefficients changes only the penalty, and the sparsest point
+ * of a flat stretch is chosen). Repeated fits give the same bytes. */
+static void test_newton_vs_cd(void **state)
+{
+    (void)state;
+    enum { N = 90, L = 25 };
+    static const uint32_t Ks[] = {2, 3, 5};
+    static const double alphas[] = {0.3, 0.8, 1.0}, seps[] = {1.0, 4.0};
+    double *x = malloc(N * P * sizeof *x), *z = malloc(N * P * sizeof *z);
+    double *b1 = malloc(L * 5 * P * sizeof *b1), *b2 = malloc(L * 5 * P * sizeof *b2);
+    double *b3 = malloc(L * 5 * P * sizeof *b3);
+    double b01[L * 5], b02[L * 5], b03[L * 5], lam[L], lam2[L];
+    uint32_t y[N];
+    uint8_t c1[L], c2[L];
+    affect_error err;
+    assert_non_null(x);
+    assert_non_null(z);
+    assert_non_null(b1);
+    assert_non_null(b2);
+    assert_non_null(b3);
+    for (size_t t = 0; t < sizeof Ks / sizeof *Ks; t++)
+        for (size_t sp = 0; sp < 2; sp++) {
+            uint32_t K = Ks[t];
+            synth(N, K, 4, seps[sp], 100 + t * 2 + sp, x, y);
+            standardize(x, N, z);
+            for (size_t a = 0; a < sizeof alphas / sizeof *alphas; a++) {
+                affect_rmlr_options o;
+                affect_rmlr_options_default(&o);
+                o.lambda_min_ratio = 0.02;
+                o.tol = 1e-13;
+                o.max_iter = 100000;
+                assert_int_equal(affect_rmlr_fit_path(x, N, P, y, K, alphas[a], NULL, L, &o, lam,
+                                                      b1, b01, c1, &err),
+                                 AFFECT_OK);
+                assert_int_equal(affect_rmlr_fit_path(x, N, P, y, K, alphas[a], NULL, L, &o, lam,
+                                                      b3, b03, NULL, &err),
+                                 AFFECT_OK);
+                assert_memory_equal(b1, b3, L * K * P * sizeof *b1);
+                assert_memory_equal(b01, b03, L * K * sizeof *b01);
+                o.solver = AFFECT_RMLR_SOLVER_CD;
+                assert_int_equal(affect_rmlr_fit_path(x, N, P, y, K, alphas[a], NULL, L, &o, lam2,
+                                                      b2, b02, c2, &err),
+                                 AFFECT_OK);
+                assert_memory_equal(lam, lam2, sizeof lam);
+                check_kkt(x, N, y, K, alphas[a], lam, L, b1, b01, 2e-6);
+                check_kkt(x, N, y, K, alphas[a], lam, L, b2, b02, 2e-6);
+                for (uint32_t l = 0; l < L; l++) {
+                    const double *n1 = b1 + (size_t)l * K * P, *n2 = b2 + (size_t)l * K * P;
+                    assert_int_equal(c1[l], 1);
+                    assert_int_equal(c2[l], 1);
+                    double f1 = objective(z, N, y, K, alphas[a], lam[l], n1, b01 + l * K);
+                    double f2 = objective(z, N, y, K, alphas[a], lam[l], n2, b02 + l * K);
+                    tu_assert_near(f1, f2, 1e-10 * f2);
+                    if (alphas[a] < 1)
+                        for (size_t q = 0; q < K * (size_t)P; q++)
+                            tu_assert_near(n1[q], n2[q], 1e-5 * (1 + fabs(n2[q])));
+                    else
+                        for (size_t j = 0; j < P; j++) {
+                            bool zero = false;
+                            for (uint32_t k = 0; k < K; k++)
+                                zero = zero || n1[k * P + j] == 0;
+                            assert_true(zero);
+                        }
+                }
+            }
+        }
+    free(x);
+    free(z);
+    free(b1);
+    free(b2);
+    free(b3);
 }
 
 static void test_lasso_path(void **state)
@@ -554,6 +658,13 @@ static void test_errors(void **state)
     EXPECT_ERR(affect_rmlr_cv(x, N, P, y, K, &o, &m, &err), AFFECT_ERR_INVALID,
                "threads must be from 1 to 64, got 65");
     assert_null(m);
+    affect_rmlr_options_default(&o);
+    o.solver = 2;
+    EXPECT_ERR(affect_rmlr_cv(x, N, P, y, K, &o, &m, &err), AFFECT_ERR_INVALID,
+               "solver must be 0 (Newton) or 1 (CD), got 2");
+    EXPECT_ERR(FIT(N, P, y, K, 1, NULL, 1, &o), AFFECT_ERR_INVALID,
+               "solver must be 0 (Newton) or 1 (CD), got 2");
+    affect_rmlr_options_default(&o);
     o.threads = 0; /* not an option of the path: ignored there */
     assert_int_equal(FIT(N, P, y, K, 1, NULL, 1, &o), AFFECT_OK); /* beta holds one λ */
     y[0] = 2;
@@ -893,6 +1004,7 @@ int main(void)
         cmocka_unit_test(test_round_trip),    cmocka_unit_test(test_corrupt),
         cmocka_unit_test(test_out_of_memory), cmocka_unit_test(test_threads),
         cmocka_unit_test(test_impute),        cmocka_unit_test(test_strong_rule_kkt),
+        cmocka_unit_test(test_newton_vs_cd),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
