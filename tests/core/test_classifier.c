@@ -1003,6 +1003,50 @@ static void test_fixture_v1(void **state)
     affect_classifier_free(d);
 }
 
+/* tests/fixtures/classifier-v2.bin: the same small classifier written by version 2 (commit
+ * 59e045b: float32 SVM weights, SVM record version 2, and float32 sPCA axes, record flag 1).
+ * Today's decoder reads it and evaluates the test's small set with it (finite decision values,
+ * labels in range), and today's encoder writes its bytes again (a model this small keeps the
+ * float32 storage). */
+static void test_fixture_v2(void **state)
+{
+    fixture *fx = *state;
+    size_t len;
+    unsigned char *data =
+        (unsigned char *)tu_read_file(AFFECT_FIXTURES_DIR "/classifier-v2.bin", &len);
+    assert_non_null(data);
+    assert_int_equal(len, 2418);
+    assert_memory_equal(data, "AFCL\x02\0\0\0", 8);
+    affect_classifier *c = NULL;
+    affect_error err;
+    if (affect_classifier_decode(data, len, &c, &err))
+        fail_msg("decode: %s", err.msg);
+    const affect_classifier_config *cfg = affect_classifier_get_config(c);
+    assert_int_equal(cfg->descriptors, 0);
+    assert_true(cfg->mirror == AFFECT_MIRROR_OFF);
+    assert_int_equal(affect_classifier_n_classes(c), 2);
+    assert_string_equal(affect_classifier_label(c, 1), "sad");
+    assert_int_equal(affect_classifier_n_train(c), 6);
+    for (uint32_t i = 0; i < fx->small_n; i++) {
+        affect_classifier_out a = {0};
+        double da[1];
+        a.decision = da;
+        const affect_hmm_seq *q = &fx->small_seqs[i];
+        assert_int_equal(affect_classifier_eval(c, q->x, q->n_frames, NULL, false, &a, &err),
+                         AFFECT_OK);
+        assert_true(isfinite(da[0]));
+        assert_true(a.svm < 2 && a.knn < 2 && a.ml < 2);
+    }
+    unsigned char *blob;
+    size_t size;
+    assert_int_equal(affect_classifier_encode(c, &blob, &size, &err), AFFECT_OK);
+    assert_int_equal(size, len);
+    assert_memory_equal(blob, data, len);
+    free(blob);
+    free(data);
+    affect_classifier_free(c);
+}
+
 /* ---- grid search ---- */
 
 static bool in_u32(uint32_t v, const uint32_t *list, uint32_t n)
@@ -1320,6 +1364,7 @@ int main(void)
         cmocka_unit_test(test_truncations),
         cmocka_unit_test(test_descriptors),
         cmocka_unit_test(test_fixture_v1),
+        cmocka_unit_test(test_fixture_v2),
         cmocka_unit_test(test_bad_fields),
         cmocka_unit_test(test_config_check),
         cmocka_unit_test(test_train_errors),
