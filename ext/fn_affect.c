@@ -726,7 +726,11 @@ void ax_affect_info(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     affect_classifier_get_report(c, &rep);
     affect_strbuf sb;
     affect_strbuf_init(&sb);
-    affect_strbuf_printf(&sb, "{\"format\":%u,\"classes\":[", AFFECT_CLASSIFIER_VERSION);
+    /* the version the classifier encodes as: 3 for the compact storage, else 2 */
+    affect_strbuf_printf(&sb, "{\"format\":%u,\"classes\":[",
+                         affect_classifier_get_config(c)->storage == AFFECT_STORAGE_COMPACT
+                             ? AFFECT_CLASSIFIER_VERSION
+                             : 2u);
     for (uint32_t k = 0; k < C; k++) {
         affect_strbuf_puts(&sb, k ? "," : "");
         affect_strbuf_json_string(&sb, affect_classifier_label(c, k));
