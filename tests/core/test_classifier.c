@@ -1004,6 +1004,33 @@ static void test_fixture_v1(void **state)
     affect_classifier_free(d);
 }
 
+/* A fixture's bytes (of the expected length and version byte) and its decoded classifier. */
+static affect_classifier *decode_fixture(const char *path, size_t expect_len, unsigned char version,
+                                         unsigned char **data, size_t *len)
+{
+    *data = (unsigned char *)tu_read_file(path, len);
+    assert_non_null(*data);
+    assert_int_equal(*len, expect_len);
+    assert_memory_equal(*data, "AFCL", 4);
+    assert_int_equal((*data)[4], version);
+    affect_classifier *c = NULL;
+    affect_error err;
+    if (affect_classifier_decode(*data, *len, &c, &err))
+        fail_msg("decode %s: %s", path, err.msg);
+    return c;
+}
+
+/* Today's encoder writes exactly data's len bytes for c. */
+static void assert_reencodes(const affect_classifier *c, const unsigned char *data, size_t len)
+{
+    unsigned char *blob;
+    size_t size;
+    encode_ok(c, &blob, &size);
+    assert_int_equal(size, len);
+    assert_memory_equal(blob, data, len);
+    affect_free(blob);
+}
+
 /* tests/fixtures/classifier-v2.bin: the same small classifier written by version 2 (commit
  * 59e045b: float32 SVM weights, SVM record version 2, and float32 sPCA axes, record flag 1).
  * Today's decoder reads it and evaluates the test's small set with it (finite decision values,
@@ -1013,15 +1040,10 @@ static void test_fixture_v2(void **state)
 {
     fixture *fx = *state;
     size_t len;
-    unsigned char *data =
-        (unsigned char *)tu_read_file(AFFECT_FIXTURES_DIR "/classifier-v2.bin", &len);
-    assert_non_null(data);
-    assert_int_equal(len, 2418);
-    assert_memory_equal(data, "AFCL\x02\0\0\0", 8);
-    affect_classifier *c = NULL;
+    unsigned char *data;
+    affect_classifier *c =
+        decode_fixture(AFFECT_FIXTURES_DIR "/classifier-v2.bin", 2418, 2, &data, &len);
     affect_error err;
-    if (affect_classifier_decode(data, len, &c, &err))
-        fail_msg("decode: %s", err.msg);
     const affect_classifier_config *cfg = affect_classifier_get_config(c);
     assert_int_equal(cfg->descriptors, 0);
     assert_true(cfg->mirror == AFFECT_MIRROR_OFF);
@@ -1038,12 +1060,7 @@ static void test_fixture_v2(void **state)
         assert_true(isfinite(da[0]));
         assert_true(a.svm < 2 && a.knn < 2 && a.ml < 2);
     }
-    unsigned char *blob;
-    size_t size;
-    assert_int_equal(affect_classifier_encode(c, &blob, &size, &err), AFFECT_OK);
-    assert_int_equal(size, len);
-    assert_memory_equal(blob, data, len);
-    free(blob);
+    assert_reencodes(c, data, len);
     free(data);
     affect_classifier_free(c);
 }
@@ -1235,19 +1252,12 @@ static void test_fixture_v3(void **state)
 {
     fixture *fx = *state;
     size_t len, len2;
-    unsigned char *data =
-        (unsigned char *)tu_read_file(AFFECT_FIXTURES_DIR "/classifier-v3.bin", &len);
-    unsigned char *v2 =
-        (unsigned char *)tu_read_file(AFFECT_FIXTURES_DIR "/classifier-v2.bin", &len2);
-    assert_non_null(data);
-    assert_non_null(v2);
-    assert_int_equal(len, 1500);
-    assert_memory_equal(data, "AFCL\x03\0\0\0", 8);
-    affect_classifier *c = NULL, *f = NULL;
+    unsigned char *data, *v2;
+    affect_classifier *c =
+        decode_fixture(AFFECT_FIXTURES_DIR "/classifier-v3.bin", 1500, 3, &data, &len);
+    affect_classifier *f =
+        decode_fixture(AFFECT_FIXTURES_DIR "/classifier-v2.bin", 2418, 2, &v2, &len2);
     affect_error err;
-    if (affect_classifier_decode(data, len, &c, &err) ||
-        affect_classifier_decode(v2, len2, &f, &err))
-        fail_msg("decode: %s", err.msg);
     assert_int_equal(affect_classifier_get_config(c)->storage, AFFECT_STORAGE_COMPACT);
     assert_int_equal(affect_classifier_get_config(f)->storage, AFFECT_STORAGE_FLOAT32);
     double max_dec = 0, max_ddec = 0;
@@ -1268,12 +1278,7 @@ static void test_fixture_v3(void **state)
     printf("classifier-v3.bin: decision values move by %.3g of the largest (%.3g)\n",
            max_ddec / max_dec, max_dec);
     assert_true(max_ddec <= COMPACT_TINY_DECISION_TOL * max_dec);
-    unsigned char *blob;
-    size_t size;
-    assert_int_equal(affect_classifier_encode(c, &blob, &size, &err), AFFECT_OK);
-    assert_int_equal(size, len);
-    assert_memory_equal(blob, data, len);
-    free(blob);
+    assert_reencodes(c, data, len);
     free(data);
     free(v2);
     affect_classifier_free(c);
