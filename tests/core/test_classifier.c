@@ -1515,6 +1515,13 @@ static affect_status oom_decode(void *ctx, affect_error *err)
     return affect_classifier_decode(o->fx->small_blob, o->fx->small_size, &o->c, err);
 }
 
+/* The compact storage's BLOB (o->blob): its triangles and 24-bit values. */
+static affect_status oom_decode_compact(void *ctx, affect_error *err)
+{
+    oom_ctx *o = ctx;
+    return affect_classifier_decode(o->blob, o->size, &o->c, err);
+}
+
 static void oom_finish_classifier(void *ctx, affect_status st)
 {
     oom_ctx *o = ctx;
@@ -1588,6 +1595,19 @@ static void test_out_of_memory(void **state)
     printf("allocations: encode %ld, decode %ld, eval %ld, training %ld\n", n_enc, n_dec, n_eval,
            n_train);
     assert_true(n_train > 20);
+    /* the same training with the compact storage (make_compact allocates), and its decoding */
+    cfg.storage = AFFECT_STORAGE_COMPACT;
+    long n_compact = tu_oom_sweep(oom_train, &o, oom_finish_classifier, NULL);
+    affect_error err;
+    assert_int_equal(oom_train(&o, &err), AFFECT_OK);
+    encode_ok(o.c, &o.blob, &o.size);
+    assert_int_equal(o.blob[4], 3);
+    affect_classifier_free(o.c);
+    o.c = NULL;
+    long n_dec3 = tu_oom_sweep(oom_decode_compact, &o, oom_finish_classifier, NULL);
+    affect_free(o.blob);
+    printf("allocations: compact training %ld, its decoding %ld\n", n_compact, n_dec3);
+    assert_true(n_compact > n_train && n_dec3 >= 10);
 }
 
 int main(void)
