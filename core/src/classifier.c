@@ -41,6 +41,10 @@
  *     u64 FNV-1a 64 of every byte before it
  * Every HMM BLOB carries the feature definition; the decoder requires them to be identical and
  * keeps the first.
+ * Version 3, the compact storage (make_compact; "storage" of affect/classifier.h): each class HMM
+ * as u8 form, u64 length, bytes (form 1: covariances as lower triangles, no checksum); the mean
+ * and scale as 24-bit floats; the SVM record's version 3 and the sPCA record's flag 2 (4-bit
+ * blocks, affect/quant.h). Version 2 is still written for the float32 storage.
  */
 #include "affect/classifier.h"
 
@@ -1278,10 +1282,8 @@ static bool cov_sizes(uint32_t N, uint32_t M, uint32_t m, size_t *full, size_t *
            affect_mul_size(*tri, 8, tri);
 }
 
-/* A class HMM in the compact storage: a form byte, the length, the bytes. Form 1 (full
- * covariances, every one exactly symmetric, bit for bit: exactly_symmetric): the model BLOB
- * without its checksum, each covariance cut to its lower triangle, row after row (row r:
- * columns 0 .. r); form 0 (any other model): the model BLOB as it is. */
+/* Whether the model BLOB (of the configuration hc) has full covariances, each equal to its
+ * transpose bit for bit (training always gives that). */
 static bool exactly_symmetric(const affect_hmm_config *hc, const unsigned char *blob, size_t len)
 {
     size_t full, tri, m = hc->dim;
@@ -1297,6 +1299,10 @@ static bool exactly_symmetric(const affect_hmm_config *hc, const unsigned char *
     return true;
 }
 
+/* A class HMM in the compact storage: a form byte, the length, the bytes. Form 1 (full
+ * covariances, every one exactly symmetric, bit for bit: exactly_symmetric): the model BLOB
+ * without its checksum, each covariance cut to its lower triangle, row after row (row r:
+ * columns 0 .. r); form 0 (any other model): the model BLOB as it is. */
 static void put_hmm_compact(affect_bw *w, const affect_hmm_config *hc, const unsigned char *blob,
                             size_t len)
 {
