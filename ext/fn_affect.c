@@ -23,7 +23,9 @@
  * limited to ± this, default 5, 0 = no limit), svm_c (a positive number
  * or "auto"), svm_folds, spca_dims, spca_kernel ("linear" | "rbf"), spca_sigma, knn_k, and
  * grid: {"spca_dims": [...], "spca_sigma": [...], "knn_k": [...], "folds": n} to choose those
- * three by inner cross-validation on the training motions (see affect/classifier.h). Rows
+ * three by inner cross-validation on the training motions (see affect/classifier.h), and
+ * storage ("auto" | "float32" | "compact": how the BLOB stores its long vectors, docs/FORMATS.md;
+ * auto = compact from 65,536 dimensions). Rows
  * whose motion or label is NULL are skipped; labels are compared as text, and the classes are
  * ordered by their text (byte order), whatever the row order.
  *
@@ -58,7 +60,7 @@ static const char *const train_keys[] = {
     AX_SEQS_KEYS, "groups",      "score_normalization", "score_clip", "svm_c",
     "svm_folds",  "spca_dims",   "spca_kernel",         "spca_sigma", "knn_k",
     "grid",       "descriptors", "descriptor_weight",   "mirror",     "threads",
-    NULL};
+    "storage",    NULL};
 
 typedef struct cls_train {
     ax_seqs s; /* first: freed by ax_seqs_free's sqlite3_free … see cls_train_free */
@@ -219,8 +221,9 @@ static ax_arg read_classifier_options(sqlite3_context *ctx, const ax_opts *opts,
     static const char *const norms[] = {"zscore", "none", NULL};
     static const char *const kernels[] = {"linear", "rbf", NULL};
     static const char *const descs[] = {"none", "kinematics", "laban", "all", NULL};
+    static const char *const storages[] = {"auto", "float32", "compact", NULL};
     affect_classifier_config *cfg = &t->cfg;
-    int desc = (int)cfg->descriptors;
+    int desc = (int)cfg->descriptors, storage = (int)cfg->storage;
     int norm = cfg->zscore ? 0 : 1, kernel = cfg->spca_kernel == AFFECT_SPCA_RBF;
     const affect_json_node *c = ax_opt(opts, "svm_c");
     if (c) {
@@ -243,8 +246,10 @@ static ax_arg read_classifier_options(sqlite3_context *ctx, const ax_opts *opts,
         ax_opt_u32(ctx, opts, "knn_k", &cfg->knn_k) || opt_grid(ctx, opts, t) ||
         ax_opt_enum(ctx, opts, "descriptors", descs, &desc) ||
         ax_opt_number(ctx, opts, "descriptor_weight", &cfg->descriptor_weight) ||
-        opt_mirror(ctx, opts, &cfg->mirror))
+        opt_mirror(ctx, opts, &cfg->mirror) ||
+        ax_opt_enum(ctx, opts, "storage", storages, &storage))
         return AX_ERROR;
+    cfg->storage = (affect_classifier_storage)storage; /* the list's order is the enum's */
     cfg->descriptors = (unsigned)desc; /* the list's order is the mask's */
     t->s.desc_mask = cfg->descriptors;
     cfg->zscore = norm == 0;
@@ -729,7 +734,11 @@ void ax_affect_info(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     affect_classifier_get_report(c, &rep);
     affect_strbuf sb;
     affect_strbuf_init(&sb);
-    affect_strbuf_printf(&sb, "{\"format\":%u,\"classes\":[", AFFECT_CLASSIFIER_VERSION);
+    /* the version the classifier encodes as: 3 for the compact storage, else 2 */
+    affect_strbuf_printf(&sb, "{\"format\":%u,\"classes\":[",
+                         affect_classifier_get_config(c)->storage == AFFECT_STORAGE_COMPACT
+                             ? AFFECT_CLASSIFIER_VERSION
+                             : 2u);
     for (uint32_t k = 0; k < C; k++) {
         affect_strbuf_puts(&sb, k ? "," : "");
         affect_strbuf_json_string(&sb, affect_classifier_label(c, k));
@@ -791,7 +800,7 @@ static const char *const cv_keys[] = {
     "svm_folds",  "spca_dims",   "spca_kernel",         "spca_sigma", "knn_k",
     "grid",       "folds",       "descriptors",         "descriptor_weight",
     "mirror",     "group",       "methods",             "verbose",    "threads",
-    NULL};
+    "storage",    NULL};
 
 typedef struct cv_state {
     cls_train t;    /* first (freed through cls_train_free) */

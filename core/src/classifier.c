@@ -41,6 +41,10 @@
  *     u64 FNV-1a 64 of every byte before it
  * Every HMM BLOB carries the feature definition; the decoder requires them to be identical and
  * keeps the first.
+ * Version 3, the compact storage (make_compact; "storage" of affect/classifier.h): each class HMM
+ * as u8 form, u64 length, bytes (form 1: covariances as lower triangles, no checksum); the mean
+ * and scale as 24-bit floats; the SVM record's version 3 and the sPCA record's flag 2 (4-bit
+ * blocks, affect/quant.h). Version 2 is still written for the float32 storage.
  */
 #include "affect/classifier.h"
 
@@ -53,6 +57,7 @@
 
 #include "affect/bytes.h"
 #include "affect/hmm_blob.h"
+#include "affect/quant.h"
 #include "internal.h"
 
 struct affect_classifier {
@@ -67,6 +72,7 @@ struct affect_classifier {
     double desc_w; /* ω, the descriptor block's factor */
     size_t dim;   /* fdim + ddim */
     double *mean, *scale;
+    bool compact; /* the compact storage (version 3): mean and scale are 24-bit floats */
     affect_svm *svm;
     affect_spca *spca;
     uint32_t n_train;
@@ -180,6 +186,9 @@ const char *affect_classifier_config_check(const affect_classifier_config *cfg)
         return "mirror must be off, on or auto";
     if (cfg->threads < 1 || cfg->threads > 64)
         return "threads must be from 1 to 64";
+    if (cfg->storage != AFFECT_STORAGE_AUTO && cfg->storage != AFFECT_STORAGE_FLOAT32 &&
+        cfg->storage != AFFECT_STORAGE_COMPACT)
+        return "storage must be auto, float32 or compact";
     const affect_classifier_grid *g = &cfg->grid;
     if (g->n_dims > AFFECT_CLASSIFIER_GRID_MAX || g->n_sigma > AFFECT_CLASSIFIER_GRID_MAX ||
         g->n_k > AFFECT_CLASSIFIER_GRID_MAX)
@@ -822,6 +831,47 @@ static affect_status rows_add_weights(affect_classifier *c, const block_rows *R,
     return AFFECT_OK;
 }
 
+/* The compact storage (affect_classifier_storage), made once the model is complete: the mean
+ * and scale rounded to 24-bit floats (μ̃, σ̃), and the SVM's weights and the sPCA's axes
+ * multiplied column by column by σ̃ / σ and rounded to 4-bit blocks (affect/quant.h). Folding
+ * the ratio keeps the linear maps what they were: w · (x − μ) / σ = (w σ̃ / σ) · (x − μ) / σ̃;
+ * what remains is the mean's rounding (at most 2⁻¹³ |μ| / σ in z-units), the clipping at
+ * ±score_clip σ̃ instead of σ (relative 2⁻¹³) and the 4-bit codes. When a value cannot be
+ * rounded (a scale beyond float32's range: never seen), the model stays as it was and c->compact
+ * false (the float32 storage follows). */
+static affect_status make_compact(affect_classifier *c, affect_error *err)
+{
+    size_t D = c->dim;
+    double *mean = affect_malloc_array(D, sizeof *mean), *scale = NULL, *factor = NULL;
+    scale = affect_malloc_array(D, sizeof *scale);
+    factor = affect_malloc_array(D, sizeof *factor);
+    affect_status st = AFFECT_OK;
+    if (!mean || !scale || !factor) {
+        st = affect_nomem_of(err, D, 3 * sizeof *mean, "the compact normalization of %zu values",
+                             D);
+        goto done;
+    }
+    for (size_t e = 0; e < D; e++) {
+        mean[e] = affect_f24_round(c->mean[e]);
+        scale[e] = affect_f24_round(c->scale[e]);
+        if (!isfinite(mean[e]) || !isfinite(scale[e]) || !(scale[e] > 0))
+            goto done; /* not representable: the float32 storage */
+        factor[e] = scale[e] / c->scale[e];
+    }
+    if (!affect_svm_compact_fits(c->svm, factor) || !affect_spca_compact_fits(c->spca, factor))
+        goto done;
+    affect_svm_compact_weights(c->svm, factor);
+    affect_spca_compact_axes(c->spca, factor);
+    memcpy(c->mean, mean, D * sizeof *mean);
+    memcpy(c->scale, scale, D * sizeof *scale);
+    c->compact = true;
+done:
+    affect_free(mean);
+    affect_free(scale);
+    affect_free(factor);
+    return st;
+}
+
 /* Training on the given set (the mirror images already added when asked). The representation
  * is never held whole: a first pass computes it block by block (one class HMM's Fisher scores,
  * or the descriptors, for every motion), fits each block's normalization and adds the block's
@@ -947,10 +997,17 @@ static affect_status train_on(const affect_classifier_config *cfg, const affect_
             goto done;
     }
     affect_spca_finish(c->spca, c->train_z, n);
-    /* the D-long vectors as float32 (half the BLOB; they act on z-scores of at most ±5, so a
-     * decision value moves by about 1e-7 of its size); out of float32's range: kept float64 */
-    affect_svm_round_weights(c->svm);
-    affect_spca_round_axes(c->spca);
+    bool compact = cfg->storage == AFFECT_STORAGE_COMPACT ||
+                   (cfg->storage == AFFECT_STORAGE_AUTO && c->dim >= AFFECT_CLASSIFIER_COMPACT_DIM);
+    if (compact && (st = make_compact(c, err)) != AFFECT_OK)
+        goto done;
+    if (!c->compact) {
+        /* the D-long vectors as float32 (half the BLOB; they act on z-scores of at most ±5, so
+         * a decision value moves by about 1e-7 of its size); out of float32's range: float64 */
+        affect_svm_round_weights(c->svm);
+        affect_spca_round_axes(c->spca);
+    }
+    c->cfg.storage = c->compact ? AFFECT_STORAGE_COMPACT : AFFECT_STORAGE_FLOAT32;
     st = loo_knn(c, &c->report.train_acc_knn, err);
 done:
     if (c)
@@ -1272,6 +1329,96 @@ affect_status affect_classifier_salience(const affect_classifier *c, uint32_t to
 
 /* ---- binary form ---- */
 
+/* The bytes of the covariances of a model BLOB of N × M full m × m covariances (they end the
+ * BLOB, before its 8-byte checksum), and those of their lower triangles; false on overflow. */
+static bool cov_sizes(uint32_t N, uint32_t M, uint32_t m, size_t *full, size_t *tri)
+{
+    size_t nm, mm, t;
+    return affect_mul_size(N, M, &nm) && affect_mul_size(m, m, &mm) &&
+           affect_mul_size(nm, mm, full) && affect_mul_size(*full, 8, full) &&
+           affect_mul_size(m, (size_t)m + 1, &t) && affect_mul_size(nm, t / 2, tri) &&
+           affect_mul_size(*tri, 8, tri);
+}
+
+/* Whether the model BLOB (of the configuration hc) has full covariances, each equal to its
+ * transpose bit for bit (training always gives that). */
+static bool exactly_symmetric(const affect_hmm_config *hc, const unsigned char *blob, size_t len)
+{
+    size_t full, tri, m = hc->dim;
+    if (hc->cov != AFFECT_HMM_FULL || !cov_sizes(hc->n_states, hc->n_mix, hc->dim, &full, &tri) ||
+        full + 8 > len)
+        return false;
+    const unsigned char *cov = blob + len - 8 - full;
+    for (size_t g = 0; g < full / (8 * m * m); g++)
+        for (size_t r = 0; r < m; r++)
+            for (size_t q = 0; q < r; q++)
+                if (memcmp(cov + 8 * ((g * m + r) * m + q), cov + 8 * ((g * m + q) * m + r), 8))
+                    return false;
+    return true;
+}
+
+/* A class HMM in the compact storage: a form byte, the length, the bytes. Form 1 (full
+ * covariances, every one exactly symmetric, bit for bit: exactly_symmetric): the model BLOB
+ * without its checksum, each covariance cut to its lower triangle, row after row (row r:
+ * columns 0 .. r); form 0 (any other model): the model BLOB as it is. */
+static void put_hmm_compact(affect_bw *w, const affect_hmm_config *hc, const unsigned char *blob,
+                            size_t len)
+{
+    size_t full = 0, tri = 0, m = hc->dim;
+    bool sym = exactly_symmetric(hc, blob, len);
+    if (sym)
+        cov_sizes(hc->n_states, hc->n_mix, hc->dim, &full, &tri);
+    const unsigned char *cov = blob + len - 8 - full;
+    affect_bw_u8(w, sym);
+    if (!sym) {
+        affect_bw_u64(w, len);
+        affect_bw_bytes(w, blob, len);
+        return;
+    }
+    affect_bw_u64(w, len - 8 - full + tri);
+    affect_bw_bytes(w, blob, len - 8 - full);
+    for (size_t g = 0; g < full / (8 * m * m); g++)
+        for (size_t r = 0; r < m; r++)
+            affect_bw_bytes(w, cov + 8 * (g * m + r) * m, 8 * (r + 1));
+}
+
+static uint32_t le32(const unsigned char *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+/* The model BLOB of a form-1 class HMM (p, len bytes): the triangles mirrored into full
+ * matrices and the checksum appended, into a new array *out of *out_len bytes. */
+static affect_status hmm_from_triangles(const unsigned char *p, size_t len, unsigned char **out,
+                                        size_t *out_len, affect_error *err)
+{
+    *out = NULL;
+    size_t full, tri;
+    if (len < 24 || p[20] != 0 || le32(p + 8) == 0 || le32(p + 12) == 0 || le32(p + 16) == 0 ||
+        !cov_sizes(le32(p + 8), le32(p + 12), le32(p + 16), &full, &tri) || tri > len - 24)
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "not a model BLOB with full covariances in triangles");
+    size_t head = len - tri, m = le32(p + 16), total = head + full + 8;
+    unsigned char *b = affect_malloc(total);
+    if (!b)
+        return affect_nomem(err);
+    memcpy(b, p, head);
+    const unsigned char *t = p + head;
+    unsigned char *cov = b + head;
+    for (size_t g = 0; g < full / (8 * m * m); g++)
+        for (size_t r = 0; r < m; r++)
+            for (size_t q = 0; q <= r; q++, t += 8) {
+                memcpy(cov + 8 * ((g * m + r) * m + q), t, 8);
+                memcpy(cov + 8 * ((g * m + q) * m + r), t, 8);
+            }
+    uint64_t sum = affect_fnv1a64(b, head + full);
+    for (int i = 0; i < 8; i++)
+        b[head + full + (size_t)i] = (unsigned char)(sum >> (8 * i));
+    *out = b;
+    *out_len = total;
+    return AFFECT_OK;
+}
+
 affect_status affect_classifier_encode(const affect_classifier *c, unsigned char **out,
                                        size_t *size, affect_error *err)
 {
@@ -1281,7 +1428,7 @@ affect_status affect_classifier_encode(const affect_classifier *c, unsigned char
     affect_bw_init(&w);
     const affect_classifier_config *cfg = &c->cfg;
     affect_bw_bytes(&w, AFFECT_CLASSIFIER_MAGIC, 4);
-    affect_bw_u32(&w, AFFECT_CLASSIFIER_VERSION);
+    affect_bw_u32(&w, c->compact ? AFFECT_CLASSIFIER_VERSION : 2u);
     affect_bw_u32(&w, 0);
     affect_bw_u32(&w, c->n_classes);
     for (uint32_t k = 0; k < c->n_classes; k++) {
@@ -1323,13 +1470,24 @@ affect_status affect_classifier_encode(const affect_classifier *c, unsigned char
             affect_bw_free(&w);
             return st;
         }
-        affect_bw_u64(&w, len);
-        affect_bw_bytes(&w, blob, len);
+        if (c->compact)
+            put_hmm_compact(&w, affect_hmm_get_config(c->hmms[k]), blob, len);
+        else {
+            affect_bw_u64(&w, len);
+            affect_bw_bytes(&w, blob, len);
+        }
         affect_free(blob);
     }
     affect_bw_u64(&w, c->dim);
-    affect_bw_f64s(&w, c->mean, c->dim);
-    affect_bw_f64s(&w, c->scale, c->dim);
+    if (c->compact) { /* exact: 24-bit values (make_compact) */
+        for (size_t e = 0; e < c->dim; e++)
+            affect_f24_write(&w, c->mean[e]);
+        for (size_t e = 0; e < c->dim; e++)
+            affect_f24_write(&w, c->scale[e]);
+    } else {
+        affect_bw_f64s(&w, c->mean, c->dim);
+        affect_bw_f64s(&w, c->scale, c->dim);
+    }
     affect_svm_encode(c->svm, &w);
     affect_spca_encode(c->spca, &w);
     uint32_t p = affect_spca_dims(c->spca);
@@ -1398,6 +1556,7 @@ static affect_status decode_head(affect_br *r, affect_classifier **out, affect_e
     if (!c)
         return affect_nomem(err);
     *out = c;
+    c->compact = version >= 3;
     for (uint32_t k = 0; k < n_classes; k++) {
         uint32_t len;
         const unsigned char *p;
@@ -1434,6 +1593,7 @@ static affect_status decode_head(affect_br *r, affect_classifier **out, affect_e
     if (zscore > 1 || kernel > 1 || mirror > 1)
         return invalid(err, r, "configuration");
     cfg->mirror = mirror ? AFFECT_MIRROR_ON : AFFECT_MIRROR_OFF;
+    cfg->storage = c->compact ? AFFECT_STORAGE_COMPACT : AFFECT_STORAGE_FLOAT32;
     cfg->zscore = zscore;
     cfg->spca_kernel = kernel ? AFFECT_SPCA_RBF : AFFECT_SPCA_LINEAR;
     return AFFECT_OK;
@@ -1468,12 +1628,33 @@ static affect_status decode_hmms(affect_br *r, affect_classifier *c, affect_erro
 {
     for (uint32_t k = 0; k < c->n_classes; k++) {
         uint64_t len;
+        uint8_t form = 0;
         const unsigned char *p;
-        if (!affect_br_u64(r, &len) || len > r->size - r->off ||
-            !affect_br_bytes(r, &p, (size_t)len))
+        if ((c->compact && !affect_br_u8(r, &form)) || !affect_br_u64(r, &len) ||
+            len > r->size - r->off || !affect_br_bytes(r, &p, (size_t)len))
             return truncated(err, r, "the class HMMs");
+        if (form > 1)
+            return affect_fail(err, AFFECT_ERR_FORMAT,
+                               "invalid form %u of the HMM of class \"%s\" (offset %zu)", form,
+                               c->labels[k], r->off - (size_t)len - 9);
+        unsigned char *whole = NULL;
+        size_t whole_len = (size_t)len;
+        affect_status st = AFFECT_OK;
+        if (form == 1 && (st = hmm_from_triangles(p, (size_t)len, &whole, &whole_len, err)) ==
+                             AFFECT_OK)
+            p = whole;
         affect_features *f = NULL;
-        affect_status st = affect_hmm_blob_decode(p, (size_t)len, &c->hmms[k], &f, err);
+        if (st == AFFECT_OK)
+            st = affect_hmm_blob_decode(p, whole_len, &c->hmms[k], &f, err);
+        affect_free(whole);
+        if (st == AFFECT_OK && form == 0 && c->compact &&
+            exactly_symmetric(affect_hmm_get_config(c->hmms[k]), p, whole_len)) {
+            affect_features_free(f);
+            return affect_fail(err, AFFECT_ERR_FORMAT,
+                               "the HMM of class \"%s\" is stored whole but its covariances are "
+                               "symmetric (offset %zu)",
+                               c->labels[k], r->off - (size_t)len - 9);
+        }
         if (st && affect_prefix(err, "the HMM of class \"%s\"", c->labels[k]) != AFFECT_ERR_NOMEM)
             err->status = AFFECT_ERR_FORMAT;
         if (st)
@@ -1514,14 +1695,21 @@ static affect_status decode_rest(affect_br *r, affect_classifier *c, affect_erro
         return truncated(err, r, "the normalization");
     if (!set_dims(c) || dim != c->dim)
         return invalid(err, r, "representation dimension");
-    if (!affect_br_has(r, c->dim, 16))
+    if (!affect_br_has(r, c->dim, c->compact ? 6 : 16))
         return truncated(err, r, "the normalization");
     c->mean = affect_malloc_array(c->dim, sizeof *c->mean);
     c->scale = affect_malloc_array(c->dim, sizeof *c->scale);
     if (!c->mean || !c->scale)
         return affect_nomem(err);
-    affect_br_f64s(r, c->mean, c->dim);
-    affect_br_f64s(r, c->scale, c->dim);
+    if (c->compact) {
+        for (size_t e = 0; e < c->dim; e++)
+            c->mean[e] = affect_f24_read(r);
+        for (size_t e = 0; e < c->dim; e++)
+            c->scale[e] = affect_f24_read(r);
+    } else {
+        affect_br_f64s(r, c->mean, c->dim);
+        affect_br_f64s(r, c->scale, c->dim);
+    }
     for (size_t e = 0; e < c->dim; e++)
         if (!isfinite(c->mean[e]) || !(c->scale[e] > 0) || !isfinite(c->scale[e]))
             return invalid(err, r, "normalization");

@@ -55,9 +55,11 @@
 #include <string.h>
 
 #include "affect/hmm_blob.h" /* affect_fnv1a64 */
+#include "affect/quant.h"
 #include "internal.h"
 
 #define FLAG_F32 1u /* record flag: the axes are float32 */
+#define FLAG_Q4 2u  /* record flag: the axes are in 4-bit blocks (affect/quant.h) */
 #define BLOCK_DOUBLES 262144u /* doubles in one centred column block of X */
 #define GRAM_MATCH_TOL 1e-6   /* relative trace mismatch tolerated by affect_spca_fit_gram */
 #define BLAS_MAX ((size_t)INT_MAX)
@@ -72,6 +74,7 @@ struct affect_spca {
     double *axes;        /* dims × input_dim, row-major */
     double *coef;        /* n_train × dims: A of a dual fit until affect_spca_finish, else NULL */
     bool f32;            /* every axis component is a float32 value: encoded with flag 1 */
+    bool q4;             /* every axis is in its 4-bit form: encoded with flag 2 */
 };
 
 /* The struct, rounded up so the doubles after it are aligned. */
@@ -678,6 +681,22 @@ bool affect_spca_round_axes(affect_spca *s)
     return true;
 }
 
+bool affect_spca_compact_fits(const affect_spca *s, const double *factor)
+{
+    for (uint32_t q = 0; q < s->dims; q++)
+        if (!affect_q4_fits(s->axes + (size_t)q * s->input_dim, s->input_dim, factor))
+            return false;
+    return true;
+}
+
+void affect_spca_compact_axes(affect_spca *s, const double *factor)
+{
+    for (uint32_t q = 0; q < s->dims; q++)
+        affect_q4_round(s->axes + (size_t)q * s->input_dim, s->input_dim, factor);
+    s->q4 = true;
+    s->f32 = false;
+}
+
 void affect_spca_encode(const affect_spca *s, affect_bw *w)
 {
     if (w->failed)
@@ -685,7 +704,7 @@ void affect_spca_encode(const affect_spca *s, affect_bw *w)
     size_t start = w->len;
     affect_bw_bytes(w, AFFECT_SPCA_MAGIC, 4);
     affect_bw_u32(w, AFFECT_SPCA_VERSION);
-    affect_bw_u32(w, s->f32 ? FLAG_F32 : 0u);
+    affect_bw_u32(w, s->q4 ? FLAG_Q4 : s->f32 ? FLAG_F32 : 0u);
     affect_bw_u32(w, (uint32_t)s->kernel);
     affect_bw_u32(w, s->classes);
     affect_bw_u32(w, s->dims);
@@ -694,7 +713,10 @@ void affect_spca_encode(const affect_spca *s, affect_bw *w)
     affect_bw_f64(w, s->sigma);
     affect_bw_f64s(w, s->eigenvalues, s->dims);
     size_t pd = (size_t)s->dims * s->input_dim;
-    if (!s->f32)
+    if (s->q4) /* exact: every axis is in its 4-bit form */
+        for (uint32_t q = 0; q < s->dims; q++)
+            affect_q4_write(w, s->axes + (size_t)q * s->input_dim, s->input_dim);
+    else if (!s->f32)
         affect_bw_f64s(w, s->axes, pd);
     else /* exact: every component is a float32 value */
         affect_bw_f64s_as_f32(w, s->axes, pd);
@@ -730,7 +752,7 @@ affect_status affect_spca_decode(affect_br *r, affect_spca **out, affect_error *
                            "sPCA: unknown format version %" PRIu32 ", this build reads %u "
                            "(offset %zu)",
                            version, AFFECT_SPCA_VERSION, start + 4);
-    if (flags & ~(uint32_t)FLAG_F32)
+    if ((flags & ~(uint32_t)(FLAG_F32 | FLAG_Q4)) || flags == (FLAG_F32 | FLAG_Q4))
         return affect_fail(err, AFFECT_ERR_FORMAT, "sPCA: unknown flags 0x%" PRIx32 " (offset %zu)",
                            flags, start + 8);
     size_t width = (flags & FLAG_F32) ? 4 : 8; /* bytes per axis component */
@@ -769,11 +791,15 @@ affect_status affect_spca_decode(affect_br *r, affect_spca **out, affect_error *
     if (!affect_br_bytes(r, &eig, (size_t)p * 8))
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "sPCA: truncated in the eigenvalues (offset %zu)", eig_off);
-    size_t ax_off = r->off, pd;
-    if (!affect_mul_size(p, (size_t)d, &pd) || !affect_br_has(r, pd, width))
+    size_t ax_off = r->off, pd, ax_bytes, q4_bytes = 0;
+    if (!affect_mul_size(p, (size_t)d, &pd) ||
+        ((flags & FLAG_Q4) ? !affect_q4_size((size_t)d, &q4_bytes) ||
+                                 !affect_mul_size(p, q4_bytes, &ax_bytes)
+                           : !affect_mul_size(pd, width, &ax_bytes)) ||
+        !affect_br_has(r, ax_bytes, 1))
         return affect_fail(err, AFFECT_ERR_FORMAT, "sPCA: truncated in the axes (offset %zu)",
                            ax_off);
-    affect_br_bytes(r, &axes, pd * width);
+    affect_br_bytes(r, &axes, ax_bytes);
     size_t sum_off = r->off;
     uint64_t sum;
     if (!affect_br_u64(r, &sum))
@@ -788,8 +814,18 @@ affect_status affect_spca_decode(affect_br *r, affect_spca **out, affect_error *
     affect_br sub;
     affect_br_init(&sub, eig, (size_t)p * 8);
     affect_br_f64s(&sub, s->eigenvalues, p);
-    affect_br_init(&sub, axes, pd * width);
-    if (width == 8) {
+    affect_br_init(&sub, axes, ax_bytes);
+    affect_status st = AFFECT_OK;
+    if (flags & FLAG_Q4) {
+        for (uint32_t q = 0; q < p && st == AFFECT_OK; q++) {
+            size_t bad, at = sub.off;
+            if (!affect_q4_read(&sub, s->axes + (size_t)q * d, (size_t)d, &bad))
+                st = affect_fail(err, AFFECT_ERR_FORMAT,
+                                 "sPCA: axis %" PRIu32 " is not a canonical 4-bit form "
+                                 "(offset %zu)",
+                                 q, ax_off + at + bad);
+        }
+    } else if (width == 8) {
         affect_br_f64s(&sub, s->axes, pd);
     } else {
         for (size_t i = 0; i < pd; i++) {
@@ -798,8 +834,8 @@ affect_status affect_spca_decode(affect_br *r, affect_spca **out, affect_error *
             s->axes[i] = f;
         }
     }
-    s->f32 = width == 4;
-    affect_status st = AFFECT_OK;
+    s->f32 = (flags & FLAG_F32) != 0;
+    s->q4 = (flags & FLAG_Q4) != 0;
     for (uint32_t q = 0; q < p && st == AFFECT_OK; q++) {
         double v = s->eigenvalues[q];
         if (!(v > 0 && isfinite(v)))

@@ -40,6 +40,7 @@
 #include <threads.h>
 #include <svm.h>
 
+#include "affect/quant.h"
 #include "affect/rng.h"
 #include "internal.h"
 
@@ -56,6 +57,7 @@ struct affect_svm {
     double *rho;        /* c(c − 1)/2 */
     double *w;          /* c(c − 1)/2 × d; NULL in cross-validation models */
     bool f32;           /* every weight is a float32 value: encoded as version 2 */
+    bool q4;            /* every weight vector is in its 4-bit form: encoded as version 3 */
 };
 
 /* A libsvm problem over a subset of the samples, built from the Gram matrix. */
@@ -820,7 +822,7 @@ cleanup:
 void affect_svm_encode(const affect_svm *m, affect_bw *w)
 {
     size_t P = n_pairs(m->c), n_coef = (size_t)(m->c - 1) * m->l;
-    affect_bw_u8(w, m->f32 ? 2 : 1);
+    affect_bw_u8(w, m->q4 ? 3 : m->f32 ? 2 : 1);
     affect_bw_u32(w, m->c);
     affect_bw_u64(w, (uint64_t)m->d);
     affect_bw_f64(w, m->C);
@@ -836,11 +838,34 @@ void affect_svm_encode(const affect_svm *m, affect_bw *w)
     affect_bw_u32(w, (uint32_t)P);
     affect_bw_f64s(w, m->rho, P);
     affect_bw_u32(w, (uint32_t)P);
+    if (m->q4) { /* exact: every vector is in its 4-bit form */
+        for (size_t p = 0; p < P; p++)
+            affect_q4_write(w, m->w + p * m->d, m->d);
+        return;
+    }
     if (!m->f32) {
         affect_bw_f64s(w, m->w, P * m->d);
         return;
     }
     affect_bw_f64s_as_f32(w, m->w, P * m->d); /* exact: every weight is a float32 value */
+}
+
+bool affect_svm_compact_fits(const affect_svm *m, const double *factor)
+{
+    if (!m->w)
+        return false;
+    for (size_t p = 0; p < n_pairs(m->c); p++)
+        if (!affect_q4_fits(m->w + p * m->d, m->d, factor))
+            return false;
+    return true;
+}
+
+void affect_svm_compact_weights(affect_svm *m, const double *factor)
+{
+    for (size_t p = 0; p < n_pairs(m->c); p++)
+        affect_q4_round(m->w + p * m->d, m->d, factor);
+    m->q4 = true;
+    m->f32 = false;
 }
 
 bool affect_svm_round_weights(affect_svm *m)
@@ -939,6 +964,26 @@ static affect_status get_f32s(affect_br *r, size_t n, double **out, const char *
     return AFFECT_OK;
 }
 
+/* P weight vectors of d values in their 4-bit form into a new array. */
+static affect_status get_q4s(affect_br *r, size_t P, size_t d, double **out, affect_error *err)
+{
+    size_t bytes, n;
+    if (!affect_q4_size(d, &bytes) || !affect_br_has(r, P, bytes) || !affect_mul_size(P, d, &n))
+        return truncated(err, "the weights", r->off);
+    *out = affect_malloc_array(n ? n : 1, sizeof **out);
+    if (!*out)
+        return affect_nomem(err);
+    for (size_t p = 0; p < P; p++) {
+        size_t off = r->off, bad;
+        if (!affect_q4_read(r, *out + p * d, d, &bad))
+            return affect_fail(err, AFFECT_ERR_FORMAT,
+                               "SVM: weight vector %zu is not a canonical 4-bit form "
+                               "(offset %zu)",
+                               p, off + bad);
+    }
+    return AFFECT_OK;
+}
+
 affect_status affect_svm_decode(affect_br *r, affect_svm **out, affect_error *err)
 {
     affect_status st;
@@ -958,7 +1003,7 @@ affect_status affect_svm_decode(affect_br *r, affect_svm **out, affect_error *er
         st = truncated(err, "the version", off);
         goto cleanup;
     }
-    if (version != 1 && version != AFFECT_SVM_FORMAT_VERSION) {
+    if (version < 1 || version > AFFECT_SVM_FORMAT_VERSION) {
         st = affect_fail(err, AFFECT_ERR_FORMAT,
                          "SVM: unknown format version %u at offset %zu (this build reads 1 .. %u)",
                          version, off, AFFECT_SVM_FORMAT_VERSION);
@@ -1091,10 +1136,14 @@ affect_status affect_svm_decode(affect_br *r, affect_svm **out, affect_error *er
     if (version == 1) {
         if ((st = get_f64s(r, n_w, &m->w, "the weights", err)) != AFFECT_OK)
             goto cleanup;
-    } else if ((st = get_f32s(r, n_w, &m->w, "the weights", err)) != AFFECT_OK) {
+    } else if (version == 2) {
+        if ((st = get_f32s(r, n_w, &m->w, "the weights", err)) != AFFECT_OK)
+            goto cleanup;
+    } else if ((st = get_q4s(r, P, m->d, &m->w, err)) != AFFECT_OK) {
         goto cleanup;
     }
     m->f32 = version == 2;
+    m->q4 = version == 3;
     *out = m;
     m = NULL;
 cleanup:

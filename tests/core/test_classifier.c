@@ -30,6 +30,7 @@
 #include "affect/classifier.h"
 #include "affect/laban.h"
 #include "affect/hmm_blob.h" /* affect_fnv1a64 */
+#include "affect/quant.h"
 #include "affect/synth.h"
 
 #define N_ACTIONS 3
@@ -689,8 +690,8 @@ static void test_bad_fields(void **state)
         const char *msg;
     } cases[] = {
         {0, 'X', MAGIC_MSG},
-        {4, 3, "unknown classifier format version 3 (this build reads 1 .. 2)"},
-        {4, 0, "unknown classifier format version 0 (this build reads 1 .. 2)"},
+        {4, 4, "unknown classifier format version 4 (this build reads 1 .. 3)"},
+        {4, 0, "unknown classifier format version 0 (this build reads 1 .. 3)"},
         {8, 1, "unknown classifier flags 1 (offset 8)"},
         {12, 1, "invalid class count 1 (offset 12)"},
         {12, 65, "invalid class count 65 (offset 12)"},
@@ -1003,6 +1004,287 @@ static void test_fixture_v1(void **state)
     affect_classifier_free(d);
 }
 
+/* A fixture's bytes (of the expected length and version byte) and its decoded classifier. */
+static affect_classifier *decode_fixture(const char *path, size_t expect_len, unsigned char version,
+                                         unsigned char **data, size_t *len)
+{
+    *data = (unsigned char *)tu_read_file(path, len);
+    assert_non_null(*data);
+    assert_int_equal(*len, expect_len);
+    assert_memory_equal(*data, "AFCL", 4);
+    assert_int_equal((*data)[4], version);
+    affect_classifier *c = NULL;
+    affect_error err;
+    if (affect_classifier_decode(*data, *len, &c, &err))
+        fail_msg("decode %s: %s", path, err.msg);
+    return c;
+}
+
+/* Today's encoder writes exactly data's len bytes for c. */
+static void assert_reencodes(const affect_classifier *c, const unsigned char *data, size_t len)
+{
+    unsigned char *blob;
+    size_t size;
+    encode_ok(c, &blob, &size);
+    assert_int_equal(size, len);
+    assert_memory_equal(blob, data, len);
+    affect_free(blob);
+}
+
+/* tests/fixtures/classifier-v2.bin: the same small classifier written by version 2 (commit
+ * 59e045b: float32 SVM weights, SVM record version 2, and float32 sPCA axes, record flag 1).
+ * Today's decoder reads it and evaluates the test's small set with it (finite decision values,
+ * labels in range), and today's encoder writes its bytes again (a model this small keeps the
+ * float32 storage). */
+static void test_fixture_v2(void **state)
+{
+    fixture *fx = *state;
+    size_t len;
+    unsigned char *data;
+    affect_classifier *c =
+        decode_fixture(AFFECT_FIXTURES_DIR "/classifier-v2.bin", 2418, 2, &data, &len);
+    affect_error err;
+    const affect_classifier_config *cfg = affect_classifier_get_config(c);
+    assert_int_equal(cfg->descriptors, 0);
+    assert_true(cfg->mirror == AFFECT_MIRROR_OFF);
+    assert_int_equal(affect_classifier_n_classes(c), 2);
+    assert_string_equal(affect_classifier_label(c, 1), "sad");
+    assert_int_equal(affect_classifier_n_train(c), 6);
+    for (uint32_t i = 0; i < fx->small_n; i++) {
+        affect_classifier_out a = {0};
+        double da[1];
+        a.decision = da;
+        const affect_hmm_seq *q = &fx->small_seqs[i];
+        assert_int_equal(affect_classifier_eval(c, q->x, q->n_frames, NULL, false, &a, &err),
+                         AFFECT_OK);
+        assert_true(isfinite(da[0]));
+        assert_true(a.svm < 2 && a.knn < 2 && a.ml < 2);
+    }
+    assert_reencodes(c, data, len);
+    free(data);
+    affect_classifier_free(c);
+}
+
+/* ---- the compact storage (version 3) ---- */
+
+/* How far the compact storage may move a decision value on this test problem, relative to the
+ * largest magnitude among the float32 model's decision values (measured: 1.9 %; docs/FORMATS.md
+ * gives the thesis configuration's). */
+#define COMPACT_DECISION_TOL 0.05
+/* The same for the sPCA coordinates (measured: 0.6 %). */
+#define COMPACT_EMBED_TOL 0.05
+/* The same for the 64 dimensions of the small classifier (classifier-v3.bin; measured: 12.5 %:
+ * one block of 64 values, whose rounding errors do not average out — why "auto" keeps the
+ * float32 storage below AFFECT_CLASSIFIER_COMPACT_DIM dimensions). */
+#define COMPACT_TINY_DECISION_TOL 0.25
+
+static uint64_t le64_at(const unsigned char *p)
+{
+    uint64_t v = 0;
+    for (int i = 0; i < 8; i++)
+        v |= (uint64_t)p[i] << (8 * i);
+    return v;
+}
+
+/* Offsets in a version-3 BLOB of the 4-emotion classifier (no grid lists): the first class
+ * HMM's form byte, the dimension field, the SVM record. */
+static void v3_offsets(const unsigned char *b, size_t *hmm0, size_t *dim_at, size_t *svm_at)
+{
+    size_t o = 16;
+    for (int k = 0; k < N_EMOTIONS; k++)
+        o += 4 + ((size_t)b[o] | (size_t)b[o + 1] << 8);
+    o += 119; /* the configuration */
+    *hmm0 = o;
+    for (int k = 0; k < N_EMOTIONS; k++)
+        o += 9 + (size_t)le64_at(b + o + 1);
+    *dim_at = o;
+    *svm_at = o + 8 + 6 * (size_t)le64_at(b + o);
+}
+
+/* The 4-emotion classifier trained with "storage": "compact" next to the same training with the
+ * default (auto: float32 at this D): a version-3 BLOB, smaller; the mean and scale are the
+ * float32 model's rounded to 24-bit floats; every held-out and training motion gets the same
+ * SVM, kNN and ML labels, decision values and coordinates within the named tolerances; the
+ * compact model decodes to itself to the bit (every output of eval) and re-encodes to the same
+ * bytes; a second training gives the same bytes; corruptions of its new fields are refused with
+ * their messages. */
+static void test_compact(void **state)
+{
+    fixture *fx = *state;
+    affect_hmm_seq seqs[N_MOTIONS];
+    uint32_t y[N_MOTIONS];
+    uint32_t n = training_part(&fx->d, seqs, y);
+    affect_classifier_config cfg;
+    main_config(&cfg, fx->d.feat);
+    cfg.storage = AFFECT_STORAGE_COMPACT;
+    affect_classifier *q = train_ok(&cfg, fx->d.feat, seqs, y, n, EMOTIONS, N_EMOTIONS);
+    const affect_classifier *f = fx->c;
+    assert_int_equal(affect_classifier_get_config(f)->storage, AFFECT_STORAGE_FLOAT32);
+    assert_int_equal(affect_classifier_get_config(q)->storage, AFFECT_STORAGE_COMPACT);
+    size_t D = affect_classifier_dim(q);
+    assert_true(D < AFFECT_CLASSIFIER_COMPACT_DIM); /* auto chose float32 for fx->c */
+    for (size_t e = 0; e < D; e++) {
+        assert_true(affect_classifier_norm_mean(q)[e] ==
+                    affect_f24_round(affect_classifier_norm_mean(f)[e]));
+        assert_true(affect_classifier_norm_scale(q)[e] ==
+                    affect_f24_round(affect_classifier_norm_scale(f)[e]));
+    }
+    unsigned char *blob, *again;
+    size_t size, size2;
+    encode_ok(q, &blob, &size);
+    assert_memory_equal(blob, "AFCL\x03\0\0\0", 8);
+    printf("compact BLOB: %zu bytes, float32: %zu bytes\n", size, fx->size);
+    assert_true(size < fx->size);
+    affect_classifier *d = NULL;
+    affect_error err;
+    if (affect_classifier_decode(blob, size, &d, &err))
+        fail_msg("decode: %s", err.msg);
+    assert_int_equal(affect_classifier_get_config(d)->storage, AFFECT_STORAGE_COMPACT);
+    double max_dec = 0, max_ddec = 0, max_emb = 0, max_demb = 0;
+    for (uint32_t i = 0; i < fx->d.n; i++) {
+        eval_res a, b, c;
+        eval_ok(f, &fx->d.seqs[i], &a);
+        eval_ok(q, &fx->d.seqs[i], &b);
+        eval_ok(d, &fx->d.seqs[i], &c);
+        /* the decoded model is the trained one */
+        assert_memory_equal(b.decision, c.decision, sizeof b.decision);
+        assert_memory_equal(b.embed, c.embed, sizeof b.embed);
+        assert_memory_equal(b.loglik, c.loglik, sizeof b.loglik);
+        assert_memory_equal(b.votes, c.votes, sizeof b.votes);
+        assert_memory_equal(b.fisher, c.fisher, D * sizeof(double));
+        /* the same decisions as the float32 model */
+        assert_int_equal(a.o.svm, b.o.svm);
+        assert_int_equal(a.o.knn, b.o.knn);
+        assert_int_equal(a.o.ml, b.o.ml);
+        assert_memory_equal(a.loglik, b.loglik, sizeof a.loglik);
+        for (size_t p = 0; p < N_EMOTIONS * (N_EMOTIONS - 1) / 2; p++) {
+            max_dec = fmax(max_dec, fabs(a.decision[p]));
+            max_ddec = fmax(max_ddec, fabs(a.decision[p] - b.decision[p]));
+        }
+        for (size_t p = 0; p < 3; p++) {
+            max_emb = fmax(max_emb, fabs(a.embed[p]));
+            max_demb = fmax(max_demb, fabs(a.embed[p] - b.embed[p]));
+        }
+        free(a.fisher);
+        free(b.fisher);
+        free(c.fisher);
+    }
+    printf("compact storage: decision values move by %.3g of the largest (%.3g), coordinates by "
+           "%.3g (%.3g)\n", max_ddec / max_dec, max_dec, max_demb / max_emb, max_emb);
+    assert_true(max_ddec <= COMPACT_DECISION_TOL * max_dec);
+    assert_true(max_demb <= COMPACT_EMBED_TOL * max_emb);
+    encode_ok(d, &again, &size2);
+    assert_int_equal(size2, size);
+    assert_memory_equal(again, blob, size);
+    affect_free(again);
+    affect_classifier *q2 = train_ok(&cfg, fx->d.feat, seqs, y, n, EMOTIONS, N_EMOTIONS);
+    encode_ok(q2, &again, &size2);
+    assert_int_equal(size2, size);
+    assert_memory_equal(again, blob, size);
+    affect_free(again);
+    affect_classifier_free(q2);
+
+    /* corruptions, each resealed */
+    size_t hmm0, dim_at, svm_at;
+    v3_offsets(blob, &hmm0, &dim_at, &svm_at);
+    assert_int_equal(blob[hmm0], 1); /* full covariances: triangles */
+    assert_int_equal(le64_at(blob + dim_at), D);
+    assert_int_equal(blob[svm_at], 3);
+    unsigned char *b = malloc(size);
+    assert_non_null(b);
+    char msg[160];
+    memcpy(b, blob, size);
+    b[hmm0] = 2;
+    reseal(b, size);
+    snprintf(msg, sizeof msg, "invalid form 2 of the HMM of class \"neutral\" (offset %zu)", hmm0);
+    decode_fails(b, size, AFFECT_ERR_FORMAT, msg);
+    memcpy(b, blob, size);
+    b[hmm0] = 0; /* the triangles read as a whole model BLOB */
+    reseal(b, size);
+    decode_fails(b, size, AFFECT_ERR_FORMAT, NULL);
+    memcpy(b, blob, size);
+    b[hmm0 + 9 + 20] = 1; /* the model says diagonal: no triangles */
+    reseal(b, size);
+    decode_fails(b, size, AFFECT_ERR_FORMAT,
+                 "the HMM of class \"neutral\": not a model BLOB with full covariances in "
+                 "triangles");
+    memcpy(b, blob, size);
+    b[dim_at + 8 + 3 * D + 2] = 0x80; /* the first scale: −0 */
+    b[dim_at + 8 + 3 * D + 1] = 0;
+    b[dim_at + 8 + 3 * D] = 0;
+    reseal(b, size);
+    snprintf(msg, sizeof msg, "invalid normalization (offset %zu)", svm_at);
+    decode_fails(b, size, AFFECT_ERR_FORMAT, msg);
+    memcpy(b, blob, size);
+    b[dim_at + 8 + 2] = 0x7f; /* the first mean: an exponent of all ones (inf or NaN) */
+    b[dim_at + 8 + 1] |= 0xf0;
+    reseal(b, size);
+    decode_fails(b, size, AFFECT_ERR_FORMAT, msg);
+    /* the SVM's first weight vector: its first scale negative, its first code −8 */
+    uint32_t l = affect_svm_total_sv(affect_classifier_svm(q));
+    size_t w0 = svm_at + 1 + 4 + 8 + 8 + 4 + 4 + 16 + 4 + 16 + 4 + 4 * (size_t)l + 4 +
+                8 * 3 * (size_t)l + 4 + 8 * 6 + 4;
+    size_t codes0 = w0 + 4 * ((D + 63) / 64);
+    memcpy(b, blob, size);
+    b[w0 + 3] ^= 0x80;
+    reseal(b, size);
+    snprintf(msg, sizeof msg, "SVM: weight vector 0 is not a canonical 4-bit form (offset %zu)",
+             w0);
+    decode_fails(b, size, AFFECT_ERR_FORMAT, msg);
+    memcpy(b, blob, size);
+    b[codes0] = (unsigned char)((b[codes0] & 0xf0) | 0x08);
+    reseal(b, size);
+    snprintf(msg, sizeof msg, "SVM: weight vector 0 is not a canonical 4-bit form (offset %zu)",
+             codes0);
+    decode_fails(b, size, AFFECT_ERR_FORMAT, msg);
+    free(b);
+    affect_free(blob);
+    affect_classifier_free(d);
+    affect_classifier_free(q);
+}
+
+/* tests/fixtures/classifier-v3.bin: the small classifier of classifier-v2.bin trained with
+ * "storage": "compact" (version 3, commit 71d367f). Today's decoder reads it as the compact
+ * storage; it gives the SVM, kNN and ML labels of classifier-v2.bin on the test's small set
+ * (decision values within COMPACT_TINY_DECISION_TOL), and today's encoder writes its bytes
+ * again. */
+static void test_fixture_v3(void **state)
+{
+    fixture *fx = *state;
+    size_t len, len2;
+    unsigned char *data, *v2;
+    affect_classifier *c =
+        decode_fixture(AFFECT_FIXTURES_DIR "/classifier-v3.bin", 1500, 3, &data, &len);
+    affect_classifier *f =
+        decode_fixture(AFFECT_FIXTURES_DIR "/classifier-v2.bin", 2418, 2, &v2, &len2);
+    affect_error err;
+    assert_int_equal(affect_classifier_get_config(c)->storage, AFFECT_STORAGE_COMPACT);
+    assert_int_equal(affect_classifier_get_config(f)->storage, AFFECT_STORAGE_FLOAT32);
+    double max_dec = 0, max_ddec = 0;
+    for (uint32_t i = 0; i < fx->small_n; i++) {
+        affect_classifier_out a = {0}, b = {0};
+        double da[1], db[1];
+        a.decision = da;
+        b.decision = db;
+        const affect_hmm_seq *q = &fx->small_seqs[i];
+        assert_int_equal(affect_classifier_eval(c, q->x, q->n_frames, NULL, false, &a, &err),
+                         AFFECT_OK);
+        assert_int_equal(affect_classifier_eval(f, q->x, q->n_frames, NULL, false, &b, &err),
+                         AFFECT_OK);
+        assert_true(a.svm == b.svm && a.knn == b.knn && a.ml == b.ml);
+        max_dec = fmax(max_dec, fabs(db[0]));
+        max_ddec = fmax(max_ddec, fabs(da[0] - db[0]));
+    }
+    printf("classifier-v3.bin: decision values move by %.3g of the largest (%.3g)\n",
+           max_ddec / max_dec, max_dec);
+    assert_true(max_ddec <= COMPACT_TINY_DECISION_TOL * max_dec);
+    assert_reencodes(c, data, len);
+    free(data);
+    free(v2);
+    affect_classifier_free(c);
+    affect_classifier_free(f);
+}
+
 /* ---- grid search ---- */
 
 static bool in_u32(uint32_t v, const uint32_t *list, uint32_t n)
@@ -1233,6 +1515,13 @@ static affect_status oom_decode(void *ctx, affect_error *err)
     return affect_classifier_decode(o->fx->small_blob, o->fx->small_size, &o->c, err);
 }
 
+/* The compact storage's BLOB (o->blob): its triangles and 24-bit values. */
+static affect_status oom_decode_compact(void *ctx, affect_error *err)
+{
+    oom_ctx *o = ctx;
+    return affect_classifier_decode(o->blob, o->size, &o->c, err);
+}
+
 static void oom_finish_classifier(void *ctx, affect_status st)
 {
     oom_ctx *o = ctx;
@@ -1306,6 +1595,19 @@ static void test_out_of_memory(void **state)
     printf("allocations: encode %ld, decode %ld, eval %ld, training %ld\n", n_enc, n_dec, n_eval,
            n_train);
     assert_true(n_train > 20);
+    /* the same training with the compact storage (make_compact allocates), and its decoding */
+    cfg.storage = AFFECT_STORAGE_COMPACT;
+    long n_compact = tu_oom_sweep(oom_train, &o, oom_finish_classifier, NULL);
+    affect_error err;
+    assert_int_equal(oom_train(&o, &err), AFFECT_OK);
+    encode_ok(o.c, &o.blob, &o.size);
+    assert_int_equal(o.blob[4], 3);
+    affect_classifier_free(o.c);
+    o.c = NULL;
+    long n_dec3 = tu_oom_sweep(oom_decode_compact, &o, oom_finish_classifier, NULL);
+    affect_free(o.blob);
+    printf("allocations: compact training %ld, its decoding %ld\n", n_compact, n_dec3);
+    assert_true(n_compact > n_train && n_dec3 >= 10);
 }
 
 int main(void)
@@ -1320,6 +1622,9 @@ int main(void)
         cmocka_unit_test(test_truncations),
         cmocka_unit_test(test_descriptors),
         cmocka_unit_test(test_fixture_v1),
+        cmocka_unit_test(test_fixture_v2),
+        cmocka_unit_test(test_compact),
+        cmocka_unit_test(test_fixture_v3),
         cmocka_unit_test(test_bad_fields),
         cmocka_unit_test(test_config_check),
         cmocka_unit_test(test_train_errors),

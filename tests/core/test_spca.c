@@ -836,7 +836,8 @@ static void test_truncations_and_corruptions(void **state)
     } cases[] = {
         {0, 4, 0x50534641 + 1, "sPCA: bad magic bytes (offset 0)"},
         {4, 4, 2, "sPCA: unknown format version 2, this build reads 1 (offset 4)"},
-        {8, 4, 2, "sPCA: unknown flags 0x2 (offset 8)"},
+        {8, 4, 3, "sPCA: unknown flags 0x3 (offset 8)"},
+        {8, 4, 4, "sPCA: unknown flags 0x4 (offset 8)"},
         {12, 4, 2, "sPCA: unknown label kernel 2 (offset 12)"},
         {16, 4, 1, "sPCA: 1 class, need at least 2 (offset 16)"},
         {16, 4, 0, "sPCA: 0 classes, need at least 2 (offset 16)"},

@@ -11,12 +11,14 @@
  * mutations reach the structure behind it (lengths, counts, the nested records). Beyond "no
  * crash, no leak, no undefined behaviour":
  *   - on failure: a non-OK status with a non-empty message;
- *   - on success: encode(decode(x)) == x byte for byte for today's version (an older version is
- *     re-encoded as today's, which must then round-trip), and evaluating a short sequence of
+ *   - on success: encode(decode(x)) == x byte for byte for today's versions (2, the float32
+ *     storage, and 3, the compact storage; version 1 is re-encoded as version 2, which must then
+ *     round-trip), and evaluating a short sequence of
  *     zeros either succeeds with labels in range or fails with a message.
  * The seeds are small classifiers trained on motion_synth (tests/fuzz/corpus/fuzz_classifier):
- * tiny-classifier.bin (version 1) and tiny-classifier-v2.bin (version 2, with kinematic
- * descriptors and mirror images).
+ * tiny-classifier.bin (version 1), tiny-classifier-v2.bin (version 2, with kinematic
+ * descriptors and mirror images) and tiny-classifier-v3.bin (version 3, the compact storage:
+ * the same options as tiny-classifier-v2.bin plus "storage": "compact").
  */
 #include "affect/classifier.h"
 #include "affect/hmm_blob.h"
@@ -51,7 +53,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     size_t n = 0;
     if (affect_classifier_encode(c, &buf, &n, &err) != AFFECT_OK)
         abort();
-    if (copy[4] == AFFECT_CLASSIFIER_VERSION) { /* today's version: the same bytes */
+    if (copy[4] >= 2) { /* today's versions (2: float32, 3: compact storage): the same bytes */
         if (n != size || memcmp(buf, copy, size) != 0)
             abort();
     } else { /* an older version is re-encoded as today's, which then round-trips */

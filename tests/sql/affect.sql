@@ -89,6 +89,23 @@ SELECT affect_train(m, emotion, '{"descriptors":"speed"}') FROM probe;
 SELECT affect_train(m, emotion, '{"root":true,"frame":"first"}') FROM probe;
 -- error: affect_train: row 1: root velocity and turning rate need the body frame
 
+-- ---- the storage of the long vectors (docs/FORMATS.md, "the compact storage") ----
+SELECT 'storage compact: version 3, smaller, the same labels as the float32 storage',
+       substr(q.model, 1, 8) = x'4146434C03000000' AND length(q.model) < length(f.model)
+   AND substr(f.model, 1, 8) = x'4146434C02000000' AND f.model = small.model
+   AND json_extract(affect_info(q.model), '$.format') = 3
+   AND (SELECT count(*) FROM probe
+         WHERE affect_classify(q.model, m) = affect_classify(f.model, m)
+           AND affect_classify(q.model, m, 'knn') = affect_classify(f.model, m, 'knn')) = 12
+  FROM small,
+       (SELECT affect_train(m, emotion, '{"states":2,"mixtures":1,"joints":["right_hand"],"max_iter":2,"svm_c":1,"spca_dims":1,"knn_k":1,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"storage":"compact"}') AS model
+          FROM probe WHERE seed <= 3) AS q,
+       (SELECT affect_train(m, emotion, '{"states":2,"mixtures":1,"joints":["right_hand"],"max_iter":2,"svm_c":1,"spca_dims":1,"knn_k":1,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"storage":"float32"}') AS model
+          FROM probe WHERE seed <= 3) AS f;
+
+SELECT affect_train(m, emotion, '{"storage":"float16"}') FROM probe;
+-- error: affect_train: option "storage" must be one of "auto", "float32", "compact", got "float16"
+
 -- ---- recognition of the unseen performers 5 and 6 ----
 SELECT 'held-out performers 5 and 6: svm ' || svm || ', knn ' || knn || ', ml ' || ml,
        svm >= 0.95 AND knn >= 0.95 AND ml >= 0.95 AND n = 24
@@ -509,7 +526,7 @@ SELECT affect_train('x', 'sad');
 -- error: affect_train: argument 1 must be a motion BLOB, got text
 
 SELECT affect_train(m, emotion, '{"svm":1,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
--- error: affect_train: unknown option "svm" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, frame, root, max_iter, tol, reg, seed, progress, groups, score_normalization, score_clip, svm_c, svm_folds, spca_dims, spca_kernel, spca_sigma, knn_k, grid, descriptors, descriptor_weight, mirror, threads)
+-- error: affect_train: unknown option "svm" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, frame, root, max_iter, tol, reg, seed, progress, groups, score_normalization, score_clip, svm_c, svm_folds, spca_dims, spca_kernel, spca_sigma, knn_k, grid, descriptors, descriptor_weight, mirror, threads, storage)
 
 SELECT affect_train(m, emotion, '{"svm_c":0,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}') FROM probe;
 -- error: affect_train: option "svm_c" must be a positive number or "auto"
@@ -666,7 +683,7 @@ SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"group":1,"covariance":
 -- error: affect_crossval: affect_crossval_json: option "group" must be a column name
 
 SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"fold":3,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}');
--- error: affect_crossval: affect_crossval_json: unknown option "fold" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, frame, root, max_iter, tol, reg, seed, progress, groups, score_normalization, score_clip, svm_c, svm_folds, spca_dims, spca_kernel, spca_sigma, knn_k, grid, folds, descriptors, descriptor_weight, mirror, group, methods, verbose, threads)
+-- error: affect_crossval: affect_crossval_json: unknown option "fold" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, frame, root, max_iter, tol, reg, seed, progress, groups, score_normalization, score_clip, svm_c, svm_folds, spca_dims, spca_kernel, spca_sigma, knn_k, grid, folds, descriptors, descriptor_weight, mirror, group, methods, verbose, threads, storage)
 
 SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"knn_k":0,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}');
 -- error: affect_crossval: affect_crossval_json: knn_k must be at least 1

@@ -76,7 +76,9 @@ extern "C" {
 #endif
 
 #define AFFECT_CLASSIFIER_MAGIC "AFCL"
-#define AFFECT_CLASSIFIER_VERSION 2u
+#define AFFECT_CLASSIFIER_VERSION 3u
+/* The representation's dimension D from which "storage": "auto" chooses the compact storage. */
+#define AFFECT_CLASSIFIER_COMPACT_DIM 65536u
 #define AFFECT_CLASSIFIER_MAX_CLASSES 64u
 /* Training holds one block of the representation for every motion (n × one class HMM's Fisher
  * scores: 4,032 × 95,333 doubles, 3.1 GB, for 2,016 motions and their mirror images at the
@@ -110,6 +112,22 @@ typedef enum affect_classifier_mirror {
     AFFECT_MIRROR_AUTO = 2
 } affect_classifier_mirror;
 
+/* How the classifier keeps (and its BLOB stores) its D-long vectors (docs/FORMATS.md, "The
+ * compact storage"). FLOAT32: the normalization's mean and scale as float64, the SVM's weights
+ * and the sPCA's axes as float32 (classifier version 2). COMPACT: the mean and scale rounded to
+ * 24-bit floats, the ratio of the stored to the exact scale folded into the weights and axes,
+ * which are then rounded to 4-bit codes in blocks of 64 with a float32 scale each, and the class
+ * HMMs' symmetric covariances stored as triangles (version 3; about 4.4 times smaller at the
+ * thesis's configuration; the decisions measured in docs/BENCHMARKS.md). AUTO (default):
+ * COMPACT when D ≥ AFFECT_CLASSIFIER_COMPACT_DIM, else FLOAT32. Either way training rounds the
+ * model it returns, so it is exactly the decoded BLOB's model. A decoded classifier says which
+ * it is (FLOAT32 for versions 1 and 2). */
+typedef enum affect_classifier_storage {
+    AFFECT_STORAGE_AUTO = 0,
+    AFFECT_STORAGE_FLOAT32 = 1,
+    AFFECT_STORAGE_COMPACT = 2
+} affect_classifier_storage;
+
 typedef struct affect_classifier_config {
     affect_hmm_config hmm;          /* the class HMMs (dim = the feature dimension) */
     unsigned groups;                /* Fisher groups (default AFFECT_FISHER_ALL) */
@@ -127,6 +145,7 @@ typedef struct affect_classifier_config {
     double descriptor_weight;       /* their block's share of the kernel (default 0.1) */
     affect_classifier_mirror mirror; /* train on every motion and its mirror image (default
                                         auto) */
+    affect_classifier_storage storage; /* default auto (above) */
     uint32_t threads;               /* training: class HMMs and motions' Fisher scores on this
                                        many threads (default 1, at most 64; the result does not
                                        depend on it; not stored in the BLOB) */

@@ -152,7 +152,8 @@ const double *affect_spca_eigenvalues(const affect_spca *s);
  * Layout, version 1 (little-endian, offsets from the start of the record):
  *    0  4  magic "AFSP"
  *    4  4  format version (1)
- *    8  4  flags (0, or 1: the axes are float32 — affect_spca_round_axes)
+ *    8  4  flags (0; 1: the axes are float32 — affect_spca_round_axes; 2: the axes are in
+ *          4-bit blocks — affect_spca_compact_axes; not both)
  *   12  4  label kernel (0 linear, 1 rbf)
  *   16  4  classes c (≥ 2)
  *   20  4  axes p (1 .. c − 1)
@@ -160,7 +161,8 @@ const double *affect_spca_eigenvalues(const affect_spca *s);
  *   32  8  input dimension d (1 .. 2147483647)
  *   40  8  sigma (float64; > 0 and finite for rbf, 0 for linear)
  *   48  p × float64      eigenvalues, positive, non-increasing
- *       p × d × float64  axes, row-major (p × d × float32 with flag 1)
+ *       p × d × float64  axes, row-major (p × d × float32 with flag 1; with flag 2 each axis
+ *                        in the 4-bit form of affect/quant.h, canonical)
  *       8  FNV-1a 64-bit hash of the record's bytes before it
  */
 #define AFFECT_SPCA_MAGIC "AFSP"
@@ -172,6 +174,14 @@ const double *affect_spca_eigenvalues(const affect_spca *s);
  * changed) when a component is beyond float32's range. The recognizer does this once its axes
  * are complete. */
 bool affect_spca_round_axes(affect_spca *s);
+
+/* Whether affect_spca_compact_axes(s, factor) can succeed (affect_q4_fits of every axis). */
+bool affect_spca_compact_fits(const affect_spca *s, const double *factor);
+
+/* Multiplies component t of every axis by factor[t] (d values, or NULL) and rounds each axis to
+ * its 4-bit block form (affect/quant.h), so that the record stores the axes with flag 2 and
+ * decodes to exactly these axes. The caller has checked affect_spca_compact_fits. */
+void affect_spca_compact_axes(affect_spca *s, const double *factor);
 
 /* Appends the record to w (check w->failed once at the end, see affect/bytes.h). */
 void affect_spca_encode(const affect_spca *s, affect_bw *w);

@@ -55,7 +55,7 @@ extern "C" {
 /* Dimension at most (BLAS counts it in an int). */
 #define AFFECT_SVM_MAX_DIM 2147483647u
 /* Version of the encoding written by affect_svm_encode. */
-#define AFFECT_SVM_FORMAT_VERSION 2u
+#define AFFECT_SVM_FORMAT_VERSION 3u
 
 typedef struct affect_svm affect_svm; /* opaque */
 
@@ -125,6 +125,17 @@ affect_status affect_svm_select_c_gram(const double *G, size_t n, size_t d, cons
  * the rounding moves a decision value by about 1e-7 of its size. */
 bool affect_svm_round_weights(affect_svm *m);
 
+/* Whether affect_svm_compact_weights(m, factor) can succeed: the model has weights and every
+ * weight times its column's factor (factor NULL: 1) gives blocks whose scales fit a float32. */
+bool affect_svm_compact_fits(const affect_svm *m, const double *factor);
+
+/* Multiplies column t of every weight vector by factor[t] (factor: d values, or NULL) and rounds
+ * each vector to its 4-bit block form (affect/quant.h), so that the model is encoded with
+ * compact weights (format version 3, about 0.56 byte a weight) and decodes to exactly these
+ * weights. The caller has checked affect_svm_compact_fits. The recognizer folds the ratio of its
+ * stored to its exact normalization scales into the factors (affect/classifier.h). */
+void affect_svm_compact_weights(affect_svm *m, const double *factor);
+
 void affect_svm_free(affect_svm *m);
 
 /* The predicted class of x (dim() values). When dec is not NULL it receives the
@@ -185,7 +196,8 @@ affect_status affect_svm_select_c(const double *X, size_t n, size_t d, const uin
 
 /* ---- serialisation ----
  * Layout, version 1 (little-endian, through affect/bytes.h), offsets relative to the start:
- *    0  1      format version (1, or 2 when the weights are float32: affect_svm_round_weights)
+ *    0  1      format version (1; 2 when the weights are float32: affect_svm_round_weights;
+ *              3 when they are in 4-bit blocks: affect_svm_compact_weights)
  *    1  4      classes c (2 .. 256)
  *    5  8      dimension d (1 .. 2147483647)
  *   13  8      C (float64, positive, finite)
@@ -202,7 +214,8 @@ affect_status affect_svm_select_c(const double *X, size_t n, size_t d, const uin
  *       8P     rho (float64, finite)
  *       4      number of weight vectors (= P)
  *       8Pd    weight vectors w, pair after pair (float64, finite; version 2: 4Pd bytes of
- *              float32, finite)
+ *              float32, finite; version 3: each vector in the 4-bit form of affect/quant.h,
+ *              canonical)
  * No checksum and no length: the object is embedded in the classifier BLOB, which carries
  * both; decoding stops after the weights. */
 
