@@ -9,7 +9,7 @@
  *     affect_classifier *c;
  *     if (affect_classifier_train(&cfg, feat, seqs, NULL, y, n, labels, 4, &c, &err) == AFFECT_OK) {
  *         affect_classifier_out o = {0};
- *         affect_classifier_eval(c, x, T, NULL, false, &o, &err);   (o.svm, o.knn, o.ml)
+ *         affect_classifier_eval(c, x, T, NULL, false, &o, NULL, &err);   (o.svm, o.knn, o.ml)
  *         affect_classifier_free(c);
  *     }
  *

@@ -6,7 +6,7 @@
  * Usage:
  *     size_t d = affect_fisher_dim(affect_hmm_get_config(h), AFFECT_FISHER_ALL);
  *     double *f = affect_malloc_array(d, sizeof *f);
- *     if (f && affect_fisher_score(h, x, n_frames, AFFECT_FISHER_ALL, f, &ll, &err) == AFFECT_OK)
+ *     if (f && affect_fisher_score(h, x, n_frames, AFFECT_FISHER_ALL, f, &ll, NULL, &err) == AFFECT_OK)
  *         ... f[0 .. d) ...; affect_fisher_describe(cfg, AFFECT_FISHER_ALL, e, &entry, &err)
  *     says what entry e is.
  *

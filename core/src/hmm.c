@@ -8,7 +8,7 @@
  *     cfg.dim = 63;
  *     affect_hmm *h;
  *     if (affect_hmm_train(&cfg, seqs, n, &h, &err) == AFFECT_OK) {
- *         affect_hmm_loglik(h, x, n_frames, &ll, &err);
+ *         affect_hmm_loglik(h, x, n_frames, &ll, NULL, &err);
  *         affect_hmm_free(h);
  *     }
  *

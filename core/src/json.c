@@ -3,7 +3,7 @@
  *
  * Usage:
  *     affect_json_doc *doc;
- *     if (affect_json_parse(text, len, &doc, &err) != AFFECT_OK) ... err.msg ...
+ *     if (affect_json_parse(text, len, &doc, NULL, &err) != AFFECT_OK) ... err.msg ...
  *     const affect_json_node *fps = affect_json_get(doc, affect_json_root(doc), "fps");
  *     affect_json_free(doc);
  *

@@ -1055,7 +1055,7 @@ static void test_fixture_v2(void **state)
         double da[1];
         a.decision = da;
         const affect_hmm_seq *q = &fx->small_seqs[i];
-        assert_int_equal(affect_classifier_eval(c, q->x, q->n_frames, NULL, false, &a, &err),
+        assert_int_equal(affect_classifier_eval(c, q->x, q->n_frames, NULL, false, &a, NULL, &err),
                          AFFECT_OK);
         assert_true(isfinite(da[0]));
         assert_true(a.svm < 2 && a.knn < 2 && a.ml < 2);
@@ -1267,9 +1267,9 @@ static void test_fixture_v3(void **state)
         a.decision = da;
         b.decision = db;
         const affect_hmm_seq *q = &fx->small_seqs[i];
-        assert_int_equal(affect_classifier_eval(c, q->x, q->n_frames, NULL, false, &a, &err),
+        assert_int_equal(affect_classifier_eval(c, q->x, q->n_frames, NULL, false, &a, NULL, &err),
                          AFFECT_OK);
-        assert_int_equal(affect_classifier_eval(f, q->x, q->n_frames, NULL, false, &b, &err),
+        assert_int_equal(affect_classifier_eval(f, q->x, q->n_frames, NULL, false, &b, NULL, &err),
                          AFFECT_OK);
         assert_true(a.svm == b.svm && a.knn == b.knn && a.ml == b.ml);
         max_dec = fmax(max_dec, fabs(db[0]));
