@@ -13,6 +13,10 @@ if [ "$(id -u)" -ne 0 ]; then echo "SKIP: needs root (a mount namespace)"; exit 
 if ! unshare -m --propagation private true 2>/dev/null; then
     echo "SKIP: unshare -m is not permitted here"; exit 77
 fi
+if ! grep -q '^AFFECT_INSTALL_LDCONFIG:BOOL=ON' "$build/CMakeCache.txt"; then
+    echo "SKIP: configured with AFFECT_INSTALL_LDCONFIG=OFF (the install does not run ldconfig)"
+    exit 77
+fi
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 cp -a /etc "$tmp/etc" 2>/dev/null || true
