@@ -231,7 +231,8 @@ def to_numpy(blob):
         if flags & _FLAG_ROTATIONS:
             expect += frames * (joints * 16 + sum(translated) * 12)
     if size != expect:
-        raise ValueError(f"{bad}{'truncated' if size < expect else 'trailing bytes'}: {size} bytes, "
+        what = "truncated" if size < expect else "trailing bytes"
+        raise ValueError(f"{bad}{what}: {size} bytes, "
                          f"expected {expect} for {frames} frames x {joints} joints")
 
     names = [_check_name(raw, j, bad.rstrip(": ")) for j, raw in enumerate(raw_names)]

@@ -32,12 +32,15 @@ fi
 
 lib="$prefix/lib"
 [ -f "$lib/affect.so" ] && [ ! -L "$lib/affect.so" ] || fail "$lib/affect.so is not a file"
-[ "$(readlink "$lib/libaffect.so")" = affect.so ] || fail "$lib/libaffect.so is not a link to affect.so"
-readelf -d "$lib/affect.so" | grep -q 'Library soname: \[affect.so\]' || fail "SONAME is not affect.so"
+[ "$(readlink "$lib/libaffect.so")" = affect.so ] ||
+    fail "$lib/libaffect.so is not a link to affect.so"
+readelf -d "$lib/affect.so" | grep -q 'Library soname: \[affect.so\]' ||
+    fail "SONAME is not affect.so"
 [ -f "$lib/libsqlite_affect.a" ] || fail "no $lib/libsqlite_affect.a"
 [ -f "$prefix/share/doc/sqlite-affect/LICENSE" ] || fail "no LICENSE installed"
 for h in "$src"/core/include/affect/*.h; do
-    cmp -s "$h" "$prefix/include/affect/$(basename "$h")" || fail "header $(basename "$h") not installed"
+    cmp -s "$h" "$prefix/include/affect/$(basename "$h")" ||
+        fail "header $(basename "$h") not installed"
 done
 [ ! -e "$prefix/include/affect/internal.h" ] || fail "internal.h installed"
 echo "installed: $(cd "$prefix" && find . -type f -o -type l | sort | tr '\n' ' ')"
@@ -55,7 +58,8 @@ got=$(LD_LIBRARY_PATH="$lib" sqlite3 :memory: -cmd ".load affect" "SELECT affect
 [ "$got" = "$version" ] || fail "affect_version() = '$got', expected $version"
 echo "sqlite3 .load affect (LD_LIBRARY_PATH=$lib): affect_version() = $got"
 # (the shell exits with 0 even when -cmd fails, hence the comparisons of its output)
-out=$(env -u LD_LIBRARY_PATH sqlite3 :memory: -cmd ".load affect" "SELECT affect_version()" 2>&1 || true)
+out=$(env -u LD_LIBRARY_PATH sqlite3 :memory: -cmd ".load affect" "SELECT affect_version()" 2>&1 ||
+    true)
 if [ "$out" = "$version" ]; then
     echo "note: .load affect also works without LD_LIBRARY_PATH here (a system-wide install)"
 else
@@ -67,7 +71,8 @@ import sqlite3
 c = sqlite3.connect(':memory:')
 c.enable_load_extension(True)
 c.load_extension('affect')
-print(c.execute('SELECT affect_version()').fetchone()[0])") || fail "python load_extension('affect')"
+print(c.execute('SELECT affect_version()').fetchone()[0])") ||
+        fail "python load_extension('affect')"
     [ "$got" = "$version" ] || fail "python: affect_version() = '$got'"
     echo "python3 load_extension('affect'): affect_version() = $got"
 fi

@@ -15,7 +15,8 @@ py=${3:-/usr/bin/python3}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 "$py" -c "import venv, ensurepip, setuptools, wheel" 2>/dev/null ||
-    { echo "SKIP: $py lacks venv/ensurepip/setuptools/wheel (apt-get install python3-venv python3-setuptools python3-wheel)"; exit 77; }
+    { echo "SKIP: $py lacks venv/ensurepip/setuptools/wheel" \
+           "(apt-get install python3-venv python3-setuptools python3-wheel)"; exit 77; }
 "$py" -m venv --system-site-packages "$tmp/venv"
 # the package is built in a copy: setuptools writes build/ and *.egg-info next to the sources
 cp -r "$src/python" "$tmp/python"
@@ -23,7 +24,8 @@ rm -f "$tmp/python/sqlite_affect/"*.so
 PIP_NO_INPUT=1 PIP_DISABLE_PIP_VERSION_CHECK=1 "$tmp/venv/bin/pip" install -q \
     --no-build-isolation --no-index "$tmp/python"
 cd "$tmp"
-where=$(env -u PYTHONPATH "$tmp/venv/bin/python" -c "import sqlite_affect; print(sqlite_affect.__file__, sqlite_affect.__version__)")
+where=$(env -u PYTHONPATH "$tmp/venv/bin/python" -c \
+    "import sqlite_affect; print(sqlite_affect.__file__, sqlite_affect.__version__)")
 echo "installed: $where"
 case "$where" in "$tmp/venv/"*) ;; *) echo "FAIL: not imported from the venv"; exit 1 ;; esac
 env -u PYTHONPATH SQLITE_AFFECT_PATH="$build/affect.so" "$tmp/venv/bin/python" \

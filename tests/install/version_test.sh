@@ -17,7 +17,8 @@ echo "CMakeLists.txt: $version"
 sql=$(sqlite3 :memory: -cmd ".load $build/affect" "SELECT affect_version()" 2>&1 || true)
 echo "affect_version(): $sql"
 [ "$sql" = "$version" ] || fail "affect_version() is '$sql', the project is $version (rebuild?)"
-info=$(sqlite3 :memory: -cmd ".load $build/affect" "SELECT affect_build_info() ->> '\$.version'" 2>&1 || true)
+info=$(sqlite3 :memory: -cmd ".load $build/affect" "SELECT affect_build_info() ->> '\$.version'" \
+    2>&1 || true)
 [ "$info" = "$version" ] || fail "affect_build_info() version is '$info'"
 
 py=$(sed -nE 's/^__version__ = "([^"]*)"/\1/p' "$src/python/sqlite_affect/__init__.py")
@@ -27,7 +28,8 @@ echo "python/sqlite_affect: $py"
 if git -C "$src" rev-parse --git-dir >/dev/null 2>&1; then
     tags=$(git -C "$src" tag --points-at HEAD --list 'v*')
     if [ -z "$tags" ]; then
-        echo "git: no v* tag at HEAD (development checkout; latest: $(git -C "$src" describe --tags --match 'v*' --abbrev=0 2>/dev/null || echo none))"
+        latest=$(git -C "$src" describe --tags --match 'v*' --abbrev=0 2>/dev/null || echo none)
+        echo "git: no v* tag at HEAD (development checkout; latest: $latest)"
     else
         for t in $tags; do
             [ "$t" = "v$version" ] || fail "git tag $t at HEAD, but the project version is $version"
