@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
-# run.sh — the two commands of the README.
+# run.sh — the commands of the README.
 #
 #   ./run.sh demo [BVH_DIR]   install what is missing, build, and run the demo: demo.db with the
 #                             synthetic corpus (and the real one when ../shared/corpora/
 #                             bandai-namco-1/data or BVH_DIR exists), a summary, and demo.html
+#   ./run.sh install          install what is missing, build, and `cmake --install build` (README,
+#                             "Install": /usr/local, so that `.load affect` works from anywhere)
 #   ./run.sh test             install what is missing, build, and run the whole test suite:
 #                             unit, SQL and out-of-memory tests, examples and scripts, the real
 #                             corpus (skipped when absent), Blender importing our BVH files
@@ -21,6 +23,8 @@ ROOT=$(pwd)
 
 PACKAGES=(build-essential cmake pkg-config sqlite3 libsqlite3-dev libopenblas-dev liblapacke-dev
           libsvm-dev libcmocka-dev clang python3)
+# The Python package (python/) and its tests: NumPy, and an offline venv + pip install.
+PACKAGES+=(python3-numpy python3-venv python3-setuptools python3-wheel)
 # Only for ./run.sh test: the real client of tests/client/blender_test.sh (headless Blender
 # imports our BVH files). If it cannot be installed the tests go on and that one is skipped.
 TEST_PACKAGES=(blender)
@@ -102,10 +106,11 @@ tests() {
 
 case "${1:-}" in
     demo) install_missing; build; shift; demo "$@" ;;
+    install) install_missing; build; cmake --install build ;;
     test)
         install_missing
         install_missing "${TEST_PACKAGES[@]}" ||
             echo "== could not install ${TEST_PACKAGES[*]}: client/blender will be skipped"
         build; tests ;;
-    *) echo "usage: ./run.sh demo [BVH_DIR] | ./run.sh test" >&2; exit 2 ;;
+    *) echo "usage: ./run.sh demo [BVH_DIR] | ./run.sh test | ./run.sh install" >&2; exit 2 ;;
 esac
