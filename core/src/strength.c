@@ -839,8 +839,13 @@ static void durations(const affect_strength *s, const double *x, const double *r
     }
 }
 
-static affect_status make_rigid(affect_motion *raw, affect_motion **out, affect_error *err)
+static affect_status make_rigid(affect_motion *raw, bool rigid, affect_motion **out,
+                                affect_error *err)
 {
+    if (!rigid) {
+        *out = raw;
+        return AFFECT_OK;
+    }
     affect_rigid_options ro;
     affect_rigid_options_default(&ro);
     affect_status st = affect_motion_rigid(raw, &ro, out, err);
@@ -848,9 +853,11 @@ static affect_status make_rigid(affect_motion *raw, affect_motion **out, affect_
     return st;
 }
 
-affect_status affect_strength_synthesize(const affect_strength *s, double strength,
-                                         affect_motion **out, affect_error *err)
+static affect_status synthesize_once(const affect_strength *s, const affect_motion *unused,
+                                     double strength, bool rigid, affect_motion **out,
+                                     affect_error *err)
 {
+    (void)unused;
     *out = NULL;
     if (!isfinite(strength))
         return affect_fail(err, AFFECT_ERR_INVALID, "the strength must be finite");
@@ -906,7 +913,7 @@ affect_status affect_strength_synthesize(const affect_strength *s, double streng
         for (uint32_t c = 0; c < D3; c++)
             p[c] = (float)(h00 * k0[c] + h10 * h * m0[c] + h01 * k1[c] + h11 * h * m1[c]);
     }
-    st = make_rigid(m, out, err);
+    st = make_rigid(m, rigid, out, err);
     m = NULL;
 cleanup:
     affect_motion_free(m);
@@ -917,8 +924,8 @@ cleanup:
     return st;
 }
 
-affect_status affect_strength_edit(const affect_strength *s, const affect_motion *m,
-                                   double strength, affect_motion **out, affect_error *err)
+static affect_status edit_once(const affect_strength *s, const affect_motion *m, double strength,
+                               bool rigid, affect_motion **out, affect_error *err)
 {
     *out = NULL;
     if (!isfinite(strength))
@@ -1002,7 +1009,7 @@ affect_status affect_strength_edit(const affect_strength *s, const affect_motion
                                tf.origin[c]);
         }
     }
-    st = make_rigid(e, out, err);
+    st = make_rigid(e, rigid, out, err);
     e = NULL;
 cleanup:
     affect_motion_free(e);
@@ -1017,6 +1024,72 @@ cleanup:
     affect_free(tau);
     affect_free(kf);
     return st;
+}
+
+typedef affect_status (*make_fn)(const affect_strength *s, const affect_motion *m,
+                                 double strength, bool rigid, affect_motion **out,
+                                 affect_error *err);
+
+/* Runs make at the target, measures the result's strength, and corrects the target by the
+ * miss (t ← t + (s − r)) up to AFFECT_STRENGTH_CORRECTIONS times while the miss shrinks and is
+ * above AFFECT_STRENGTH_TOL; keeps the closest result. The miss comes from what the feature
+ * step cannot see: the keyframes chosen again on the new motion and the rigid projection. */
+static affect_status hit_target(const affect_strength *s, const affect_motion *m, double strength,
+                                bool rigid, make_fn make, affect_motion **out, affect_error *err)
+{
+    *out = NULL;
+    if (!isfinite(strength))
+        return affect_fail(err, AFFECT_ERR_INVALID, "the strength must be finite");
+    affect_motion *best = NULL;
+    double best_miss = INFINITY, t = strength;
+    affect_status st = AFFECT_OK;
+    for (uint32_t round = 0; round <= AFFECT_STRENGTH_CORRECTIONS; round++) {
+        affect_motion *cand = NULL;
+        double r;
+        st = make(s, m, t, rigid, &cand, err);
+        if (st == AFFECT_OK)
+            st = affect_strength_score(s, cand, &r, err);
+        if (st != AFFECT_OK) {
+            affect_motion_free(cand);
+            if (best && st != AFFECT_ERR_NOMEM && st != AFFECT_ERR_INTERRUPTED) {
+                st = AFFECT_OK; /* a correction that cannot be measured: keep the best so far */
+                break;
+            }
+            affect_motion_free(best);
+            return st;
+        }
+        double miss = fabs(strength - r);
+        if (miss < best_miss) {
+            affect_motion_free(best);
+            best = cand;
+            best_miss = miss;
+        } else {
+            affect_motion_free(cand);
+            break;
+        }
+        if (miss <= AFFECT_STRENGTH_TOL)
+            break;
+        t += strength - r;
+    }
+    *out = best;
+    return st;
+}
+
+affect_status affect_strength_synthesize(const affect_strength *s, double strength, bool rigid,
+                                         affect_motion **out, affect_error *err)
+{
+    return hit_target(s, NULL, strength, rigid, synthesize_once, out, err);
+}
+
+affect_status affect_strength_edit(const affect_strength *s, const affect_motion *m,
+                                   double strength, bool rigid, affect_motion **out,
+                                   affect_error *err)
+{
+    *out = NULL;
+    affect_status st = check_skeleton(s->n_joints, s->names, m, err);
+    if (st != AFFECT_OK)
+        return st;
+    return hit_target(s, m, strength, rigid, edit_once, out, err);
 }
 
 /* ---- the BLOB ---- */

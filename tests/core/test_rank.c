@@ -363,13 +363,38 @@ static void test_out_of_memory(void **state)
     affect_free(c.pairs);
 }
 
+static void test_fixture_v1(void **state)
+{
+    (void)state;
+    size_t n;
+    char *data = tu_read_file(AFFECT_FIXTURES_DIR "/ranker-v1.bin", &n);
+    assert_non_null(data);
+    affect_ranker *r;
+    affect_error err;
+    assert_int_equal(affect_ranker_decode((const unsigned char *)data, n, &r, &err), AFFECT_OK);
+    assert_int_equal(r->dim, 27);
+    assert_int_equal(r->clusters, 2);
+    assert_true(r->stats.converged);
+    assert_true(r->stats.correct <= r->stats.ordered && r->stats.ordered > 0);
+    unsigned char *enc;
+    size_t ne;
+    assert_int_equal(affect_ranker_encode(r, &enc, &ne, &err), AFFECT_OK);
+    assert_int_equal(ne, n);
+    assert_memory_equal(enc, data, n);
+    /* a centroid belongs to its own cluster */
+    assert_int_equal(affect_ranker_cluster(r, r->centroids + r->dim), 1);
+    affect_free(enc);
+    affect_ranker_free(r);
+    free(data);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_kkt),           cmocka_unit_test(test_recovers_w),
         cmocka_unit_test(test_similar_pairs), cmocka_unit_test(test_pairs),
         cmocka_unit_test(test_clusters),      cmocka_unit_test(test_errors),
-        cmocka_unit_test(test_out_of_memory),
+        cmocka_unit_test(test_out_of_memory), cmocka_unit_test(test_fixture_v1),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

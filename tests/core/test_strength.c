@@ -266,7 +266,7 @@ static void test_model(void **state)
     for (int k = 0; k < 5; k++) {
         double target = lo + (hi - lo) * k / 4.0, got;
         affect_motion *m;
-        assert_int_equal(affect_strength_synthesize(s, target, &m, &err), AFFECT_OK);
+        assert_int_equal(affect_strength_synthesize(s, target, true, &m, &err), AFFECT_OK);
         assert_int_equal(m->n_joints, tr.m[0]->n_joints);
         assert_true(m->n_frames > 10);
         assert_int_equal(affect_strength_score(s, m, &got, &err), AFFECT_OK);
@@ -280,7 +280,7 @@ static void test_model(void **state)
     for (int k = 0; k < 3; k++) {
         double target = s->level_strength[k], got;
         affect_motion *m;
-        assert_int_equal(affect_strength_edit(s, te.m[0], target, &m, &err), AFFECT_OK);
+        assert_int_equal(affect_strength_edit(s, te.m[0], target, true, &m, &err), AFFECT_OK);
         assert_int_equal(affect_strength_score(s, m, &got, &err), AFFECT_OK);
         if (!(got > prev))
             fail_msg("edited to %g: strength %g after %g", target, got, prev);
@@ -325,7 +325,7 @@ static void test_no_pca_and_options(void **state)
     assert_int_equal(affect_strength_encode(s, &b, &nb, &err), AFFECT_OK);
     assert_int_equal(affect_strength_decode(b, nb, &back, &err), AFFECT_OK);
     affect_motion *m;
-    assert_int_equal(affect_strength_synthesize(back, 0.0, &m, &err), AFFECT_OK);
+    assert_int_equal(affect_strength_synthesize(back, 0.0, false, &m, &err), AFFECT_OK);
     affect_motion_free(m);
     affect_free(b);
     affect_strength_free(back);
@@ -387,7 +387,7 @@ static void test_errors(void **state)
     assert_int_equal(affect_strength_score(s, shortm, &v, &err), AFFECT_ERR_RANGE);
     assert_string_equal(err.msg, "3 frames, fewer than the 5 keyframes");
     affect_motion *m;
-    assert_int_equal(affect_strength_synthesize(s, NAN, &m, &err), AFFECT_ERR_INVALID);
+    assert_int_equal(affect_strength_synthesize(s, NAN, true, &m, &err), AFFECT_ERR_INVALID);
     assert_string_equal(err.msg, "the strength must be finite");
     affect_motion_free(other);
     affect_motion_free(shortm);
@@ -413,8 +413,8 @@ static affect_status oom_op(void *ctx, affect_error *err)
         return affect_strength_train((const affect_motion *const *)c->tr.m, c->tr.level, NULL,
                                      c->tr.n, LEVELS, N_INT, &opt, &c->s, err);
     if (c->what == 1)
-        return affect_strength_synthesize(c->s, 0.5, &c->m, err);
-    return affect_strength_edit(c->s, c->tr.m[1], 0.5, &c->m, err);
+        return affect_strength_synthesize(c->s, 0.5, true, &c->m, err);
+    return affect_strength_edit(c->s, c->tr.m[1], 0.5, true, &c->m, err);
 }
 
 static void oom_finish(void *ctx, affect_status st)
@@ -455,6 +455,48 @@ static void test_out_of_memory(void **state)
     free_corpus(&c.tr);
 }
 
+static void test_fixture_v1(void **state)
+{
+    (void)state;
+    size_t n;
+    char *data = tu_read_file(AFFECT_FIXTURES_DIR "/strength-v1.bin", &n);
+    assert_non_null(data);
+    affect_strength *s;
+    affect_error err;
+    assert_int_equal(affect_strength_decode((const unsigned char *)data, n, &s, &err), AFFECT_OK);
+    assert_int_equal(s->n_joints, 26);
+    assert_int_equal(s->keyframes, 3);
+    assert_int_equal(s->dim, 468);
+    assert_int_equal(s->pdim, 2);
+    assert_true(s->pca);
+    assert_int_equal(s->n_train, 3);
+    assert_int_equal(s->n_levels, 3);
+    assert_string_equal(s->level_names[1], "0.8");
+    assert_int_equal(s->regression, AFFECT_STRENGTH_REG_KERNEL_RIDGE);
+    assert_int_equal(s->stats.ordered, 3);
+    assert_int_equal(s->stats.correct, 3);
+    assert_true(s->level_strength[0] < s->level_strength[1] &&
+                s->level_strength[1] < s->level_strength[2]);
+    unsigned char *enc;
+    size_t ne;
+    assert_int_equal(affect_strength_encode(s, &enc, &ne, &err), AFFECT_OK);
+    assert_int_equal(ne, n);
+    assert_memory_equal(enc, data, n);
+    /* the training motions score as stored (the wave of seed 1 at intensity 1.4) */
+    affect_synth_options so;
+    affect_synth_options_default(&so);
+    so.intensity = 1.4;
+    affect_motion *m;
+    assert_int_equal(affect_motion_synth("wave", "angry", 1, &so, &m, &err), AFFECT_OK);
+    double r;
+    assert_int_equal(affect_strength_score(s, m, &r, &err), AFFECT_OK);
+    tu_assert_near(r, s->level_strength[2], 1e-9);
+    affect_motion_free(m);
+    affect_free(enc);
+    affect_strength_free(s);
+    free(data);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -465,6 +507,7 @@ int main(void)
         cmocka_unit_test(test_no_pca_and_options),
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_out_of_memory),
+        cmocka_unit_test(test_fixture_v1),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

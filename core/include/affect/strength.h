@@ -34,6 +34,11 @@
  * frame) and its time between keyframes is rescaled to the new durations; the result is put
  * back where the original stood (the inverse of step 1) and made rigid.
  *
+ * Both then measure the strength of what they made (keyframes chosen again, the rigid
+ * projection and the interpolation move it off the target) and correct the target by the miss,
+ * t ← t + (s − r), up to AFFECT_STRENGTH_CORRECTIONS times while the miss shrinks, keeping the
+ * closest motion.
+ *
  * Errors: motions of another skeleton ("motion 3: 19 joints, the model has 22"), fewer frames
  * than keyframes, fewer than two levels present, no pairs, options out of range.
  */
@@ -55,6 +60,8 @@ extern "C" {
 #define AFFECT_STRENGTH_MAX_PCA 4096u
 #define AFFECT_STRENGTH_MAX_DIM 16777216u /* D = 6 J q */
 #define AFFECT_STRENGTH_CV_FOLDS 5u
+#define AFFECT_STRENGTH_CORRECTIONS 4u /* target corrections of synthesis and editing */
+#define AFFECT_STRENGTH_TOL 0.01          /* strength miss at which the corrections stop */
 #define AFFECT_STRENGTH_V_MIN 1e-12       /* v·v below this: the segment keeps its mean duration */
 
 typedef enum affect_strength_regression {
@@ -133,13 +140,15 @@ affect_status affect_strength_score(const affect_strength *s, const affect_motio
 /* The regression's feature coordinates for a strength (pdim doubles). */
 void affect_strength_predict(const affect_strength *s, double strength, double *z);
 
-/* A motion of the target strength. */
-affect_status affect_strength_synthesize(const affect_strength *s, double strength,
+/* A motion of the target strength (rigid: projected to constant bone lengths, as the header
+ * says; false: the interpolated positions as they are). */
+affect_status affect_strength_synthesize(const affect_strength *s, double strength, bool rigid,
                                          affect_motion **out, affect_error *err);
 
-/* m edited to the target strength. */
+/* m edited to the target strength (rigid as above). */
 affect_status affect_strength_edit(const affect_strength *s, const affect_motion *m,
-                                   double strength, affect_motion **out, affect_error *err);
+                                   double strength, bool rigid, affect_motion **out,
+                                   affect_error *err);
 
 /* (Re)fits the regression of s from its train_r and train_z (n_train × pdim) by 5-fold
  * cross-validation (see the file header): sets regression, reg_h, reg_lambda, the cv_* errors,
