@@ -21,7 +21,7 @@
  * Training options (the same text on every row): order, pairs ("all" | "same_content"),
  * label, content, fraction (0 < f ≤ 1), similar (true), C (1), seed (0), progress; and for
  * strength_train keyframes (13), pca_dims (40; 0 = none), regression ("auto" | "kernel_ridge"
- * | "local_linear"); for rank_train clusters (1).
+ * | "local_linear"), relative (false), standardize (true); for rank_train clusters (1).
  *
  * How the aggregates work: the state (one pointer in the aggregate context) keeps each row's
  * decoded motion (strength_train: every motion is checked against the first's skeleton and
@@ -119,7 +119,7 @@ static char *dup_text(const char *s, size_t n)
 static const char *const strength_keys[] = {"order",    "pairs",     "label",    "content",
                                             "fraction", "similar",   "C",        "seed",
                                             "progress", "keyframes", "pca_dims", "regression",
-                                            NULL};
+                                            "relative", "standardize", NULL};
 static const char *const rank_keys[] = {"order", "pairs", "label", "content", "fraction",
                                         "similar", "C", "seed", "progress", "clusters", NULL};
 
@@ -157,7 +157,9 @@ static ax_arg read_options(sqlite3_context *ctx, int argc, sqlite3_value **argv,
         goto done;
     if (!ts->vectors && (ax_opt_u32(ctx, &opts, "keyframes", &ts->so.keyframes) ||
                          ax_opt_u32(ctx, &opts, "pca_dims", &ts->so.pca_dims) ||
-                         ax_opt_enum(ctx, &opts, "regression", reg_choices, &reg)))
+                         ax_opt_enum(ctx, &opts, "regression", reg_choices, &reg) ||
+                         ax_opt_bool(ctx, &opts, "relative", &ts->so.relative) ||
+                         ax_opt_bool(ctx, &opts, "standardize", &ts->so.standardize)))
         goto done;
     if (ts->vectors && ax_opt_u32(ctx, &opts, "clusters", &ts->clusters))
         goto done;

@@ -37,6 +37,9 @@
 #include "internal.h"
 
 #define PCA_RANK_TOL 1e-10
+#define FLAG_PCA 1u
+#define FLAG_RELATIVE 2u
+#define FLAG_STANDARDIZE 4u
 #define DT_CLAMP 10.0        /* durations kept within [mean / 10, mean × 10] */
 #define MAX_OUT_FRAMES 1000000u
 #define HEADER_SIZE 44u
@@ -55,6 +58,7 @@ void affect_strength_options_default(affect_strength_options *opt)
     opt->C = 1.0;
     opt->fraction = 1.0;
     opt->similar = true;
+    opt->standardize = true;
 }
 
 void affect_strength_free(affect_strength *s)
@@ -67,6 +71,7 @@ void affect_strength_free(affect_strength *s)
     affect_free(s->names);
     affect_free(s->parents);
     affect_free(s->mean);
+    affect_free(s->scale);
     affect_free(s->comps);
     affect_free(s->seg_dt);
     affect_free(s->w);
@@ -134,8 +139,34 @@ static affect_status check_skeleton(uint32_t J, char *const *names, const affect
 
 /* Normalized positions Y (T × 3J), the transform, the q keyframes, and the features x (6 J q).
  * Y may be NULL (then freed inside). */
-static affect_status motion_features(const affect_motion *m, uint32_t q, double *x,
-                                     uint32_t *kf, double **Y_out,
+/* The root joint of relative features: the pelvis role, else joint 0. */
+static uint32_t root_joint(const affect_motion *m)
+{
+    affect_roles roles;
+    affect_roles_resolve(m, &roles);
+    int32_t p = roles.joint[AFFECT_ROLE_PELVIS];
+    return p >= 0 ? (uint32_t)p : 0;
+}
+
+/* Pose in place: every joint but the root minus the root (relative features). */
+static void to_relative(double *pose, uint32_t J, uint32_t root)
+{
+    for (uint32_t j = 0; j < J; j++)
+        if (j != root)
+            for (uint32_t c = 0; c < 3; c++)
+                pose[3 * j + c] -= pose[3 * root + c];
+}
+
+static void from_relative(double *pose, uint32_t J, uint32_t root)
+{
+    for (uint32_t j = 0; j < J; j++)
+        if (j != root)
+            for (uint32_t c = 0; c < 3; c++)
+                pose[3 * j + c] += pose[3 * root + c];
+}
+
+static affect_status motion_features(const affect_motion *m, uint32_t q, bool relative,
+                                     uint32_t root, double *x, uint32_t *kf, double **Y_out,
                                      affect_normalize_transform *tf_out, affect_error *err)
 {
     if (Y_out)
@@ -172,16 +203,17 @@ static affect_status motion_features(const affect_motion *m, uint32_t q, double 
         goto cleanup;
     for (uint32_t i = 0; i < q; i++) {
         double *pose = x + (size_t)i * 2 * D3, *vel = pose + D3;
-        const double *yk = Y + (size_t)kf[i] * D3;
-        memcpy(pose, yk, sizeof(double) * D3);
+        memcpy(pose, Y + (size_t)kf[i] * D3, sizeof(double) * D3);
+        if (relative)
+            to_relative(pose, J, root);
         if (i == 0) {
             memset(vel, 0, sizeof(double) * D3);
             continue;
         }
-        const double *yp = Y + (size_t)kf[i - 1] * D3;
+        const double *prev = pose - 2 * (size_t)D3;
         double dt = (double)(kf[i] - kf[i - 1]) / m->fps;
         for (uint32_t c = 0; c < D3; c++)
-            vel[c] = (yk[c] - yp[c]) / dt;
+            vel[c] = (pose[c] - prev[c]) / dt;
     }
     if (tf_out)
         *tf_out = tf;
@@ -197,11 +229,12 @@ cleanup:
 static void project(const affect_strength *s, const double *x, double *z, double *work)
 {
     if (!s->pca) {
-        memcpy(z, x, sizeof(double) * s->dim);
+        for (uint32_t c = 0; c < s->dim; c++)
+            z[c] = s->scale ? x[c] / s->scale[c] : x[c];
         return;
     }
     for (uint32_t c = 0; c < s->dim; c++)
-        work[c] = x[c] - s->mean[c];
+        work[c] = (s->scale ? x[c] / s->scale[c] : x[c]) - s->mean[c];
     AFFECT_BLAS(cblas_dgemv(CblasRowMajor, CblasNoTrans, (int)s->pdim, (int)s->dim, 1.0, s->comps,
                             (int)s->dim, work, 1, 0.0, z, 1));
 }
@@ -211,11 +244,14 @@ static void unproject(const affect_strength *s, const double *z, double *x)
 {
     if (!s->pca) {
         memcpy(x, z, sizeof(double) * s->dim);
-        return;
+    } else {
+        memcpy(x, s->mean, sizeof(double) * s->dim);
+        AFFECT_BLAS(cblas_dgemv(CblasRowMajor, CblasTrans, (int)s->pdim, (int)s->dim, 1.0,
+                                s->comps, (int)s->dim, z, 1, 1.0, x, 1));
     }
-    memcpy(x, s->mean, sizeof(double) * s->dim);
-    AFFECT_BLAS(cblas_dgemv(CblasRowMajor, CblasTrans, (int)s->pdim, (int)s->dim, 1.0, s->comps,
-                            (int)s->dim, z, 1, 1.0, x, 1));
+    if (s->scale)
+        for (uint32_t c = 0; c < s->dim; c++)
+            x[c] *= s->scale[c];
 }
 
 affect_status affect_strength_features(const affect_strength *s, const affect_motion *m,
@@ -231,7 +267,7 @@ affect_status affect_strength_features(const affect_strength *s, const affect_mo
         st = affect_nomem(err);
         goto cleanup;
     }
-    st = motion_features(m, s->keyframes, x, kf, NULL, NULL, err);
+    st = motion_features(m, s->keyframes, s->relative, s->root, x, kf, NULL, NULL, err);
     if (st != AFFECT_OK)
         goto cleanup;
     if (z)
@@ -669,6 +705,8 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
     s->fps = m0->fps;
     memcpy(s->unit, m0->unit, sizeof s->unit);
     s->pca = false; /* the PCA arrays are made by pca_fit */
+    s->relative = opt->relative;
+    s->root = opt->relative ? root_joint(m0) : 0;
     s->pdim = opt->pca_dims == 0 ? (uint32_t)D : 1;
     s->regression = AFFECT_STRENGTH_REG_LOCAL_LINEAR; /* alpha made by fit_regression */
     if (!alloc_arrays(s)) {
@@ -711,7 +749,8 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
         affect_monitor_report(opt->monitor, "features", k, used);
         st = check_skeleton(J, s->names, motions[i], err);
         if (st == AFFECT_OK)
-            st = motion_features(motions[i], q, X + (size_t)k * D, kf, NULL, NULL, err);
+            st = motion_features(motions[i], q, s->relative, s->root, X + (size_t)k * D, kf, NULL,
+                                     NULL, err);
         if (st != AFFECT_OK) {
             affect_prefix(err, "motion %u", i);
             goto cleanup;
@@ -724,8 +763,34 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
             grp[k] = group[i];
         k++;
     }
+    /* standardization: X is divided in place for the PCA fit, then restored */
+    if (opt->standardize) {
+        s->scale = affect_malloc_array(D, sizeof(double));
+        if (!s->scale) {
+            st = affect_nomem(err);
+            goto cleanup;
+        }
+        double top = 0;
+        for (size_t c = 0; c < D; c++) {
+            double mu = 0, var = 0;
+            for (uint32_t i = 0; i < used; i++)
+                mu += X[(size_t)i * D + c] / used;
+            for (uint32_t i = 0; i < used; i++)
+                var += (X[(size_t)i * D + c] - mu) * (X[(size_t)i * D + c] - mu) / used;
+            s->scale[c] = sqrt(var);
+            if (s->scale[c] > top)
+                top = s->scale[c];
+        }
+        for (size_t c = 0; c < D; c++)
+            if (!(s->scale[c] > AFFECT_STRENGTH_SD_FLOOR * top))
+                s->scale[c] = 1; /* constant features (the first keyframe's velocity) */
+    }
     /* PCA */
     if (opt->pca_dims > 0) {
+        if (s->scale)
+            for (uint32_t i = 0; i < used; i++)
+                for (size_t c = 0; c < D; c++)
+                    X[(size_t)i * D + c] /= s->scale[c];
         affect_free(s->train_z);
         affect_free(s->w);
         affect_free(s->zbar);
@@ -733,6 +798,10 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
         st = pca_fit(s, X, used, opt->pca_dims, err);
         if (st != AFFECT_OK)
             goto cleanup;
+        if (s->scale)
+            for (uint32_t i = 0; i < used; i++)
+                for (size_t c = 0; c < D; c++)
+                    X[(size_t)i * D + c] *= s->scale[c];
         s->pca = true;
         s->train_z = affect_calloc((size_t)used * s->pdim, sizeof(double));
         s->w = affect_calloc(s->pdim, sizeof(double));
@@ -866,9 +935,10 @@ static affect_status synthesize_once(const affect_strength *s, const affect_moti
     double *x = affect_malloc_array(s->dim, sizeof(double));
     double *tau = affect_malloc_array(q, sizeof(double));
     double *tan = affect_malloc_array((size_t)q * D3, sizeof(double));
+    double *pose = affect_malloc_array(D3, sizeof(double));
     affect_motion *m = NULL;
     affect_status st = AFFECT_OK;
-    if (!z || !x || !tau || !tan) {
+    if (!z || !x || !tau || !tan || !pose) {
         st = affect_nomem(err);
         goto cleanup;
     }
@@ -911,7 +981,11 @@ static affect_status synthesize_once(const affect_strength *s, const affect_moti
         const double *m0 = tan + (size_t)seg * D3, *m1 = tan + (size_t)(seg + 1) * D3;
         float *p = m->pos + (size_t)f * D3;
         for (uint32_t c = 0; c < D3; c++)
-            p[c] = (float)(h00 * k0[c] + h10 * h * m0[c] + h01 * k1[c] + h11 * h * m1[c]);
+            pose[c] = h00 * k0[c] + h10 * h * m0[c] + h01 * k1[c] + h11 * h * m1[c];
+        if (s->relative)
+            from_relative(pose, s->n_joints, s->root);
+        for (uint32_t c = 0; c < D3; c++)
+            p[c] = (float)pose[c];
     }
     st = make_rigid(m, rigid, out, err);
     m = NULL;
@@ -921,6 +995,7 @@ cleanup:
     affect_free(x);
     affect_free(tau);
     affect_free(tan);
+    affect_free(pose);
     return st;
 }
 
@@ -950,20 +1025,20 @@ static affect_status edit_once(const affect_strength *s, const affect_motion *m,
         goto cleanup;
     }
     affect_normalize_transform tf;
-    st = motion_features(m, q, x, kf, &Y, &tf, err);
+    st = motion_features(m, q, s->relative, s->root, x, kf, &Y, &tf, err);
     if (st != AFFECT_OK)
         goto cleanup;
     project(s, x, z, work);
     double ww = dotp(s->w, s->w, s->pdim), r = dotp(s->w, z, s->pdim);
     for (uint32_t c = 0; c < s->pdim; c++)
         dz[c] = ww > 0 ? (strength - r) * s->w[c] / ww : 0;
-    memcpy(xn, x, sizeof(double) * s->dim);
     if (s->pca)
         AFFECT_BLAS(cblas_dgemv(CblasRowMajor, CblasTrans, (int)s->pdim, (int)s->dim, 1.0,
-                                s->comps, (int)s->dim, dz, 1, 1.0, xn, 1));
+                                s->comps, (int)s->dim, dz, 1, 0.0, work, 1));
     else
-        for (uint32_t c = 0; c < s->dim; c++)
-            xn[c] += dz[c];
+        memcpy(work, dz, sizeof(double) * s->dim);
+    for (uint32_t c = 0; c < s->dim; c++)
+        xn[c] = x[c] + (s->scale ? work[c] * s->scale[c] : work[c]);
     for (uint32_t i = 1; i < q; i++)
         dt0[i - 1] = (double)(kf[i] - kf[i - 1]) / m->fps;
     durations(s, xn, dt0, dt1);
@@ -976,6 +1051,15 @@ static affect_status edit_once(const affect_strength *s, const affect_motion *m,
         goto cleanup;
     }
     uint32_t T = (uint32_t)floor(total + 0.5) + 1;
+    /* x's pose parts become the keyframes' displacements k' − k, in absolute coordinates */
+    for (uint32_t i = 0; i < q; i++) {
+        double *d = x + (size_t)i * 2 * D3;
+        const double *kn = xn + (size_t)i * 2 * D3;
+        for (uint32_t c = 0; c < D3; c++)
+            d[c] = kn[c] - d[c];
+        if (s->relative)
+            from_relative(d, s->n_joints, s->root);
+    }
     st = new_motion(s, T, m->fps, &e, err);
     if (st != AFFECT_OK)
         goto cleanup;
@@ -992,14 +1076,13 @@ static affect_status edit_once(const affect_strength *s, const affect_motion *m,
         double src = kf[seg] + a * (double)(kf[seg + 1] - kf[seg]);
         uint32_t f0 = (uint32_t)floor(src), f1 = f0 + 1 < m->n_frames ? f0 + 1 : f0;
         double b = src - f0;
-        const double *k0 = x + (size_t)seg * 2 * D3, *k1 = x + (size_t)(seg + 1) * 2 * D3;
-        const double *n0 = xn + (size_t)seg * 2 * D3, *n1 = xn + (size_t)(seg + 1) * 2 * D3;
+        const double *d0 = x + (size_t)seg * 2 * D3, *d1 = x + (size_t)(seg + 1) * 2 * D3;
         for (uint32_t j = 0; j < s->n_joints; j++) {
             double pn[3];
             for (uint32_t c = 0; c < 3; c++) {
                 uint32_t o = 3 * j + c;
                 double y = (1 - b) * Y[(size_t)f0 * D3 + o] + b * Y[(size_t)f1 * D3 + o];
-                pn[c] = y + (1 - a) * (n0[o] - k0[o]) + a * (n1[o] - k1[o]);
+                pn[c] = y + (1 - a) * d0[o] + a * d1[o];
                 pn[c] *= tf.scale;
             }
             /* back: p = Rᵀ p' scale + origin */
@@ -1103,7 +1186,8 @@ affect_status affect_strength_encode(const affect_strength *s, unsigned char **o
     affect_bw_init(&w);
     affect_bw_bytes(&w, AFFECT_STRENGTH_MAGIC, 4);
     affect_bw_u32(&w, AFFECT_STRENGTH_VERSION);
-    affect_bw_u32(&w, s->pca ? 1u : 0u);
+    affect_bw_u32(&w, (s->pca ? FLAG_PCA : 0u) | (s->relative ? FLAG_RELATIVE : 0u) |
+                          (s->scale ? FLAG_STANDARDIZE : 0u));
     affect_bw_u32(&w, s->n_joints);
     affect_bw_u32(&w, s->keyframes);
     affect_bw_u32(&w, s->dim);
@@ -1111,7 +1195,7 @@ affect_status affect_strength_encode(const affect_strength *s, unsigned char **o
     affect_bw_u32(&w, s->n_train);
     affect_bw_u32(&w, s->n_levels);
     affect_bw_u32(&w, (uint32_t)s->regression);
-    affect_bw_u32(&w, 0);
+    affect_bw_u32(&w, s->root);
     affect_bw_f64(&w, s->fps);
     affect_bw_f64(&w, s->C);
     affect_bw_f64(&w, s->pca_variance);
@@ -1142,6 +1226,8 @@ affect_status affect_strength_encode(const affect_strength *s, unsigned char **o
         affect_bw_f64(&w, s->level_strength[l]);
         affect_bw_u32(&w, s->level_count[l]);
     }
+    if (s->scale)
+        affect_bw_f64s(&w, s->scale, s->dim);
     if (s->pca) {
         affect_bw_f64s(&w, s->mean, s->dim);
         affect_bw_f64s(&w, s->comps, (size_t)s->pdim * s->dim);
@@ -1207,7 +1293,7 @@ affect_status affect_strength_decode(const unsigned char *data, size_t size,
     affect_br r;
     affect_br_init(&r, data, size - 8);
     const unsigned char *magic;
-    uint32_t version, flags, J, q, D, p, n, L, reg, reserved;
+    uint32_t version, flags, J, q, D, p, n, L, reg, root;
     affect_br_bytes(&r, &magic, 4);
     affect_br_u32(&r, &version);
     affect_br_u32(&r, &flags);
@@ -1218,13 +1304,15 @@ affect_status affect_strength_decode(const unsigned char *data, size_t size,
     affect_br_u32(&r, &n);
     affect_br_u32(&r, &L);
     affect_br_u32(&r, &reg);
-    affect_br_u32(&r, &reserved);
+    affect_br_u32(&r, &root);
     if (version < 1 || version > AFFECT_STRENGTH_VERSION)
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "unsupported strength model version %u (this build reads 1 to %u)",
                            version, AFFECT_STRENGTH_VERSION);
-    bool pca = (flags & 1u) != 0;
-    if ((flags & ~1u) != 0 || reserved != 0 || reg < AFFECT_STRENGTH_REG_KERNEL_RIDGE ||
+    bool pca = (flags & FLAG_PCA) != 0, stdz = (flags & FLAG_STANDARDIZE) != 0;
+    bool relative = (flags & FLAG_RELATIVE) != 0;
+    if ((flags & ~(FLAG_PCA | FLAG_RELATIVE | FLAG_STANDARDIZE)) != 0 || root >= J ||
+        (!relative && root != 0) || reg < AFFECT_STRENGTH_REG_KERNEL_RIDGE ||
         reg > AFFECT_STRENGTH_REG_LOCAL_LINEAR)
         return affect_fail(err, AFFECT_ERR_FORMAT, "reserved strength model fields are not valid");
     if (J < 1 || J > AFFECT_MOTION_MAX_JOINTS || q < 2 || q > AFFECT_KEYFRAMES_MAX ||
@@ -1244,7 +1332,7 @@ affect_status affect_strength_decode(const unsigned char *data, size_t size,
     /* the arrays must fit in what is left (before allocating them) */
     uint64_t doubles = (uint64_t)(q - 1) + p + n + (uint64_t)n * p + p +
                        (reg == AFFECT_STRENGTH_REG_KERNEL_RIDGE ? (uint64_t)n * p : 0) +
-                       (pca ? (uint64_t)D + (uint64_t)p * D : 0);
+                       (pca ? (uint64_t)D + (uint64_t)p * D : 0) + (stdz ? (uint64_t)D : 0);
     if (doubles > (size - 8) / 8)
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "strength model BLOB length %zu is too short for its sizes", size);
@@ -1259,7 +1347,13 @@ affect_status affect_strength_decode(const unsigned char *data, size_t size,
     s->n_train = n;
     s->n_levels = L;
     s->pca = pca;
+    s->relative = relative;
+    s->root = root;
     s->regression = (affect_strength_regression)reg;
+    if (stdz && !(s->scale = affect_malloc_array(D, sizeof(double)))) {
+        st = affect_nomem(err);
+        goto cleanup;
+    }
     if (!alloc_arrays(s)) {
         st = affect_nomem(err);
         goto cleanup;
@@ -1325,7 +1419,12 @@ affect_status affect_strength_decode(const unsigned char *data, size_t size,
     }
     size_t nz = (size_t)n * p;
     bool ok = true;
-    if (pca)
+    if (stdz) {
+        ok = affect_br_f64s(&r, s->scale, D);
+        for (uint32_t c = 0; ok && c < D; c++)
+            ok = s->scale[c] > 0 && isfinite(s->scale[c]);
+    }
+    if (ok && pca)
         ok = affect_br_f64s(&r, s->mean, D) && affect_br_f64s(&r, s->comps, (size_t)p * D) &&
              finite_all(s->mean, D) && finite_all(s->comps, (size_t)p * D);
     ok = ok && affect_br_f64s(&r, s->seg_dt, q - 1) && affect_br_f64s(&r, s->w, p) &&

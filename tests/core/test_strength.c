@@ -310,6 +310,7 @@ static void test_no_pca_and_options(void **state)
     opt.fraction = 0.5;
     opt.seed = 3;
     opt.regression = AFFECT_STRENGTH_REG_KERNEL_RIDGE;
+    opt.relative = true;
     affect_strength *s;
     affect_error err;
     assert_int_equal(affect_strength_train((const affect_motion *const *)tr.m, tr.level, NULL,
@@ -324,8 +325,19 @@ static void test_no_pca_and_options(void **state)
     affect_strength *back;
     assert_int_equal(affect_strength_encode(s, &b, &nb, &err), AFFECT_OK);
     assert_int_equal(affect_strength_decode(b, nb, &back, &err), AFFECT_OK);
+    assert_true(back->relative && back->scale != NULL);
+    assert_int_equal(back->root, s->root);
     affect_motion *m;
     assert_int_equal(affect_strength_synthesize(back, 0.0, false, &m, &err), AFFECT_OK);
+    affect_motion_free(m);
+    /* relative poses and standardized features are undone exactly: editing a training motion
+     * to its own strength (no correction needed: it lands on it) gives it back */
+    double r0;
+    assert_int_equal(affect_strength_score(s, tr.m[0], &r0, &err), AFFECT_OK);
+    assert_int_equal(affect_strength_edit(s, tr.m[0], r0, false, &m, &err), AFFECT_OK);
+    assert_int_equal(m->n_frames, tr.m[0]->n_frames);
+    if (!(tu_max_dist(m, tr.m[0]) < 1e-4))
+        fail_msg("an edit to the motion's own strength moved it by %g", tu_max_dist(m, tr.m[0]));
     affect_motion_free(m);
     affect_free(b);
     affect_strength_free(back);

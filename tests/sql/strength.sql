@@ -195,7 +195,7 @@ SELECT strength_train(m, lvl, '{"order":["a","a"]}') FROM s;
 -- error: strength_train: option "order" must be an array of 2 to 64 distinct non-empty labels
 
 SELECT strength_train(m, lvl, '{"clusters":2}') FROM s;
--- error: strength_train: unknown option "clusters" (expected order, pairs, label, content, fraction, similar, C, seed, progress, keyframes, pca_dims, regression)
+-- error: strength_train: unknown option "clusters" (expected order, pairs, label, content, fraction, similar, C, seed, progress, keyframes, pca_dims, regression, relative, standardize)
 
 SELECT strength_train(m, lvl, '{"regression":"mlp"}') FROM s;
 -- error: strength_train: option "regression" must be one of "auto", "kernel_ridge", "local_linear", got "mlp"
