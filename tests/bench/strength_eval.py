@@ -16,10 +16,11 @@ runs the protocol of the paper's §6.3: for each seed, half the motions (stratif
 drawn by the seed) train, half test; strength_train gets the training motions with
 "fraction" = 10, 30, 50, 70, 90 % of the training pairs (all ordered pairs of different labels
 and similar pairs of the same label; the sample drawn by the seed), for PCA-40, PCA-80 and no
-PCA; the accuracy is the share of the test motions' ordered pairs (different labels, never seen
-in training) that affect_strength orders right. Then leave one content out (train on every
-other content, 90 %... no: all pairs; test on the held-out content's ordered pairs, pooled over
-the folds). Then, on exhausted (the task with enough takes), synthesis and editing: a model of
+PCA (default options otherwise: standardized features), and at PCA-40 with relative poses and
+without standardization (the paper's features); the accuracy is the share of the test
+motions' ordered pairs (different labels, never seen in training) that affect_strength orders
+right. Then leave one content out (train on every other content with all its pairs; test on
+the held-out content's ordered pairs, pooled over the folds). Then, on exhausted (the task with enough takes), synthesis and editing: a model of
 one content's training half synthesizes 5 strengths spread over its training range, and every
 test normal motion of that content is edited to the same 5 strengths; the Spearman correlation
 between the strength asked and the strength affect_strength measures on the result, and the
@@ -47,7 +48,13 @@ TASKS = {
     "exhausted": ("bandai-namco-2-dev", ["normal", "exhausted"]),
 }
 FRACTIONS = [0.1, 0.3, 0.5, 0.7, 0.9]
-CONFIGS = [("PCA-40", 40), ("PCA-80", 80), ("no PCA", 0)]
+# (name, strength_train options): the paper's three feature sizes with the defaults
+# (standardized features), then the two feature options at PCA-40
+CONFIGS = [("PCA-40", {"pca_dims": 40}), ("PCA-80", {"pca_dims": 80}),
+           ("no PCA", {"pca_dims": 0}),
+           ("PCA-40, relative poses", {"pca_dims": 40, "relative": True}),
+           ("PCA-40, not standardized (the paper's features)",
+            {"pca_dims": 40, "standardize": False})]
 
 
 def connect(db):
@@ -171,14 +178,14 @@ def protocol(con, task, seeds, fractions, configs):
           " | train time (CPU, 90 %) | dims |")
     print("|---|" + "---:|" * (len(fractions) + 2))
     summary = {}
-    for name, dims in configs:
+    for name, copts in configs:
         cells, times, used_dims = [], [], set()
         for f in fractions:
             accs = []
             for seed in seeds:
                 tr, te = split_half(rows, seed)
-                model, wall, cpu = train(con, task, tr, {"pca_dims": dims, "fraction": f,
-                                                         "seed": seed})
+                o = dict(copts, fraction=f, seed=seed)
+                model, wall, cpu = train(con, task, tr, o)
                 sc = scores(con, model, te)
                 right, total = pair_accuracy(te, sc)
                 accs.append(right / total)
@@ -201,12 +208,12 @@ def leave_one_content_out(con, task, configs):
           "content's ordered pairs, pooled):\n" % len(contents))
     print("| features | accuracy | pairs |")
     print("|---|---:|---:|")
-    for name, dims in configs:
+    for name, copts in configs:
         right = total = 0
         for c in contents:
             tr = [r for r in rows if r["content"] != c]
             te = [r for r in rows if r["content"] == c]
-            model, _, _ = train(con, task, tr, {"pca_dims": dims})
+            model, _, _ = train(con, task, tr, copts)
             rr, tt = pair_accuracy(te, scores(con, model, te))
             right += rr
             total += tt
