@@ -270,6 +270,7 @@ static void test_clusters(void **state)
     assert_int_equal(affect_ranker_decode(b1, s1, &back, &err), AFFECT_OK);
     for (uint32_t i = 0; i < n; i++)
         assert_true(affect_ranker_score(back, X + i * d) == affect_ranker_score(rk, X + i * d));
+    affect_ranker_free(back);
     /* corruption: every truncation and a flipped byte are refused */
     for (size_t cut = 0; cut < s1; cut += 7)
         assert_int_equal(affect_ranker_decode(b1, cut, &back, &err) == AFFECT_OK, 0);
