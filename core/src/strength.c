@@ -770,7 +770,7 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
             st = affect_nomem(err);
             goto cleanup;
         }
-        double top = 0;
+        double top = 0, mean_sd = 0;
         for (size_t c = 0; c < D; c++) {
             double mu = 0, var = 0;
             for (uint32_t i = 0; i < used; i++)
@@ -778,12 +778,16 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
             for (uint32_t i = 0; i < used; i++)
                 var += (X[(size_t)i * D + c] - mu) * (X[(size_t)i * D + c] - mu) / used;
             s->scale[c] = sqrt(var);
+            mean_sd += s->scale[c] / (double)D;
             if (s->scale[c] > top)
                 top = s->scale[c];
         }
-        for (size_t c = 0; c < D; c++)
+        for (size_t c = 0; c < D; c++) {
             if (!(s->scale[c] > AFFECT_STRENGTH_SD_FLOOR * top))
                 s->scale[c] = 1; /* constant features (the first keyframe's velocity) */
+            else if (s->scale[c] < AFFECT_STRENGTH_SD_REL * mean_sd)
+                s->scale[c] = AFFECT_STRENGTH_SD_REL * mean_sd; /* no amplified noise */
+        }
     }
     /* PCA */
     if (opt->pca_dims > 0) {
@@ -908,8 +912,10 @@ static void durations(const affect_strength *s, const double *x, const double *r
     }
 }
 
-static affect_status make_rigid(affect_motion *raw, bool rigid, affect_motion **out,
-                                affect_error *err)
+/* The rigid projection of raw (freed): bone lengths from reference when given (an edited
+ * motion keeps its own skeleton's), else the median over raw's frames. */
+static affect_status make_rigid(affect_motion *raw, bool rigid, const affect_motion *reference,
+                                affect_motion **out, affect_error *err)
 {
     if (!rigid) {
         *out = raw;
@@ -917,6 +923,10 @@ static affect_status make_rigid(affect_motion *raw, bool rigid, affect_motion **
     }
     affect_rigid_options ro;
     affect_rigid_options_default(&ro);
+    if (reference) {
+        ro.lengths = AFFECT_RIGID_REFERENCE;
+        ro.reference = reference;
+    }
     affect_status st = affect_motion_rigid(raw, &ro, out, err);
     affect_motion_free(raw);
     return st;
@@ -987,7 +997,7 @@ static affect_status synthesize_once(const affect_strength *s, const affect_moti
         for (uint32_t c = 0; c < D3; c++)
             p[c] = (float)pose[c];
     }
-    st = make_rigid(m, rigid, out, err);
+    st = make_rigid(m, rigid, NULL, out, err);
     m = NULL;
 cleanup:
     affect_motion_free(m);
@@ -1092,7 +1102,7 @@ static affect_status edit_once(const affect_strength *s, const affect_motion *m,
                                tf.origin[c]);
         }
     }
-    st = make_rigid(e, rigid, out, err);
+    st = make_rigid(e, rigid, m, out, err);
     e = NULL;
 cleanup:
     affect_motion_free(e);

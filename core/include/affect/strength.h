@@ -66,6 +66,7 @@ extern "C" {
 #define AFFECT_STRENGTH_CORRECTIONS 4u /* target corrections of synthesis and editing */
 #define AFFECT_STRENGTH_TOL 0.01          /* strength miss at which the corrections stop */
 #define AFFECT_STRENGTH_SD_FLOOR 1e-9 /* standardization: sd below this × the largest → 1 */
+#define AFFECT_STRENGTH_SD_REL 0.1    /* … and at least this × the mean sd (no amplified noise) */
 #define AFFECT_STRENGTH_V_MIN 1e-12       /* v·v below this: the segment keeps its mean duration */
 
 typedef enum affect_strength_regression {
