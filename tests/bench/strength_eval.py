@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """strength_eval.py — emotion strength by relative attributes, measured with the paper's protocol.
 
-Usage (from the repository root, after any build of build/affect.so):
+Usage (from the repository root, after any build of build/affect.so; about 15 minutes):
     OPENBLAS_NUM_THREADS=1 python3 tests/bench/strength_eval.py [--db build/strength.db]
         [--tasks anger,happiness,exhausted] [--seeds 1,2,3] [--quick]
 AFFECT_EXT overrides the extension's path (default build/affect). Python 3 standard library and
@@ -244,10 +244,12 @@ def synthesis(con, task, seeds):
             for r in te:
                 if r["level"] != 0:
                     continue
-                res = [con.execute(
-                    "SELECT affect_strength(?1, e), laban_time(e), laban_weight(e) FROM "
-                    "(SELECT strength_edit(?1, motion, ?2) AS e FROM motions WHERE id = ?3)",
-                    (model, t, r["id"])).fetchone() for t in targets]
+                res = []
+                for t in targets:  # the edit once, then its three measures
+                    e = con.execute("SELECT strength_edit(?1, motion, ?2) FROM motions "
+                                    "WHERE id = ?3", (model, t, r["id"])).fetchone()[0]
+                    res.append(con.execute("SELECT affect_strength(?1, ?2), laban_time(?2), "
+                                           "laban_weight(?2)", (model, e)).fetchone())
                 edit.append(spearman(targets, [x[0] for x in res]))
                 lt.append(pearson(targets, [x[1] for x in res]))
                 lw.append(pearson(targets, [x[2] for x in res]))
