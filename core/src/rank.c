@@ -171,13 +171,7 @@ affect_status affect_rank_fit(const double *X, uint32_t n, uint32_t d,
         /* G = X Xᵀ, eigenvectors in the rows of G (column-major call on a symmetric array) */
         AFFECT_BLAS(cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasTrans, (int)n, (int)n, (int)d,
                                 1.0, X, (int)d, X, (int)d, 0.0, G, (int)n));
-        for (uint32_t i = 0; i < n; i++)
-            for (uint32_t j = 0; j < i; j++)
-                G[(size_t)i * n + j] = G[(size_t)j * n + i] =
-                    0.5 * (G[(size_t)i * n + j] + G[(size_t)j * n + i]);
-        lapack_int info;
-        AFFECT_BLAS(info = LAPACKE_dsyev_work(LAPACK_COL_MAJOR, 'V', 'U', (lapack_int)n, G,
-                                              (lapack_int)n, ev, work, (lapack_int)(3 * n - 1)));
+        int info = affect_sym_eigen(G, n, ev, work);
         if (info != 0) {
             status = affect_fail(err, AFFECT_ERR_RANGE,
                                  "the eigen-decomposition of the Gram matrix failed (info %d)",
@@ -306,6 +300,18 @@ affect_status affect_rank_fit(const double *X, uint32_t n, uint32_t d,
 cleanup:
     affect_free(block);
     return status;
+}
+
+int affect_sym_eigen(double *G, uint32_t n, double *ev, double *work)
+{
+    for (uint32_t i = 0; i < n; i++)
+        for (uint32_t j = 0; j < i; j++)
+            G[(size_t)i * n + j] = G[(size_t)j * n + i] =
+                0.5 * (G[(size_t)i * n + j] + G[(size_t)j * n + i]);
+    lapack_int info;
+    AFFECT_BLAS(info = LAPACKE_dsyev_work(LAPACK_COL_MAJOR, 'V', 'U', (lapack_int)n, G,
+                                          (lapack_int)n, ev, work, (lapack_int)(3 * n - 1)));
+    return (int)info;
 }
 
 /* ---- pairs ---- */

@@ -345,13 +345,7 @@ static affect_status pca_fit(affect_strength *s, const double *X, uint32_t n, ui
     else
         AFFECT_BLAS(cblas_dgemm(CblasRowMajor, CblasTrans, CblasNoTrans, (int)D, (int)D, (int)n,
                                 1.0, Xc, (int)D, Xc, (int)D, 0.0, G, (int)D));
-    for (uint32_t a = 0; a < N; a++)
-        for (uint32_t b = 0; b < a; b++)
-            G[(size_t)a * N + b] = G[(size_t)b * N + a] =
-                0.5 * (G[(size_t)a * N + b] + G[(size_t)b * N + a]);
-    lapack_int info;
-    AFFECT_BLAS(info = LAPACKE_dsyev_work(LAPACK_COL_MAJOR, 'V', 'U', (lapack_int)N, G,
-                                          (lapack_int)N, ev, work, (lapack_int)(3 * N - 1)));
+    int info = affect_sym_eigen(G, N, ev, work);
     if (info != 0) {
         st = affect_fail(err, AFFECT_ERR_RANGE, "PCA: the eigen-decomposition failed (info %d)",
                          (int)info);
@@ -870,6 +864,18 @@ cleanup:
 
 /* ---- synthesis and editing ---- */
 
+/* Output frame f of T spans the keyframe times tau[0 .. q): the segment seg (advanced from its
+ * previous value, frames in increasing order) and the fraction u ∈ [0, 1] within it. */
+static void frame_segment(const double *tau, uint32_t q, uint32_t T, uint32_t f, uint32_t *seg,
+                          double *u)
+{
+    double t = T > 1 ? tau[q - 1] * f / (T - 1) : 0;
+    while (*seg + 2 < q && t > tau[*seg + 1])
+        (*seg)++;
+    double h = tau[*seg + 1] - tau[*seg], v = h > 0 ? (t - tau[*seg]) / h : 0;
+    *u = v < 0 ? 0 : v > 1 ? 1 : v;
+}
+
 /* A positions-only motion of the model's skeleton with T frames (positions unset). */
 static affect_status new_motion(const affect_strength *s, uint32_t T, double fps,
                                 affect_motion **out, affect_error *err)
@@ -977,14 +983,9 @@ static affect_status synthesize_once(const affect_strength *s, const affect_moti
         goto cleanup;
     uint32_t seg = 0;
     for (uint32_t f = 0; f < T; f++) {
-        double t = T > 1 ? tau[q - 1] * f / (T - 1) : 0;
-        while (seg + 2 < q && t > tau[seg + 1])
-            seg++;
-        double h = tau[seg + 1] - tau[seg], u = h > 0 ? (t - tau[seg]) / h : 0;
-        if (u < 0)
-            u = 0;
-        if (u > 1)
-            u = 1;
+        double u;
+        frame_segment(tau, q, T, f, &seg, &u);
+        double h = tau[seg + 1] - tau[seg];
         double h00 = 2 * u * u * u - 3 * u * u + 1, h10 = u * u * u - 2 * u * u + u;
         double h01 = -2 * u * u * u + 3 * u * u, h11 = u * u * u - u * u;
         const double *k0 = x + (size_t)seg * 2 * D3, *k1 = x + (size_t)(seg + 1) * 2 * D3;
@@ -1075,14 +1076,8 @@ static affect_status edit_once(const affect_strength *s, const affect_motion *m,
         goto cleanup;
     uint32_t seg = 0;
     for (uint32_t f = 0; f < T; f++) {
-        double t = T > 1 ? tau[q - 1] * f / (T - 1) : 0;
-        while (seg + 2 < q && t > tau[seg + 1])
-            seg++;
-        double h = tau[seg + 1] - tau[seg], a = h > 0 ? (t - tau[seg]) / h : 0;
-        if (a < 0)
-            a = 0;
-        if (a > 1)
-            a = 1;
+        double a;
+        frame_segment(tau, q, T, f, &seg, &a);
         double src = kf[seg] + a * (double)(kf[seg + 1] - kf[seg]);
         uint32_t f0 = (uint32_t)floor(src), f1 = f0 + 1 < m->n_frames ? f0 + 1 : f0;
         double b = src - f0;
