@@ -268,6 +268,8 @@ def main():
     ap.add_argument("--quick", action="store_true",
                     help="one seed, 50 %% of the pairs, PCA-40 only (a smoke run)")
     ap.add_argument("--no-synthesis", action="store_true")
+    ap.add_argument("--synthesis-only", action="store_true",
+                    help="only the synthesis and editing table (exhausted)")
     a = ap.parse_args()
     if not os.path.isdir(CORPORA):
         print("strength_eval: ../shared/corpora is absent; nothing to measure")
@@ -279,7 +281,7 @@ def main():
     con = connect(a.db)
     t0, c0 = time.perf_counter(), time.process_time()
     import_corpora(con)
-    for task in a.tasks.split(","):
+    for task in ([] if a.synthesis_only else a.tasks.split(",")):
         protocol(con, task, seeds, fractions, configs)
         leave_one_content_out(con, task, configs)
     if not a.no_synthesis and "exhausted" in a.tasks.split(","):
