@@ -106,18 +106,22 @@ affect_status affect_keyframes_select(const double *Y, uint32_t T, uint32_t D, u
             /* Σ s_t = Σ_{k=1}^{L−1} k/L, Σ s_t² = Σ k²/L² */
             double s1 = (L - 1) / 2.0;
             double s2 = (L - 1) * (2 * L - 1) / (6.0 * L);
-            double e = sq[b] - sq[a + 1] + m * na, cross = 0, dd = 0;
+            /* Σ s_t (y_t − y_a)·Δ = (Σ (t − a) y_t · Δ)/L − s1 y_a·Δ: the four sums are
+             * accumulated apart (independent chains; no division in the loop) */
+            const double *syb = sy + (size_t)b * D, *sya = sy + (size_t)(a + 1) * D;
+            const double *styb = sty + (size_t)b * D, *stya = sty + (size_t)(a + 1) * D;
+            double ySy = 0, tyd = 0, yd = 0, dd = 0, fa = (double)a;
             for (uint32_t c = 0; c < D; c++) {
-                double Sy = sy[(size_t)b * D + c] - sy[(size_t)(a + 1) * D + c];
-                double Sty = sty[(size_t)b * D + c] - sty[(size_t)(a + 1) * D + c];
+                double Sy = syb[c] - sya[c];
+                double Sty = styb[c] - stya[c];
                 double delta = yb[c] - ya[c];
-                e -= 2 * ya[c] * Sy;
-                /* Σ s_t (y_t − y_a) = (Σ (t − a) y_t)/L − s1 y_a */
-                double sty_c = (Sty - (double)a * Sy) / L - s1 * ya[c];
-                cross += sty_c * delta;
+                ySy += ya[c] * Sy;
+                tyd += (Sty - fa * Sy) * delta;
+                yd += ya[c] * delta;
                 dd += delta * delta;
             }
-            e += -2 * cross + dd * s2;
+            double cross = tyd / L - s1 * yd;
+            double e = sq[b] - sq[a + 1] + m * na - 2 * ySy - 2 * cross + dd * s2;
             cost[(size_t)a * T + b] = e > 0 ? e : 0;
         }
     }
