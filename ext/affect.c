@@ -20,6 +20,7 @@
 #include "fn_laban.h"
 #include "fn_motion.h"
 #include "fn_skeleton.h"
+#include "fn_strength.h"
 #include "vt_laban.h"
 #include "fn_plot.h"
 #include "affect/strbuf.h"
@@ -161,6 +162,16 @@ static const ax_function functions[] = {
     {"hmm_viterbi_loglik", 2, false, ax_hmm_viterbi_loglik},
     {"hmm_info", 1, true, ax_hmm_info},
     {"hmm_postures", 1, false, ax_hmm_postures},
+    /* emotion strength (fn_strength.c) */
+    {"affect_strength", 2, false, ax_affect_strength},
+    {"strength_synthesize", 2, false, ax_strength_synthesize},
+    {"strength_synthesize", 3, false, ax_strength_synthesize},
+    {"strength_edit", 3, false, ax_strength_edit},
+    {"strength_edit", 4, false, ax_strength_edit},
+    {"strength_info", 1, true, ax_strength_info},
+    {"motion_keyframes", 1, true, ax_motion_keyframes},
+    {"motion_keyframes", 2, true, ax_motion_keyframes},
+    {"rank_score", 2, false, ax_rank_score},
 };
 
 typedef struct ax_aggregate {
@@ -179,6 +190,10 @@ static const ax_aggregate aggregates[] = {
     {"affect_train", 2, ax_affect_train_step, ax_affect_train_final},
     {"affect_train", 3, ax_affect_train_step, ax_affect_train_final},
     {"affect_crossval_json", 4, ax_affect_crossval_step, ax_affect_crossval_final},
+    {"strength_train", 2, ax_strength_train_step, ax_strength_train_final},
+    {"strength_train", 3, ax_strength_train_step, ax_strength_train_final},
+    {"rank_train", 2, ax_rank_train_step, ax_rank_train_final},
+    {"rank_train", 3, ax_rank_train_step, ax_rank_train_final},
 };
 
 /* The functions on a classifier BLOB: each registration gets its own one-classifier cache

@@ -54,4 +54,11 @@ void affect_blas_end(void);
         affect_blas_end();                                                                         \
     } while (0)
 
+/* Eigen-decomposition of the symmetric n × n array G (rank.c): G is first symmetrized (each
+ * pair replaced by its mean), then LAPACKE_dsyev_work runs in column-major form on it (the
+ * same matrix) with the minimal workspace work (3n − 1 doubles), so nothing is allocated
+ * outside ours; ev gets the eigenvalues in ascending order and row k of G the eigenvector of
+ * ev[k]. Returns LAPACK's info (0 on success). */
+int affect_sym_eigen(double *G, uint32_t n, double *ev, double *work);
+
 #endif

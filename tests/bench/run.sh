@@ -112,6 +112,13 @@ if want bench_rmlr; then
     echo
 fi
 
+# Emotion strength (issue 16): ranker, regression, training and affect_strength, one core.
+if want bench_strength; then
+    echo "== bench_strength"
+    OPENBLAS_NUM_THREADS=1 "${pin[@]}" "$build/tests/bench/bench_strength"
+    echo
+fi
+
 # How fast long calls stop when interrupted (the built module), single-threaded OpenBLAS,
 # unpinned (some calls run 2 threads, and the interrupting thread needs a core too).
 if want bench_interrupt; then

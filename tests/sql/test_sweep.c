@@ -493,6 +493,8 @@ typedef struct baseline {
 #define OPT "'{}'"
 #define HMM "<hmm model>"
 #define CLS "<classifier>"
+#define STR "<strength model>"
+#define RNK "<ranker>"
 
 static const baseline baselines[] = {
     {"affect_version", {NULL}, false},
@@ -542,11 +544,19 @@ static const baseline baselines[] = {
     {"affect_generate", {"'idx'", M, "'angry'", OPT}, true},
     {"affect_generate_explain", {"'idx'", M, "'angry'", OPT}, true},
     {"laban_salient", {"'idx'", OPT}, true},
+    {"affect_strength", {STR, M}, false},
+    {"strength_synthesize", {STR, "0.5", OPT}, true},
+    {"strength_edit", {STR, M, "0.5", OPT}, true},
+    {"strength_info", {STR}, false},
+    {"motion_keyframes", {M, "9"}, false},
+    {"rank_score", {RNK, "<laban vector>"}, false},
     /* aggregates, over agg_rows */
     {"laban_plot", {"@x", "@y", "@label", OPT}, false},
     {"hmm_train", {"@m", "@hmm_opt"}, true},
     {"affect_train", {"@m", "@label", "@cls_opt"}, true},
     {"affect_crossval_json", {"@m", "@label", "@grp", "@cv_opt"}, true},
+    {"strength_train", {"@m", "@label", "@str_opt"}, true},
+    {"rank_train", {"@vec", "@label", "@rank_opt"}, false},
     /* table-valued functions: their hidden arguments */
     {"motion_points", {M}, false},
     {"motion_angles", {M, OPT}, false},
@@ -559,6 +569,7 @@ static const baseline baselines[] = {
     "{\"states\":2,\"mixtures\":1,\"joints\":[\"right_hand\"],\"max_iter\":2,\"svm_c\":1,"         \
     "\"spca_dims\":1,\"knn_k\":1,\"covariance\":\"full\",\"frame\":\"first\",\"velocity\":false,"  \
     "\"descriptors\":\"all\",\"mirror\":false}"
+#define STR_OPT "{\"order\":[\"sad\",\"angry\"],\"keyframes\":4,\"pca_dims\":3}"
 #define CV_OPT                                                                                     \
     "{\"folds\":2,\"states\":1,\"mixtures\":1,\"joints\":[\"right_hand\"],\"max_iter\":1,"         \
     "\"svm_c\":1,\"spca_dims\":1,\"knn_k\":1,\"descriptors\":\"none\",\"mirror\":false}"
@@ -912,6 +923,8 @@ static void build_pool(const char *fixtures)
     add_from_sql(HMM, "SELECT hmm_train(m, hmm_opt) FROM agg_rows WHERE label = 'sad'");
     add_from_sql(CLS, "SELECT affect_train(m, label, cls_opt) FROM agg_rows");
     add_from_sql("<laban vector>", "SELECT laban_vector(m) FROM corpus WHERE id = 1");
+    add_from_sql(STR, "SELECT strength_train(m, label, str_opt) FROM agg_rows");
+    add_from_sql(RNK, "SELECT rank_train(vec, label, rank_opt) FROM agg_rows");
     add_from_sql("<fisher score>", "SELECT fisher_score((SELECT affect_train(m, label, cls_opt) "
                                    "FROM agg_rows), m) FROM corpus WHERE id = 1");
     add_from_sql("<embedding>", "SELECT affect_embed((SELECT affect_train(m, label, cls_opt) "
@@ -922,6 +935,8 @@ static void build_pool(const char *fixtures)
     add_fixture(fixtures, "motion-v2.bin");
     add_fixture(fixtures, "hmm-v1.bin");
     add_fixture(fixtures, "classifier-v1.bin");
+    add_fixture(fixtures, "strength-v1.bin");
+    add_fixture(fixtures, "ranker-v1.bin");
 
     /* the short pool: these, every BLOB made above, and some corruptions of each kind */
     /* clang-format off */
@@ -945,6 +960,8 @@ static void build_pool(const char *fixtures)
         {CLS, false},
         {"<laban vector>", false},
         {"<fisher score>", false},
+        {STR, false},
+        {RNK, false},
         {"<bvh text>", true},
         {"<csv text>", true},
         {"<json text>", true},
@@ -1658,7 +1675,9 @@ int main(int argc, char **argv)
         "CREATE VIRTUAL TABLE idx USING laban(content=corpus, motion=m, label=emotion);"
         "CREATE TABLE agg_rows AS SELECT id, m, emotion AS label, action AS grp,"
         "       laban_weight(m) AS x, laban_time(m) AS y, '" HMM_OPT "' AS hmm_opt,"
-        "       '" CLS_OPT "' AS cls_opt, '" CV_OPT "' AS cv_opt FROM corpus ORDER BY id;"
+        "       '" CLS_OPT "' AS cls_opt, '" CV_OPT "' AS cv_opt, laban_vector(m) AS vec,"
+        "       '" STR_OPT "' AS str_opt, '{\"order\":[\"sad\",\"angry\"]}' AS rank_opt"
+        "  FROM corpus ORDER BY id;"
         "CREATE TABLE empty_t(m, label);");
     build_pool(fixtures);
     /* every pool value as a row (for joins), and as the content of an index */

@@ -1,0 +1,295 @@
+#!/usr/bin/env python3
+"""strength_eval.py — emotion strength by relative attributes, measured with the paper's protocol.
+
+Usage (from the repository root, after any build of build/affect.so; about 15 minutes):
+    OPENBLAS_NUM_THREADS=1 python3 tests/bench/strength_eval.py [--db build/strength.db]
+        [--tasks anger,happiness,exhausted] [--seeds 1,2,3] [--quick]
+AFFECT_EXT overrides the extension's path (default build/affect). Python 3 standard library and
+sqlite3 only. It imports the BVH files of ../shared/corpora/bandai-namco-1 and
+bandai-namco-2-dev into --db once (motion_from_bvh), then, for every task:
+
+  anger      bandai-namco-1, normal < angry   (the 10 contents recorded in every style: 22 motions)
+  happiness  bandai-namco-1, sad < normal < happy                                  (33 motions)
+  exhausted  bandai-namco-2-dev, normal < exhausted  (6 contents × 12 takes × 2: 144 motions)
+
+runs the protocol of the paper's §6.3: for each seed, half the motions (stratified by label,
+drawn by the seed) train, half test; strength_train gets the training motions with
+"fraction" = 10, 30, 50, 70, 90 % of the training pairs (all ordered pairs of different labels
+and similar pairs of the same label; the sample drawn by the seed), for PCA-40, PCA-80 and no
+PCA (default options otherwise: standardized features), and at PCA-40 with relative poses and
+without standardization (the paper's features); the accuracy is the share of the test
+motions' ordered pairs (different labels, never seen in training) that affect_strength orders
+right. Then leave one content out (train on every other content with all its pairs; test on
+the held-out content's ordered pairs, pooled over the folds). Then, on exhausted (the task with enough takes), synthesis and editing: a model of
+one content's training half synthesizes 5 strengths spread over its training range, and every
+test normal motion of that content is edited to the same 5 strengths; the Spearman correlation
+between the strength asked and the strength affect_strength measures on the result, and the
+correlation of laban_time and laban_weight with it. Output: Markdown tables (mean ± sd over the
+seeds), and the wall and CPU time of the runs.
+"""
+import argparse
+import json
+import math
+import os
+import random
+import sqlite3
+import sys
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+CORPORA = os.path.join(ROOT, "..", "shared", "corpora")
+EXT = os.environ.get("AFFECT_EXT", os.path.join(ROOT, "build", "affect"))
+
+TEN = ["walk", "run", "dash", "walk-back", "walk-left", "walk-right", "bow", "bye", "byebye",
+       "guide"]
+TASKS = {
+    "anger": ("bandai-namco-1", ["normal", "angry"]),
+    "happiness": ("bandai-namco-1", ["sad", "normal", "happy"]),
+    "exhausted": ("bandai-namco-2-dev", ["normal", "exhausted"]),
+}
+FRACTIONS = [0.1, 0.3, 0.5, 0.7, 0.9]
+# (name, strength_train options): the paper's three feature sizes with the defaults
+# (standardized features), then the two feature options at PCA-40
+CONFIGS = [("PCA-40", {"pca_dims": 40}), ("PCA-80", {"pca_dims": 80}),
+           ("no PCA", {"pca_dims": 0}),
+           ("PCA-40, relative poses", {"pca_dims": 40, "relative": True}),
+           ("PCA-40, not standardized (the paper's features)",
+            {"pca_dims": 40, "standardize": False})]
+
+
+def connect(db):
+    con = sqlite3.connect(db)
+    con.enable_load_extension(True)
+    con.load_extension(EXT)
+    return con
+
+
+def import_corpora(con):
+    con.execute("CREATE TABLE IF NOT EXISTS motions(id INTEGER PRIMARY KEY, source TEXT, "
+                "name TEXT UNIQUE, content TEXT, style TEXT, frames INTEGER, motion BLOB)")
+    for source in ("bandai-namco-1", "bandai-namco-2-dev"):
+        data = os.path.join(CORPORA, source, "data")
+        files = sorted(f for f in os.listdir(data) if f.endswith(".bvh"))
+        have = con.execute("SELECT count(*) FROM motions WHERE source = ?", (source,)).fetchone()[0]
+        if have == len(files):
+            continue
+        for f in files:
+            _, content, style, _ = f[:-4].split("_")
+            with open(os.path.join(data, f), encoding="utf-8") as fh:
+                text = fh.read()
+            con.execute("INSERT OR REPLACE INTO motions(source, name, content, style, motion) "
+                        "VALUES (?, ?, ?, ?, motion_from_bvh(?, '{\"unit\":\"cm\"}'))",
+                        (source, f[:-4], content, style, text))
+        con.execute("UPDATE motions SET frames = motion_frames(motion) WHERE frames IS NULL")
+        con.commit()
+
+
+def task_rows(con, task):
+    source, order = TASKS[task]
+    marks = ",".join("?" * len(order))
+    sql = ("SELECT id, content, style FROM motions WHERE source = ? AND style IN (%s)" % marks)
+    args = [source] + order
+    if source == "bandai-namco-1":
+        sql += " AND content IN (%s)" % ",".join("?" * len(TEN))
+        args += TEN
+    return [dict(id=r[0], content=r[1], style=r[2], level=order.index(r[2]))
+            for r in con.execute(sql + " ORDER BY id", args)]
+
+
+def split_half(rows, seed):
+    """Half of each label to training (the odd one out alternates), by the seed."""
+    rng = random.Random(seed)
+    train, test = [], []
+    for level in sorted(set(r["level"] for r in rows)):
+        group = [r for r in rows if r["level"] == level]
+        rng.shuffle(group)
+        k = (len(group) + (level % 2)) // 2
+        train += group[:k]
+        test += group[k:]
+    return train, test
+
+
+def train(con, task, rows, opts):
+    order = TASKS[task][1]
+    con.execute("DROP TABLE IF EXISTS temp.tr")
+    con.execute("CREATE TEMP TABLE tr(id INTEGER PRIMARY KEY)")
+    con.executemany("INSERT INTO tr VALUES (?)", [(r["id"],) for r in rows])
+    o = dict(opts)
+    o["order"] = order
+    t0, c0 = time.perf_counter(), time.process_time()
+    blob = con.execute("SELECT strength_train(motion, style, ?) FROM motions JOIN tr USING (id)",
+                       (json.dumps(o),)).fetchone()[0]
+    return blob, time.perf_counter() - t0, time.process_time() - c0
+
+
+def scores(con, model, rows):
+    out = {}
+    for r in rows:
+        out[r["id"]] = con.execute("SELECT affect_strength(?, motion) FROM motions WHERE id = ?",
+                                   (model, r["id"])).fetchone()[0]
+    return out
+
+
+def pair_accuracy(rows, sc, same_content=False):
+    right = total = 0
+    for a in rows:
+        for b in rows:
+            if a["level"] > b["level"] and (not same_content or a["content"] == b["content"]):
+                total += 1
+                right += sc[a["id"]] > sc[b["id"]]
+    return right, total
+
+
+def mean_sd(v):
+    if not v:
+        return float("nan"), float("nan")
+    m = sum(v) / len(v)
+    sd = math.sqrt(sum((x - m) ** 2 for x in v) / (len(v) - 1)) if len(v) > 1 else 0.0
+    return m, sd
+
+
+def spearman(x, y):
+    def ranks(v):
+        order = sorted(range(len(v)), key=lambda i: v[i])
+        r = [0.0] * len(v)
+        for k, i in enumerate(order):
+            r[i] = float(k)
+        return r
+    rx, ry = ranks(x), ranks(y)
+    return pearson(rx, ry)
+
+
+def pearson(x, y):
+    n = len(x)
+    mx, my = sum(x) / n, sum(y) / n
+    sxy = sum((a - mx) * (b - my) for a, b in zip(x, y))
+    sxx = sum((a - mx) ** 2 for a in x)
+    syy = sum((b - my) ** 2 for b in y)
+    return sxy / math.sqrt(sxx * syy) if sxx > 0 and syy > 0 else float("nan")
+
+
+def protocol(con, task, seeds, fractions, configs):
+    rows = task_rows(con, task)
+    print("\n### %s: %s, %d motions (%s)\n" % (task, " < ".join(TASKS[task][1]), len(rows),
+                                               TASKS[task][0]))
+    print("Half train / half test; accuracy on the test motions' ordered pairs (unseen), "
+          "mean ± sd over seeds %s.\n" % ",".join(map(str, seeds)))
+    print("| features | " + " | ".join("%d %%" % round(100 * f) for f in fractions) +
+          " | train time (CPU, 90 %) | dims |")
+    print("|---|" + "---:|" * (len(fractions) + 2))
+    summary = {}
+    for name, copts in configs:
+        cells, times, used_dims = [], [], set()
+        for f in fractions:
+            accs = []
+            for seed in seeds:
+                tr, te = split_half(rows, seed)
+                o = dict(copts, fraction=f, seed=seed)
+                model, wall, cpu = train(con, task, tr, o)
+                sc = scores(con, model, te)
+                right, total = pair_accuracy(te, sc)
+                accs.append(right / total)
+                if f == fractions[-1]:
+                    times.append(cpu)
+                    info = json.loads(con.execute("SELECT strength_info(?)", (model,)).fetchone()[0])
+                    used_dims.add(info["pca"]["dims"] if info["pca"] else info["features"])
+            m, sd = mean_sd(accs)
+            cells.append("%.1f ± %.1f" % (100 * m, 100 * sd))
+            summary[(name, f)] = m
+        print("| %s | %s | %.3f s | %s |" % (name, " | ".join(cells), mean_sd(times)[0],
+                                             ",".join(map(str, sorted(used_dims)))))
+    return summary
+
+
+def leave_one_content_out(con, task, configs):
+    rows = task_rows(con, task)
+    contents = sorted(set(r["content"] for r in rows))
+    print("\nLeave one content out (%d folds; all training pairs; accuracy on the held-out "
+          "content's ordered pairs, pooled):\n" % len(contents))
+    print("| features | accuracy | pairs |")
+    print("|---|---:|---:|")
+    for name, copts in configs:
+        right = total = 0
+        for c in contents:
+            tr = [r for r in rows if r["content"] != c]
+            te = [r for r in rows if r["content"] == c]
+            model, _, _ = train(con, task, tr, copts)
+            rr, tt = pair_accuracy(te, scores(con, model, te))
+            right += rr
+            total += tt
+        print("| %s | %.1f | %d |" % (name, 100.0 * right / total if total else float("nan"),
+                                      total))
+
+
+def synthesis(con, task, seeds):
+    rows = task_rows(con, task)
+    contents = sorted(set(r["content"] for r in rows))
+    print("\nSynthesis and editing (%s, PCA-40, one model per content from its training half; "
+          "5 strengths from the lowest to the highest level's training mean):\n" % task)
+    print("| content | synthesized: Spearman | edited: Spearman (mean over test motions) | "
+          "edited: r(s, laban_time) | edited: r(s, laban_weight) |")
+    print("|---|---:|---:|---:|---:|")
+    allsyn, alledit = [], []
+    for c in contents:
+        syn, edit, lt, lw = [], [], [], []
+        for seed in seeds:
+            tr, te = split_half([r for r in rows if r["content"] == c], seed)
+            model, _, _ = train(con, task, tr, {"pca_dims": 40, "seed": seed})
+            info = json.loads(con.execute("SELECT strength_info(?)", (model,)).fetchone()[0])
+            lo, hi = info["levels"][0]["strength"], info["levels"][-1]["strength"]
+            targets = [lo + (hi - lo) * k / 4 for k in range(5)]
+            got = [con.execute("SELECT affect_strength(?1, strength_synthesize(?1, ?2))",
+                               (model, t)).fetchone()[0] for t in targets]
+            syn.append(spearman(targets, got))
+            for r in te:
+                if r["level"] != 0:
+                    continue
+                res = []
+                for t in targets:  # the edit once, then its three measures
+                    e = con.execute("SELECT strength_edit(?1, motion, ?2) FROM motions "
+                                    "WHERE id = ?3", (model, t, r["id"])).fetchone()[0]
+                    res.append(con.execute("SELECT affect_strength(?1, ?2), laban_time(?2), "
+                                           "laban_weight(?2)", (model, e)).fetchone())
+                edit.append(spearman(targets, [x[0] for x in res]))
+                lt.append(pearson(targets, [x[1] for x in res]))
+                lw.append(pearson(targets, [x[2] for x in res]))
+        allsyn += syn
+        alledit += edit
+        print("| %s | %.2f | %.2f | %+.2f | %+.2f |" % (c, mean_sd(syn)[0], mean_sd(edit)[0],
+                                                        mean_sd(lt)[0], mean_sd(lw)[0]))
+    print("| **all** | %.2f | %.2f | | |" % (mean_sd(allsyn)[0], mean_sd(alledit)[0]))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--db", default=os.path.join(ROOT, "build", "strength.db"))
+    ap.add_argument("--tasks", default="anger,happiness,exhausted")
+    ap.add_argument("--seeds", default="1,2,3")
+    ap.add_argument("--quick", action="store_true",
+                    help="one seed, 50 %% of the pairs, PCA-40 only (a smoke run)")
+    ap.add_argument("--no-synthesis", action="store_true")
+    ap.add_argument("--synthesis-only", action="store_true",
+                    help="only the synthesis and editing table (exhausted)")
+    a = ap.parse_args()
+    if not os.path.isdir(CORPORA):
+        print("strength_eval: ../shared/corpora is absent; nothing to measure")
+        return 0
+    seeds = [int(s) for s in a.seeds.split(",")]
+    fractions, configs = FRACTIONS, CONFIGS
+    if a.quick:
+        seeds, fractions, configs = seeds[:1], [0.5], CONFIGS[:1]
+    con = connect(a.db)
+    t0, c0 = time.perf_counter(), time.process_time()
+    import_corpora(con)
+    for task in ([] if a.synthesis_only else a.tasks.split(",")):
+        protocol(con, task, seeds, fractions, configs)
+        leave_one_content_out(con, task, configs)
+    if not a.no_synthesis and "exhausted" in a.tasks.split(","):
+        synthesis(con, "exhausted", seeds)
+    print("\n(total: %.0f s wall, %.0f s CPU)" % (time.perf_counter() - t0,
+                                                  time.process_time() - c0))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
