@@ -513,6 +513,49 @@ static void test_errors(void **state)
     free_data(&e);
 }
 
+/* tests/fixtures/fda-v1.bin: the SQL spec's small model (right hand, first-frame
+ * observations, 6 B-splines, FPCA 2-D, 12 motion_synth waves of 4 emotions). */
+static void test_fixture_v1(void **state)
+{
+    (void)state;
+    size_t len;
+    char *bytes = tu_read_file(AFFECT_FIXTURES_DIR "/fda-v1.bin", &len);
+    assert_non_null(bytes);
+    affect_fda *f = NULL;
+    affect_error err;
+    if (affect_fda_decode((const unsigned char *)bytes, len, &f, &err))
+        fail_msg("decode: %s", err.msg);
+    const affect_fda_config *cfg = affect_fda_get_config(f);
+    assert_int_equal(cfg->method, AFFECT_FDA_FPCA);
+    assert_int_equal(cfg->n_basis, 6);
+    assert_int_equal(cfg->order, 4);
+    assert_true(cfg->lambda == 1e-10);
+    assert_int_equal(affect_fda_dims(f), 2);
+    assert_int_equal(affect_fda_coords(f), 3);
+    assert_int_equal(affect_fda_train_size(f), 12);
+    assert_int_equal(affect_fda_classes(f), 4);
+    assert_string_equal(affect_fda_class_name(f, 0), "angry");
+    assert_string_equal(affect_fda_class_name(f, 3), "sad");
+    assert_non_null(affect_fda_features(f));
+    assert_int_equal(affect_fda_features(f)->frame, AFFECT_FEATURES_FRAME_FIRST);
+    unsigned char *again;
+    size_t n;
+    assert_int_equal(affect_fda_encode(f, &again, &n, &err), AFFECT_OK);
+    assert_int_equal(n, len);
+    assert_memory_equal(again, bytes, len);
+    /* the training embedding is the FPCA scores: centred, the first axis the wider */
+    const double *z = affect_fda_train_embedding(f);
+    double m0 = 0, v0 = 0, v1 = 0;
+    for (int i = 0; i < 12; i++)
+        m0 += z[2 * i] / 12, v0 += z[2 * i] * z[2 * i], v1 += z[2 * i + 1] * z[2 * i + 1];
+    tu_assert_near(m0, 0.0, 1e-9);
+    assert_true(v0 >= v1);
+    tu_assert_near(v0 / 11, affect_fda_eigenvalues(f)[0], 1e-9 * v0);
+    free(again);
+    free(bytes);
+    affect_fda_free(f);
+}
+
 /* ---- allocation failure ---- */
 typedef struct oom_ctx {
     data *d;
@@ -574,6 +617,7 @@ int main(void)
         cmocka_unit_test(test_gcv),
         cmocka_unit_test(test_determinism_and_blob),
         cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_fixture_v1),
         cmocka_unit_test(test_oom),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
