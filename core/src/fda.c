@@ -1052,6 +1052,10 @@ affect_status affect_fda_embed(const affect_fda *f, const double *x, uint32_t T,
         z[r] = 0.5 * s / sqrt(f->eig[r]);
     }
 done:
+    for (uint32_t r = 0; st == AFFECT_OK && r < p; r++)
+        if (!isfinite(z[r]))
+            st = affect_fail(err, AFFECT_ERR_RANGE, "the embedding overflows (coordinate %u is "
+                             "not finite)", r);
     affect_free(d);
     affect_free(nb);
     return st;
@@ -1354,6 +1358,8 @@ static affect_status decode_body(affect_br *r, affect_fda *f, affect_error *err)
                                "coordinates, the model %u (offset %zu)",
                                affect_features_dim(f->feat), f->m, at);
     }
+    if (!affect_br_has(r, f->c, 5)) /* each name: a length and at least one byte */
+        return truncated(err, r, "the class names");
     f->classes = affect_calloc(f->c, sizeof *f->classes);
     if (!f->classes)
         return affect_nomem(err);

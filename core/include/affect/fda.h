@@ -127,9 +127,10 @@ affect_status affect_fda_train(const affect_fda_config *cfg, const affect_featur
                                affect_fda **out, affect_error *err);
 void affect_fda_free(affect_fda *f);
 
-/* The embedding of a motion x (T × m, T ≥ 1) into z (affect_fda_dims values). Errors:
- * the fit's ("sample 3, column 2: non-finite value", "the fit is singular …"),
- * AFFECT_ERR_NOMEM. */
+/* The embedding of a motion x (T × m, T ≥ 1) into z (affect_fda_dims values), always finite on
+ * success. Errors: the fit's ("sample 3, column 2: non-finite value", "the fit is singular …"),
+ * "the embedding overflows (coordinate 0 is not finite)" (AFFECT_ERR_RANGE: data or a model
+ * with values near DBL_MAX), AFFECT_ERR_NOMEM. */
 affect_status affect_fda_embed(const affect_fda *f, const double *x, uint32_t T, double *z,
                                affect_error *err);
 /* k-NN (affect_knn_classify's rules) of the embedding among the training embeddings; votes
