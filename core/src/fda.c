@@ -1106,6 +1106,14 @@ affect_status affect_fda_prototype(const affect_fda *f, uint32_t label, affect_m
     affect_bspline_values(&f->b, coef, f->m, NULL, T, x);
     if ((st = affect_features_posture_motion(f->feat, x, T, &pm, err)) != AFFECT_OK)
         goto done;
+    bool bones = false; /* observed joints without a parent among them have no bones */
+    for (uint32_t j = 0; j < pm->n_joints; j++)
+        bones = bones || pm->parents[j] >= 0;
+    if (!bones) {
+        *out = pm;
+        pm = NULL;
+        goto done;
+    }
     affect_rigid_options ro;
     affect_rigid_options_default(&ro);
     st = affect_motion_rigid(pm, &ro, out, err);

@@ -493,6 +493,7 @@ typedef struct baseline {
 #define OPT "'{}'"
 #define HMM "<hmm model>"
 #define CLS "<classifier>"
+#define FDA "<functional model>"
 
 static const baseline baselines[] = {
     {"affect_version", {NULL}, false},
@@ -539,6 +540,11 @@ static const baseline baselines[] = {
     {"fisher_score", {CLS, M}, false},
     {"affect_embed", {CLS, M}, false},
     {"affect_info", {CLS}, false},
+    {"fda_embed", {FDA, M}, false},
+    {"fda_classify", {FDA, M, "1"}, false},
+    {"fda_info", {FDA}, false},
+    {"fda_prototype", {FDA, "'sad'"}, false},
+    {"fda_plot", {FDA, OPT}, false},
     {"affect_generate", {"'idx'", M, "'angry'", OPT}, true},
     {"affect_generate_explain", {"'idx'", M, "'angry'", OPT}, true},
     {"laban_salient", {"'idx'", OPT}, true},
@@ -547,6 +553,7 @@ static const baseline baselines[] = {
     {"hmm_train", {"@m", "@hmm_opt"}, true},
     {"affect_train", {"@m", "@label", "@cls_opt"}, true},
     {"affect_crossval_json", {"@m", "@label", "@grp", "@cv_opt"}, true},
+    {"fda_train", {"@m", "@label", "@fda_opt"}, true},
     /* table-valued functions: their hidden arguments */
     {"motion_points", {M}, false},
     {"motion_angles", {M, OPT}, false},
@@ -559,6 +566,7 @@ static const baseline baselines[] = {
     "{\"states\":2,\"mixtures\":1,\"joints\":[\"right_hand\"],\"max_iter\":2,\"svm_c\":1,"         \
     "\"spca_dims\":1,\"knn_k\":1,\"covariance\":\"full\",\"frame\":\"first\",\"velocity\":false,"  \
     "\"descriptors\":\"all\",\"mirror\":false}"
+#define FDA_OPT "{\"basis\":8,\"dims\":2,\"joints\":[\"right_hand\",\"head\"]}"
 #define CV_OPT                                                                                     \
     "{\"folds\":2,\"states\":1,\"mixtures\":1,\"joints\":[\"right_hand\"],\"max_iter\":1,"         \
     "\"svm_c\":1,\"spca_dims\":1,\"knn_k\":1,\"descriptors\":\"none\",\"mirror\":false}"
@@ -874,8 +882,8 @@ static void build_pool(const char *fixtures)
         rnd[i] = (unsigned char)rng_next();
     add_blob("<random 16 bytes>", rnd, 16);
     add_blob("<random 4096 bytes>", rnd, 4096);
-    for (int k = 0; k < 4; k++) {
-        static const char *const magic[] = {"AFMO", "AFHM", "AFCL", "AFxx"};
+    for (int k = 0; k < 5; k++) {
+        static const char *const magic[] = {"AFMO", "AFHM", "AFCL", "AFxx", "AFFD"};
         memcpy(rnd, magic[k], 4);
         rnd[4] = 1 + (unsigned char)(k & 1);
         rnd[5] = 0;
@@ -911,6 +919,7 @@ static void build_pool(const char *fixtures)
                  "SELECT motion_to_json(motion_slice(m, 0, 4)) FROM corpus WHERE id = 1");
     add_from_sql(HMM, "SELECT hmm_train(m, hmm_opt) FROM agg_rows WHERE label = 'sad'");
     add_from_sql(CLS, "SELECT affect_train(m, label, cls_opt) FROM agg_rows");
+    add_from_sql(FDA, "SELECT fda_train(m, label, fda_opt) FROM agg_rows");
     add_from_sql("<laban vector>", "SELECT laban_vector(m) FROM corpus WHERE id = 1");
     add_from_sql("<fisher score>", "SELECT fisher_score((SELECT affect_train(m, label, cls_opt) "
                                    "FROM agg_rows), m) FROM corpus WHERE id = 1");
@@ -922,6 +931,7 @@ static void build_pool(const char *fixtures)
     add_fixture(fixtures, "motion-v2.bin");
     add_fixture(fixtures, "hmm-v1.bin");
     add_fixture(fixtures, "classifier-v1.bin");
+    add_fixture(fixtures, "fda-v1.bin");
 
     /* the short pool: these, every BLOB made above, and some corruptions of each kind */
     /* clang-format off */
@@ -1658,7 +1668,8 @@ int main(int argc, char **argv)
         "CREATE VIRTUAL TABLE idx USING laban(content=corpus, motion=m, label=emotion);"
         "CREATE TABLE agg_rows AS SELECT id, m, emotion AS label, action AS grp,"
         "       laban_weight(m) AS x, laban_time(m) AS y, '" HMM_OPT "' AS hmm_opt,"
-        "       '" CLS_OPT "' AS cls_opt, '" CV_OPT "' AS cv_opt FROM corpus ORDER BY id;"
+        "       '" CLS_OPT "' AS cls_opt, '" CV_OPT "' AS cv_opt,"
+        "       '" FDA_OPT "' AS fda_opt FROM corpus ORDER BY id;"
         "CREATE TABLE empty_t(m, label);");
     build_pool(fixtures);
     /* every pool value as a row (for joins), and as the content of an index */

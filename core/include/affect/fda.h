@@ -54,7 +54,8 @@
  * components (proto_dims, default 3), mapped back by the inverse transform c̄ + Σ q_r e_r,
  * evaluated at the class's mean frame count (rounded, ≥ 2), its positions put on the feature
  * definition's skeleton (affect_features_posture_motion) and made rigid (affect_motion_rigid,
- * constant bone lengths), so motion_to_bvh exports it. Every model, whatever its method,
+ * constant bone lengths), so motion_to_bvh exports it (when no observed joint has an observed
+ * ancestor there are no bones: the positions are returned as they are). Every model, whatever its method,
  * keeps the P eigenfunctions for this.
  *
  * Determinism: the same inputs give bit-identical models and embeddings on a given BLAS build.
