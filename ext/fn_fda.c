@@ -23,7 +23,11 @@
  * Rows whose motion or label is NULL are skipped; labels are compared as text and the classes
  * are ordered by their text (byte order) — the order the RBF label kernel sees.
  * fda_plot's options: x, y (1-based axes, default 1 and 2), title, width, height, radius,
- * means.
+ * means; with "coordinate" (1-based, the observation coordinate: joint entry by joint entry,
+ * x y z, then the velocities) the perturbation plot of the axis "axis" (default 1) instead:
+ * the mean function of that coordinate and the mean ± "alpha" (default 2) training standard
+ * deviations along the axis (affect_fda_perturbation; linear methods), drawn as three dense
+ * point series over normalized time.
  *
  * Every function on a model keeps the last model it decoded on this connection (a call with
  * byte-identical BLOB reuses it).
@@ -523,9 +527,70 @@ void ax_fda_prototype(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     affect_motion_free(m);
 }
 
+/* "right_hand y", "right_hand y velocity", "root 2" for coordinate j of the observations. */
+static void coordinate_name(const affect_fda *f, uint32_t j, char *out, size_t size)
+{
+    static const char *const xyz[] = {"x", "y", "z"};
+    const affect_features *feat = affect_fda_features(f);
+    if (!feat) {
+        snprintf(out, size, "coordinate %u", j + 1);
+        return;
+    }
+    uint32_t J3 = 3 * feat->n_joints;
+    if (j < J3)
+        snprintf(out, size, "%s %s", feat->joints[j / 3], xyz[j % 3]);
+    else if (feat->velocity && j < 2 * J3)
+        snprintf(out, size, "%s %s velocity", feat->joints[(j - J3) / 3], xyz[(j - J3) % 3]);
+    else
+        snprintf(out, size, "root %u", j - (feat->velocity ? 2 * J3 : J3) + 1);
+}
+
+#define PERTURB_SAMPLES 201
+
+/* The perturbation plot of fda_plot's "coordinate" option: μ and μ ± α σ w of one axis. */
+static void perturbation_plot(sqlite3_context *ctx, const affect_fda *f, uint32_t axis,
+                              uint32_t coord, double alpha, affect_plot_options *po,
+                              affect_scatter *sc)
+{
+    double mean[PERTURB_SAMPLES], plus[PERTURB_SAMPLES], minus[PERTURB_SAMPLES];
+    char title[160], yl[128], lp[64], lm[64];
+    char *svg = NULL;
+    size_t len;
+    affect_error err;
+    if (affect_fda_perturbation(f, axis - 1, coord - 1, alpha, PERTURB_SAMPLES, mean, plus, minus,
+                                &err)) {
+        ax_error(ctx, &err);
+        return;
+    }
+    coordinate_name(f, coord - 1, yl, sizeof yl);
+    snprintf(title, sizeof title, "%s %u: mean and mean ± %g sd along the axis",
+             method_names[affect_fda_get_config(f)->method], axis, alpha);
+    snprintf(lp, sizeof lp, "mean + %g sd", alpha);
+    snprintf(lm, sizeof lm, "mean - %g sd", alpha);
+    if (!po->title)
+        po->title = title;
+    po->x_label = "normalized time";
+    po->y_label = yl;
+    for (uint32_t t = 0; t < PERTURB_SAMPLES; t++) {
+        double x = (double)t / (PERTURB_SAMPLES - 1);
+        if (affect_scatter_add(sc, x, mean[t], "mean", &err) ||
+            affect_scatter_add(sc, x, plus[t], lp, &err) ||
+            affect_scatter_add(sc, x, minus[t], lm, &err)) {
+            ax_error(ctx, &err);
+            return;
+        }
+    }
+    if (affect_scatter_render(sc, po, &svg, &len, &err)) {
+        ax_error(ctx, &err);
+        return;
+    }
+    ax_result_text(ctx, svg, len);
+}
+
 void ax_fda_plot(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 {
-    static const char *const keys[] = {"x", "y", "title", "width", "height", "radius", "means",
+    static const char *const keys[] = {"x",      "y",          "title", "width", "height",
+                                       "radius", "means",      "axis",  "coordinate", "alpha",
                                        NULL};
     const affect_fda *f;
     if (arg_model(ctx, argv, &f) != AX_OK)
@@ -540,13 +605,31 @@ void ax_fda_plot(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     char *svg = NULL, xl[32], yl[32];
     size_t len;
     affect_error err;
+    uint32_t axis = 1, coord = 0;
+    double alpha = 2.0;
     if (ax_opt_u32(ctx, &opts, "x", &ax) || ax_opt_u32(ctx, &opts, "y", &ay) ||
         ax_opt_string(ctx, &opts, "title", &po.title) ||
         ax_opt_number(ctx, &opts, "width", &po.width) ||
         ax_opt_number(ctx, &opts, "height", &po.height) ||
         ax_opt_number(ctx, &opts, "radius", &po.radius) ||
-        ax_opt_bool(ctx, &opts, "means", &po.means))
+        ax_opt_bool(ctx, &opts, "means", &po.means) || ax_opt_u32(ctx, &opts, "axis", &axis) ||
+        ax_opt_u32(ctx, &opts, "coordinate", &coord) ||
+        ax_opt_number(ctx, &opts, "alpha", &alpha))
         goto done;
+    if (ax_opt(&opts, "coordinate")) {
+        if (coord < 1 || axis < 1) {
+            ax_errorf(ctx, "option \"%s\" must be at least 1", coord < 1 ? "coordinate" : "axis");
+            goto done;
+        }
+        if (ax_opt(&opts, "radius") == NULL)
+            po.radius = 1.0;
+        if (affect_scatter_create(&sc, &err)) {
+            ax_error(ctx, &err);
+            goto done;
+        }
+        perturbation_plot(ctx, f, axis, coord, alpha, &po, sc);
+        goto done;
+    }
     if (ax < 1 || ax > p || ay < 1 || ay > p) {
         ax_errorf(ctx, "option \"%s\" must be from 1 to %u (the model's dimensions), got %u",
                   ax < 1 || ax > p ? "x" : "y", p, ax < 1 || ax > p ? ax : ay);

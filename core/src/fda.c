@@ -1126,6 +1126,72 @@ done:
     return st;
 }
 
+affect_status affect_fda_perturbation(const affect_fda *f, uint32_t r, uint32_t j, double alpha,
+                                      uint32_t T, double *mean, double *plus, double *minus,
+                                      affect_error *err)
+{
+    if (!is_linear(f->cfg.method))
+        return affect_fail(err, AFFECT_ERR_INVALID, "perturbation plots need a linear method "
+                           "(fpca, ffda, fspca), not fisomap");
+    if (r >= f->p)
+        return affect_fail(err, AFFECT_ERR_INVALID, "axis %u is out of range (%u dimensions)",
+                           r + 1, f->p);
+    if (j >= f->m)
+        return affect_fail(err, AFFECT_ERR_INVALID, "coordinate %u is out of range (%u "
+                           "coordinates)", j + 1, f->m);
+    if (!isfinite(alpha))
+        return affect_fail(err, AFFECT_ERR_INVALID, "alpha must be a finite number");
+    if (T < 2)
+        return affect_fail(err, AFFECT_ERR_INVALID, "need at least 2 times");
+    uint32_t G = f->b.n, k = f->b.order, m = f->m;
+    size_t h = f->h;
+    double *u = affect_malloc_array((size_t)G * k, sizeof *u);
+    double *w = affect_malloc_array(h, sizeof *w);
+    double *mc = affect_malloc_array(G, sizeof *mc), *wc = affect_malloc_array(G, sizeof *wc);
+    affect_status st = AFFECT_OK;
+    if (!u || !w || !mc || !wc) {
+        st = affect_nomem(err);
+        goto done;
+    }
+    /* w = M⁻¹ b (block by block), ‖w‖² = bᵀ M⁻¹ b */
+    memcpy(u, f->mband, (size_t)G * k * sizeof *u);
+    if (!affect_band_cholesky(u, G, k)) {
+        st = affect_fail(err, AFFECT_ERR_RANGE, "the Gram matrix of the basis is singular");
+        goto done;
+    }
+    const double *b = f->axes + (size_t)r * h;
+    memcpy(w, b, h * sizeof *w);
+    affect_band_solve(u, G, k, w, m);
+    double norm2 = dot(w, b, h);
+    double mu = 0.0, ss = 0.0;
+    for (uint32_t i = 0; i < f->n; i++)
+        mu += f->train_z[(size_t)i * f->p + r];
+    mu /= f->n;
+    for (uint32_t i = 0; i < f->n; i++) {
+        double d = f->train_z[(size_t)i * f->p + r] - mu;
+        ss += d * d;
+    }
+    double sd = sqrt(ss / (f->n - 1));
+    double scale = norm2 > 0 ? alpha * sd / norm2 : 0.0;
+    for (uint32_t g = 0; g < G; g++) {
+        mc[g] = f->mean[(size_t)g * m + j];
+        wc[g] = w[(size_t)g * m + j];
+    }
+    affect_bspline_values(&f->b, mc, 1, NULL, T, mean);
+    affect_bspline_values(&f->b, wc, 1, NULL, T, plus);
+    for (uint32_t t = 0; t < T; t++) {
+        double d = scale * plus[t];
+        plus[t] = mean[t] + d;
+        minus[t] = mean[t] - d;
+    }
+done:
+    affect_free(u);
+    affect_free(w);
+    affect_free(mc);
+    affect_free(wc);
+    return st;
+}
+
 /* ---- accessors ---- */
 
 const affect_fda_config *affect_fda_get_config(const affect_fda *f) { return &f->cfg; }

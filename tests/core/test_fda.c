@@ -556,6 +556,52 @@ static void test_fixture_v1(void **state)
     affect_fda_free(f);
 }
 
+static void test_perturbation(void **state)
+{
+    (void)state;
+    data d = make_data(20, 4, 0.8, 17);
+    affect_fda_config cfg;
+    small_cfg(&cfg, AFFECT_FDA_FPCA);
+    affect_fda *f = train_ok(&cfg, &d);
+    double mean[11], plus[11], minus[11], psi[11], mc[12], ec[12];
+    affect_error err;
+    const double *efun = affect_fda_eigenfunctions(f), *mu = affect_fda_mean(f);
+    affect_bspline b = {4, 12};
+    for (uint32_t r = 0; r < 2; r++)
+        for (uint32_t j = 0; j < 2; j++) {
+            assert_int_equal(affect_fda_perturbation(f, r, j, 2.0, 11, mean, plus, minus, &err),
+                             AFFECT_OK);
+            for (int g = 0; g < 12; g++) {
+                mc[g] = mu[g * 2 + j];
+                ec[g] = efun[r * 24 + g * 2 + j];
+            }
+            double m2[11];
+            affect_bspline_values(&b, mc, 1, NULL, 11, m2);
+            affect_bspline_values(&b, ec, 1, NULL, 11, psi);
+            double s = 2.0 * sqrt(affect_fda_fpca_eigenvalues(f)[r]);
+            for (int t = 0; t < 11; t++) {
+                tu_assert_near(mean[t], m2[t], 1e-12);
+                tu_assert_near(plus[t] - mean[t], s * psi[t], 1e-8);
+                tu_assert_near(mean[t] - minus[t], s * psi[t], 1e-8);
+            }
+        }
+    assert_int_equal(affect_fda_perturbation(f, 3, 0, 2.0, 11, mean, plus, minus, &err),
+                     AFFECT_ERR_INVALID);
+    assert_string_equal(err.msg, "axis 4 is out of range (3 dimensions)");
+    assert_int_equal(affect_fda_perturbation(f, 0, 2, 2.0, 11, mean, plus, minus, &err),
+                     AFFECT_ERR_INVALID);
+    assert_string_equal(err.msg, "coordinate 3 is out of range (2 coordinates)");
+    affect_fda_free(f);
+    small_cfg(&cfg, AFFECT_FDA_FISOMAP);
+    f = train_ok(&cfg, &d);
+    assert_int_equal(affect_fda_perturbation(f, 0, 0, 2.0, 11, mean, plus, minus, &err),
+                     AFFECT_ERR_INVALID);
+    assert_string_equal(err.msg, "perturbation plots need a linear method (fpca, ffda, fspca), "
+                                 "not fisomap");
+    affect_fda_free(f);
+    free_data(&d);
+}
+
 /* ---- allocation failure ---- */
 typedef struct oom_ctx {
     data *d;
@@ -618,6 +664,7 @@ int main(void)
         cmocka_unit_test(test_determinism_and_blob),
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_fixture_v1),
+        cmocka_unit_test(test_perturbation),
         cmocka_unit_test(test_oom),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

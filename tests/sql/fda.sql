@@ -97,6 +97,11 @@ SELECT 'fda_plot: an SVG with one legend entry per class',
    AND instr(fda_plot(model), 'neutral') > 0
   FROM fm WHERE method = 'small';
 
+SELECT 'fda_plot: a perturbation plot of the right hand''s y (the small model''s coordinate 2)',
+       fda_plot(model, '{"axis":1,"coordinate":2,"alpha":3}') LIKE '<svg%mean + 3 sd%</svg>' || char(10)
+   AND instr(fda_plot(model, '{"axis":1,"coordinate":2}'), 'right_hand y') > 0
+  FROM fm WHERE method = 'small';
+
 -- ---- NULL in, NULL out ----
 SELECT 'NULL model', fda_embed(NULL, m) IS NULL AND fda_classify(NULL, m) IS NULL
    AND fda_info(NULL) IS NULL AND fda_prototype(NULL, 'sad') IS NULL AND fda_plot(NULL) IS NULL
@@ -138,3 +143,9 @@ SELECT fda_plot(model, '{"y":5}') FROM fm WHERE method = 'small';
 -- error: fda_plot: option "y" must be from 1 to 2 (the model's dimensions), got 5
 SELECT fda_classify(model, m, 0) FROM fm, fs WHERE method = 'small' LIMIT 1;
 -- error: fda_classify: k must be from 1 to 100000, got 0
+SELECT fda_plot(model, '{"axis":3,"coordinate":1}') FROM fm WHERE method = 'small';
+-- error: fda_plot: axis 3 is out of range (2 dimensions)
+SELECT fda_plot(model, '{"coordinate":4}') FROM fm WHERE method = 'small';
+-- error: fda_plot: coordinate 4 is out of range (3 coordinates)
+SELECT fda_plot(model, '{"coordinate":1}') FROM fm WHERE method = 'fisomap';
+-- error: fda_plot: perturbation plots need a linear method (fpca, ffda, fspca), not fisomap

@@ -146,6 +146,20 @@ affect_status affect_fda_prototype(const affect_fda *f, uint32_t label, affect_m
 /* The prototype's coefficients (G × m): c̄ + Σ_r centroid_r e_r. */
 void affect_fda_prototype_coefs(const affect_fda *f, uint32_t label, double *coef);
 
+/* Perturbation plot data (the thesis's Figure 3.3) for a linear method's axis r (0 .. p − 1) and
+ * coordinate j (0 .. m − 1): at T equally spaced times (T ≥ 2) the mean function μ(t) and
+ * μ(t) ± α σ_r w_r(t) / ‖w_r‖², where w_r is the axis's weight function (the score is
+ * ∫ Σ_coordinates w_r (x − μ)), σ_r the standard deviation of the training scores on the axis
+ * and ‖w_r‖² = ∫ Σ w_r²: the change of the motion that moves its score by ± α σ_r along the
+ * axis with the least L² norm. For FPCA w_r is the eigenfunction ψ_r and the perturbation
+ * ± α √λ_r ψ_r. mean, plus, minus: T values each. Errors (AFFECT_ERR_INVALID): "perturbation
+ * plots need a linear method (fpca, ffda, fspca), not fisomap", "axis 4 is out of range (3
+ * dimensions)", "coordinate 99 is out of range (42 coordinates)", "alpha must be a finite
+ * number", "need at least 2 times", AFFECT_ERR_NOMEM. */
+affect_status affect_fda_perturbation(const affect_fda *f, uint32_t r, uint32_t j, double alpha,
+                                      uint32_t T, double *mean, double *plus, double *minus,
+                                      affect_error *err);
+
 /* ---- accessors ---- */
 const affect_fda_config *affect_fda_get_config(const affect_fda *f); /* λ: the one used */
 uint32_t affect_fda_dims(const affect_fda *f);      /* p (may be below cfg.dims) */
