@@ -283,7 +283,7 @@ void affect_bspline_values(const affect_bspline *b, const double *c, uint32_t m,
 size_t affect_bspline_gcv_work(const affect_bspline *b, uint32_t T, uint32_t m)
 {
     (void)T;
-    return 2 * (size_t)b->n * b->order + (size_t)b->n * m + b->n;
+    return 3 * (size_t)b->n * b->order + (size_t)b->n * m;
 }
 
 double affect_bspline_gcv(const affect_bspline *b, const double *r, const double *t,
@@ -291,7 +291,7 @@ double affect_bspline_gcv(const affect_bspline *b, const double *r, const double
                           double *work)
 {
     uint32_t k = b->order, G = b->n;
-    double *a = work, *u = a + (size_t)G * k, *c = u + (size_t)G * k, *col = c + (size_t)G * m;
+    double *a = work, *u = a + (size_t)G * k, *c = u + (size_t)G * k, *sb = c + (size_t)G * m;
     affect_bspline_normal(b, t, x, T, m, a, c);
     for (size_t i = 0; i < (size_t)G * k; i++)
         u[i] = a[i] + lambda * r[i];
@@ -300,15 +300,30 @@ double affect_bspline_gcv(const affect_bspline *b, const double *r, const double
     if (!affect_band_cholesky(u, G, k))
         return INFINITY;
     affect_band_solve(u, G, k, c, m);
-    /* df = tr((A + λR)⁻¹ A), column by column */
-    double tr = 0.0;
-    for (uint32_t j = 0; j < G; j++) {
-        memset(col, 0, G * sizeof *col);
-        for (uint32_t i = j >= k - 1 ? j - (k - 1) : 0; i < G && (i <= j || i - j < k); i++)
-            col[i] = i <= j ? a[(size_t)i * k + (j - i)] : a[(size_t)j * k + (i - j)];
-        affect_band_solve(u, G, k, col, 1);
-        tr += col[j];
+    /* df = tr((A + λR)⁻¹ A) = Σ_{|i−j|<k} S_ij A_ji with S = (A + λR)⁻¹: only S's band is
+     * needed, and it follows from the factor U by the recursion of Hutchinson and de Hoog
+     * (S_ij = δ_ij / U_ii² − Σ_{l>i} (U_il / U_ii) S_lj for j ≥ i), O(G k²) */
+    /* sb: S's band, sb[i k + d] = S_{i, i+d} */
+    for (uint32_t ii = G; ii-- > 0;) {
+        double uii = u[(size_t)ii * k];
+        for (uint32_t d = k; d-- > 0;) {
+            uint32_t j = ii + d;
+            if (j >= G) {
+                sb[(size_t)ii * k + d] = 0.0;
+                continue;
+            }
+            double sum = 0.0;
+            for (uint32_t l = ii + 1; l < G && l - ii < k; l++) {
+                double slj = l <= j ? sb[(size_t)l * k + (j - l)] : sb[(size_t)j * k + (l - j)];
+                sum += u[(size_t)ii * k + (l - ii)] * slj;
+            }
+            sb[(size_t)ii * k + d] = (d == 0 ? 1.0 / uii : 0.0) / uii - sum / uii;
+        }
     }
+    double tr = 0.0;
+    for (uint32_t i = 0; i < G; i++)
+        for (uint32_t d = 0; d < k && i + d < G; d++)
+            tr += (d ? 2.0 : 1.0) * sb[(size_t)i * k + d] * a[(size_t)i * k + d];
     if (df)
         *df = tr;
     if (!(tr < (double)T - AFFECT_GCV_DF_MARGIN))

@@ -250,6 +250,47 @@ static void test_gcv_minimum(void **state)
     free(work);
 }
 
+/* df from the band recursion against tr((A + λR)⁻¹ A) by G full solves. */
+static void test_gcv_df(void **state)
+{
+    (void)state;
+    affect_bspline b = {4, 30};
+    double r[30 * 4], a[30 * 4], u[30 * 4], rhs[30], col[30];
+    affect_bspline_gram(&b, 2, r);
+    uint32_t T = 50;
+    double x[50], tt[50];
+    for (uint32_t s = 0; s < T; s++) {
+        tt[s] = (s * 0.37 + 0.1 * (s % 3)) / (T * 0.37); /* uneven times */
+        if (tt[s] > 1)
+            tt[s] = 1;
+        x[s] = cos(7.0 * tt[s]);
+    }
+    double *work = malloc(affect_bspline_gcv_work(&b, T, 1) * sizeof(double));
+    assert_non_null(work);
+    for (double lam = 1e-9; lam < 10; lam *= 31.6) {
+        double df;
+        affect_bspline_gcv(&b, r, tt, x, T, 1, lam, &df, work);
+        affect_bspline_normal(&b, tt, x, T, 1, a, rhs);
+        for (int i = 0; i < 120; i++)
+            u[i] = a[i] + lam * r[i];
+        assert_true(affect_band_cholesky(u, 30, 4));
+        double tr = 0;
+        for (uint32_t j = 0; j < 30; j++) {
+            memset(col, 0, sizeof col);
+            for (uint32_t i = 0; i < 30; i++) {
+                uint32_t lo = i < j ? i : j, d = i < j ? j - i : i - j;
+                if (d < 4)
+                    col[i] = a[lo * 4 + d];
+            }
+            affect_band_solve(u, 30, 4, col, 1);
+            tr += col[j];
+        }
+        tu_assert_near(df, tr, 1e-9 * (1 + tr));
+        assert_true(df > 0 && df <= 30 + 1e-9);
+    }
+    free(work);
+}
+
 static void test_check(void **state)
 {
     (void)state;
@@ -273,7 +314,8 @@ int main(void)
         cmocka_unit_test(test_gauss_legendre),    cmocka_unit_test(test_partition_of_unity),
         cmocka_unit_test(test_derivatives),       cmocka_unit_test(test_exact_penalty_and_gram),
         cmocka_unit_test(test_lines_survive_penalty), cmocka_unit_test(test_band_cholesky),
-        cmocka_unit_test(test_gcv_minimum),       cmocka_unit_test(test_check),
+        cmocka_unit_test(test_gcv_minimum),       cmocka_unit_test(test_gcv_df),
+        cmocka_unit_test(test_check),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

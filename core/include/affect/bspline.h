@@ -96,8 +96,9 @@ void affect_bspline_values(const affect_bspline *b, const double *c, uint32_t m,
 
 /* One curve's contribution to GCV(λ) (see above) with its smoother's degrees of freedom in
  * *df (may be NULL): T Σ_columns SSE / (T − df)², +∞ when df ≥ T − AFFECT_GCV_DF_MARGIN or
- * A + λR is not positive definite. work: affect_bspline_gcv_work doubles (2 G k + G m + G).
- * No allocation; O(G² k) for the trace. */
+ * A + λR is not positive definite. work: affect_bspline_gcv_work doubles (3 G k + G m).
+ * No allocation; O(T k² + G k (k + m)): the trace needs only the band of (A + λR)⁻¹, which the
+ * recursion of Hutchinson and de Hoog gives from the Cholesky factor. */
 #define AFFECT_GCV_DF_MARGIN 1e-9
 size_t affect_bspline_gcv_work(const affect_bspline *b, uint32_t T, uint32_t m);
 double affect_bspline_gcv(const affect_bspline *b, const double *r, const double *t,
