@@ -90,34 +90,32 @@ uint32_t affect_bspline_eval(const affect_bspline *b, double t, uint32_t deriv, 
     return mu - k + 1;
 }
 
+/* P_n(x) by the three-term recurrence, and P_n′(x) (|x| < 1) into *dp. */
+static double legendre(uint32_t n, double x, double *dp)
+{
+    double p0 = 1.0, p1 = x;
+    for (uint32_t j = 2; j <= n; j++) {
+        double p2 = ((double)(2 * j - 1) * x * p1 - (double)(j - 1) * p0) / (double)j;
+        p0 = p1;
+        p1 = p2;
+    }
+    *dp = (double)n * (x * p1 - p0) / (x * x - 1.0);
+    return p1;
+}
+
 void affect_gauss_legendre(uint32_t n, double *nodes, double *weights)
 {
     const double pi = 3.14159265358979323846;
     for (uint32_t i = 0; i < n; i++) {
         /* root i (descending from cos), refined by Newton on P_n */
-        double x = cos(pi * ((double)i + 0.75) / ((double)n + 0.5)), dp = 1.0;
+        double x = cos(pi * ((double)i + 0.75) / ((double)n + 0.5)), dp;
         for (int it = 0; it < NEWTON_MAX_ITER; it++) {
-            double p0 = 1.0, p1 = x;
-            for (uint32_t j = 2; j <= n; j++) {
-                double p2 = ((double)(2 * j - 1) * x * p1 - (double)(j - 1) * p0) / (double)j;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = (double)n * (x * p1 - p0) / (x * x - 1.0);
-            double dx = p1 / dp;
+            double dx = legendre(n, x, &dp) / dp;
             x -= dx;
             if (fabs(dx) <= 1e-16)
                 break;
         }
-        {
-            double p0 = 1.0, p1 = x;
-            for (uint32_t j = 2; j <= n; j++) {
-                double p2 = ((double)(2 * j - 1) * x * p1 - (double)(j - 1) * p0) / (double)j;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = (double)n * (x * p1 - p0) / (x * x - 1.0);
-        }
+        legendre(n, x, &dp);
         nodes[n - 1 - i] = x;
         weights[n - 1 - i] = 2.0 / ((1.0 - x * x) * dp * dp);
     }
