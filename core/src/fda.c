@@ -709,10 +709,14 @@ static affect_status check_train(const affect_fda_config *cfg, const affect_feat
     if (feat && affect_features_dim(feat) != m)
         return affect_fail(err, AFFECT_ERR_INVALID, "m is %u but the feature definition gives %u",
                            m, affect_features_dim(feat));
-    size_t h;
+    size_t h, cells;
     if (!affect_mul_size(cfg->n_basis, m, &h) || h > INT32_MAX)
         return affect_fail(err, AFFECT_ERR_RANGE, "%u basis functions x %u coordinates exceed "
                            "the BLAS limit", cfg->n_basis, m);
+    if (n > INT32_MAX || !affect_mul_size(n, h > n ? h : n, &cells) ||
+        !affect_mul_size(cells, sizeof(double), &cells))
+        return affect_fail(err, AFFECT_ERR_RANGE, "%u motions x %zu coefficients are too many",
+                           n, h);
     for (uint32_t k = 0; k < c; k++) {
         if (!classes || !classes[k])
             return affect_fail(err, AFFECT_ERR_INVALID, "class %u has no name", k);
