@@ -476,6 +476,11 @@ void ax_fda_info(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     affect_strbuf_double(&sb, cfg->ffda_reg);
     affect_strbuf_printf(&sb, ",\"isomap_k\":%u,\"proto_dims\":%u", cfg->isomap_k,
                          affect_fda_proto_dims(f));
+    affect_strbuf_puts(&sb, ",\"train_labels\":[");
+    for (uint32_t i = 0; i < affect_fda_train_size(f); i++)
+        affect_strbuf_printf(&sb, i ? ",%u" : "%u", affect_fda_train_labels(f)[i]);
+    affect_strbuf_puts(&sb, "],\"train_embedding\":");
+    ax_json_matrix(&sb, affect_fda_train_embedding(f), affect_fda_train_size(f), p);
     if (affect_fda_features(f)) {
         affect_strbuf_puts(&sb, ",\"observations\":");
         ax_json_features(&sb, affect_fda_features(f));

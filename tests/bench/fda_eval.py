@@ -125,16 +125,16 @@ def training_rate(con, table, options):
 
 def cv_rate(con, table, options, folds):
     """folds: list of (train where, test where); returns {2: %, 3: %} and the mean training
-    CPU seconds."""
+    CPU seconds. The training points are the model's own training embedding (fda_info)."""
     right = {2: 0, 3: 0}
     total, secs = 0, []
     for tw, sw in folds:
         model, s = train(con, table, tw, options)
         secs.append(s)
-        tr = embed_all(con, table, model, tw)
+        info = json.loads(con.execute("SELECT fda_info(?)", (model,)).fetchone()[0])
         te = embed_all(con, table, model, sw)
-        pts = [z for _, _, z in tr]
-        labs = [l for _, l, _ in tr]
+        pts = info["train_embedding"]
+        labs = [info["classes"][k] for k in info["train_labels"]]
         for _, lab, z in te:
             total += 1
             for d in (2, 3):

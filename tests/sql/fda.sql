@@ -50,6 +50,12 @@ SELECT 'fda_info: method, basis, classes in byte order, dimensions',
    AND json_extract(fda_info(model), '$.observations.frame') = 'body'
   FROM fm WHERE method = 'fpca';
 
+SELECT 'fda_info: the training labels and embedding (24 motions x 2)',
+       json_array_length(fda_info(model), '$.train_labels') = 24
+   AND json_array_length(fda_info(model), '$.train_embedding') = 24
+   AND json_array_length(fda_info(model), '$.train_embedding[0]') = 2
+  FROM fm WHERE method = 'fpca';
+
 SELECT 'fda_info: eigenvalues decrease, explained shares in (0, 1]',
        json_extract(fda_info(model), '$.eigenvalues[0]') >= json_extract(fda_info(model), '$.eigenvalues[1]')
    AND json_extract(fda_info(model), '$.explained[0]') > 0
