@@ -435,7 +435,8 @@ static affect_status fit_ffda(train_ctx *t, const uint32_t *y, affect_error *err
     uint32_t n = f->n, R = f->R, c = f->c;
     size_t RR = (size_t)R * R;
     double *sw = affect_calloc(RR, sizeof *sw), *sb = affect_calloc(RR, sizeof *sb);
-    double *mu = affect_calloc((size_t)c * R, sizeof *mu), *tm = affect_malloc_array(RR, sizeof *tm);
+    double *mu = affect_calloc((size_t)c * R, sizeof *mu);
+    double *tm = affect_malloc_array(RR, sizeof *tm);
     double *ev = affect_malloc_array(R, sizeof *ev), *ez = affect_malloc_array(RR, sizeof *ez);
     uint32_t *cnt = affect_calloc(c, sizeof *cnt);
     double *g = NULL;

@@ -87,7 +87,8 @@ static void test_derivatives(void **state)
 static void fit_poly(const affect_bspline *b, const double *r, int degree, double *c)
 {
     uint32_t T = 400;
-    double *x = malloc(T * sizeof *x), *work = malloc((2 * b->n * b->order + b->n) * sizeof(double));
+    double *x = malloc(T * sizeof *x);
+    double *work = malloc((2 * b->n * b->order + b->n) * sizeof(double));
     assert_non_null(x);
     assert_non_null(work);
     for (uint32_t s = 0; s < T; s++)

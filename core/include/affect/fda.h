@@ -37,9 +37,10 @@
  *            solver on K: the axes are Aᵀ W in coefficient space (p ≤ c − 1).
  *   FFDA     Fisher's discriminant on z, regularized: within the span of the training
  *            functions (their FPCA scores q, all R = rank K components), the axes a maximize
- *            aᵀ S_b a / aᵀ (S_w + γ (tr S_t / R) I) a (γ = ffda_reg, default 1e-3, S_t the total scatter), scaled so
- *            that aᵀ (S_w + …) a = 1; p ≤ c − 1. Without γ, S_w is singular whenever R ≥ n − c
- *            + 1, which is the rule with h ≫ n: the thesis's FFDA overfits for that reason.
+ *            aᵀ S_b a / aᵀ (S_w + γ (tr S_t / R) I) a (γ = ffda_reg, default 1e-3, S_t the
+ *            total scatter), scaled so that aᵀ (S_w + …) a = 1; p ≤ c − 1. Without γ, S_w is
+ *            singular whenever R ≥ n − c + 1, which is the rule with h ≫ n: the thesis's FFDA
+ *            overfits for that reason.
  *   F-Isomap the L² distances between the training functions, the symmetric k-nearest-
  *            neighbour graph, geodesic distances D by Floyd–Warshall (the graph must be
  *            connected), classical MDS of D (B = −½ H D² H, Y = V Λ^{1/2}). An unseen motion x:
@@ -55,8 +56,8 @@
  * evaluated at the class's mean frame count (rounded, ≥ 2), its positions put on the feature
  * definition's skeleton (affect_features_posture_motion) and made rigid (affect_motion_rigid,
  * constant bone lengths), so motion_to_bvh exports it (when no observed joint has an observed
- * ancestor there are no bones: the positions are returned as they are). Every model, whatever its method,
- * keeps the P eigenfunctions for this.
+ * ancestor there are no bones: the positions are returned as they are). Every model, whatever
+ * its method, keeps the P eigenfunctions for this.
  *
  * Determinism: the same inputs give bit-identical models and embeddings on a given BLAS build.
  */
