@@ -14,7 +14,8 @@ is reused when it already holds them), then for each method:
   - bandai-namco-1, the 44 motions of angry, happy, normal and sad over the ten contents
     recorded in every style: leave-one-out — for every motion, fda_train on the 43 others, the
     held-out motion embedded with fda_embed and classified by its nearest training motion
-    (1-NN) in the first 2 and the first 3 dimensions of the embedding (one model serves both:
+    (1-NN; the training motions' coordinates are the model's own, from fda_info) in the first 2
+    and the first 3 dimensions of the embedding (one model serves both:
     the first two axes of a 3-D model are the 2-D model's axes for every method here);
     the training rate is the same 1-NN among the training motions of the model fitted on all
     44, each motion's own point left out;
