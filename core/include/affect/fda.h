@@ -104,10 +104,11 @@ typedef struct affect_fda_config {
 } affect_fda_config;
 
 void affect_fda_config_default(affect_fda_config *cfg);
-/* NULL, or a message: "unknown method 9", "dims must be from 1 to 64", "lambda must be a
- * finite number, 0 or more", "sigma must be a positive finite number", "ffda_reg must be a
- * finite number, 0 or more", "isomap_k must be from 1 to 1024", "proto_dims must be from 1 to
- * 64", "unknown label kernel 7", and affect_bspline_check's. */
+/* NULL, or a message: "unknown method", "order must be at least 3 for the roughness penalty",
+ * "dims must be from 1 to 64", "lambda must be a finite number, 0 or more", "unknown label
+ * kernel", "sigma must be a positive finite number", "ffda_reg must be a finite number, 0 or
+ * more", "isomap_k must be from 1 to 1024", "proto_dims must be from 1 to 64", and
+ * affect_bspline_check's. */
 const char *affect_fda_config_check(const affect_fda_config *cfg);
 
 typedef struct affect_fda affect_fda;
