@@ -15,6 +15,7 @@
 
 #include "common.h"
 #include "fn_affect.h"
+#include "fn_fda.h"
 #include "fn_generate.h"
 #include "fn_hmm.h"
 #include "fn_laban.h"
@@ -194,6 +195,8 @@ static const ax_aggregate aggregates[] = {
     {"strength_train", 3, ax_strength_train_step, ax_strength_train_final},
     {"rank_train", 2, ax_rank_train_step, ax_rank_train_final},
     {"rank_train", 3, ax_rank_train_step, ax_rank_train_final},
+    {"fda_train", 2, ax_fda_train_step, ax_fda_train_final},
+    {"fda_train", 3, ax_fda_train_step, ax_fda_train_final},
 };
 
 /* The functions on a classifier BLOB: each registration gets its own one-classifier cache
@@ -205,6 +208,17 @@ static const ax_function classifier_functions[] = {
     {"fisher_score", 2, false, ax_fisher_score},
     {"affect_embed", 2, false, ax_affect_embed},
     {"affect_info", 1, true, ax_affect_info},
+};
+
+/* The functions on a functional model BLOB (fn_fda.c), each with its one-model cache. */
+static const ax_function fda_functions[] = {
+    {"fda_embed", 2, false, ax_fda_embed},
+    {"fda_classify", 2, false, ax_fda_classify},
+    {"fda_classify", 3, false, ax_fda_classify},
+    {"fda_info", 1, true, ax_fda_info},
+    {"fda_prototype", 2, false, ax_fda_prototype},
+    {"fda_plot", 1, false, ax_fda_plot},
+    {"fda_plot", 2, false, ax_fda_plot},
 };
 
 #ifdef _WIN32
@@ -255,6 +269,20 @@ int sqlite3_affect_init(sqlite3 *db, char **err, const sqlite3_api_routines *api
         int flags = AX_PURE | (f->json ? subtype_flag : 0);
         int rc = sqlite3_create_function_v2(db, f->name, f->n_arg, flags, user, f->fn, NULL,
                                             NULL, ax_cls_fn_free); /* frees user on failure */
+        if (rc != SQLITE_OK) {
+            *err = sqlite3_mprintf("affect: cannot register %s/%d: %s", f->name, f->n_arg,
+                                   sqlite3_errmsg(db));
+            return rc;
+        }
+    }
+    for (size_t i = 0; i < sizeof fda_functions / sizeof fda_functions[0]; i++) {
+        const ax_function *f = &fda_functions[i];
+        ax_fda_fn *user = ax_fda_fn_new(f->name);
+        if (!user)
+            return SQLITE_NOMEM;
+        int flags = AX_PURE | (f->json ? subtype_flag : 0);
+        int rc = sqlite3_create_function_v2(db, f->name, f->n_arg, flags, user, f->fn, NULL,
+                                            NULL, ax_fda_fn_free); /* frees user on failure */
         if (rc != SQLITE_OK) {
             *err = sqlite3_mprintf("affect: cannot register %s/%d: %s", f->name, f->n_arg,
                                    sqlite3_errmsg(db));

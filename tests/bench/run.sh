@@ -119,6 +119,15 @@ if want bench_strength; then
     echo
 fi
 
+# The functional analysis (fda_train) on the 44 emotion motions, single-threaded OpenBLAS, one
+# core: the defaults' observations, then the evaluation's (7 joints with velocities).
+if want bench_fda; then
+    echo "== bench_fda"
+    OPENBLAS_NUM_THREADS=1 "${pin[@]}" "$build/tests/bench/bench_fda"
+    OPENBLAS_NUM_THREADS=1 "${pin[@]}" "$build/tests/bench/bench_fda" --joints thesis
+    echo
+fi
+
 # How fast long calls stop when interrupted (the built module), single-threaded OpenBLAS,
 # unpinned (some calls run 2 threads, and the interrupting thread needs a core too).
 if want bench_interrupt; then

@@ -495,6 +495,7 @@ typedef struct baseline {
 #define CLS "<classifier>"
 #define STR "<strength model>"
 #define RNK "<ranker>"
+#define FDA "<functional model>"
 
 static const baseline baselines[] = {
     {"affect_version", {NULL}, false},
@@ -541,6 +542,11 @@ static const baseline baselines[] = {
     {"fisher_score", {CLS, M}, false},
     {"affect_embed", {CLS, M}, false},
     {"affect_info", {CLS}, false},
+    {"fda_embed", {FDA, M}, false},
+    {"fda_classify", {FDA, M, "1"}, false},
+    {"fda_info", {FDA}, false},
+    {"fda_prototype", {FDA, "'sad'"}, false},
+    {"fda_plot", {FDA, OPT}, false},
     {"affect_generate", {"'idx'", M, "'angry'", OPT}, true},
     {"affect_generate_explain", {"'idx'", M, "'angry'", OPT}, true},
     {"laban_salient", {"'idx'", OPT}, true},
@@ -557,6 +563,7 @@ static const baseline baselines[] = {
     {"affect_crossval_json", {"@m", "@label", "@grp", "@cv_opt"}, true},
     {"strength_train", {"@m", "@label", "@str_opt"}, true},
     {"rank_train", {"@vec", "@label", "@rank_opt"}, false},
+    {"fda_train", {"@m", "@label", "@fda_opt"}, true},
     /* table-valued functions: their hidden arguments */
     {"motion_points", {M}, false},
     {"motion_angles", {M, OPT}, false},
@@ -570,6 +577,7 @@ static const baseline baselines[] = {
     "\"spca_dims\":1,\"knn_k\":1,\"covariance\":\"full\",\"frame\":\"first\",\"velocity\":false,"  \
     "\"descriptors\":\"all\",\"mirror\":false}"
 #define STR_OPT "{\"order\":[\"sad\",\"angry\"],\"keyframes\":4,\"pca_dims\":3}"
+#define FDA_OPT "{\"basis\":8,\"dims\":2,\"joints\":[\"right_hand\",\"head\"]}"
 #define CV_OPT                                                                                     \
     "{\"folds\":2,\"states\":1,\"mixtures\":1,\"joints\":[\"right_hand\"],\"max_iter\":1,"         \
     "\"svm_c\":1,\"spca_dims\":1,\"knn_k\":1,\"descriptors\":\"none\",\"mirror\":false}"
@@ -885,8 +893,8 @@ static void build_pool(const char *fixtures)
         rnd[i] = (unsigned char)rng_next();
     add_blob("<random 16 bytes>", rnd, 16);
     add_blob("<random 4096 bytes>", rnd, 4096);
-    for (int k = 0; k < 4; k++) {
-        static const char *const magic[] = {"AFMO", "AFHM", "AFCL", "AFxx"};
+    for (int k = 0; k < 5; k++) {
+        static const char *const magic[] = {"AFMO", "AFHM", "AFCL", "AFxx", "AFFD"};
         memcpy(rnd, magic[k], 4);
         rnd[4] = 1 + (unsigned char)(k & 1);
         rnd[5] = 0;
@@ -922,6 +930,7 @@ static void build_pool(const char *fixtures)
                  "SELECT motion_to_json(motion_slice(m, 0, 4)) FROM corpus WHERE id = 1");
     add_from_sql(HMM, "SELECT hmm_train(m, hmm_opt) FROM agg_rows WHERE label = 'sad'");
     add_from_sql(CLS, "SELECT affect_train(m, label, cls_opt) FROM agg_rows");
+    add_from_sql(FDA, "SELECT fda_train(m, label, fda_opt) FROM agg_rows");
     add_from_sql("<laban vector>", "SELECT laban_vector(m) FROM corpus WHERE id = 1");
     add_from_sql(STR, "SELECT strength_train(m, label, str_opt) FROM agg_rows");
     add_from_sql(RNK, "SELECT rank_train(vec, label, rank_opt) FROM agg_rows");
@@ -937,6 +946,7 @@ static void build_pool(const char *fixtures)
     add_fixture(fixtures, "classifier-v1.bin");
     add_fixture(fixtures, "strength-v1.bin");
     add_fixture(fixtures, "ranker-v1.bin");
+    add_fixture(fixtures, "fda-v1.bin");
 
     /* the short pool: these, every BLOB made above, and some corruptions of each kind */
     /* clang-format off */
@@ -1676,8 +1686,8 @@ int main(int argc, char **argv)
         "CREATE TABLE agg_rows AS SELECT id, m, emotion AS label, action AS grp,"
         "       laban_weight(m) AS x, laban_time(m) AS y, '" HMM_OPT "' AS hmm_opt,"
         "       '" CLS_OPT "' AS cls_opt, '" CV_OPT "' AS cv_opt, laban_vector(m) AS vec,"
-        "       '" STR_OPT "' AS str_opt, '{\"order\":[\"sad\",\"angry\"]}' AS rank_opt"
-        "  FROM corpus ORDER BY id;"
+        "       '" STR_OPT "' AS str_opt, '{\"order\":[\"sad\",\"angry\"]}' AS rank_opt,"
+        "       '" FDA_OPT "' AS fda_opt FROM corpus ORDER BY id;"
         "CREATE TABLE empty_t(m, label);");
     build_pool(fixtures);
     /* every pool value as a row (for joins), and as the content of an index */

@@ -1,0 +1,669 @@
+/*
+ * fn_fda.c — SQL wrappers of the functional analysis of movements (core: affect/fda.h;
+ * SCIENCE.md §4, thesis chapter 3):
+ *
+ *   fda_train(motion, label [, options])  aggregate → functional model BLOB
+ *   fda_embed(model, motion)              → float32 vector BLOB (the motion's coordinates)
+ *   fda_classify(model, motion [, k])     → label by k-NN in the embedding (k default 1)
+ *   fda_info(model)                       → JSON: method, basis, λ, dimensions, eigenvalues,
+ *                                           explained shares, classes, feature definition
+ *   fda_prototype(model, label)           → motion: the class prototype (rigid; exports with
+ *                                           motion_to_bvh)
+ *   fda_plot(model [, options])           → SVG scatter of the training embedding by label
+ *
+ * fda_train's options (the same text on every row):
+ *   method      "fpca" (default) | "ffda" | "fspca" | "fisomap"
+ *   basis       B-spline count G (default 200), order (default 4), lambda (a number ≥ 0,
+ *               default 1e-10, or "gcv"), dims (default 3)
+ *   kernel      FSPCA label kernel "linear" (default) | "rbf", sigma (default 1)
+ *   ffda_reg    FFDA regularization γ (default 1e-3); isomap_k (default 7); proto_dims
+ *               (FPCA components of the prototypes, default 3)
+ *   observations: frame ("body", the default, or "first"), joints, normalize, scale, up,
+ *               velocity, root (as hmm_train's); progress (an SQL function's name)
+ * Rows whose motion or label is NULL are skipped; labels are compared as text and the classes
+ * are ordered by their text (byte order) — the order the RBF label kernel sees.
+ * fda_plot's options: x, y (1-based axes, default 1 and 2), title, width, height, radius,
+ * means; with "coordinate" (1-based, the observation coordinate: joint entry by joint entry,
+ * x y z, then the velocities) the perturbation plot of the axis "axis" (default 1) instead:
+ * the mean function of that coordinate and the mean ± "alpha" (default 2) training standard
+ * deviations along the axis (affect_fda_perturbation; linear methods), drawn as three dense
+ * point series over normalized time.
+ *
+ * Every function on a model keeps the last model it decoded on this connection (a call with
+ * byte-identical BLOB reuses it).
+ *
+ * Errors: "fda_embed: argument 1 must be a functional model BLOB (from fda_train), got text",
+ * "fda_info: argument 1 is not a valid functional model: …", "fda_train: row 3: label must be
+ * text or a number, got a BLOB", "fda_train: need motions of at least 2 labels, got 1
+ * (\"sad\")", "fda_train: option \"method\" must be one of …", "fda_prototype: no class
+ * \"joy\" in the model (angry, happy, normal, sad)", "fda_plot: option \"y\" must be from 1 to
+ * 3 (the model's dimensions), got 4", and the core's messages.
+ */
+#include "fn_fda.h"
+
+#include <inttypes.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "affect/fda.h"
+#include "affect/plot.h"
+#include "affect/strbuf.h"
+#include "seqs.h"
+
+/* ---- fda_train ---- */
+
+static const char *const train_keys[] = {
+    "joints", "normalize", "scale", "up", "velocity", "frame", "root", "progress",
+    "method", "basis", "order", "lambda", "dims", "kernel", "sigma", "ffda_reg",
+    "isomap_k", "proto_dims", NULL};
+
+static const char *const method_names[] = {"fpca", "ffda", "fspca", "fisomap", NULL};
+
+typedef struct fda_train {
+    ax_seqs s; /* first: ax_seqs_free frees the whole struct */
+    affect_fda_config cfg;
+    char **labels; /* one per sequence */
+} fda_train;
+
+static void fda_train_free(fda_train *t)
+{
+    if (!t)
+        return;
+    for (uint32_t i = 0; i < t->s.n_seqs; i++)
+        affect_free(t->labels[i]);
+    affect_free(t->labels);
+    ax_seqs_free(&t->s);
+}
+
+static ax_arg read_fda_options(sqlite3_context *ctx, const ax_opts *opts, affect_fda_config *cfg)
+{
+    static const char *const kernels[] = {"linear", "rbf", NULL};
+    int method = (int)cfg->method, kernel = (int)cfg->kernel;
+    if (ax_opt_enum(ctx, opts, "method", method_names, &method) ||
+        ax_opt_u32(ctx, opts, "basis", &cfg->n_basis) ||
+        ax_opt_u32(ctx, opts, "order", &cfg->order) ||
+        ax_opt_u32(ctx, opts, "dims", &cfg->dims) ||
+        ax_opt_enum(ctx, opts, "kernel", kernels, &kernel) ||
+        ax_opt_number(ctx, opts, "sigma", &cfg->sigma) ||
+        ax_opt_number(ctx, opts, "ffda_reg", &cfg->ffda_reg) ||
+        ax_opt_u32(ctx, opts, "isomap_k", &cfg->isomap_k) ||
+        ax_opt_u32(ctx, opts, "proto_dims", &cfg->proto_dims))
+        return AX_ERROR;
+    cfg->method = (affect_fda_method)method;
+    cfg->kernel = (affect_spca_kernel)kernel;
+    const affect_json_node *l = ax_opt(opts, "lambda");
+    if (l) {
+        if (l->type == AFFECT_JSON_STRING && strcmp(l->str, "gcv") == 0) {
+            cfg->gcv = true;
+        } else if (l->type == AFFECT_JSON_NUMBER) {
+            if (ax_opt_number(ctx, opts, "lambda", &cfg->lambda))
+                return AX_ERROR;
+        } else {
+            ax_errorf(ctx, "option \"lambda\" must be a number or \"gcv\"");
+            return AX_ERROR;
+        }
+    }
+    const char *msg = affect_fda_config_check(cfg);
+    if (msg) {
+        ax_errorf(ctx, "%s", msg);
+        return AX_ERROR;
+    }
+    return AX_OK;
+}
+
+/* The label of the current row (argument 1): its text, or NULL for SQL NULL. */
+static ax_arg row_label(sqlite3_context *ctx, sqlite3_value **argv, const fda_train *t,
+                        const char **text)
+{
+    int type = sqlite3_value_type(argv[1]);
+    *text = NULL;
+    if (type == SQLITE_NULL)
+        return AX_NULL;
+    if (type == SQLITE_BLOB) {
+        ax_errorf(ctx, "row %" PRIu64 ": label must be text or a number, got a BLOB", t->s.rows);
+        return AX_ERROR;
+    }
+    *text = (const char *)sqlite3_value_text(argv[1]);
+    if (!*text) {
+        sqlite3_result_error_nomem(ctx);
+        return AX_ERROR;
+    }
+    if (**text == '\0' || strlen(*text) != (size_t)sqlite3_value_bytes(argv[1])) {
+        ax_errorf(ctx, "row %" PRIu64 ": label must not be empty or contain NUL", t->s.rows);
+        return AX_ERROR;
+    }
+    size_t len = strlen(*text), bad = affect_utf8_invalid_at(*text, len);
+    if (bad < len) {
+        ax_errorf(ctx, "row %" PRIu64 ": label is not valid UTF-8 (byte 0x%02x at offset %zu)",
+                  t->s.rows, (unsigned char)(*text)[bad], bad);
+        return AX_ERROR;
+    }
+    return AX_OK;
+}
+
+static ax_arg train_row(sqlite3_context *ctx, int argc, sqlite3_value **argv, fda_train *t)
+{
+    const char *label;
+    ax_arg r = row_label(ctx, argv, t, &label);
+    if (r != AX_OK)
+        return r == AX_NULL ? AX_OK : AX_ERROR;
+    uint32_t before = t->s.n_seqs;
+    if (ax_seqs_add(ctx, argc, argv, &t->s) != AX_OK)
+        return AX_ERROR;
+    if (t->s.n_seqs == before)
+        return AX_OK;
+    char **labels = affect_realloc(t->labels, (size_t)t->s.cap * sizeof *labels);
+    if (!labels) {
+        affect_free((void *)t->s.seqs[before].x); /* keep labels and sequences paired */
+        t->s.n_seqs = before;
+        sqlite3_result_error_nomem(ctx);
+        return AX_ERROR;
+    }
+    t->labels = labels;
+    t->labels[before] = affect_strndup(label, strlen(label));
+    if (!t->labels[before]) {
+        affect_free((void *)t->s.seqs[before].x);
+        t->s.n_seqs = before;
+        sqlite3_result_error_nomem(ctx);
+        return AX_ERROR;
+    }
+    return AX_OK;
+}
+
+void ax_fda_train_step(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    fda_train **slot = sqlite3_aggregate_context(ctx, (int)sizeof *slot);
+    if (!slot) {
+        sqlite3_result_error_nomem(ctx);
+        return;
+    }
+    fda_train *t = *slot;
+    if (t && t->s.failed)
+        return;
+    if (!t) {
+        t = sqlite3_malloc64(sizeof *t);
+        if (!t) {
+            sqlite3_result_error_nomem(ctx);
+            return;
+        }
+        memset(t, 0, sizeof *t);
+        *slot = t;
+        t->s.rows++;
+        affect_fda_config_default(&t->cfg);
+        affect_hmm_config_default(&t->s.cfg);
+        t->s.cfg.n_states = 1; /* no HMM: a motion needs 1 frame */
+        t->s.cfg.max_jump = 0;
+        affect_features_options_default(&t->s.fo);
+        t->s.fo.frame = AFFECT_FEATURES_FRAME_BODY; /* the recognizer's observations */
+        t->s.preset = true;
+        ax_opts opts;
+        if (ax_seqs_options(ctx, argc, argv, 2, train_keys, &t->s, &opts) != AX_OK) {
+            t->s.failed = true;
+            return;
+        }
+        ax_arg r = read_fda_options(ctx, &opts, &t->cfg);
+        ax_opts_free(&opts);
+        if (r != AX_OK) {
+            t->s.failed = true;
+            return;
+        }
+    } else {
+        t->s.rows++;
+    }
+    if (train_row(ctx, argc, argv, t) != AX_OK)
+        t->s.failed = true;
+}
+
+static int cmp_text(const void *a, const void *b)
+{
+    return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+static void train_final(sqlite3_context *ctx, fda_train *t)
+{
+    uint32_t n = t->s.n_seqs, n_classes = 0;
+    char **classes = affect_malloc_array(n, sizeof *classes);
+    uint32_t *y = affect_malloc_array(n, sizeof *y);
+    affect_fda *f = NULL;
+    affect_error err;
+    if (!classes || !y) {
+        sqlite3_result_error_nomem(ctx);
+        goto done;
+    }
+    memcpy(classes, t->labels, n * sizeof *classes);
+    qsort(classes, n, sizeof *classes, cmp_text);
+    for (uint32_t i = 0; i < n; i++)
+        if (n_classes == 0 || strcmp(classes[i], classes[n_classes - 1]) != 0)
+            classes[n_classes++] = classes[i];
+    if (n_classes < 2) {
+        ax_errorf(ctx, "need motions of at least 2 labels, got 1 (\"%s\")", classes[0]);
+        goto done;
+    }
+    for (uint32_t i = 0; i < n; i++) {
+        char **hit = bsearch(&t->labels[i], classes, n_classes, sizeof *classes, cmp_text);
+        y[i] = (uint32_t)(hit - classes);
+    }
+    ax_monitor am;
+    if (ax_monitor_begin(&am, ctx, t->s.progress) != AX_OK)
+        goto done;
+    t->cfg.monitor = &am.mon;
+    affect_status st = affect_fda_train(&t->cfg, t->s.feat, t->s.seqs, n,
+                                        affect_features_dim(t->s.feat), y,
+                                        (const char *const *)classes, n_classes, &f, &err);
+    ax_monitor_end(&am);
+    if (st) {
+        ax_error(ctx, &err);
+        goto done;
+    }
+    unsigned char *blob;
+    size_t size;
+    if (affect_fda_encode(f, &blob, &size, &err))
+        ax_error(ctx, &err);
+    else
+        sqlite3_result_blob64(ctx, blob, size, sqlite3_free);
+done:
+    affect_fda_free(f);
+    affect_free(classes);
+    affect_free(y);
+}
+
+void ax_fda_train_final(sqlite3_context *ctx)
+{
+    fda_train **slot = sqlite3_aggregate_context(ctx, 0);
+    fda_train *t = slot ? *slot : NULL;
+    if (!t || t->s.failed || t->s.n_seqs == 0) {
+        if (!t || !t->s.failed)
+            sqlite3_result_null(ctx);
+    } else {
+        train_final(ctx, t);
+    }
+    fda_train_free(t);
+    if (slot)
+        *slot = NULL;
+}
+
+/* ---- the model argument, with the per-function cache ---- */
+
+struct ax_fda_fn {
+    char name[32]; /* first: AX_NAME(ctx) reads it */
+    unsigned char *bytes;
+    size_t size;
+    affect_fda *f;
+};
+
+static void cache_clear(ax_fda_fn *fn)
+{
+    affect_fda_free(fn->f);
+    sqlite3_free(fn->bytes);
+    fn->f = NULL;
+    fn->bytes = NULL;
+    fn->size = 0;
+}
+
+void ax_fda_fn_free(void *p)
+{
+    ax_fda_fn *fn = p;
+    if (fn) {
+        cache_clear(fn);
+        sqlite3_free(fn);
+    }
+}
+
+ax_fda_fn *ax_fda_fn_new(const char *name)
+{
+    ax_fda_fn *fn = sqlite3_malloc64(sizeof *fn);
+    if (!fn)
+        return NULL;
+    memset(fn, 0, sizeof *fn);
+    ax_copy_name(fn->name, sizeof fn->name, name);
+    return fn;
+}
+
+static ax_arg arg_model(sqlite3_context *ctx, sqlite3_value **argv, const affect_fda **out)
+{
+    ax_fda_fn *fn = sqlite3_user_data(ctx);
+    sqlite3_value *v = argv[0];
+    int type = sqlite3_value_type(v);
+    *out = NULL;
+    if (type == SQLITE_NULL)
+        return AX_NULL;
+    if (type != SQLITE_BLOB) {
+        ax_errorf(ctx, "argument 1 must be a functional model BLOB (from fda_train), got %s",
+                  ax_type_name(v));
+        return AX_ERROR;
+    }
+    const unsigned char *data = sqlite3_value_blob(v);
+    size_t n = (size_t)sqlite3_value_bytes(v);
+    if (!data && n > 0) {
+        sqlite3_result_error_nomem(ctx);
+        return AX_ERROR;
+    }
+    if (fn->f && fn->size == n && memcmp(fn->bytes, data, n) == 0) {
+        *out = fn->f;
+        return AX_OK;
+    }
+    cache_clear(fn);
+    affect_fda *f;
+    affect_error err;
+    if (affect_fda_decode(data ? data : (const unsigned char *)"", n, &f, &err)) {
+        if (err.status == AFFECT_ERR_NOMEM)
+            ax_error(ctx, &err);
+        else
+            ax_errorf(ctx, "argument 1 is not a valid functional model: %s", err.msg);
+        return AX_ERROR;
+    }
+    fn->bytes = sqlite3_malloc64(n ? n : 1);
+    if (!fn->bytes) {
+        affect_fda_free(f);
+        sqlite3_result_error_nomem(ctx);
+        return AX_ERROR;
+    }
+    memcpy(fn->bytes, data, n);
+    fn->size = n;
+    fn->f = f;
+    *out = f;
+    return AX_OK;
+}
+
+/* The model (argument 0) and the observations of the motion (argument 1) under its feature
+ * definition. */
+static ax_arg arg_model_motion(sqlite3_context *ctx, sqlite3_value **argv, const affect_fda **f,
+                               double **x, uint32_t *T)
+{
+    *x = NULL;
+    ax_arg r = arg_model(ctx, argv, f);
+    if (r != AX_OK)
+        return r;
+    affect_motion *m = NULL;
+    if ((r = ax_arg_motion(ctx, argv, 1, &m)) != AX_OK)
+        return r;
+    const affect_features *feat = affect_fda_features(*f);
+    affect_error err;
+    if (!feat) {
+        ax_errorf(ctx, "the model was trained on plain data, not motions");
+        r = AX_ERROR;
+    } else if (affect_features_extract(feat, m, x, T, NULL, &err)) {
+        ax_error(ctx, &err);
+        r = AX_ERROR;
+    }
+    affect_motion_free(m);
+    return r;
+}
+
+void ax_fda_embed(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    (void)argc;
+    const affect_fda *f;
+    double *x, z[AFFECT_FDA_MAX_DIMS];
+    uint32_t T;
+    if (arg_model_motion(ctx, argv, &f, &x, &T) != AX_OK)
+        return;
+    affect_error err;
+    if (affect_fda_embed(f, x, T, z, &err))
+        ax_error(ctx, &err);
+    else
+        ax_result_f32(ctx, z, affect_fda_dims(f));
+    affect_free(x);
+}
+
+void ax_fda_classify(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    int64_t k = 1;
+    if (argc > 2) {
+        ax_arg r = ax_arg_int(ctx, argv, 2, &k);
+        if (r != AX_OK)
+            return;
+        if (k < 1 || k > 100000) {
+            ax_errorf(ctx, "k must be from 1 to 100000, got %" PRId64, k);
+            return;
+        }
+    }
+    const affect_fda *f;
+    double *x;
+    uint32_t T, label;
+    if (arg_model_motion(ctx, argv, &f, &x, &T) != AX_OK)
+        return;
+    affect_error err;
+    if (affect_fda_classify(f, x, T, (uint32_t)k, &label, NULL, &err))
+        ax_error(ctx, &err);
+    else
+        sqlite3_result_text(ctx, affect_fda_class_name(f, label), -1, SQLITE_TRANSIENT);
+    affect_free(x);
+}
+
+void ax_fda_info(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    (void)argc;
+    const affect_fda *f;
+    if (arg_model(ctx, argv, &f) != AX_OK)
+        return;
+    const affect_fda_config *cfg = affect_fda_get_config(f);
+    uint32_t p = affect_fda_dims(f), c = affect_fda_classes(f);
+    affect_strbuf sb;
+    affect_strbuf_init(&sb);
+    affect_strbuf_printf(&sb, "{\"method\":\"%s\",\"order\":%u,\"basis\":%u,\"lambda\":",
+                         method_names[cfg->method], cfg->order, cfg->n_basis);
+    affect_strbuf_double(&sb, cfg->lambda);
+    affect_strbuf_printf(&sb, ",\"lambda_from\":\"%s\",\"dims\":%u,\"dims_requested\":%u,"
+                              "\"coordinates\":%u,\"motions\":%u,\"classes\":[",
+                         cfg->gcv ? "gcv" : "option", p, cfg->dims, affect_fda_coords(f),
+                         affect_fda_train_size(f));
+    for (uint32_t k = 0; k < c; k++) {
+        if (k)
+            affect_strbuf_putc(&sb, ',');
+        affect_strbuf_json_string(&sb, affect_fda_class_name(f, k));
+    }
+    affect_strbuf_puts(&sb, "],\"class_frames\":[");
+    for (uint32_t k = 0; k < c; k++) {
+        if (k)
+            affect_strbuf_putc(&sb, ',');
+        affect_strbuf_double(&sb, affect_fda_class_frames(f, k));
+    }
+    affect_strbuf_puts(&sb, "],\"eigenvalues\":");
+    ax_json_doubles(&sb, affect_fda_eigenvalues(f), p);
+    affect_strbuf_puts(&sb, ",\"explained\":");
+    ax_json_doubles(&sb, affect_fda_explained(f), p);
+    affect_strbuf_puts(&sb, ",\"fpca_eigenvalues\":");
+    ax_json_doubles(&sb, affect_fda_fpca_eigenvalues(f), affect_fda_fpca_rank(f));
+    affect_strbuf_puts(&sb, ",\"total_variance\":");
+    affect_strbuf_double(&sb, affect_fda_total_variance(f));
+    affect_strbuf_printf(&sb, ",\"kernel\":\"%s\",\"sigma\":",
+                         cfg->kernel == AFFECT_SPCA_RBF ? "rbf" : "linear");
+    affect_strbuf_double(&sb, cfg->sigma);
+    affect_strbuf_puts(&sb, ",\"ffda_reg\":");
+    affect_strbuf_double(&sb, cfg->ffda_reg);
+    affect_strbuf_printf(&sb, ",\"isomap_k\":%u,\"proto_dims\":%u", cfg->isomap_k,
+                         affect_fda_proto_dims(f));
+    affect_strbuf_puts(&sb, ",\"train_labels\":[");
+    for (uint32_t i = 0; i < affect_fda_train_size(f); i++)
+        affect_strbuf_printf(&sb, i ? ",%u" : "%u", affect_fda_train_labels(f)[i]);
+    affect_strbuf_puts(&sb, "],\"train_embedding\":");
+    ax_json_matrix(&sb, affect_fda_train_embedding(f), affect_fda_train_size(f), p);
+    if (affect_fda_features(f)) {
+        affect_strbuf_puts(&sb, ",\"observations\":");
+        ax_json_features(&sb, affect_fda_features(f));
+    }
+    affect_strbuf_putc(&sb, '}');
+    ax_result_json_buffer(ctx, &sb);
+}
+
+void ax_fda_prototype(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    (void)argc;
+    const affect_fda *f;
+    if (arg_model(ctx, argv, &f) != AX_OK)
+        return;
+    const char *label;
+    size_t len;
+    if (ax_arg_text(ctx, argv, 1, &label, &len) != AX_OK)
+        return;
+    uint32_t c = affect_fda_classes(f), k = 0;
+    while (k < c && !(strlen(affect_fda_class_name(f, k)) == len &&
+                      memcmp(affect_fda_class_name(f, k), label, len) == 0))
+        k++;
+    if (k == c) {
+        affect_strbuf sb;
+        affect_strbuf_init(&sb);
+        for (uint32_t j = 0; j < c; j++) {
+            if (j)
+                affect_strbuf_puts(&sb, ", ");
+            affect_strbuf_puts(&sb, affect_fda_class_name(f, j));
+        }
+        char *names;
+        size_t nlen;
+        affect_error err;
+        if (affect_strbuf_finish(&sb, &names, &nlen, &err)) {
+            sqlite3_result_error_nomem(ctx);
+            return;
+        }
+        ax_errorf(ctx, "no class \"%.*s\" in the model (%s)", (int)(len > 200 ? 200 : len),
+                  label, names);
+        affect_free(names);
+        return;
+    }
+    affect_motion *m = NULL;
+    affect_error err;
+    if (affect_fda_prototype(f, k, &m, &err))
+        ax_error(ctx, &err);
+    else
+        ax_result_motion(ctx, m);
+    affect_motion_free(m);
+}
+
+/* "right_hand y", "right_hand y velocity", "root 2" for coordinate j of the observations. */
+static void coordinate_name(const affect_fda *f, uint32_t j, char *out, size_t size)
+{
+    static const char *const xyz[] = {"x", "y", "z"};
+    const affect_features *feat = affect_fda_features(f);
+    if (!feat) {
+        snprintf(out, size, "coordinate %u", j + 1);
+        return;
+    }
+    uint32_t J3 = 3 * feat->n_joints;
+    if (j < J3)
+        snprintf(out, size, "%s %s", feat->joints[j / 3], xyz[j % 3]);
+    else if (feat->velocity && j < 2 * J3)
+        snprintf(out, size, "%s %s velocity", feat->joints[(j - J3) / 3], xyz[(j - J3) % 3]);
+    else
+        snprintf(out, size, "root %u", j - (feat->velocity ? 2 * J3 : J3) + 1);
+}
+
+#define PERTURB_SAMPLES 201
+
+/* The perturbation plot of fda_plot's "coordinate" option: μ and μ ± α σ w of one axis. */
+static void perturbation_plot(sqlite3_context *ctx, const affect_fda *f, uint32_t axis,
+                              uint32_t coord, double alpha, affect_plot_options *po,
+                              affect_scatter *sc)
+{
+    double mean[PERTURB_SAMPLES], plus[PERTURB_SAMPLES], minus[PERTURB_SAMPLES];
+    char title[160], yl[128], lp[64], lm[64];
+    char *svg = NULL;
+    size_t len;
+    affect_error err;
+    if (affect_fda_perturbation(f, axis - 1, coord - 1, alpha, PERTURB_SAMPLES, mean, plus, minus,
+                                &err)) {
+        ax_error(ctx, &err);
+        return;
+    }
+    coordinate_name(f, coord - 1, yl, sizeof yl);
+    snprintf(title, sizeof title, "%s %u: mean and mean ± %g sd along the axis",
+             method_names[affect_fda_get_config(f)->method], axis, alpha);
+    snprintf(lp, sizeof lp, "mean + %g sd", alpha);
+    snprintf(lm, sizeof lm, "mean - %g sd", alpha);
+    if (!po->title)
+        po->title = title;
+    po->x_label = "normalized time";
+    po->y_label = yl;
+    for (uint32_t t = 0; t < PERTURB_SAMPLES; t++) {
+        double x = (double)t / (PERTURB_SAMPLES - 1);
+        if (affect_scatter_add(sc, x, mean[t], "mean", &err) ||
+            affect_scatter_add(sc, x, plus[t], lp, &err) ||
+            affect_scatter_add(sc, x, minus[t], lm, &err)) {
+            ax_error(ctx, &err);
+            return;
+        }
+    }
+    if (affect_scatter_render(sc, po, &svg, &len, &err)) {
+        ax_error(ctx, &err);
+        return;
+    }
+    ax_result_text(ctx, svg, len);
+}
+
+void ax_fda_plot(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    static const char *const keys[] = {"x",      "y",          "title", "width", "height",
+                                       "radius", "means",      "axis",  "coordinate", "alpha",
+                                       NULL};
+    const affect_fda *f;
+    if (arg_model(ctx, argv, &f) != AX_OK)
+        return;
+    ax_opts opts;
+    if (ax_opts_parse(ctx, argc, argv, 1, keys, &opts) != AX_OK)
+        return;
+    uint32_t p = affect_fda_dims(f), ax = 1, ay = p >= 2 ? 2 : 1;
+    affect_plot_options po;
+    affect_plot_options_default(&po);
+    affect_scatter *sc = NULL;
+    char *svg = NULL, xl[32], yl[32];
+    size_t len;
+    affect_error err;
+    uint32_t axis = 1, coord = 0;
+    double alpha = 2.0;
+    if (ax_opt_u32(ctx, &opts, "x", &ax) || ax_opt_u32(ctx, &opts, "y", &ay) ||
+        ax_opt_string(ctx, &opts, "title", &po.title) ||
+        ax_opt_number(ctx, &opts, "width", &po.width) ||
+        ax_opt_number(ctx, &opts, "height", &po.height) ||
+        ax_opt_number(ctx, &opts, "radius", &po.radius) ||
+        ax_opt_bool(ctx, &opts, "means", &po.means) || ax_opt_u32(ctx, &opts, "axis", &axis) ||
+        ax_opt_u32(ctx, &opts, "coordinate", &coord) ||
+        ax_opt_number(ctx, &opts, "alpha", &alpha))
+        goto done;
+    if (ax_opt(&opts, "coordinate")) {
+        if (coord < 1 || axis < 1) {
+            ax_errorf(ctx, "option \"%s\" must be at least 1", coord < 1 ? "coordinate" : "axis");
+            goto done;
+        }
+        if (ax_opt(&opts, "radius") == NULL)
+            po.radius = 1.0;
+        if (affect_scatter_create(&sc, &err)) {
+            ax_error(ctx, &err);
+            goto done;
+        }
+        perturbation_plot(ctx, f, axis, coord, alpha, &po, sc);
+        goto done;
+    }
+    if (ax < 1 || ax > p || ay < 1 || ay > p) {
+        ax_errorf(ctx, "option \"%s\" must be from 1 to %u (the model's dimensions), got %u",
+                  ax < 1 || ax > p ? "x" : "y", p, ax < 1 || ax > p ? ax : ay);
+        goto done;
+    }
+    snprintf(xl, sizeof xl, "%s %u", method_names[affect_fda_get_config(f)->method], ax);
+    snprintf(yl, sizeof yl, "%s %u", method_names[affect_fda_get_config(f)->method], ay);
+    po.x_label = xl;
+    po.y_label = yl;
+    if (affect_scatter_create(&sc, &err)) {
+        ax_error(ctx, &err);
+        goto done;
+    }
+    const double *z = affect_fda_train_embedding(f);
+    const uint32_t *y = affect_fda_train_labels(f);
+    for (uint32_t i = 0; i < affect_fda_train_size(f); i++)
+        if (affect_scatter_add(sc, z[(size_t)i * p + ax - 1], z[(size_t)i * p + ay - 1],
+                               affect_fda_class_name(f, y[i]), &err)) {
+            ax_error(ctx, &err);
+            goto done;
+        }
+    if (affect_scatter_render(sc, &po, &svg, &len, &err)) {
+        ax_error(ctx, &err);
+        goto done;
+    }
+    ax_result_text(ctx, svg, len);
+    svg = NULL;
+done:
+    affect_free(svg);
+    affect_scatter_free(sc);
+    ax_opts_free(&opts);
+}
