@@ -651,14 +651,16 @@ affect_status affect_bvh_parse(const char *text, size_t len, const affect_bvh_op
                          (unsigned long long)max_samples);
         goto done;
     }
-    st = affect_motion_create(n_frames, ps.n_joints, snap_fps(1.0 / frame_time), &m, err);
+    /* every frame line sets all positions, rotations and translations (parse_frames) */
+    st = affect_motion_create_as(n_frames, ps.n_joints, snap_fps(1.0 / frame_time), false, &m,
+                                 err);
     if (st)
         goto done;
     for (uint32_t i = 0; i < ps.n_joints; i++)
         m->parents[i] = ps.joints[i].parent;
     st = name_joints(&ps, m);
     if (!st)
-        st = affect_motion_add_skeleton(m, true, err);
+        st = affect_motion_add_skeleton_as(m, true, false, err);
     if (!st)
         keep_skeleton(&ps, m, scale);
     if (!st && opt && opt->unit)

@@ -197,14 +197,17 @@ done:
     return st;
 }
 
-/* Positions in the body frame of every frame, and the root columns, into obs (T × dim). */
+/* affect_features_extract polls the monitor between slices of this many frames */
+#define FEATURES_POLL_FRAMES 8192
+
+/* Positions in the body frame of frames t0 .. t1 − 1, and the root columns, into obs (T × dim). */
 static void body_positions(const affect_features *f, const affect_motion *m,
                            const uint32_t *idx, uint32_t root, const double *ang, double scale,
-                           double *obs)
+                           uint32_t t0, uint32_t t1, double *obs)
 {
     uint32_t J = f->n_joints, T = m->n_frames, dim = affect_features_dim(f);
     double inv = 1.0 / scale;
-    for (uint32_t t = 0; t < T; t++) {
+    for (uint32_t t = t0; t < t1; t++) {
         double r[9], *row = obs + (size_t)t * dim;
         affect_normalize_axis_rotation(f->up_axis, ang[t], r);
         const float *o = affect_motion_at(m, t, root);
@@ -234,15 +237,15 @@ static void body_positions(const affect_features *f, const affect_motion *m,
     }
 }
 
-/* Positions in the first frame's normalized frame (tf) into obs (T × dim). */
+/* Positions of frames t0 .. t1 − 1 in the first frame's normalized frame (tf) into obs (T × dim). */
 static void first_positions(const affect_features *f, const affect_motion *m,
                             const uint32_t *idx, const affect_normalize_transform *tf,
-                            double *obs)
+                            uint32_t t0, uint32_t t1, double *obs)
 {
-    uint32_t J = f->n_joints, T = m->n_frames, dim = affect_features_dim(f);
+    uint32_t J = f->n_joints, dim = affect_features_dim(f);
     const double *r = tf->rot;
     double inv = 1.0 / tf->scale;
-    for (uint32_t t = 0; t < T; t++) {
+    for (uint32_t t = t0; t < t1; t++) {
         double *row = obs + (size_t)t * dim;
         for (uint32_t e = 0; e < J; e++) {
             const float *p = affect_motion_at(m, t, idx[e]);
@@ -255,12 +258,14 @@ static void first_positions(const affect_features *f, const affect_motion *m,
     }
 }
 
-/* Velocities: central differences × fps of the positions already in obs. */
-static void velocities(const affect_features *f, const affect_motion *m, double *obs)
+/* Velocities of frames t0 .. t1 − 1: central differences × fps of the positions already in
+ * obs (every frame's). */
+static void velocities(const affect_features *f, const affect_motion *m, uint32_t t0,
+                       uint32_t t1, double *obs)
 {
     uint32_t T = m->n_frames, dim = affect_features_dim(f);
     size_t np = (size_t)f->n_joints * 3;
-    for (uint32_t t = 0; t < T; t++) {
+    for (uint32_t t = t0; t < t1; t++) {
         double *v = obs + (size_t)t * dim + np;
         if (T == 1) {
             memset(v, 0, np * sizeof *v);
@@ -336,20 +341,28 @@ affect_status affect_features_extract(const affect_features *f, const affect_mot
         st = affect_nomem(err);
         goto fail;
     }
-    if ((st = affect_monitor_check(mon, err)) != AFFECT_OK)
-        goto fail;
-    if (body) {
-        int32_t root = roles.joint[AFFECT_ROLE_PELVIS];
-        if (root < 0 || (uint32_t)root >= m->n_joints)
-            root = 0;
-        body_positions(f, m, idx, (uint32_t)root, ang, tf.scale, obs);
-    } else {
-        first_positions(f, m, idx, &tf, obs);
+    int32_t root = roles.joint[AFFECT_ROLE_PELVIS];
+    if (root < 0 || (uint32_t)root >= m->n_joints)
+        root = 0;
+    /* the positions, then the velocities (which read the neighbours' positions), in slices of
+     * FEATURES_POLL_FRAMES between polls */
+    for (uint32_t t0 = 0; t0 < T; t0 += FEATURES_POLL_FRAMES) {
+        uint32_t t1 = T - t0 < FEATURES_POLL_FRAMES ? T : t0 + FEATURES_POLL_FRAMES;
+        if ((st = affect_monitor_check(mon, err)) != AFFECT_OK)
+            goto fail;
+        if (body)
+            body_positions(f, m, idx, (uint32_t)root, ang, tf.scale, t0, t1, obs);
+        else
+            first_positions(f, m, idx, &tf, t0, t1, obs);
+    }
+    for (uint32_t t0 = 0; f->velocity && t0 < T; t0 += FEATURES_POLL_FRAMES) {
+        uint32_t t1 = T - t0 < FEATURES_POLL_FRAMES ? T : t0 + FEATURES_POLL_FRAMES;
+        if ((st = affect_monitor_check(mon, err)) != AFFECT_OK)
+            goto fail;
+        velocities(f, m, t0, t1, obs);
     }
     if ((st = affect_monitor_check(mon, err)) != AFFECT_OK)
         goto fail;
-    if (f->velocity)
-        velocities(f, m, obs);
     affect_free(idx);
     affect_free(ang);
     *x = obs;

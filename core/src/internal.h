@@ -36,6 +36,16 @@ void *affect_ws_alloc(const affect_ws_part *parts, size_t n);
  * The allocator and the BLAS must be thread-safe (SQLite's and OpenBLAS's are). */
 #include "affect/base.h"
 #include "affect/monitor.h"
+#include "affect/motion.h"
+/* affect_motion_create and affect_motion_add_skeleton, with the positions (zero false), the
+ * rotations and translations (fill false) allocated but not set: the caller must write every
+ * sample before anyone reads them (core/src/motion.c). A parser that fills a motion frame by
+ * frame uses them so that the memory is first touched between its polls of the monitor. */
+affect_status affect_motion_create_as(uint32_t n_frames, uint32_t n_joints, double fps, bool zero,
+                                      affect_motion **out, affect_error *err);
+affect_status affect_motion_add_skeleton_as(affect_motion *m, bool rotations, bool fill,
+                                            affect_error *err);
+
 typedef affect_status (*affect_item_fn)(void *ctx, uint32_t i, affect_error *err);
 /* mon (may be NULL): when the calling thread has taken its last item it keeps asking mon's stop
  * hook (which only it may call) until the other threads are done. */

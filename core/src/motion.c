@@ -117,8 +117,10 @@ static affect_status check_sizes(uint32_t n_frames, uint32_t n_joints, double fp
     return AFFECT_OK;
 }
 
-affect_status affect_motion_create(uint32_t n_frames, uint32_t n_joints, double fps,
-                                   affect_motion **out, affect_error *err)
+/* affect_motion_create, with the positions left unset when zero is false (the caller writes
+ * every sample: see affect_motion_add_skeleton_as). */
+affect_status affect_motion_create_as(uint32_t n_frames, uint32_t n_joints, double fps, bool zero,
+                                      affect_motion **out, affect_error *err)
 {
     affect_status st = check_sizes(n_frames, n_joints, fps, err);
     if (st)
@@ -134,7 +136,8 @@ affect_status affect_motion_create(uint32_t n_frames, uint32_t n_joints, double 
     m->fps = fps;
     m->names = affect_calloc(n_joints, sizeof *m->names);
     m->parents = affect_malloc_array(n_joints, sizeof *m->parents);
-    m->pos = affect_calloc(n_pos, sizeof *m->pos);
+    m->pos = zero ? affect_calloc(n_pos, sizeof *m->pos)
+                  : affect_malloc_array(n_pos, sizeof *m->pos);
     if (!m->names || !m->parents)
         goto nomem;
     if (!m->pos) {
@@ -155,6 +158,12 @@ affect_status affect_motion_create(uint32_t n_frames, uint32_t n_joints, double 
 nomem:
     affect_motion_free(m);
     return affect_nomem(err);
+}
+
+affect_status affect_motion_create(uint32_t n_frames, uint32_t n_joints, double fps,
+                                   affect_motion **out, affect_error *err)
+{
+    return affect_motion_create_as(n_frames, n_joints, fps, true, out, err);
 }
 
 void affect_motion_free(affect_motion *m)
@@ -189,7 +198,11 @@ bool affect_skel_has_position(const affect_skel_joint *j)
     return false;
 }
 
-affect_status affect_motion_add_skeleton(affect_motion *m, bool rotations, affect_error *err)
+/* affect_motion_add_skeleton, with the rotations and translations left unset when fill is false
+ * (the caller writes every frame's: the BVH parser, whose frames then touch the memory as it
+ * polls, instead of filling hundreds of megabytes before its first poll). */
+affect_status affect_motion_add_skeleton_as(affect_motion *m, bool rotations, bool fill,
+                                            affect_error *err)
 {
     affect_motion_drop_skeleton(m);
     size_t n = (size_t)m->n_frames * m->n_joints; /* ≤ 2^36: no overflow below */
@@ -199,7 +212,8 @@ affect_status affect_motion_add_skeleton(affect_motion *m, bool rotations, affec
     if (!rotations)
         return AFFECT_OK;
     m->rot = affect_malloc_array(n, 4 * sizeof *m->rot);
-    m->trans = affect_calloc(n, 3 * sizeof *m->trans);
+    m->trans = fill ? affect_calloc(n, 3 * sizeof *m->trans)
+                    : affect_malloc_array(n, 3 * sizeof *m->trans);
     if (!m->rot || !m->trans) {
         bool rot = !m->rot;
         affect_motion_drop_skeleton(m);
@@ -207,11 +221,16 @@ affect_status affect_motion_add_skeleton(affect_motion *m, bool rotations, affec
                                "the %s of %u frames x %u joints",
                                rot ? "rotations" : "translations", m->n_frames, m->n_joints);
     }
-    for (size_t i = 0; i < n; i++) {
+    for (size_t i = 0; fill && i < n; i++) {
         float *q = m->rot + i * 4;
         q[0] = 1, q[1] = q[2] = q[3] = 0;
     }
     return AFFECT_OK;
+}
+
+affect_status affect_motion_add_skeleton(affect_motion *m, bool rotations, affect_error *err)
+{
+    return affect_motion_add_skeleton_as(m, rotations, true, err);
 }
 
 affect_status affect_motion_set_name(affect_motion *m, uint32_t j, const char *name, size_t len,
@@ -650,6 +669,23 @@ static void get_floats(const unsigned char *p, float *v, size_t n)
     }
 }
 
+/* decoding polls the monitor after every this many values copied (4 MB) */
+#define DECODE_POLL_VALUES ((size_t)1 << 20)
+
+/* get_floats in slices, polling mon between them. */
+static affect_status get_floats_polled(const unsigned char *p, float *v, size_t n,
+                                       affect_monitor *mon, affect_error *err)
+{
+    for (size_t done = 0; done < n; done += DECODE_POLL_VALUES) {
+        size_t k = n - done < DECODE_POLL_VALUES ? n - done : DECODE_POLL_VALUES;
+        get_floats(p + done * 4, v + done, k);
+        affect_status st = affect_monitor_check(mon, err);
+        if (st)
+            return st;
+    }
+    return AFFECT_OK;
+}
+
 void affect_motion_encode_into(const affect_motion *m, unsigned char *buf)
 {
     unsigned char *p = buf;
@@ -800,8 +836,10 @@ affect_status affect_motion_decode_monitored(const unsigned char *data, size_t s
                            size < expect ? "truncated" : "trailing bytes", size, expect, n_frames,
                            n_joints);
 
+    /* positions, rotations and translations are all read below: not cleared first, so that the
+     * memory is first touched between polls */
     affect_motion *m = NULL;
-    st = affect_motion_create(n_frames, n_joints, fps, &m, err);
+    st = affect_motion_create_as(n_frames, n_joints, fps, false, &m, err);
     if (st)
         return st;
     memcpy(m->unit, data + unit_off, unit_len);
@@ -816,12 +854,12 @@ affect_status affect_motion_decode_monitored(const unsigned char *data, size_t s
     }
     for (uint32_t j = 0; j < n_joints; j++, off += 4)
         m->parents[j] = (int32_t)get_u32(data + off);
-    get_floats(data + off, m->pos, n_vals);
-    off += n_vals * 4;
-    if ((st = affect_monitor_check(mon, err)))
+    if ((st = get_floats_polled(data + off, m->pos, n_vals, mon, err)))
         goto fail;
+    off += n_vals * 4;
     if (flags & AFFECT_MOTION_FLAG_SKELETON) {
-        st = affect_motion_add_skeleton(m, (flags & AFFECT_MOTION_FLAG_ROTATIONS) != 0, err);
+        st = affect_motion_add_skeleton_as(m, (flags & AFFECT_MOTION_FLAG_ROTATIONS) != 0, false,
+                                           err);
         if (st)
             goto fail;
         for (uint32_t j = 0; j < n_joints; j++, off += AFFECT_MOTION_JOINT_SIZE) {
@@ -843,10 +881,9 @@ affect_status affect_motion_decode_monitored(const unsigned char *data, size_t s
     }
     if (flags & AFFECT_MOTION_FLAG_ROTATIONS) {
         size_t nq = (size_t)n_frames * n_joints;
-        get_floats(data + off, m->rot, nq * 4);
-        off += nq * 16;
-        if ((st = affect_monitor_check(mon, err)))
+        if ((st = get_floats_polled(data + off, m->rot, nq * 4, mon, err)))
             goto fail;
+        off += nq * 16;
         /* per joint once: stored translations, or the offset (as float) for every frame */
         float *rest = m->trans; /* frame 0's row holds each joint's fallback until it is read */
         uint8_t moving[AFFECT_MOTION_MAX_JOINTS];
@@ -857,6 +894,8 @@ affect_status affect_motion_decode_monitored(const unsigned char *data, size_t s
                 rest[(size_t)j * 3 + a] = (float)s->offset[a];
         }
         for (uint32_t t = n_frames; t-- > 0;) { /* backwards: frame 0's fallbacks are read last */
+            if (t % 4096 == 0 && (st = affect_monitor_check(mon, err)))
+                goto fail;
             float *row = m->trans + (size_t)t * n_joints * 3;
             const unsigned char *src = data + off + (size_t)t * n_translated * 12;
             for (uint32_t j = 0; j < n_joints; j++) {
