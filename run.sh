@@ -52,20 +52,8 @@ build() {
 
 demo() {
     local dir="${1:-$ROOT/../shared/corpora/bandai-namco-1/data}"
-    local shell=(sqlite3 demo.db -cmd ".load $ROOT/build/affect")
     echo "== building demo.db"
-    rm -f demo.db demo.html
-    sqlite3 demo.db < sql/schema.sql
-    "${shell[@]}" < sql/synth_corpus.sql
-    if [ -d "$dir" ]; then
-        echo "== importing the BVH files of $dir"
-        "${shell[@]}" -cmd ".parameter set :dir '$dir'" -cmd ".parameter set :unit cm" \
-            -cmd ".parameter set :source '$(basename "$(dirname "$dir")")'" \
-            < sql/import_bvh.sql
-    else
-        echo "== no BVH folder at $dir: the demo uses the synthetic corpus only"
-    fi
-    "${shell[@]}" < sql/demo.sql
+    bash sql/build_demo.sh sqlite3 "$ROOT/build/affect" "$ROOT" "$dir"
     echo "== open demo.html in a browser; query demo.db with: sqlite3 demo.db -cmd '.load ./build/affect'"
 }
 
@@ -96,7 +84,7 @@ tests() {
     cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DAFFECT_WERROR=ON -DAFFECT_SANITIZE=ON >/dev/null
     cmake --build build-asan -j"$(nproc)" >/dev/null
     ASAN_OPTIONS=detect_leaks=1 counted ctest --test-dir build-asan --output-on-failure -j"$(nproc)" \
-        -E '^fuzz/|^examples/|^sql/scripts|^sql/blas-threads|^client/' || status=1
+        -E '^fuzz/|^examples/|^sql/scripts|^sql/readme|^sql/blas-threads|^client/' || status=1
     echo "== fuzzers (build-fuzz/, clang + libFuzzer)"
     counted bash tests/fuzz/run.sh "${AFFECT_FUZZ_SECONDS:-20}" || status=1
     echo
