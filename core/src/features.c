@@ -287,6 +287,14 @@ affect_status affect_features_extract(const affect_features *f, const affect_mot
     size_t n_vals;
     if (!affect_mul_size(T, dim, &n_vals))
         return affect_fail(err, AFFECT_ERR_RANGE, "too many observations");
+    /* observations not scaled by the arm are in the motions' unit: one of another unit would
+     * be 100 times off (cm against m) without a word */
+    if (!f->scale_arm && f->unit[0] && m->unit[0] && strcmp(f->unit, m->unit) != 0)
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "the motion is in %s, the observations in %s (convert it, or use "
+                           "motions of one unit; {\"scale\":\"arm\"} makes observations "
+                           "unit-free)",
+                           m->unit, f->unit);
     bool body = f->frame == AFFECT_FEATURES_FRAME_BODY;
     affect_roles roles;
     affect_roles_resolve(m, &roles);

@@ -243,6 +243,25 @@ SELECT emotion, length(hmm_train(motion_slice(m, 0, 11), '{"states":2,"mixtures"
 SELECT hmm_train(m, CASE WHEN seed = 2 THEN '{"states":2}' ELSE '{"states":3}' END) FROM probe;
 -- error: hmm_train: options must be the same on every row
 
+-- motions of two units: unscaled observations would be 100 times off, so they are refused, in
+-- training and in scoring; scaled by the arm (the default) they are unit-free
+CREATE TABLE units AS
+SELECT seed, CASE WHEN seed = 2 THEN motion_from_bvh(motion_to_bvh(m), '{"unit":"cm","scale":100}')
+                  ELSE m END AS m
+  FROM s WHERE action = 'wave' AND emotion = 'sad' AND seed <= 3;
+SELECT hmm_train(m, '{"states":2,"scale":"none"}') FROM (SELECT * FROM units ORDER BY seed);
+-- error: hmm_train: row 2: the motion is in cm, the observations in m (convert it, or use motions of one unit; {"scale":"arm"} makes observations unit-free)
+
+SELECT hmm_loglik((SELECT hmm_train(m, '{"states":2,"scale":"none"}') FROM units WHERE seed <> 2), m) FROM units WHERE seed = 2;
+-- error: hmm_loglik: the motion is in cm, the observations in m (convert it, or use motions of one unit; {"scale":"arm"} makes observations unit-free)
+
+SELECT 'arm-scaled observations are unit-free (the same BVH round trip in m and in cm)',
+       abs(hmm_loglik(h, u.m) - hmm_loglik(h, r.m)) < 1e-5 * abs(hmm_loglik(h, r.m))
+  FROM (SELECT hmm_train(m, '{"states":2}') AS h FROM units WHERE seed <> 2), units u,
+       (SELECT motion_from_bvh(motion_to_bvh(m)) AS m FROM s
+         WHERE seed = 2 AND action = 'wave' AND emotion = 'sad') r
+ WHERE u.seed = 2;
+
 -- ---- errors ----
 SELECT hmm_train('x');
 -- error: hmm_train: argument 1 must be a motion BLOB, got text
