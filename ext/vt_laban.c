@@ -41,10 +41,13 @@
  *       format ('1'), content, motion, label, options (normalized JSON: every option with its
  *       value), generation (bumped by every write), rows (indexed rows), mean and sd (JSON arrays
  *       of 27 numbers in component order: sd is the divisor used, see below; a mean is null
- *       where the component is missing in every row).
+ *       where the component is missing in every row), stats_generation (the generation that
+ *       mean and sd describe: it lags behind generation while a transaction that changed the
+ *       index has not committed; ax_laban_stats_read, behind laban_zvector, refuses them then).
  * Standardization: z = (x − mean) / sd per component over the indexed rows, skipping missing
  * values; sd is the sample standard deviation (n − 1), and 1 where it is 0 or undefined (fewer
- * than two values). mean and sd are recomputed when a transaction that changed the index
+ * than two values) (affect_laban_stats, core/src/laban_std.c, which also gives laban_zvector
+ * the vectors whose plain L2 distances are these distances, for sqlite-vec's vec0). mean and sd are recomputed when a transaction that changed the index
  * commits (xSync), so a transaction of many per-row 'refresh' commands pays for them once;
  * queries always standardize with the statistics of the rows they see.
  * Distance: Euclidean over the chosen components (default all 27) of the standardized vectors;
