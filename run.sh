@@ -9,7 +9,9 @@
 #   ./run.sh test             install what is missing, build, and run the whole test suite:
 #                             unit, SQL and out-of-memory tests, examples and scripts, the real
 #                             corpus (skipped when absent), Blender importing our BVH files
-#                             (blender is installed for this command only), a sanitizer build,
+#                             (blender is installed for this command only), sqlite-vec's vec0
+#                             finding the laban index's neighbours (npm package, under
+#                             build/npm), a sanitizer build,
 #                             and the fuzzers
 #
 # Works on a fresh Debian 12 machine as root (or with sudo). Set AFFECT_FUZZ_SECONDS to change
@@ -28,6 +30,15 @@ PACKAGES+=(python3-numpy python3-venv python3-setuptools python3-wheel)
 # Only for ./run.sh test: the real client of tests/client/blender_test.sh (headless Blender
 # imports our BVH files). If it cannot be installed the tests go on and that one is skipped.
 TEST_PACKAGES=(blender)
+# Only for ./run.sh test: sqlite-vec (the npm package sqlite-vec-linux-x64, its vec0.so, under
+# build/npm), the real client of tests/client/sqlite_vec_test.sh (vec0 over laban_zvector
+# finds the laban index's neighbours). If it cannot be installed that test is skipped.
+install_sqlite_vec() {
+    [ -f build/npm/node_modules/sqlite-vec-linux-x64/vec0.so ] && return 0
+    install_missing npm || return 1
+    mkdir -p build/npm
+    npm install --silent --no-audit --no-fund --prefix build/npm sqlite-vec-linux-x64 >/dev/null
+}
 
 # install_missing [PACKAGE...]: installs those of the packages (default: PACKAGES) not installed.
 install_missing() {
@@ -99,6 +110,8 @@ case "${1:-}" in
         install_missing
         install_missing "${TEST_PACKAGES[@]}" ||
             echo "== could not install ${TEST_PACKAGES[*]}: client/blender will be skipped"
+        install_sqlite_vec ||
+            echo "== could not install sqlite-vec-linux-x64 (npm): client/sqlite-vec will be skipped"
         build; tests ;;
     *) echo "usage: ./run.sh demo [BVH_DIR] | ./run.sh test | ./run.sh install" >&2; exit 2 ;;
 esac

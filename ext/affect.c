@@ -313,6 +313,23 @@ int sqlite3_affect_init(sqlite3 *db, char **err, const sqlite3_api_routines *api
             return rc;
         }
     }
+    /* laban_zvector reads the statistics of the laban index named by its argument: not
+     * deterministic in SQLite's sense (the vector follows the index) and not for triggers,
+     * views, generated columns or expression indexes */
+    static const ax_function index_functions[] = {
+        {"laban_zvector", 2, false, ax_laban_zvector},
+        {"laban_zvector", 3, false, ax_laban_zvector},
+    };
+    for (size_t i = 0; i < sizeof index_functions / sizeof index_functions[0]; i++) {
+        const ax_function *f = &index_functions[i];
+        int rc = sqlite3_create_function_v2(db, f->name, f->n_arg, SQLITE_UTF8 | SQLITE_DIRECTONLY,
+                                            (void *)f->name, f->fn, NULL, NULL, NULL);
+        if (rc != SQLITE_OK) {
+            *err = sqlite3_mprintf("affect: cannot register %s/%d: %s", f->name, f->n_arg,
+                                   sqlite3_errmsg(db));
+            return rc;
+        }
+    }
     int rc = ax_register_affect_tables(db);
     if (rc != SQLITE_OK) {
         *err = sqlite3_mprintf("affect: cannot register affect_crossval/affect_salience: %s",

@@ -1,7 +1,8 @@
 /*
  * fn_laban.c — SQL wrappers of the Laban Effort and Shape descriptors (core/src/laban.c):
  * laban_weight, laban_time, laban_flow, laban_space, laban_shape_directional,
- * laban_shape_shaping, laban_shape_flow, laban, laban_names, laban_vector.
+ * laban_shape_shaping, laban_shape_flow, laban, laban_names, laban_vector, and laban_zvector
+ * (a motion's vector standardized with a laban index's statistics, for sqlite-vec's vec0).
  *
  * Options shared by all (a JSON object, last argument): cutoff_hz (low-pass cut-off, 6),
  * up ("y"), roles ({"left_hand": "LWrist", …}), missing ("error" | "null": a component that
@@ -12,6 +13,7 @@
 #include <string.h>
 
 #include "fn_laban.h"
+#include "vt_laban.h"
 
 #include "affect/laban.h"
 #include "affect/summary.h"
@@ -272,7 +274,8 @@ void ax_laban_shape_flow(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 }
 
 static const char *const vector_keys[] = {"cutoff_hz", "up", "roles", "missing", "hull",
-                                          "per_second", "speed_floor", "max_ratio", NULL};
+                                          "per_second", "speed_floor", "max_ratio",
+                                          "standardize", NULL};
 
 /* The 27 components of a motion, or an error already set on ctx (returns false). */
 static bool all_components(sqlite3_context *ctx, int argc, sqlite3_value **argv, laban_call *c,
@@ -280,6 +283,15 @@ static bool all_components(sqlite3_context *ctx, int argc, sqlite3_value **argv,
 {
     if (call_begin(ctx, argc, argv, 1, vector_keys, c) != AX_OK)
         return false;
+    if (ax_opt(&c->opts, "standardize")) {
+        /* laban_vector is pure (usable in indexes, views and generated columns); a vector that
+         * depends on an index's rows is not */
+        ax_errorf(ctx, "option \"standardize\" is laban_zvector's: laban_zvector(motion, "
+                       "'index_name') gives the vector standardized with that laban index's "
+                       "statistics (laban_vector is pure and reads no table)");
+        call_free(c);
+        return false;
+    }
     affect_error err;
     if (affect_laban_vector(c->m, &c->roles, &c->lo, out, &err)) {
         if (err.status == AFFECT_ERR_MISSING)
@@ -323,6 +335,124 @@ void ax_laban_vector(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         return;
     ax_result_f32(ctx, v, AFFECT_LABAN_N);
     call_free(&c);
+}
+
+/* The "components" option of laban_zvector: out gets the chosen component indices in
+ * laban_names() order (*n of them; all 27 when absent), as the index's components = ? does. */
+static ax_arg zvector_components(sqlite3_context *ctx, const ax_opts *opts,
+                                 int out[AFFECT_LABAN_N], int *n)
+{
+    const affect_json_node *arr = ax_opt(opts, "components");
+    bool on[AFFECT_LABAN_N] = {false};
+    char q[80];
+    *n = 0;
+    if (!arr) {
+        for (int j = 0; j < AFFECT_LABAN_N; j++)
+            out[(*n)++] = j;
+        return AX_OK;
+    }
+    if (arr->type != AFFECT_JSON_ARRAY || arr->count == 0) {
+        ax_errorf(ctx, "option \"components\" must be a non-empty array of component names "
+                       "(see laban_names()), got %s%s",
+                  arr->type == AFFECT_JSON_ARRAY ? "an empty " : "",
+                  affect_json_type_name(arr->type));
+        return AX_ERROR;
+    }
+    for (const affect_json_node *m = affect_json_first(opts->doc, arr); m;
+         m = affect_json_next_sibling(opts->doc, m)) {
+        if (m->type != AFFECT_JSON_STRING) {
+            ax_errorf(ctx, "option \"components\" must be an array of component names, got %s "
+                           "in it",
+                      affect_json_type_name(m->type));
+            return AX_ERROR;
+        }
+        int j = strlen(m->str) == m->str_len ? affect_laban_index(m->str) : -1;
+        affect_json_quote(q, sizeof q, m->str, m->str_len);
+        if (j < 0 || on[j]) {
+            ax_errorf(ctx, j < 0 ? "option \"components\": unknown component %s (see "
+                                   "laban_names())"
+                                 : "option \"components\": component %s is listed twice",
+                      q);
+            return AX_ERROR;
+        }
+        on[j] = true;
+    }
+    for (int j = 0; j < AFFECT_LABAN_N; j++)
+        if (on[j])
+            out[(*n)++] = j;
+    return AX_OK;
+}
+
+/* laban_zvector(motion, index_name [, options]) → float32 BLOB: the motion's Laban vector
+ * computed with the index's options and standardized with its statistics, so that L2 distances
+ * between such vectors are the index's distances (affect_laban_l2_vector). Option components:
+ * the index's components = ? (default all 27). Reads the index: registered DIRECTONLY. */
+void ax_laban_zvector(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    static const char *const keys[] = {"components", NULL};
+    affect_motion *m = NULL;
+    ax_opts opts = {0};
+    ax_monitor am;
+    bool monitored = false;
+    const char *name;
+    size_t name_len;
+    char *msg = NULL;
+    ax_laban_stats stats;
+    int comp[AFFECT_LABAN_N], nc = 0;
+    if (ax_arg_motion(ctx, argv, 0, &m) != AX_OK ||
+        ax_arg_text(ctx, argv, 1, &name, &name_len) != AX_OK ||
+        ax_opts_parse(ctx, argc, argv, 2, keys, &opts) != AX_OK ||
+        zvector_components(ctx, &opts, comp, &nc) != AX_OK)
+        goto done;
+    if (strlen(name) != name_len) {
+        ax_errorf(ctx, "argument 2 must name a laban index, got text with a NUL byte");
+        goto done;
+    }
+    int rc = ax_laban_stats_read(sqlite3_context_db_handle(ctx), name, &stats, &msg);
+    if (rc != SQLITE_OK) {
+        if (rc == SQLITE_NOMEM)
+            sqlite3_result_error_nomem(ctx);
+        else if (rc == SQLITE_NOTFOUND)
+            ax_errorf(ctx, "\"%s\" is not a laban table (CREATE VIRTUAL TABLE %s USING "
+                           "laban(…))",
+                      name, name);
+        else
+            ax_errorf(ctx, "%s", msg);
+        goto done;
+    }
+    if (ax_monitor_begin(&am, ctx, NULL) != AX_OK)
+        goto done;
+    monitored = true;
+    affect_roles roles;
+    affect_roles_resolve(m, &roles); /* as the index resolves them */
+    affect_laban_options lo = stats.opt;
+    lo.monitor = &am.mon;
+    double v[AFFECT_LABAN_N];
+    float x[AFFECT_LABAN_N], z[AFFECT_LABAN_N];
+    affect_error err;
+    affect_status st = affect_laban_vector(m, &roles, &lo, v, &err);
+    if (!st) {
+        for (int j = 0; j < AFFECT_LABAN_N; j++)
+            x[j] = affect_laban_f32(v[j]); /* as the index stores it */
+        st = affect_laban_l2_vector(x, stats.mean, stats.sd, comp, nc, z, &err);
+    }
+    if (st == AFFECT_ERR_MISSING || st == AFFECT_ERR_RANGE) {
+        ax_errorf(ctx, "%s (index \"%s\"%s)", err.msg, name,
+                  st == AFFECT_ERR_MISSING ? "; leave it out with {\"components\": […]}" : "");
+    } else if (st) {
+        ax_error(ctx, &err);
+    } else {
+        double d[AFFECT_LABAN_N];
+        for (int t = 0; t < nc; t++)
+            d[t] = z[t];
+        ax_result_f32(ctx, d, (size_t)nc);
+    }
+done:
+    if (monitored)
+        ax_monitor_end(&am);
+    sqlite3_free(msg);
+    ax_opts_free(&opts);
+    affect_motion_free(m);
 }
 
 /* motion_kinematics(motion [, options]) → JSON object of the kinematic summary

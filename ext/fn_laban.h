@@ -15,6 +15,7 @@ AX_FN(ax_laban_shape_shaping);
 AX_FN(ax_laban_shape_flow);
 AX_FN(ax_laban);
 AX_FN(ax_laban_vector);
+AX_FN(ax_laban_zvector);
 AX_FN(ax_motion_kinematics);
 AX_FN(ax_laban_names);
 

@@ -41,10 +41,13 @@
  *       format ('1'), content, motion, label, options (normalized JSON: every option with its
  *       value), generation (bumped by every write), rows (indexed rows), mean and sd (JSON arrays
  *       of 27 numbers in component order: sd is the divisor used, see below; a mean is null
- *       where the component is missing in every row).
+ *       where the component is missing in every row), stats_generation (the generation that
+ *       mean and sd describe: it lags behind generation while a transaction that changed the
+ *       index has not committed; ax_laban_stats_read, behind laban_zvector, refuses them then).
  * Standardization: z = (x − mean) / sd per component over the indexed rows, skipping missing
  * values; sd is the sample standard deviation (n − 1), and 1 where it is 0 or undefined (fewer
- * than two values). mean and sd are recomputed when a transaction that changed the index
+ * than two values) (affect_laban_stats, core/src/laban_std.c, which also gives laban_zvector
+ * the vectors whose plain L2 distances are these distances, for sqlite-vec's vec0). mean and sd are recomputed when a transaction that changed the index
  * commits (xSync), so a transaction of many per-row 'refresh' commands pays for them once;
  * queries always standardize with the statistics of the rows they see.
  * Distance: Euclidean over the chosen components (default all 27) of the standardized vectors;
@@ -301,12 +304,6 @@ static int lab_exec(sqlite3 *db, char **err, const char *fmt, ...)
 
 /* ---- vectors and hashes ---- */
 
-static float lab_to_float(double v)
-{
-    return fabs(v) <= FLT_MAX ? (float)v : NAN; /* NaN, ±inf and overflow are missing */
-}
-
-
 /* The bits of the missing marker, a quiet NaN. */
 #define LAB_MISSING_BITS 0x7fc00000u
 
@@ -417,7 +414,7 @@ static affect_status lab_vector(const lab_vtab *vt, const unsigned char *data, s
     affect_motion_free(m);
     if (!st)
         for (int i = 0; i < LAB_N; i++)
-            out[i] = lab_to_float(v[i]);
+            out[i] = affect_laban_f32(v[i]);
     return st;
 }
 
@@ -533,29 +530,11 @@ static int lab_cache_label(lab_cache *c, sqlite3_int64 rank, sqlite3_value *v, i
     return SQLITE_OK;
 }
 
-/* mean and sd per component over the rows (missing values skipped), then z. */
+/* mean and sd per component over the rows (missing values skipped; affect_laban_stats), then
+ * z. */
 static int lab_cache_standardize(lab_cache *c)
 {
-    for (int j = 0; j < LAB_N; j++) {
-        double sum = 0;
-        size_t cnt = 0;
-        for (size_t i = 0; i < c->n; i++) {
-            double x = c->raw[i * LAB_N + j];
-            if (!isnan(x)) {
-                sum += x;
-                cnt++;
-            }
-        }
-        double mean = cnt ? sum / (double)cnt : NAN, ss = 0;
-        for (size_t i = 0; i < c->n && cnt; i++) {
-            double x = c->raw[i * LAB_N + j];
-            if (!isnan(x))
-                ss += (x - mean) * (x - mean);
-        }
-        double sd = cnt > 1 ? sqrt(ss / (double)(cnt - 1)) : 0;
-        c->mean[j] = mean;
-        c->sd[j] = sd > 0 && isfinite(sd) ? sd : 1;
-    }
+    affect_laban_stats(c->raw, c->n, c->mean, c->sd);
     size_t bytes;
     if (!affect_mul_size(c->n ? c->n : 1, LAB_N * sizeof *c->z, &bytes))
         return SQLITE_NOMEM;
@@ -1045,7 +1024,9 @@ static int lab_touch(lab_vtab *vt, char **err)
                     vt->schema, vt->name);
 }
 
-/* Writes rows, mean and sd of the current rows into _info. */
+/* Writes rows, mean and sd of the current rows into _info, with the generation they describe
+ * (stats_generation: readers of the statistics, ax_laban_stats_read, refuse them while a
+ * transaction has changed the index and not yet committed). */
 static int lab_flush_stats(lab_vtab *vt, char **err)
 {
     lab_cache *c = NULL;
@@ -1075,13 +1056,14 @@ static int lab_flush_stats(lab_vtab *vt, char **err)
     }
     rc = lab_prepare(vt->db, err, &st,
                      "INSERT OR REPLACE INTO \"%w\".\"%w_info\"(key, value) "
-                     "VALUES('rows', ?1), ('mean', ?2), ('sd', ?3)",
+                     "VALUES('rows', ?1), ('mean', ?2), ('sd', ?3), ('stats_generation', ?4)",
                      vt->schema, vt->name);
     if (rc)
         goto done;
     if ((rc = sqlite3_bind_int64(st, 1, (sqlite3_int64)c->n)) != SQLITE_OK ||
         (rc = sqlite3_bind_text(st, 2, mean, (int)la, SQLITE_STATIC)) != SQLITE_OK ||
-        (rc = sqlite3_bind_text(st, 3, sd, (int)lb, SQLITE_STATIC)) != SQLITE_OK) {
+        (rc = sqlite3_bind_text(st, 3, sd, (int)lb, SQLITE_STATIC)) != SQLITE_OK ||
+        (rc = sqlite3_bind_int64(st, 4, c->generation)) != SQLITE_OK) {
         rc = lab_db_error(err, vt->db, rc);
         goto done;
     }
@@ -2325,5 +2307,217 @@ int ax_laban_cache_put(sqlite3 *db, const char *name, const char *key, const cha
         rc = rc == SQLITE_DONE ? SQLITE_OK : rc;
     }
     sqlite3_finalize(st);
+    return rc;
+}
+
+/* ---- the statistics, for vectors that other L2 searches compare as the index does ---- */
+
+/* One JSON array of AFFECT_LABAN_N statistics from _info row `key` (text) into v; a null entry
+ * is NaN where nulls are allowed. NULL when sound, else what is wrong (static or in why). */
+static const char *stats_array(const char *text, int type, const char *key, bool nulls,
+                               double v[LAB_N], char *why, int size, bool *nomem)
+{
+    *nomem = false;
+    if (type != SQLITE_TEXT) {
+        sqlite3_snprintf(size, why, "%s is %s, expected a JSON array of %d numbers", key,
+                         type == SQLITE_NULL ? "missing or NULL" : "not text", LAB_N);
+        return why;
+    }
+    affect_json_doc *doc = NULL;
+    affect_error e;
+    const char *bad = NULL;
+    if (affect_json_parse(text, strlen(text), &doc, NULL, &e)) {
+        *nomem = e.status == AFFECT_ERR_NOMEM;
+        sqlite3_snprintf(size, why, "%s is not valid JSON (%s)", key, e.msg);
+        return why;
+    }
+    const affect_json_node *root = affect_json_root(doc);
+    if (root->type != AFFECT_JSON_ARRAY || root->count != LAB_N) {
+        if (root->type == AFFECT_JSON_ARRAY)
+            sqlite3_snprintf(size, why, "%s is a JSON array of %u values, expected %d", key,
+                             root->count, LAB_N);
+        else
+            sqlite3_snprintf(size, why, "%s is a JSON %s, expected an array of %d numbers", key,
+                             affect_json_type_name(root->type), LAB_N);
+        bad = why;
+        goto done;
+    }
+    int j = 0;
+    for (const affect_json_node *m = affect_json_first(doc, root); m;
+         m = affect_json_next_sibling(doc, m), j++) {
+        if (m->type == AFFECT_JSON_NUMBER) {
+            v[j] = m->num;
+        } else if (m->type == AFFECT_JSON_NULL && nulls) {
+            v[j] = NAN;
+        } else {
+            sqlite3_snprintf(size, why, "%s[%d] (%s) is %s, expected a number%s", key, j,
+                             affect_laban_names[j], affect_json_type_name(m->type),
+                             nulls ? " or null" : "");
+            bad = why;
+            goto done;
+        }
+    }
+done:
+    affect_json_free(doc);
+    return bad;
+}
+
+int ax_laban_stats_read(sqlite3 *db, const char *name, ax_laban_stats *out, char **err)
+{
+    memset(out, 0, sizeof *out);
+    sqlite3_stmt *st = NULL;
+    lab_vtab tmp;
+    memset(&tmp, 0, sizeof tmp);
+    char *ident = lab_ident(name);
+    if (!ident)
+        return SQLITE_NOMEM;
+    int rc = SQLITE_OK;
+    char *sql = sqlite3_mprintf("SELECT sql FROM sqlite_schema WHERE type = 'table' AND "
+                                "name = %Q",
+                                name);
+    if (!sql) {
+        rc = SQLITE_NOMEM;
+        goto done;
+    }
+    rc = sqlite3_prepare_v2(db, sql, -1, &st, NULL);
+    sqlite3_free(sql);
+    if (rc != SQLITE_OK) {
+        rc = rows_db_error(err, db, rc);
+        goto done;
+    }
+    rc = sqlite3_step(st);
+    const char *def = rc == SQLITE_ROW ? (const char *)sqlite3_column_text(st, 0) : NULL;
+    if (rc != SQLITE_ROW && rc != SQLITE_DONE) {
+        rc = rows_db_error(err, db, rc);
+        goto done;
+    }
+    if (!def || sqlite3_strlike("%USING laban(%", def, 0) != 0) {
+        rc = SQLITE_NOTFOUND;
+        goto done;
+    }
+    sqlite3_finalize(st);
+    st = NULL;
+    /* the seven keys in one row; absent keys are NULL, told apart by the EXISTS columns */
+    sql = sqlite3_mprintf("SELECT (SELECT value FROM \"%w_info\" WHERE key = 'format'), "
+                          "(SELECT value FROM \"%w_info\" WHERE key = 'options'), "
+                          "(SELECT value FROM \"%w_info\" WHERE key = 'mean'), "
+                          "(SELECT value FROM \"%w_info\" WHERE key = 'sd'), "
+                          "(SELECT value FROM \"%w_info\" WHERE key = 'generation'), "
+                          "(SELECT value FROM \"%w_info\" WHERE key = 'stats_generation'), "
+                          "(SELECT value FROM \"%w_info\" WHERE key = 'rows')",
+                          name, name, name, name, name, name, name);
+    if (!sql) {
+        rc = SQLITE_NOMEM;
+        goto done;
+    }
+    rc = sqlite3_prepare_v2(db, sql, -1, &st, NULL);
+    sqlite3_free(sql);
+    if (rc == SQLITE_OK && (rc = sqlite3_step(st)) == SQLITE_ROW)
+        rc = SQLITE_OK;
+    if (rc != SQLITE_OK) {
+        rc = (rc & 0xff) == SQLITE_NOMEM
+                 ? SQLITE_NOMEM
+                 : rows_error(err, "cannot read the statistics of index \"%w\": %s", name,
+                              sqlite3_errmsg(db));
+        goto done;
+    }
+    const char *format = (const char *)sqlite3_column_text(st, 0);
+    if (sqlite3_column_type(st, 0) != SQLITE_TEXT || !format || strcmp(format, LAB_FORMAT)) {
+        if (!format && sqlite3_column_type(st, 0) != SQLITE_NULL) {
+            rc = SQLITE_NOMEM;
+            goto done;
+        }
+        rc = rows_error(err, "%s_info has format %s%s%s; this version reads format " LAB_FORMAT
+                        " (index \"%w\")",
+                        name, format ? "\"" : "", format ? format : "NULL", format ? "\"" : "",
+                        name);
+        goto done;
+    }
+    char why[200];
+    const char *bad = NULL;
+    bool nomem = false;
+    /* the options with which the index computes a query motion's vector */
+    const char *options = (const char *)sqlite3_column_text(st, 1);
+    if (sqlite3_column_type(st, 1) != SQLITE_TEXT) {
+        sqlite3_snprintf(sizeof why, why, "options is %s, expected a JSON object",
+                         sqlite3_column_type(st, 1) == SQLITE_NULL ? "missing or NULL"
+                                                                   : "not text");
+        bad = why;
+    } else if (!options) {
+        rc = SQLITE_NOMEM;
+        goto done;
+    } else {
+        char *msg = NULL;
+        rc = lab_parse_options(&tmp, options, &msg);
+        if (rc == SQLITE_NOMEM) {
+            sqlite3_free(msg);
+            goto done;
+        }
+        if (rc != SQLITE_OK) {
+            /* "laban: option …" without the module's prefix */
+            const char *text = msg ? msg : "";
+            if (!strncmp(text, "laban: ", 7))
+                text += 7;
+            sqlite3_snprintf(sizeof why, why, "options: %s", text);
+            sqlite3_free(msg);
+            bad = why;
+        }
+        rc = SQLITE_OK;
+    }
+    const char *row = bad ? "options" : NULL;
+    if (!bad && (bad = stats_array((const char *)sqlite3_column_text(st, 2),
+                                   sqlite3_column_type(st, 2), "mean", true, out->mean, why,
+                                   (int)sizeof why, &nomem)) != NULL)
+        row = "mean";
+    if (!bad && !nomem &&
+        (bad = stats_array((const char *)sqlite3_column_text(st, 3), sqlite3_column_type(st, 3),
+                           "sd", false, out->sd, why, (int)sizeof why, &nomem)) != NULL)
+        row = "sd";
+    if (nomem) {
+        rc = SQLITE_NOMEM;
+        goto done;
+    }
+    affect_error e;
+    if (!bad && affect_laban_stats_check(out->mean, out->sd, &e)) {
+        sqlite3_snprintf(sizeof why, why, "%s", e.msg);
+        bad = why;
+        row = strncmp(e.msg, "mean", 4) ? "sd" : "mean";
+    }
+    if (!bad && (sqlite3_column_type(st, 4) != SQLITE_INTEGER ||
+                 (sqlite3_column_type(st, 5) != SQLITE_INTEGER &&
+                  sqlite3_column_type(st, 5) != SQLITE_NULL) ||
+                 sqlite3_column_type(st, 6) != SQLITE_INTEGER || sqlite3_column_int64(st, 6) < 0)) {
+        int c = sqlite3_column_type(st, 4) != SQLITE_INTEGER   ? 4
+                : sqlite3_column_type(st, 6) != SQLITE_INTEGER ? 6
+                : sqlite3_column_int64(st, 6) < 0              ? 6
+                                                               : 5;
+        row = c == 4 ? "generation" : c == 5 ? "stats_generation" : "rows";
+        sqlite3_snprintf(sizeof why, why, "%s is %s, expected %s", row,
+                         ax_type_name(sqlite3_column_value(st, c)),
+                         c == 6 ? "an integer >= 0" : "an integer");
+        bad = why;
+    }
+    if (bad) {
+        rc = rows_error(err, "corrupt statistics: %s (index \"%w\", %s_info row '%s'); run "
+                        "INSERT INTO %s(%s) VALUES('rebuild')",
+                        bad, name, name, row, ident, ident);
+        goto done;
+    }
+    out->generation = sqlite3_column_int64(st, 4);
+    out->rows = sqlite3_column_int64(st, 6);
+    if (sqlite3_column_type(st, 5) == SQLITE_INTEGER &&
+        sqlite3_column_int64(st, 5) != out->generation) {
+        rc = rows_error(err, "the statistics of index \"%w\" are out of date until the "
+                        "transaction that changed it commits (generation %lld, statistics of "
+                        "generation %lld)",
+                        name, out->generation, sqlite3_column_int64(st, 5));
+        goto done;
+    }
+    out->opt = tmp.opt;
+    rc = SQLITE_OK;
+done:
+    sqlite3_finalize(st);
+    affect_free(tmp.options_json);
+    sqlite3_free(ident);
     return rc;
 }

@@ -7,6 +7,8 @@
 
 #include "common.h"
 
+#include "affect/laban.h"
+
 /* What the rest of the extension reads of an index: the index owns its shadow tables, and no
  * other file reads them. */
 typedef struct ax_laban_rows {
@@ -54,5 +56,24 @@ int ax_laban_cache_get(sqlite3 *db, const char *name, const char *key, const cha
                        void **blob, int *size);
 int ax_laban_cache_put(sqlite3 *db, const char *name, const char *key, const char *tag,
                        const void *blob, int size);
+
+/* What a query of index `name` (main schema) standardizes with, for vectors that other L2
+ * searches compare as the index does (laban_zvector): the index's Laban options (a query
+ * motion's vector is computed with them), and the mean and sd per component of _info, read
+ * back as untrusted input: format 1, options a valid options object, mean an array of 27
+ * numbers or nulls, sd 27 numbers, checked by affect_laban_stats_check, generation and rows
+ * integers. SQLITE_OK; SQLITE_NOTFOUND when it is not a laban table; SQLITE_NOMEM;
+ * SQLITE_ERROR with *err (sqlite3_malloc'd): "corrupt statistics: sd[3] (WeightLHand) is -1,
+ * expected a finite number > 0 (index "g", g_info row 'sd'); run INSERT INTO g(g)
+ * VALUES('rebuild')", or, inside a transaction that changed the index (the statistics catch up
+ * when it commits, see vt_laban.c), "the statistics of index "g" are out of date until the
+ * transaction that changed it commits (…)". An index written before stats_generation existed
+ * has no such row and is taken as current. */
+typedef struct ax_laban_stats {
+    affect_laban_options opt; /* missing_null set, monitor NULL */
+    double mean[AFFECT_LABAN_N], sd[AFFECT_LABAN_N];
+    sqlite3_int64 generation, rows;
+} ax_laban_stats;
+int ax_laban_stats_read(sqlite3 *db, const char *name, ax_laban_stats *out, char **err);
 
 #endif

@@ -3,7 +3,7 @@
  * them (ext/common.c ax_opts_parse and each wrapper's option reading), through a real
  * connection: motion import (BVH, CSV: options and document together), export, rigid bones,
  * roles, normalization, motion_svg, motion_synth, motion_angles, every laban_* descriptor,
- * laban_plot, hmm_train, hmm_loglik, affect_train, affect_crossval(_json), laban_salient and
+ * laban_zvector (its options, and its index name as ?1), laban_plot, hmm_train, hmm_loglik, affect_train, affect_crossval(_json), laban_salient and
  * affect_generate(_explain) (its classifier option as hex text included).
  *
  * Usage (see tests/fuzz/run.sh, or build with -DAFFECT_FUZZ=ON and clang):
@@ -69,6 +69,9 @@ static const call calls[] = {
     {"laban", "laban", 'j', false, "SELECT laban(" M1 ", ?1)"},
     {"motion_kinematics", "motion_kinematics", 'x', false, "SELECT motion_kinematics(" M1 ", ?1)"},
     {"laban_vector", "laban_vector", 'x', false, "SELECT laban_vector(" M1 ", ?1)"},
+    {"laban_zvector", "laban_zvector", 'x', false, "SELECT laban_zvector(" M1 ", 'ix', ?1)"},
+    /* the index name itself (quoted into laban_zvector's reads of the index's tables) */
+    {"laban_zvector_index", "laban_zvector", 'x', false, "SELECT laban_zvector(" M1 ", ?1)"},
     {"laban_plot", "laban_plot", 'x', false, "SELECT laban_plot(x, y, label, ?1) FROM points"},
     {"hmm_train", "hmm_train", 'h', false,
      "SELECT hmm_train(motion, ?1) FROM motions WHERE label = 'angry'"},

@@ -10,7 +10,7 @@ SELECT a.value, e.value, k.value, motion_synth(a.value, e.value, k.value)
 
 SELECT group_concat(name || '/' || narg, ' ') FROM (
   SELECT DISTINCT name, narg FROM pragma_function_list
-   WHERE name = 'laban' OR (name LIKE 'laban\_%' ESCAPE '\' AND name NOT IN ('laban_plot', 'laban_salient'))
+   WHERE name = 'laban' OR (name LIKE 'laban\_%' ESCAPE '\' AND name NOT IN ('laban_plot', 'laban_salient', 'laban_zvector'))
    ORDER BY name, narg);
 -- expect: laban/1 laban/2 laban_flow/1 laban_flow/2 laban_flow/3 laban_names/0 laban_shape_directional/2 laban_shape_directional/3 laban_shape_flow/1 laban_shape_flow/2 laban_shape_shaping/1 laban_shape_shaping/2 laban_space/1 laban_space/2 laban_space/3 laban_time/1 laban_time/2 laban_time/3 laban_vector/1 laban_vector/2 laban_weight/1 laban_weight/2 laban_weight/3
 

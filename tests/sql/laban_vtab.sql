@@ -75,7 +75,7 @@ SELECT 'msize and mhash describe the motion BLOB', count(*) = 48, count(DISTINCT
 
 -- ---- the _info shadow table ----
 SELECT group_concat(key, ' ') FROM (SELECT key FROM motion_laban_info ORDER BY key);
--- expect: content format generation label mean motion options rows sd
+-- expect: content format generation label mean motion options rows sd stats_generation
 
 SELECT group_concat(value, ' ') FROM (SELECT value FROM motion_laban_info
   WHERE key IN ('format', 'content', 'motion', 'label', 'rows') ORDER BY key);

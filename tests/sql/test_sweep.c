@@ -531,6 +531,7 @@ static const baseline baselines[] = {
     {"laban", {M, OPT}, false},
     {"motion_kinematics", {M, OPT}, false},
     {"laban_vector", {M, OPT}, false},
+    {"laban_zvector", {M, "'idx'", OPT}, false},
     {"laban_names", {NULL}, false},
     {"hmm_loglik", {HMM, M, OPT}, false},
     {"hmm_viterbi", {HMM, M}, false},
@@ -1271,8 +1272,9 @@ static void phase_done(const char *what, double *t, long *calls)
     *calls = total.calls;
 }
 
-/* The generation functions on an index: laban_salient's fit with 2 folds, generation with
- * the components given (no fit), both methods; target_sql is the target label's SQL. */
+/* The functions that read an index: laban_salient's fit with 2 folds, generation with the
+ * components given (no fit), both methods, and laban_zvector; target_sql is the target
+ * label's SQL. */
 static void generation(const char *index, const char *target_sql)
 {
     static const char *const calls[][2] = {
@@ -1283,6 +1285,9 @@ static void generation(const char *index, const char *target_sql)
         {"SELECT affect_generate_explain('%s', ?1, %s, '{\"method\":\"hmm_nn\",\"components\":"
          "[\"WeightAll\",\"TimeAll\",\"FlowAll\"]}')",
          "affect_generate_explain"},
+        /* the index's statistics and options (_info), read back as untrusted input */
+        {"SELECT laban_zvector(?1, '%s', '{\"components\":[\"TimeAll\",\"FlowAll\"]}')",
+         "laban_zvector"},
     };
     for (size_t i = 0; i < sizeof calls / sizeof calls[0]; i++) {
         char q[512];

@@ -142,6 +142,44 @@ affect_status affect_laban_vector(const affect_motion *m, const affect_roles *ro
                                   const affect_laban_options *opt, double out[AFFECT_LABAN_N],
                                   affect_error *err);
 
+/* ---- standardization (SCIENCE.md §5 step 1) and vectors for L2 search ----
+ *
+ * The laban index (ext/vt_laban.c) stores each vector as float32 and compares motions by the
+ * Euclidean distance of their z-scores z_j = (x_j − mean_j) / sd_j, computed in double from the
+ * float32 values, over the components present in both vectors. These functions are that
+ * arithmetic, shared by the index and by the vectors it hands to other L2 searches. */
+
+/* A component as the index stores it: v rounded to float32; NaN, ±inf and values beyond the
+ * float range are missing (NaN). */
+float affect_laban_f32(double v);
+
+/* mean and sd per component over n vectors x (n × AFFECT_LABAN_N, row-major, NaN = missing),
+ * missing values skipped: mean is NaN where every value is missing; sd is the sample standard
+ * deviation (n − 1 divisor), and 1 where it is 0, not finite or undefined (fewer than two
+ * values), so it is always a usable divisor. */
+void affect_laban_stats(const float *x, size_t n, double mean[AFFECT_LABAN_N],
+                        double sd[AFFECT_LABAN_N]);
+
+/* Checks statistics read back from storage: every mean finite or NaN (missing everywhere),
+ * every sd finite and > 0. AFFECT_ERR_FORMAT naming the first bad one ("sd[3] (WeightLHand) is
+ * -1, expected a finite number > 0"). */
+affect_status affect_laban_stats_check(const double mean[AFFECT_LABAN_N],
+                                       const double sd[AFFECT_LABAN_N], affect_error *err);
+
+/* The vector whose plain Euclidean (L2) distances are the index's distances: out[t] =
+ * (x[c] − mean[c]) / sd[c] for the n_comp components c = comp[t] (all AFFECT_LABAN_N in order
+ * when comp is NULL), computed in double and rounded to float32. A component whose mean is NaN
+ * (missing in every indexed row) is 0: the index skips it for every pair, and a constant adds
+ * nothing to an L2 distance. A component missing in x whose mean is known cannot be written
+ * (the index would skip it for this vector's pairs only, which no L2 vector reproduces):
+ * AFFECT_ERR_MISSING naming it; a z-score beyond the float32 range (statistics with a tiny sd)
+ * is AFFECT_ERR_RANGE. n_comp in 1..AFFECT_LABAN_N, comp entries in range (AFFECT_ERR_INVALID
+ * otherwise). */
+affect_status affect_laban_l2_vector(const float x[AFFECT_LABAN_N],
+                                     const double mean[AFFECT_LABAN_N],
+                                     const double sd[AFFECT_LABAN_N], const int *comp,
+                                     int n_comp, float *out, affect_error *err);
+
 /* ---- geometry (exposed for tests) ---- */
 
 /* Area of the convex hull of n 2-D points (xy interleaved); 0 for fewer than 3 or collinear.

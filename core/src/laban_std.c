@@ -1,0 +1,94 @@
+/*
+ * laban_std.c — standardization of Laban vectors (affect/laban.h, "standardization"): the
+ * statistics the laban index keeps (mean and sample standard deviation per component, missing
+ * values skipped), their validation when read back, and the float32 z-score vector whose L2
+ * distances are the index's distances, for sqlite-vec's vec0 and other L2 searches.
+ *
+ * Why the L2 vector equals the index's distance: the index computes
+ *   d(q, x) = sqrt( Σ_{j ∈ C, both present} ((q_j − m_j)/s_j − (x_j − m_j)/s_j)² )
+ * over the chosen components C, in double from the stored float32 x_j. With every component of
+ * C present in both vectors this is exactly the Euclidean distance of the two z-vectors; the
+ * components missing everywhere (m_j NaN) are skipped for every pair, which writing 0 for them
+ * reproduces. The only difference left is rounding: vec0 takes float32 z-scores and sums in
+ * float32, so two distances closer than about 1e-6 relative may come out in either order.
+ */
+#include <float.h>
+#include <math.h>
+
+#include "affect/laban.h"
+
+float affect_laban_f32(double v)
+{
+    return fabs(v) <= FLT_MAX ? (float)v : NAN; /* NaN, ±inf and overflow are missing */
+}
+
+void affect_laban_stats(const float *x, size_t n, double mean[AFFECT_LABAN_N],
+                        double sd[AFFECT_LABAN_N])
+{
+    for (int j = 0; j < AFFECT_LABAN_N; j++) {
+        double sum = 0;
+        size_t cnt = 0;
+        for (size_t i = 0; i < n; i++) {
+            double v = x[i * AFFECT_LABAN_N + j];
+            if (!isnan(v)) {
+                sum += v;
+                cnt++;
+            }
+        }
+        double m = cnt ? sum / (double)cnt : NAN, ss = 0;
+        for (size_t i = 0; i < n && cnt; i++) {
+            double v = x[i * AFFECT_LABAN_N + j];
+            if (!isnan(v))
+                ss += (v - m) * (v - m);
+        }
+        double s = cnt > 1 ? sqrt(ss / (double)(cnt - 1)) : 0;
+        mean[j] = m;
+        sd[j] = s > 0 && isfinite(s) ? s : 1;
+    }
+}
+
+affect_status affect_laban_stats_check(const double mean[AFFECT_LABAN_N],
+                                       const double sd[AFFECT_LABAN_N], affect_error *err)
+{
+    for (int j = 0; j < AFFECT_LABAN_N; j++) {
+        if (isinf(mean[j]))
+            return affect_fail(err, AFFECT_ERR_FORMAT, "mean[%d] (%s) is %s, expected a finite "
+                               "number or null", j, affect_laban_names[j],
+                               mean[j] > 0 ? "inf" : "-inf");
+        if (!(isfinite(sd[j]) && sd[j] > 0))
+            return affect_fail(err, AFFECT_ERR_FORMAT, "sd[%d] (%s) is %.17g, expected a finite "
+                               "number > 0", j, affect_laban_names[j], sd[j]);
+    }
+    return AFFECT_OK;
+}
+
+affect_status affect_laban_l2_vector(const float x[AFFECT_LABAN_N],
+                                     const double mean[AFFECT_LABAN_N],
+                                     const double sd[AFFECT_LABAN_N], const int *comp,
+                                     int n_comp, float *out, affect_error *err)
+{
+    if (comp ? n_comp < 1 || n_comp > AFFECT_LABAN_N : n_comp != AFFECT_LABAN_N)
+        return affect_fail(err, AFFECT_ERR_INVALID, "%d components, expected 1 to %d", n_comp,
+                           AFFECT_LABAN_N);
+    for (int t = 0; t < n_comp; t++) {
+        int c = comp ? comp[t] : t;
+        if (c < 0 || c >= AFFECT_LABAN_N)
+            return affect_fail(err, AFFECT_ERR_INVALID, "component index %d is out of range "
+                               "(0 to %d)", c, AFFECT_LABAN_N - 1);
+        if (isnan(mean[c])) {
+            out[t] = 0;
+            continue;
+        }
+        if (isnan(x[c]))
+            return affect_fail(err, AFFECT_ERR_MISSING, "component %s is missing in this motion "
+                               "but present in the index, so no L2 vector gives the index's "
+                               "distances", affect_laban_names[c]);
+        float z = (float)(((double)x[c] - mean[c]) / sd[c]);
+        if (!isfinite(z))
+            return affect_fail(err, AFFECT_ERR_RANGE, "the z-score of %s, (%.9g - %.17g) / "
+                               "%.17g, is beyond the float32 range", affect_laban_names[c],
+                               (double)x[c], mean[c], sd[c]);
+        out[t] = z;
+    }
+    return AFFECT_OK;
+}
