@@ -18,8 +18,9 @@ is the module under test and `sql/`, `examples/` and `python/` are the checkout'
   through bash; the other sh blocks install or build, and run.sh itself runs them.
 
 A block that needs something the machine lacks is skipped with a message: the real corpus's
-rows (when BVH_DIR is absent, a block naming `dataset-1_` or `bandai-namco` is skipped), or a
-Python that cannot load extensions. Prints one line per block; exits 1 if any failed.
+rows (when BVH_DIR is absent, a block naming `dataset-1_` or `bandai-namco` is skipped), a
+Python that cannot load extensions, or sqlite-vec (MODULE's folder/npm, where run.sh test
+installs it). Prints one line per block; exits 1 if any failed.
 """
 import os
 import re
@@ -132,6 +133,12 @@ def main():
                 print("SKIP %s: needs the real corpus (../shared absent)" % where)
                 skipped += 1
                 continue
+            vec0 = os.path.join(os.path.dirname(module_file), "npm")
+            if "vec0" in text and not os.path.isdir(vec0):
+                print("SKIP %s: sqlite-vec is not installed (%s; run.sh test installs it)"
+                      % (where, vec0))
+                skipped += 1
+                continue
             if kind == "python" and not py_ok:
                 print("SKIP %s: %s cannot load extensions" % (where, PYTHON))
                 skipped += 1
@@ -141,6 +148,8 @@ def main():
             shutil.copy(db, cwd)
             os.mkdir(os.path.join(cwd, "build"))
             os.symlink(module_file, os.path.join(cwd, "build", "affect.so"))
+            if os.path.isdir(vec0):
+                os.symlink(vec0, os.path.join(cwd, "build", "npm"))
             for d in ("sql", "examples", "python", "tests"):
                 os.symlink(os.path.join(src, d), os.path.join(cwd, d))
             problem = None
