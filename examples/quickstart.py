@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""quickstart.py — sqlite-affect from Python's standard sqlite3 module.
+"""quickstart.py — sqlite-affect from Python's standard sqlite3 module, loaded with the
+package in python/ (sqlite_affect.load).
 
     python3 examples/quickstart.py [path/to/build/affect] [path/to/file.bvh]
 
@@ -13,24 +14,19 @@ import sqlite3
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-MODULE = sys.argv[1] if len(sys.argv) > 1 else os.path.join(HERE, "..", "build", "affect")
+sys.path.insert(0, os.path.join(HERE, "..", "python"))  # the package of this checkout
+import sqlite_affect  # noqa: E402  (or: pip install ./python)
+
+MODULE = sys.argv[1] if len(sys.argv) > 1 else None  # None: sqlite_affect.load finds it
 BVH = sys.argv[2] if len(sys.argv) > 2 else None
 
 
 def connect():
     conn = sqlite3.connect(":memory:")
-    if not hasattr(conn, "enable_load_extension"):
-        sys.exit(
-            "This Python's sqlite3 module cannot load extensions (built without "
-            "SQLITE_ENABLE_LOAD_EXTENSION: pyenv's and python.org's macOS builds are like this).\n"
-            "Use Debian's /usr/bin/python3, or a Python built with --enable-loadable-sqlite-extensions, "
-            "or the sqlite3 shell: sqlite3 -cmd '.load ./build/affect'.")
-    conn.enable_load_extension(True)
     try:
-        conn.load_extension(MODULE)
-    except sqlite3.OperationalError as e:
-        sys.exit(f"cannot load {MODULE}: {e}\nBuild it first: ./run.sh demo (or cmake -S . -B build && cmake --build build)")
-    conn.enable_load_extension(False)
+        sqlite_affect.load(conn, MODULE)
+    except sqlite_affect.LoadError as e:  # says what to use instead, or what was not found
+        sys.exit(f"{e}\nBuild it first: ./run.sh demo (or cmake -S . -B build && cmake --build build)")
     return conn
 
 

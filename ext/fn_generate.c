@@ -76,7 +76,8 @@
 
 #define N_COMP AFFECT_LABAN_N
 /* Versions the cached fit's key: a fit stored under another tag is refitted. */
-#define RMLR_CACHE_TAG "affect-rmlr-cache-2"
+#define RMLR_CACHE_TAG "affect-rmlr-cache-3" /* 3: the Newton solver (a fit made by the
+                                             * coordinate-descent solver is refitted) */
 
 /* ---- the per-function cache of RMLR fits ---- */
 
