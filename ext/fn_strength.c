@@ -788,10 +788,13 @@ AX_FN(ax_affect_strength)
         return;
     affect_strength *s = mv;
     affect_motion *m = NULL;
-    if (ax_arg_motion(ctx, argv, 1, &m) == AX_OK) {
+    ax_monitor am;
+    if (ax_arg_motion(ctx, argv, 1, &m) == AX_OK && ax_monitor_begin(&am, ctx, NULL) == AX_OK) {
         affect_error err;
         double v;
-        if (affect_strength_score(s, m, &v, &err))
+        affect_status st = affect_strength_score(s, m, &v, &am.mon, &err);
+        ax_monitor_end(&am);
+        if (st)
             ax_error(ctx, &err);
         else
             sqlite3_result_double(ctx, v);
@@ -848,9 +851,13 @@ static void synth_or_edit(sqlite3_context *ctx, int argc, sqlite3_value **argv, 
     if (ax_opts_parse(ctx, argc, argv, si + 1, synth_keys, &opts) != AX_OK ||
         ax_opt_bool(ctx, &opts, "rigid", &rigid) != AX_OK)
         goto done;
+    ax_monitor am;
+    if (ax_monitor_begin(&am, ctx, NULL) != AX_OK)
+        goto done;
     affect_error err;
-    affect_status st = edit ? affect_strength_edit(s, m, target, rigid, &out, &err)
-                            : affect_strength_synthesize(s, target, rigid, &out, &err);
+    affect_status st = edit ? affect_strength_edit(s, m, target, rigid, &out, &am.mon, &err)
+                            : affect_strength_synthesize(s, target, rigid, &out, &am.mon, &err);
+    ax_monitor_end(&am);
     if (st)
         ax_error(ctx, &err);
     else

@@ -167,7 +167,8 @@ static void from_relative(double *pose, uint32_t J, uint32_t root)
 
 static affect_status motion_features(const affect_motion *m, uint32_t q, bool relative,
                                      uint32_t root, double *x, uint32_t *kf, double **Y_out,
-                                     affect_normalize_transform *tf_out, affect_error *err)
+                                     affect_normalize_transform *tf_out, affect_monitor *mon,
+                                     affect_error *err)
 {
     if (Y_out)
         *Y_out = NULL;
@@ -198,7 +199,7 @@ static affect_status motion_features(const affect_motion *m, uint32_t q, bool re
                     tf.scale;
         }
     uint32_t nk;
-    st = affect_keyframes_select(Y, T, D3, q, kf, &nk, NULL, NULL, err);
+    st = affect_keyframes_select(Y, T, D3, q, kf, &nk, NULL, mon, err);
     if (st != AFFECT_OK)
         goto cleanup;
     for (uint32_t i = 0; i < q; i++) {
@@ -256,7 +257,7 @@ static void unproject(const affect_strength *s, const double *z, double *x)
 
 affect_status affect_strength_features(const affect_strength *s, const affect_motion *m,
                                        double *x, double *z, uint32_t *keyframes,
-                                       affect_error *err)
+                                       affect_monitor *mon, affect_error *err)
 {
     affect_status st = check_skeleton(s->n_joints, s->names, m, err);
     if (st != AFFECT_OK)
@@ -267,7 +268,7 @@ affect_status affect_strength_features(const affect_strength *s, const affect_mo
         st = affect_nomem(err);
         goto cleanup;
     }
-    st = motion_features(m, s->keyframes, s->relative, s->root, x, kf, NULL, NULL, err);
+    st = motion_features(m, s->keyframes, s->relative, s->root, x, kf, NULL, NULL, mon, err);
     if (st != AFFECT_OK)
         goto cleanup;
     if (z)
@@ -289,7 +290,7 @@ static double dotp(const double *a, const double *b, size_t n)
 }
 
 affect_status affect_strength_score(const affect_strength *s, const affect_motion *m,
-                                    double *strength, affect_error *err)
+                                    double *strength, affect_monitor *mon, affect_error *err)
 {
     double *x = affect_malloc_array(s->dim, sizeof(double));
     double *z = affect_malloc_array(s->pdim, sizeof(double));
@@ -297,7 +298,7 @@ affect_status affect_strength_score(const affect_strength *s, const affect_motio
     if (!x || !z)
         st = affect_nomem(err);
     else
-        st = affect_strength_features(s, m, x, z, NULL, err);
+        st = affect_strength_features(s, m, x, z, NULL, mon, err);
     if (st == AFFECT_OK)
         *strength = dotp(s->w, z, s->pdim);
     affect_free(x);
@@ -744,7 +745,7 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
         st = check_skeleton(J, s->names, motions[i], err);
         if (st == AFFECT_OK)
             st = motion_features(motions[i], q, s->relative, s->root, X + (size_t)k * D, kf, NULL,
-                                     NULL, err);
+                                     NULL, opt->monitor, err);
         if (st != AFFECT_OK) {
             affect_prefix(err, "motion %u", i);
             goto cleanup;
@@ -921,7 +922,7 @@ static void durations(const affect_strength *s, const double *x, const double *r
 /* The rigid projection of raw (freed): bone lengths from reference when given (an edited
  * motion keeps its own skeleton's), else the median over raw's frames. */
 static affect_status make_rigid(affect_motion *raw, bool rigid, const affect_motion *reference,
-                                affect_motion **out, affect_error *err)
+                                affect_motion **out, affect_monitor *mon, affect_error *err)
 {
     if (!rigid) {
         *out = raw;
@@ -929,6 +930,7 @@ static affect_status make_rigid(affect_motion *raw, bool rigid, const affect_mot
     }
     affect_rigid_options ro;
     affect_rigid_options_default(&ro);
+    ro.monitor = mon;
     if (reference) {
         ro.lengths = AFFECT_RIGID_REFERENCE;
         ro.reference = reference;
@@ -940,7 +942,7 @@ static affect_status make_rigid(affect_motion *raw, bool rigid, const affect_mot
 
 static affect_status synthesize_once(const affect_strength *s, const affect_motion *unused,
                                      double strength, bool rigid, affect_motion **out,
-                                     affect_error *err)
+                                     affect_monitor *mon, affect_error *err)
 {
     (void)unused;
     *out = NULL;
@@ -998,7 +1000,7 @@ static affect_status synthesize_once(const affect_strength *s, const affect_moti
         for (uint32_t c = 0; c < D3; c++)
             p[c] = (float)pose[c];
     }
-    st = make_rigid(m, rigid, NULL, out, err);
+    st = make_rigid(m, rigid, NULL, out, mon, err);
     m = NULL;
 cleanup:
     affect_motion_free(m);
@@ -1011,7 +1013,8 @@ cleanup:
 }
 
 static affect_status edit_once(const affect_strength *s, const affect_motion *m, double strength,
-                               bool rigid, affect_motion **out, affect_error *err)
+                               bool rigid, affect_motion **out, affect_monitor *mon,
+                               affect_error *err)
 {
     *out = NULL;
     if (!isfinite(strength))
@@ -1036,7 +1039,7 @@ static affect_status edit_once(const affect_strength *s, const affect_motion *m,
         goto cleanup;
     }
     affect_normalize_transform tf;
-    st = motion_features(m, q, s->relative, s->root, x, kf, &Y, &tf, err);
+    st = motion_features(m, q, s->relative, s->root, x, kf, &Y, &tf, mon, err);
     if (st != AFFECT_OK)
         goto cleanup;
     project(s, x, z, work);
@@ -1097,7 +1100,7 @@ static affect_status edit_once(const affect_strength *s, const affect_motion *m,
                                tf.origin[c]);
         }
     }
-    st = make_rigid(e, rigid, m, out, err);
+    st = make_rigid(e, rigid, m, out, mon, err);
     e = NULL;
 cleanup:
     affect_motion_free(e);
@@ -1116,14 +1119,15 @@ cleanup:
 
 typedef affect_status (*make_fn)(const affect_strength *s, const affect_motion *m,
                                  double strength, bool rigid, affect_motion **out,
-                                 affect_error *err);
+                                 affect_monitor *mon, affect_error *err);
 
 /* Runs make at the target, measures the result's strength, and corrects the target by the
  * miss (t ← t + (s − r)) up to AFFECT_STRENGTH_CORRECTIONS times while the miss shrinks and is
  * above AFFECT_STRENGTH_TOL; keeps the closest result. The miss comes from what the feature
  * step cannot see: the keyframes chosen again on the new motion and the rigid projection. */
 static affect_status hit_target(const affect_strength *s, const affect_motion *m, double strength,
-                                bool rigid, make_fn make, affect_motion **out, affect_error *err)
+                                bool rigid, make_fn make, affect_motion **out, affect_monitor *mon,
+                                affect_error *err)
 {
     *out = NULL;
     if (!isfinite(strength))
@@ -1134,9 +1138,9 @@ static affect_status hit_target(const affect_strength *s, const affect_motion *m
     for (uint32_t round = 0; round <= AFFECT_STRENGTH_CORRECTIONS; round++) {
         affect_motion *cand = NULL;
         double r;
-        st = make(s, m, t, rigid, &cand, err);
+        st = make(s, m, t, rigid, &cand, mon, err);
         if (st == AFFECT_OK)
-            st = affect_strength_score(s, cand, &r, err);
+            st = affect_strength_score(s, cand, &r, mon, err);
         if (st != AFFECT_OK) {
             affect_motion_free(cand);
             if (best && st != AFFECT_ERR_NOMEM && st != AFFECT_ERR_INTERRUPTED) {
@@ -1164,20 +1168,21 @@ static affect_status hit_target(const affect_strength *s, const affect_motion *m
 }
 
 affect_status affect_strength_synthesize(const affect_strength *s, double strength, bool rigid,
-                                         affect_motion **out, affect_error *err)
+                                         affect_motion **out, affect_monitor *mon,
+                                         affect_error *err)
 {
-    return hit_target(s, NULL, strength, rigid, synthesize_once, out, err);
+    return hit_target(s, NULL, strength, rigid, synthesize_once, out, mon, err);
 }
 
 affect_status affect_strength_edit(const affect_strength *s, const affect_motion *m,
                                    double strength, bool rigid, affect_motion **out,
-                                   affect_error *err)
+                                   affect_monitor *mon, affect_error *err)
 {
     *out = NULL;
     affect_status st = check_skeleton(s->n_joints, s->names, m, err);
     if (st != AFFECT_OK)
         return st;
-    return hit_target(s, m, strength, rigid, edit_once, out, err);
+    return hit_target(s, m, strength, rigid, edit_once, out, mon, err);
 }
 
 /* ---- the BLOB ---- */

@@ -192,7 +192,7 @@ static int bench_set(dataset *d)
             continue;
         double s, c0 = cpu_now();
         for (int r = 0; r < 3; r++)
-            if (affect_strength_score(model[0], d->m[i], &s, &err)) {
+            if (affect_strength_score(model[0], d->m[i], &s, NULL, &err)) {
                 fprintf(stderr, "bench_strength: score: %s\n", err.msg);
                 return 1;
             }

@@ -184,7 +184,7 @@ static double pair_accuracy(const affect_strength *s, const corpus *c, double *s
 {
     affect_error err;
     for (uint32_t i = 0; i < c->n; i++)
-        assert_int_equal(affect_strength_score(s, c->m[i], &score[i], &err), AFFECT_OK);
+        assert_int_equal(affect_strength_score(s, c->m[i], &score[i], NULL, &err), AFFECT_OK);
     uint32_t right = 0, total = 0;
     for (uint32_t i = 0; i < c->n; i++)
         for (uint32_t j = 0; j < c->n; j++)
@@ -266,10 +266,10 @@ static void test_model(void **state)
     for (int k = 0; k < 5; k++) {
         double target = lo + (hi - lo) * k / 4.0, got;
         affect_motion *m;
-        assert_int_equal(affect_strength_synthesize(s, target, true, &m, &err), AFFECT_OK);
+        assert_int_equal(affect_strength_synthesize(s, target, true, &m, NULL, &err), AFFECT_OK);
         assert_int_equal(m->n_joints, tr.m[0]->n_joints);
         assert_true(m->n_frames > 10);
-        assert_int_equal(affect_strength_score(s, m, &got, &err), AFFECT_OK);
+        assert_int_equal(affect_strength_score(s, m, &got, NULL, &err), AFFECT_OK);
         if (!(got > prev))
             fail_msg("synthesized at %g: strength %g after %g", target, got, prev);
         prev = got;
@@ -280,8 +280,8 @@ static void test_model(void **state)
     for (int k = 0; k < 3; k++) {
         double target = s->level_strength[k], got;
         affect_motion *m;
-        assert_int_equal(affect_strength_edit(s, te.m[0], target, true, &m, &err), AFFECT_OK);
-        assert_int_equal(affect_strength_score(s, m, &got, &err), AFFECT_OK);
+        assert_int_equal(affect_strength_edit(s, te.m[0], target, true, &m, NULL, &err), AFFECT_OK);
+        assert_int_equal(affect_strength_score(s, m, &got, NULL, &err), AFFECT_OK);
         if (!(got > prev))
             fail_msg("edited to %g: strength %g after %g", target, got, prev);
         prev = got;
@@ -328,13 +328,13 @@ static void test_no_pca_and_options(void **state)
     assert_true(back->relative && back->scale != NULL);
     assert_int_equal(back->root, s->root);
     affect_motion *m;
-    assert_int_equal(affect_strength_synthesize(back, 0.0, false, &m, &err), AFFECT_OK);
+    assert_int_equal(affect_strength_synthesize(back, 0.0, false, &m, NULL, &err), AFFECT_OK);
     affect_motion_free(m);
     /* relative poses and standardized features are undone exactly: editing a training motion
      * to its own strength (no correction needed: it lands on it) gives it back */
     double r0;
-    assert_int_equal(affect_strength_score(s, tr.m[0], &r0, &err), AFFECT_OK);
-    assert_int_equal(affect_strength_edit(s, tr.m[0], r0, false, &m, &err), AFFECT_OK);
+    assert_int_equal(affect_strength_score(s, tr.m[0], &r0, NULL, &err), AFFECT_OK);
+    assert_int_equal(affect_strength_edit(s, tr.m[0], r0, false, &m, NULL, &err), AFFECT_OK);
     assert_int_equal(m->n_frames, tr.m[0]->n_frames);
     if (!(tu_max_dist(m, tr.m[0]) < 1e-4))
         fail_msg("an edit to the motion's own strength moved it by %g", tu_max_dist(m, tr.m[0]));
@@ -390,16 +390,16 @@ static void test_errors(void **state)
     affect_motion *other;
     assert_int_equal(affect_motion_create(20, 3, 30, &other, &err), AFFECT_OK);
     double v;
-    assert_int_equal(affect_strength_score(s, other, &v, &err), AFFECT_ERR_INVALID);
+    assert_int_equal(affect_strength_score(s, other, &v, NULL, &err), AFFECT_ERR_INVALID);
     char expect[96];
     snprintf(expect, sizeof expect, "3 joints, the model has %u", tr.m[0]->n_joints);
     assert_string_equal(err.msg, expect);
     affect_motion *shortm;
     assert_int_equal(affect_motion_slice(tr.m[0], 0, 2, &shortm, &err), AFFECT_OK);
-    assert_int_equal(affect_strength_score(s, shortm, &v, &err), AFFECT_ERR_RANGE);
+    assert_int_equal(affect_strength_score(s, shortm, &v, NULL, &err), AFFECT_ERR_RANGE);
     assert_string_equal(err.msg, "3 frames, fewer than the 5 keyframes");
     affect_motion *m;
-    assert_int_equal(affect_strength_synthesize(s, NAN, true, &m, &err), AFFECT_ERR_INVALID);
+    assert_int_equal(affect_strength_synthesize(s, NAN, true, &m, NULL, &err), AFFECT_ERR_INVALID);
     assert_string_equal(err.msg, "the strength must be finite");
     affect_motion_free(other);
     affect_motion_free(shortm);
@@ -425,8 +425,8 @@ static affect_status oom_op(void *ctx, affect_error *err)
         return affect_strength_train((const affect_motion *const *)c->tr.m, c->tr.level, NULL,
                                      c->tr.n, LEVELS, N_INT, &opt, &c->s, err);
     if (c->what == 1)
-        return affect_strength_synthesize(c->s, 0.5, true, &c->m, err);
-    return affect_strength_edit(c->s, c->tr.m[1], 0.5, true, &c->m, err);
+        return affect_strength_synthesize(c->s, 0.5, true, &c->m, NULL, err);
+    return affect_strength_edit(c->s, c->tr.m[1], 0.5, true, &c->m, NULL, err);
 }
 
 static void oom_finish(void *ctx, affect_status st)
@@ -501,7 +501,7 @@ static void test_fixture_v1(void **state)
     affect_motion *m;
     assert_int_equal(affect_motion_synth("wave", "angry", 1, &so, &m, &err), AFFECT_OK);
     double r;
-    assert_int_equal(affect_strength_score(s, m, &r, &err), AFFECT_OK);
+    assert_int_equal(affect_strength_score(s, m, &r, NULL, &err), AFFECT_OK);
     tu_assert_near(r, s->level_strength[2], 1e-9);
     affect_motion_free(m);
     affect_free(enc);

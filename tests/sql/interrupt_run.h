@@ -94,6 +94,14 @@ static const ir_case IR_CASES[] = {
     {"affect_generate_explain (RMLR fit)",
      "SELECT affect_generate_explain('motion_laban', motion, 'angry') FROM motions WHERE id = 1",
      "affect_generate_explain", NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
+    /* the exact keyframe selection of a 6,158-frame walk (a 6,158² cost table), and for the edit
+     * the rigid projection and the corrections after it */
+    {"affect_strength, 6158 frames",
+     "SELECT affect_strength(r, motion) FROM strength, long WHERE long.id = 1", "affect_strength",
+     NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
+    {"strength_edit, 6158 frames",
+     "SELECT strength_edit(r, motion, 0.5) FROM strength, long WHERE long.id = 1",
+     "strength_edit", NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
     {"affect_generate hmm_nn (HMM training)",
      "SELECT affect_generate('motion_laban', motion, 'angry', '{\"method\":\"hmm_nn\","
      "\"components\":[\"WeightAll\",\"TimeAll\"],\"k\":20,\"min_neighbours\":20,"
@@ -190,6 +198,9 @@ static const char IR_CORPUS[] =
     "    FROM actions, emotions, seeds ORDER BY action, emotion, seed;"
     "CREATE VIRTUAL TABLE motion_laban USING laban(content=motions, motion=motion,"
     "                                              label=emotion);"
+    "CREATE TABLE strength AS SELECT strength_train(motion, emotion,"
+    "  '{\"order\":[\"sad\",\"neutral\",\"happy\"]}') AS r FROM motions"
+    " WHERE emotion IN ('sad', 'neutral', 'happy');"
     "CREATE TABLE long(id INTEGER PRIMARY KEY, emotion TEXT, motion BLOB);"
     "INSERT INTO long(emotion, motion) VALUES"
     "  ('sad', motion_synth('walk', 'sad', 1, '{\"fps\":1000}')),"

@@ -8,8 +8,8 @@
  *   tests/bench/bench_interrupt.c.
  *
  * The calls, the corpus and how each run is stopped: interrupt_run.h (hmm_train, affect_train,
- * affect_crossval, motion_dtw, laban_salient, affect_generate, affect_generate_explain and the
- * laban index's 'rebuild', each running for seconds uninterrupted; an interrupt from a second
+ * affect_crossval, motion_dtw, laban_salient, affect_generate, affect_generate_explain,
+ * affect_strength, strength_edit and the laban index's 'rebuild', each running for seconds uninterrupted; an interrupt from a second
  * thread 0.3 s after the step starts, from the progress function as affect_train reaches a
  * stage, from a function in the statement's WHERE clause (while an aggregate reads its rows,
  * or just before a scalar call starts: the interrupt is then pending at the call's first

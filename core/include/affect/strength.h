@@ -145,11 +145,11 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
  * coordinates (pdim doubles, may be NULL). */
 affect_status affect_strength_features(const affect_strength *s, const affect_motion *m,
                                        double *x, double *z, uint32_t *keyframes,
-                                       affect_error *err);
+                                       affect_monitor *mon, affect_error *err);
 
 /* The strength r(x) of a motion. */
 affect_status affect_strength_score(const affect_strength *s, const affect_motion *m,
-                                    double *strength, affect_error *err);
+                                    double *strength, affect_monitor *mon, affect_error *err);
 
 /* The regression's feature coordinates for a strength (pdim doubles). */
 void affect_strength_predict(const affect_strength *s, double strength, double *z);
@@ -157,12 +157,13 @@ void affect_strength_predict(const affect_strength *s, double strength, double *
 /* A motion of the target strength (rigid: projected to constant bone lengths, as the header
  * says; false: the interpolated positions as they are). */
 affect_status affect_strength_synthesize(const affect_strength *s, double strength, bool rigid,
-                                         affect_motion **out, affect_error *err);
+                                         affect_motion **out, affect_monitor *mon,
+                                         affect_error *err);
 
 /* m edited to the target strength (rigid as above). */
 affect_status affect_strength_edit(const affect_strength *s, const affect_motion *m,
                                    double strength, bool rigid, affect_motion **out,
-                                   affect_error *err);
+                                   affect_monitor *mon, affect_error *err);
 
 /* (Re)fits the regression of s from its train_r and train_z (n_train × pdim) by 5-fold
  * cross-validation (see the file header): sets regression, reg_h, reg_lambda, the cv_* errors,
