@@ -12,7 +12,7 @@
  *   fda_plot(model [, options])           → SVG scatter of the training embedding by label
  *
  * fda_train's options (the same text on every row):
- *   method      "fpca" (default) | "ffda" | "fspca" | "fisomap"
+ *   method      "ffda" (default: the measured best) | "fpca" | "fspca" | "fisomap"
  *   basis       B-spline count G (default 200), order (default 4), lambda (a number ≥ 0,
  *               default 1e-10, or "gcv"), dims (default 3)
  *   kernel      FSPCA label kernel "linear" (default) | "rbf", sigma (default 1)

@@ -63,7 +63,7 @@ struct affect_fda {
 void affect_fda_config_default(affect_fda_config *cfg)
 {
     memset(cfg, 0, sizeof *cfg);
-    cfg->method = AFFECT_FDA_FPCA;
+    cfg->method = AFFECT_FDA_FFDA; /* the measured best (docs/EVALUATION.md) */
     cfg->order = 4;
     cfg->n_basis = 200;
     cfg->lambda = 1e-10;

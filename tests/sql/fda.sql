@@ -21,7 +21,7 @@ SELECT 'the functional functions are deterministic and innocuous', count(*) = 9
 
 -- ---- models: FPCA (20 B-splines, 2-D) and one of each other method ----
 CREATE TABLE fm AS
-SELECT 'fpca' AS method, fda_train(m, emotion, '{"basis":20,"dims":2}') AS model FROM fs
+SELECT 'fpca' AS method, fda_train(m, emotion, '{"basis":20,"dims":2,"method":"fpca"}') AS model FROM fs
 UNION ALL
 SELECT 'ffda', fda_train(m, emotion, '{"basis":20,"method":"ffda"}') FROM fs
 UNION ALL
@@ -29,11 +29,11 @@ SELECT 'fspca', fda_train(m, emotion, '{"basis":20,"method":"fspca","kernel":"rb
 UNION ALL
 SELECT 'fisomap', fda_train(m, emotion, '{"basis":20,"method":"fisomap","isomap_k":10}') FROM fs
 UNION ALL
-SELECT 'small', fda_train(m, emotion, '{"basis":6,"dims":2,"joints":["right_hand"],"frame":"first"}') FROM fs WHERE seed <= 3;
+SELECT 'small', fda_train(m, emotion, '{"basis":6,"dims":2,"joints":["right_hand"],"frame":"first","method":"fpca"}') FROM fs WHERE seed <= 3;
 
 SELECT 'an AFFD BLOB of version 1', substr(model, 1, 8) = x'4146464401000000' FROM fm;
 
-SELECT 'retraining gives the same bytes', model = (SELECT fda_train(m, emotion, '{"basis":20,"dims":2}') FROM fs)
+SELECT 'retraining gives the same bytes', model = (SELECT fda_train(m, emotion, '{"basis":20,"dims":2,"method":"fpca"}') FROM fs)
   FROM fm WHERE method = 'fpca';
 -- oom: skip
 
@@ -61,6 +61,11 @@ SELECT 'fda_info: eigenvalues decrease, explained shares in (0, 1]',
    AND json_extract(fda_info(model), '$.explained[0]') > 0
    AND json_extract(fda_info(model), '$.explained[0]') + json_extract(fda_info(model), '$.explained[1]') <= 1
   FROM fm WHERE method = 'fpca';
+
+SELECT 'the default method is FFDA (the measured best on both corpora: docs/EVALUATION.md)',
+       json_extract(fda_info(fda_train(m, emotion, '{"basis":20}')), '$.method') = 'ffda'
+  FROM fs;
+-- oom: skip
 
 SELECT 'FFDA and FSPCA keep at most c - 1 = 3 axes, Isomap the 3 asked',
        json_extract(fda_info(model), '$.dims') = 3 FROM fm WHERE method IN ('ffda', 'fspca', 'fisomap');

@@ -89,7 +89,7 @@ typedef enum affect_fda_method {
 #define AFFECT_FDA_NOVAR_TOL 1e-20
 
 typedef struct affect_fda_config {
-    affect_fda_method method; /* default FPCA */
+    affect_fda_method method; /* default FFDA, the measured best (docs/EVALUATION.md) */
     uint32_t order;           /* B-spline order k (default 4: cubic) */
     uint32_t n_basis;         /* G (default 200, the thesis's for recognition) */
     double lambda;            /* roughness penalty (default 1e-10; ignored with gcv) */
