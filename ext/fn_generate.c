@@ -65,6 +65,7 @@
 #include "affect/classifier.h"
 #include "affect/features.h"
 #include "affect/generate.h"
+#include "affect/skeleton.h"
 #include "affect/hmm_blob.h"
 #include "affect/laban.h"
 #include "affect/rmlr.h"
@@ -81,6 +82,17 @@
 
 /* ---- the per-function cache of RMLR fits ---- */
 
+/* Donor motions kept in their skeletal form (with joint rotations): a position-only corpus
+ * would otherwise go through inverse kinematics for every donor of every call. An entry is
+ * found by the content row and the FNV-1a hash of its motion BLOB, so an edited row misses. */
+#define DONOR_CACHE 32
+
+typedef struct donor_entry {
+    sqlite3_int64 rowid;
+    uint64_t hash; /* of the BLOB's bytes, 0 for an empty entry */
+    affect_motion *skeletal;
+} donor_entry;
+
 struct ax_gen_fn {
     char name[32]; /* first: AX_NAME(ctx) reads it */
     char *index;   /* the cached fit's index, content key and seed */
@@ -88,6 +100,8 @@ struct ax_gen_fn {
     uint64_t seed;
     uint32_t folds;
     affect_rmlr *fit;
+    donor_entry donors[DONOR_CACHE];
+    uint32_t donor_next; /* the entry replaced next (round robin) */
 };
 
 ax_gen_fn *ax_gen_fn_new(const char *name)
@@ -113,6 +127,8 @@ void ax_gen_fn_free(void *p)
     ax_gen_fn *fn = p;
     if (fn) {
         gen_cache_clear(fn);
+        for (uint32_t i = 0; i < DONOR_CACHE; i++)
+            affect_motion_free(fn->donors[i].skeletal);
         sqlite3_free(fn);
     }
 }
@@ -1127,6 +1143,73 @@ static ax_arg load_motions(sqlite3_context *ctx, const gen_index *ix, const sqli
     return r;
 }
 
+/* load_motions for the transfer's donors: each in its skeletal form, from fn's cache when the
+ * row's BLOB is the one cached, else decoded and given joint rotations (affect_motion_skeletal,
+ * as affect_transfer would: the same motion, bit for bit) and cached. A motion that has no
+ * skeletal form is returned as decoded, uncached: affect_transfer then says what is wrong. */
+static ax_arg load_donors(sqlite3_context *ctx, ax_gen_fn *fn, const gen_index *ix,
+                          const sqlite3_int64 *ids, uint32_t n, affect_monitor *mon,
+                          affect_motion **out)
+{
+    sqlite3_stmt *st = prepare(ctx, "reading the content table",
+                               "SELECT \"%w\" FROM \"%w\" WHERE rowid = ?1", ix->motion,
+                               ix->content);
+    if (!st)
+        return AX_ERROR;
+    affect_ik_options io;
+    affect_ik_options_default(&io);
+    io.rigid.monitor = mon;
+    ax_arg r = AX_OK;
+    for (uint32_t i = 0; i < n && r == AX_OK; i++) {
+        sqlite3_reset(st);
+        sqlite3_bind_int64(st, 1, ids[i]);
+        if (sqlite3_step(st) != SQLITE_ROW || sqlite3_column_type(st, 0) != SQLITE_BLOB) {
+            ax_errorf(ctx, "content row %" PRId64 " of \"%s\" has no motion (run the index's "
+                           "'check' command)", (int64_t)ids[i], ix->name);
+            r = AX_ERROR;
+            break;
+        }
+        const unsigned char *blob = sqlite3_column_blob(st, 0);
+        size_t size = (size_t)sqlite3_column_bytes(st, 0);
+        uint64_t hash = affect_fnv1a64(blob, size) | 1u; /* never 0, the empty entry's */
+        donor_entry *hit = NULL;
+        for (uint32_t e = 0; e < DONOR_CACHE && !hit; e++)
+            if (fn->donors[e].hash == hash && fn->donors[e].rowid == ids[i])
+                hit = &fn->donors[e];
+        affect_error err;
+        affect_status s = hit ? affect_motion_clone(hit->skeletal, &out[i], &err)
+                              : affect_motion_decode(blob, size, &out[i], &err);
+        if (!s && !hit) {
+            affect_motion *made = NULL, *keep = NULL;
+            affect_status k = affect_motion_skeletal(out[i], AFFECT_ROTATIONS_AUTO, &io, &made,
+                                                     &err);
+            if (k == AFFECT_ERR_INTERRUPTED || k == AFFECT_ERR_NOMEM)
+                s = k;
+            else if (!k && made) {
+                affect_motion_free(out[i]);
+                out[i] = made;
+            }
+            if (!k && affect_motion_clone(out[i], &keep, &err) == AFFECT_OK) {
+                donor_entry *slot = &fn->donors[fn->donor_next];
+                affect_motion_free(slot->skeletal);
+                *slot = (donor_entry){ids[i], hash, keep};
+                fn->donor_next = (fn->donor_next + 1) % DONOR_CACHE;
+            }
+        }
+        if (s) {
+            if (s == AFFECT_ERR_NOMEM)
+                sqlite3_result_error_nomem(ctx);
+            else if (s == AFFECT_ERR_INTERRUPTED)
+                ax_error(ctx, &err);
+            else
+                ax_errorf(ctx, "content row %" PRId64 ": %s", (int64_t)ids[i], err.msg);
+            r = AX_ERROR;
+        }
+    }
+    sqlite3_finalize(st);
+    return r;
+}
+
 /* The explanation's common head: index, method, target, source and components (the object
  * left open). */
 static void explain_head(affect_strbuf *sb, const gen_index *ix, const gen_opts *o,
@@ -1515,13 +1598,16 @@ static void run_transfer(sqlite3_context *ctx, const gen_index *ix, const gen_op
         sqlite3_result_error_nomem(ctx);
         goto done;
     }
-    if (load_motions(ctx, ix, dn->ids, 2 * dn->n, motions) != AX_OK)
-        goto done;
-    affect_transfer_report rep;
-    affect_error err;
     ax_monitor am;
     if (ax_monitor_begin(&am, ctx, NULL) != AX_OK)
         goto done;
+    if (load_donors(ctx, sqlite3_user_data(ctx), ix, dn->ids, 2 * dn->n, &am.mon, motions) !=
+        AX_OK) {
+        ax_monitor_end(&am);
+        goto done;
+    }
+    affect_transfer_report rep;
+    affect_error err;
     affect_transfer_options tr = o->tr;
     tr.monitor = &am.mon;
     affect_status st = affect_transfer(m, (const affect_motion *const *)motions,

@@ -188,6 +188,13 @@ SELECT 'a walk keeps its root path, frame by frame',
        (SELECT affect_generate('idx', motion_synth('walk', 'neutral', 9), 'sad', '{"strength":0}') AS g0);
 -- oom: skip
 
+-- the donors (position-only here) go through inverse kinematics once: the second call reads
+-- their skeletal forms from the function's cache and must give the bytes of the first
+SELECT 'transfer: the cached skeletal forms of the donors give the same bytes', a = b
+  FROM (SELECT affect_generate('idx', motion_synth('walk', 'neutral', 11), 'angry') AS a),
+       (SELECT affect_generate('idx', motion_synth('walk', 'neutral', 11), 'angry') AS b);
+-- oom: skip
+
 SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad', '{"strength":2.5}');
 -- error: affect_generate: option strength must be between 0 and 2
 
