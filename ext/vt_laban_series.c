@@ -288,11 +288,11 @@ static affect_status opt_frames(const series_opts *o, const char *sec_key, const
         return affect_fail(err, AFFECT_ERR_INVALID, "give \"%s\" or \"%s\", not both", sec_key,
                            frames_key);
     if (has_frames) {
-        if (!(frames >= min && frames <= 2147483647.0) || frames != floor(frames))
+        if (!(frames >= min) || !isfinite(frames) || frames != floor(frames))
             return affect_fail(err, AFFECT_ERR_INVALID,
                                "option \"%s\" must be an integer of at least %u, got %.15g",
                                frames_key, min, frames);
-        *out = (uint32_t)frames;
+        *out = frames >= 4294967295.0 ? UINT32_MAX : (uint32_t)frames; /* longer than any take */
     } else if (has_sec) {
         uint32_t f = affect_laban_series_frames(sec, fps);
         if (!(sec > 0) || f < min)

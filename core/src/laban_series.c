@@ -55,9 +55,9 @@ void affect_laban_series_options_default(affect_laban_series_options *so)
 uint32_t affect_laban_series_frames(double seconds, double fps)
 {
     double f = seconds * fps;
-    if (!isfinite(f) || !(f >= 0.5) || f > 2147483648.0)
+    if (!isfinite(f) || !(f >= 0.5))
         return 0;
-    return (uint32_t)llround(f);
+    return f >= 4294967295.0 ? UINT32_MAX : (uint32_t)llround(f);
 }
 
 /* A running sum: hi + lo, the exact error of every addition to hi carried in lo. */

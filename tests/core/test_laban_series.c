@@ -321,7 +321,8 @@ static void test_layouts(void **state)
     assert_int_equal(affect_laban_series_frames(0.01, 30), 0);
     assert_int_equal(affect_laban_series_frames(NAN, 30), 0);
     assert_int_equal(affect_laban_series_frames(-1, 30), 0);
-    assert_int_equal(affect_laban_series_frames(1e300, 30), 0);
+    assert_int_equal(affect_laban_series_frames(1e300, 30), UINT32_MAX);
+    assert_int_equal(affect_laban_series_frames(INFINITY, 30), 0);
     affect_motion_free(m);
 }
 

@@ -178,8 +178,9 @@ typedef struct affect_laban_series_options {
 /* window 0 (to be set: from affect_laban_series_frames), hop 1, Q1, Q1, combined false. */
 void affect_laban_series_options_default(affect_laban_series_options *so);
 
-/* Frames of a duration in seconds at fps: round(seconds · fps), or 0 when that is not a
- * finite number in [1, 2^31] (the caller reports it). */
+/* Frames of a duration in seconds at fps: round(seconds · fps), at most UINT32_MAX (a window
+ * longer than any motion), or 0 when that is not a finite number of at least 0.5 (the caller
+ * reports it). */
 uint32_t affect_laban_series_frames(double seconds, double fps);
 
 typedef struct affect_laban_series affect_laban_series;
