@@ -30,8 +30,11 @@
  *     lo), so removing a term undoes its addition to within 2^-104 relative and a long motion
  *     does not drift; a count of the non-zero terms it holds makes a sum exactly 0 when nothing
  *     moved in the window (a still part is direct: Space 1, not max_ratio from a residue).
- * Windows that do not overlap (hop > window) are computed afresh. The positions for Space are
- * the parts' centroids read from the motion when needed (m must outlive the series).
+ * Each frame's step terms are computed once, when it enters, and kept in a ring of one window
+ * (rows × 3 + parts doubles a frame) from which they are taken back, the same bits, when it
+ * leaves; windows that do not overlap (hop ≥ window) are computed afresh and need no ring. The
+ * positions for Space are the parts' centroids read from the motion as frames enter (m must
+ * outlive the series), the last ones kept for the next frame's path step.
  */
 #include "affect/laban.h"
 
@@ -139,6 +142,9 @@ struct affect_laban_series {
     peak_queue qw[MAX_ROWS];  /* Weight's peak (Q1: point terms; Q2: step terms) */
     peak_queue qt[MAX_ROWS];  /* Time Q1's peak */
     dd_sum time_sum[MAX_ROWS], flow_sum[MAX_ROWS], path[6];
+    double pos[6][3]; /* the parts' positions at the frame added last */
+    double *ring;     /* overlapping windows: each frame's step terms (RING_SLOTS doubles) at
+                         row t mod window, read back when it leaves; NULL otherwise */
     uint32_t prev_first, prev_last;
     bool started;
     uint64_t work, next_poll;
@@ -208,22 +214,51 @@ static void add_point(affect_laban_series *s, uint32_t t)
     }
 }
 
-/* The step terms of frame t (t ≥ 1) added (sign 1) or removed (sign −1). */
-static void step_terms(affect_laban_series *s, uint32_t t, int sign)
+/* Step-term slots per frame in the ring: three per row (deceleration, velocity change, jerk)
+ * and one per part (its path step). */
+#define RING_SLOTS(s) ((size_t)(s)->n_rows * 3 + (s)->n_parts)
+
+/* Applies the step terms of one frame (terms: RING_SLOTS doubles) with sign 1 (the frame
+ * enters; Weight Q2's queue gets it too) or −1 (it leaves). */
+static void apply_steps(affect_laban_series *s, uint32_t t, const double *terms, int sign)
 {
-    double fps = s->fps, dec[6], dv[6], da[6];
+    for (uint32_t r = 0; r < s->n_rows; r++) {
+        const double *rt = terms + (size_t)r * 3;
+        if (sign > 0 && s->so.weight == AFFECT_LABAN_Q2)
+            queue_push(&s->qw[r], t, rt[0]);
+        if (s->so.time == AFFECT_LABAN_Q2)
+            dd_add(&s->time_sum[r], rt[1], sign);
+        dd_add(&s->flow_sum[r], rt[2], sign);
+    }
+    const double *path = terms + (size_t)s->n_rows * 3;
+    for (uint32_t k = 0; k < s->n_parts; k++)
+        dd_add(&s->path[k], path[k], sign);
+}
+
+/* Frame t enters the window: its point terms into the queues and, unless it is the window's
+ * first (step false), its step terms (from frame t − 1, the frame added just before: its
+ * positions are in s->pos) into the sums, and into the ring for when it leaves. */
+static void add_frame(affect_laban_series *s, uint32_t t, bool step)
+{
+    add_point(s, t);
+    double fps = s->fps, dec[6], dv[6], da[6], pos[6][3];
+    double local[MAX_ROWS * 3 + 6];
+    double *terms = s->ring ? s->ring + (size_t)(t % s->window) * RING_SLOTS(s) : local;
     for (uint32_t k = 0; k < s->n_parts; k++) {
+        part_at(s, k, t, pos[k]);
+        if (!step)
+            continue;
         const double *v1 = s->vel[k] + (size_t)t * s->stride, *v0 = v1 - s->stride;
         const double *a1 = s->acc[k] + (size_t)t * s->stride, *a0 = a1 - s->stride;
         double drop = (norm3(v0) - norm3(v1)) * fps;
         dec[k] = drop > 0 ? drop : 0;
         dv[k] = dist3(v1, v0) * fps;
         da[k] = dist3(a1, a0) * fps;
-        double p1[3], p0[3];
-        part_at(s, k, t, p1);
-        part_at(s, k, t - 1, p0);
-        dd_add(&s->path[k], dist3(p1, p0), sign);
+        terms[(size_t)s->n_rows * 3 + k] = dist3(pos[k], s->pos[k]);
     }
+    memcpy(s->pos, pos, sizeof pos);
+    if (!step)
+        return;
     for (uint32_t r = 0; r < s->n_rows; r++) {
         uint32_t lo, hi;
         row_parts(s, r, &lo, &hi);
@@ -233,12 +268,17 @@ static void step_terms(affect_laban_series *s, uint32_t t, int sign)
             sv += dv[k];
             sa += da[k];
         }
-        if (sign > 0 && s->so.weight == AFFECT_LABAN_Q2)
-            queue_push(&s->qw[r], t, sd);
-        if (s->so.time == AFFECT_LABAN_Q2)
-            dd_add(&s->time_sum[r], sv, sign);
-        dd_add(&s->flow_sum[r], sa, sign);
+        terms[(size_t)r * 3] = sd;
+        terms[(size_t)r * 3 + 1] = sv;
+        terms[(size_t)r * 3 + 2] = sa;
     }
+    apply_steps(s, t, terms, 1);
+}
+
+/* Frame t (≥ 1, in the ring) leaves: its step terms out of the sums. */
+static void remove_frame(affect_laban_series *s, uint32_t t)
+{
+    apply_steps(s, t, s->ring + (size_t)(t % s->window) * RING_SLOTS(s), -1);
 }
 
 /* Counts frames of work and polls the monitor every POLL_FRAMES of them. */
@@ -299,7 +339,7 @@ affect_status affect_laban_series_new(const affect_motion *m, const affect_part 
     uint32_t T = m->n_frames;
     s->window = so->window < T ? so->window : T;
     s->n_windows = so->window < T ? (T - so->window) / so->hop + 1 : 1;
-    affect_ws_part ws[4 * MAX_ROWS];
+    affect_ws_part ws[4 * MAX_ROWS + 1];
     size_t n_ws = 0;
     for (uint32_t r = 0; r < s->n_rows; r++) {
         s->qw[r].cap = s->qt[r].cap = s->window;
@@ -307,6 +347,14 @@ affect_status affect_laban_series_new(const affect_motion *m, const affect_part 
         ws[n_ws++] = (affect_ws_part){(void **)&s->qw[r].val, s->window, sizeof(double)};
         ws[n_ws++] = (affect_ws_part){(void **)&s->qt[r].idx, s->window, sizeof(uint32_t)};
         ws[n_ws++] = (affect_ws_part){(void **)&s->qt[r].val, s->window, sizeof(double)};
+    }
+    if (s->n_windows > 1 && so->hop < s->window) {
+        size_t slots;
+        if (!affect_mul_size(s->window, RING_SLOTS(s), &slots)) {
+            st = affect_fail(err, AFFECT_ERR_RANGE, "window too long");
+            goto fail;
+        }
+        ws[n_ws++] = (affect_ws_part){(void **)&s->ring, slots, sizeof(double)};
     }
     s->ws = affect_ws_alloc(ws, n_ws);
     if (!s->ws) {
@@ -342,15 +390,13 @@ affect_status affect_laban_series_next(affect_laban_series *s, uint32_t *first, 
     if (!s->started || f > s->prev_last) {
         reset(s);
         for (uint32_t t = f; t <= l; t++) {
-            add_point(s, t);
-            if (t > f)
-                step_terms(s, t, 1);
+            add_frame(s, t, t > f);
             if ((st = tick(s, err)))
                 return st;
         }
     } else {
         for (uint32_t t = s->prev_first + 1; t <= f; t++) {
-            step_terms(s, t, -1);
+            remove_frame(s, t);
             if ((st = tick(s, err)))
                 return st;
         }
@@ -359,8 +405,7 @@ affect_status affect_laban_series_next(affect_laban_series *s, uint32_t *first, 
             queue_expire(&s->qt[r], f);
         }
         for (uint32_t t = s->prev_last + 1; t <= l; t++) {
-            add_point(s, t);
-            step_terms(s, t, 1);
+            add_frame(s, t, true);
             if ((st = tick(s, err)))
                 return st;
         }

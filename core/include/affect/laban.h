@@ -158,7 +158,9 @@ affect_status affect_laban_vector(const affect_motion *m, const affect_roles *ro
  * they fit (window i covers frames i·hop … i·hop + window − 1); a window longer than the motion
  * is cut to it (one window). Cost O(frames · parts), whatever the window: the peaks come from
  * monotone queues, the sums from running sums kept in double-double (TwoSum), so adding and
- * removing frames does not drift. */
+ * removing frames does not drift. Memory: the parts' kinematics (6 doubles a frame and part),
+ * and for overlapping windows a ring of one window's step terms (3 · rows + parts doubles a
+ * frame). */
 
 /* Quantities of a row, in this order. */
 enum { AFFECT_SERIES_WEIGHT, AFFECT_SERIES_TIME, AFFECT_SERIES_SPACE, AFFECT_SERIES_FLOW,
