@@ -537,3 +537,47 @@ void ax_monitor_end(ax_monitor *am)
     sqlite3_finalize(am->report);
     am->probe = am->report = NULL;
 }
+
+/* ---- table-valued functions of a motion ---- */
+
+int ax_motion_tvf_best_index(sqlite3_vtab *vt, sqlite3_index_info *info, int col_motion,
+                             int col_options, const char *name)
+{
+    int motion = -1, options = -1, seen = 0;
+    for (int i = 0; i < info->nConstraint; i++) {
+        const struct sqlite3_index_constraint *k = &info->aConstraint[i];
+        if (k->iColumn != col_motion && (col_options < 0 || k->iColumn != col_options))
+            continue;
+        if (k->iColumn == col_motion)
+            seen = 1;
+        if (!k->usable || k->op != SQLITE_INDEX_CONSTRAINT_EQ) {
+            if (k->iColumn != col_motion)
+                return SQLITE_CONSTRAINT;
+            continue;
+        }
+        if (k->iColumn == col_motion)
+            motion = i;
+        else
+            options = i;
+    }
+    if (motion < 0) {
+        if (seen)
+            return SQLITE_CONSTRAINT;
+        sqlite3_free(vt->zErrMsg);
+        vt->zErrMsg = sqlite3_mprintf("%s: a motion argument is required, as in "
+                                      "SELECT * FROM %s(:motion)",
+                                      name, name);
+        return vt->zErrMsg ? SQLITE_ERROR : SQLITE_NOMEM;
+    }
+    info->aConstraintUsage[motion].argvIndex = 1;
+    info->aConstraintUsage[motion].omit = 1;
+    info->idxNum = 1;
+    if (options >= 0) {
+        info->aConstraintUsage[options].argvIndex = 2;
+        info->aConstraintUsage[options].omit = 1;
+        info->idxNum |= 2;
+    }
+    info->estimatedCost = 1000.0;
+    info->estimatedRows = 10000;
+    return SQLITE_OK;
+}

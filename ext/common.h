@@ -147,4 +147,13 @@ void ax_monitor_end(ax_monitor *am);
 /* Asks now, unthrottled (an aggregate's step: see ext/seqs.c). */
 bool ax_monitor_interrupted(ax_monitor *am);
 
+/* ---- table-valued functions of a motion ----
+ * xBestIndex of an eponymous table whose hidden columns col_motion and col_options (−1: none)
+ * are its arguments: an equality on motion is required (idxNum bit 1, argv 1) and one on
+ * options taken (bit 2, argv 2); any other constraint on options, or an unusable one on motion,
+ * is SQLITE_CONSTRAINT (another plan will do); no constraint on motion at all is the error
+ * "<name>: a motion argument is required, as in SELECT * FROM <name>(:motion)". */
+int ax_motion_tvf_best_index(sqlite3_vtab *vt, sqlite3_index_info *info, int col_motion,
+                             int col_options, const char *name);
+
 #endif

@@ -621,42 +621,7 @@ static int series_rowid(sqlite3_vtab_cursor *cur, sqlite3_int64 *rowid)
 
 static int series_best_index(sqlite3_vtab *vt, sqlite3_index_info *info)
 {
-    int motion = -1, options = -1, seen = 0;
-    for (int i = 0; i < info->nConstraint; i++) {
-        const struct sqlite3_index_constraint *k = &info->aConstraint[i];
-        if (k->iColumn != COL_MOTION && k->iColumn != COL_OPTIONS)
-            continue;
-        if (k->iColumn == COL_MOTION)
-            seen = 1;
-        if (!k->usable || k->op != SQLITE_INDEX_CONSTRAINT_EQ) {
-            if (k->iColumn == COL_OPTIONS)
-                return SQLITE_CONSTRAINT;
-            continue;
-        }
-        if (k->iColumn == COL_MOTION)
-            motion = i;
-        else
-            options = i;
-    }
-    if (motion < 0) {
-        if (seen)
-            return SQLITE_CONSTRAINT;
-        sqlite3_free(vt->zErrMsg);
-        vt->zErrMsg = sqlite3_mprintf("laban_series: a motion argument is required, as in "
-                                      "SELECT * FROM laban_series(:motion)");
-        return vt->zErrMsg ? SQLITE_ERROR : SQLITE_NOMEM;
-    }
-    info->aConstraintUsage[motion].argvIndex = 1;
-    info->aConstraintUsage[motion].omit = 1;
-    info->idxNum = 1;
-    if (options >= 0) {
-        info->aConstraintUsage[options].argvIndex = 2;
-        info->aConstraintUsage[options].omit = 1;
-        info->idxNum |= 2;
-    }
-    info->estimatedCost = 1000.0;
-    info->estimatedRows = 10000;
-    return SQLITE_OK;
+    return ax_motion_tvf_best_index(vt, info, COL_MOTION, COL_OPTIONS, "laban_series");
 }
 
 static sqlite3_module series_module = {
