@@ -24,6 +24,7 @@ SELECT 'default: windows of fps frames, hop 1, the seven parts in order',
                    CAST(json_extract(motion_info(m), '$.fps') AS INTEGER)
           FROM laban_series(m))
   FROM ls;
+-- oom: skip
 
 SELECT 'frame is the centre frame (rounded down), seconds the centre time',
        (SELECT count(*) FROM laban_series(m, '{"window_frames":10,"hop_frames":7}')
@@ -32,6 +33,7 @@ SELECT 'frame is the centre frame (rounded down), seconds the centre time',
                    / json_extract(motion_info(m), '$.fps')) > 1e-12
             OR first_frame % 7 <> 0) = 0
   FROM ls;
+-- oom: skip
 
 -- ---- a window covering the whole take is the per-clip value ----
 SELECT 'whole window: ' || s.part || ' of ' || action || ' ' || emotion,
@@ -40,6 +42,7 @@ SELECT 'whole window: ' || s.part || ' of ' || action || ' ' || emotion,
    AND abs(s.flow - laban_flow(m, s.part)) <= 1e-12 * laban_flow(m, s.part)
    AND s.first_frame = 0 AND s.last_frame = motion_frames(m) - 1
   FROM ls, laban_series(ls.m, '{"window":1000}') AS s;
+-- oom: skip
 
 SELECT 'whole window, the other methods: ' || s.part || ' of ' || action || ' ' || emotion,
        s.weight = laban_weight(m, s.part, '{"method":"deceleration"}')
@@ -47,6 +50,7 @@ SELECT 'whole window, the other methods: ' || s.part || ' of ' || action || ' ' 
        <= 1e-12 * s.time
   FROM ls, laban_series(ls.m, '{"window_frames":100000,"weight_method":"deceleration",' ||
                               '"time_method":"accumulated","per_second":true}') AS s;
+-- oom: skip
 
 -- the peaks of the windows of a one-frame hop cover every frame: their maximum is the clip's
 SELECT 'max over windows = the per-clip peak: ' || action || ' ' || emotion,
@@ -54,6 +58,7 @@ SELECT 'max over windows = the per-clip peak: ' || action || ' ' || emotion,
            laban_weight(m)
    AND (SELECT max(time) FROM laban_series(m, '{"window":0.5,"parts":"all"}')) = laban_time(m)
   FROM ls;
+-- oom: skip
 
 SELECT 'angry is Strong and Sudden over most of the take, sad Light and Sustained',
        (SELECT avg(weight) FROM laban_series(a.m) WHERE part = 'all') >
@@ -61,6 +66,7 @@ SELECT 'angry is Strong and Sudden over most of the take, sad Light and Sustaine
    AND (SELECT avg(time) FROM laban_series(a.m) WHERE part = 'all') >
            (SELECT avg(time) FROM laban_series(s.m) WHERE part = 'all')
   FROM ls AS a JOIN ls AS s USING (action) WHERE a.emotion = 'angry' AND s.emotion = 'sad';
+-- oom: skip
 
 -- ---- options ----
 SELECT 'parts: a name, an array in its order, a joint',
@@ -103,6 +109,7 @@ SELECT 'laban_plot mode series: one line per part, in x order',
    AND instr(svg, 'data-label="left_hand" data-count="70"') > 0
   FROM (SELECT laban_plot(seconds, weight, part, '{"mode":"series","y_label":"Weight"}') AS svg
           FROM laban_series((SELECT m FROM ls WHERE action = 'knock' AND emotion = 'angry')));
+-- oom: skip
 
 SELECT laban_plot(1, 2, 'a', '{"mode":"lines"}');
 -- error: laban_plot: option "mode" must be one of "scatter", "series", got "lines"
