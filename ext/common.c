@@ -581,3 +581,39 @@ int ax_motion_tvf_best_index(sqlite3_vtab *vt, sqlite3_index_info *info, int col
     info->estimatedRows = 10000;
     return SQLITE_OK;
 }
+
+affect_status ax_motion_tvf_args(int idx_num, int argc, sqlite3_value **argv, affect_monitor *mon,
+                                 affect_motion **m, const char **text, size_t *len,
+                                 affect_error *err)
+{
+    *m = NULL;
+    *text = NULL;
+    *len = 0;
+    if (argc < 1 || sqlite3_value_type(argv[0]) == SQLITE_NULL)
+        return AFFECT_OK;
+    if (sqlite3_value_type(argv[0]) != SQLITE_BLOB)
+        return affect_fail(err, AFFECT_ERR_INVALID, "the argument must be a motion BLOB, got %s",
+                           ax_type_name(argv[0]));
+    if ((idx_num & 2) && argc > 1 && sqlite3_value_type(argv[1]) != SQLITE_NULL) {
+        if (sqlite3_value_type(argv[1]) != SQLITE_TEXT)
+            return affect_fail(err, AFFECT_ERR_INVALID,
+                               "options must be a JSON object as text, got %s",
+                               ax_type_name(argv[1]));
+        *text = (const char *)sqlite3_value_text(argv[1]);
+        if (!*text)
+            return affect_nomem(err);
+        *len = (size_t)sqlite3_value_bytes(argv[1]);
+    }
+    const unsigned char *data = sqlite3_value_blob(argv[0]);
+    int n = sqlite3_value_bytes(argv[0]);
+    if (!data && n > 0)
+        return affect_nomem(err);
+    affect_status st = affect_motion_decode_monitored(data, (size_t)n, mon, m, err);
+    if (st && st != AFFECT_ERR_NOMEM && st != AFFECT_ERR_INTERRUPTED) {
+        char emsg[AFFECT_ERROR_MSG_MAX];
+        memcpy(emsg, err->msg, sizeof emsg);
+        st = affect_fail(err, AFFECT_ERR_FORMAT, "the argument is not a valid motion: %.200s",
+                         emsg);
+    }
+    return st;
+}

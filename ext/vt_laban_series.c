@@ -469,45 +469,18 @@ static int series_filter(sqlite3_vtab_cursor *cur, int idx_num, const char *idx_
     series_reset(c);
     c->base = base;
     affect_error err;
-    if (argc < 1 || sqlite3_value_type(argv[0]) == SQLITE_NULL)
-        return SQLITE_OK;
-    if (sqlite3_value_type(argv[0]) != SQLITE_BLOB) {
-        affect_fail(&err, AFFECT_ERR_INVALID, "the argument must be a motion BLOB, got %s",
-                    ax_type_name(argv[0]));
-        return vtab_error(cur->pVtab, &err);
-    }
-    const char *text = NULL;
-    size_t len = 0;
-    if ((idx_num & 2) && argc > 1 && sqlite3_value_type(argv[1]) != SQLITE_NULL) {
-        if (sqlite3_value_type(argv[1]) != SQLITE_TEXT) {
-            affect_fail(&err, AFFECT_ERR_INVALID, "options must be a JSON object as text, got %s",
-                        ax_type_name(argv[1]));
-            return vtab_error(cur->pVtab, &err);
-        }
-        text = (const char *)sqlite3_value_text(argv[1]);
-        if (!text)
-            return SQLITE_NOMEM;
-        len = (size_t)sqlite3_value_bytes(argv[1]);
-    }
-    const unsigned char *data = sqlite3_value_blob(argv[0]);
-    int n = sqlite3_value_bytes(argv[0]);
-    if (!data && n > 0)
-        return SQLITE_NOMEM;
+    const char *text;
+    size_t len;
     char *msg = NULL;
     if (ax_monitor_begin_db(&c->am, ((series_vtab *)cur->pVtab)->db, NULL, &msg) != SQLITE_OK) {
         sqlite3_free(msg); /* no progress function: cannot fail */
         return SQLITE_NOMEM;
     }
     c->monitoring = true;
-    if (affect_motion_decode_monitored(data, (size_t)n, &c->am.mon, &c->m, &err)) {
-        if (err.status != AFFECT_ERR_NOMEM && err.status != AFFECT_ERR_INTERRUPTED) {
-            char emsg[AFFECT_ERROR_MSG_MAX];
-            memcpy(emsg, err.msg, sizeof emsg);
-            affect_fail(&err, AFFECT_ERR_FORMAT, "the argument is not a valid motion: %.200s",
-                        emsg);
-        }
+    if (ax_motion_tvf_args(idx_num, argc, argv, &c->am.mon, &c->m, &text, &len, &err))
         return vtab_error(cur->pVtab, &err);
-    }
+    if (!c->m)
+        return SQLITE_OK; /* a NULL motion: no rows */
     static const char *const missing[] = {"error", "null", NULL};
     static const char *const weights[] = {"peak", "deceleration", NULL};
     static const char *const times[] = {"peak", "accumulated", NULL};
