@@ -346,6 +346,11 @@ int sqlite3_affect_init(sqlite3 *db, char **err, const sqlite3_api_routines *api
         *err = sqlite3_mprintf("affect: cannot register motion_angles: %s", sqlite3_errmsg(db));
         return rc;
     }
+    rc = ax_register_laban_series(db);
+    if (rc != SQLITE_OK) {
+        *err = sqlite3_mprintf("affect: cannot register laban_series: %s", sqlite3_errmsg(db));
+        return rc;
+    }
     static const ax_laban_cache_kind laban_caches[] = {{"rmlr", ax_gen_check_fit},
                                                         {NULL, NULL}};
     rc = ax_register_laban(db, laban_caches);

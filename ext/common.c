@@ -537,3 +537,83 @@ void ax_monitor_end(ax_monitor *am)
     sqlite3_finalize(am->report);
     am->probe = am->report = NULL;
 }
+
+/* ---- table-valued functions of a motion ---- */
+
+int ax_motion_tvf_best_index(sqlite3_vtab *vt, sqlite3_index_info *info, int col_motion,
+                             int col_options, const char *name)
+{
+    int motion = -1, options = -1, seen = 0;
+    for (int i = 0; i < info->nConstraint; i++) {
+        const struct sqlite3_index_constraint *k = &info->aConstraint[i];
+        if (k->iColumn != col_motion && (col_options < 0 || k->iColumn != col_options))
+            continue;
+        if (k->iColumn == col_motion)
+            seen = 1;
+        if (!k->usable || k->op != SQLITE_INDEX_CONSTRAINT_EQ) {
+            if (k->iColumn != col_motion)
+                return SQLITE_CONSTRAINT;
+            continue;
+        }
+        if (k->iColumn == col_motion)
+            motion = i;
+        else
+            options = i;
+    }
+    if (motion < 0) {
+        if (seen)
+            return SQLITE_CONSTRAINT;
+        sqlite3_free(vt->zErrMsg);
+        vt->zErrMsg = sqlite3_mprintf("%s: a motion argument is required, as in "
+                                      "SELECT * FROM %s(:motion)",
+                                      name, name);
+        return vt->zErrMsg ? SQLITE_ERROR : SQLITE_NOMEM;
+    }
+    info->aConstraintUsage[motion].argvIndex = 1;
+    info->aConstraintUsage[motion].omit = 1;
+    info->idxNum = 1;
+    if (options >= 0) {
+        info->aConstraintUsage[options].argvIndex = 2;
+        info->aConstraintUsage[options].omit = 1;
+        info->idxNum |= 2;
+    }
+    info->estimatedCost = 1000.0;
+    info->estimatedRows = 10000;
+    return SQLITE_OK;
+}
+
+affect_status ax_motion_tvf_args(int idx_num, int argc, sqlite3_value **argv, affect_monitor *mon,
+                                 affect_motion **m, const char **text, size_t *len,
+                                 affect_error *err)
+{
+    *m = NULL;
+    *text = NULL;
+    *len = 0;
+    if (argc < 1 || sqlite3_value_type(argv[0]) == SQLITE_NULL)
+        return AFFECT_OK;
+    if (sqlite3_value_type(argv[0]) != SQLITE_BLOB)
+        return affect_fail(err, AFFECT_ERR_INVALID, "the argument must be a motion BLOB, got %s",
+                           ax_type_name(argv[0]));
+    if ((idx_num & 2) && argc > 1 && sqlite3_value_type(argv[1]) != SQLITE_NULL) {
+        if (sqlite3_value_type(argv[1]) != SQLITE_TEXT)
+            return affect_fail(err, AFFECT_ERR_INVALID,
+                               "options must be a JSON object as text, got %s",
+                               ax_type_name(argv[1]));
+        *text = (const char *)sqlite3_value_text(argv[1]);
+        if (!*text)
+            return affect_nomem(err);
+        *len = (size_t)sqlite3_value_bytes(argv[1]);
+    }
+    const unsigned char *data = sqlite3_value_blob(argv[0]);
+    int n = sqlite3_value_bytes(argv[0]);
+    if (!data && n > 0)
+        return affect_nomem(err);
+    affect_status st = affect_motion_decode_monitored(data, (size_t)n, mon, m, err);
+    if (st && st != AFFECT_ERR_NOMEM && st != AFFECT_ERR_INTERRUPTED) {
+        char emsg[AFFECT_ERROR_MSG_MAX];
+        memcpy(emsg, err->msg, sizeof emsg);
+        st = affect_fail(err, AFFECT_ERR_FORMAT, "the argument is not a valid motion: %.200s",
+                         emsg);
+    }
+    return st;
+}

@@ -147,4 +147,21 @@ void ax_monitor_end(ax_monitor *am);
 /* Asks now, unthrottled (an aggregate's step: see ext/seqs.c). */
 bool ax_monitor_interrupted(ax_monitor *am);
 
+/* ---- table-valued functions of a motion ----
+ * xBestIndex of an eponymous table whose hidden columns col_motion and col_options (−1: none)
+ * are its arguments: an equality on motion is required (idxNum bit 1, argv 1) and one on
+ * options taken (bit 2, argv 2); any other constraint on options, or an unusable one on motion,
+ * is SQLITE_CONSTRAINT (another plan will do); no constraint on motion at all is the error
+ * "<name>: a motion argument is required, as in SELECT * FROM <name>(:motion)". */
+int ax_motion_tvf_best_index(sqlite3_vtab *vt, sqlite3_index_info *info, int col_motion,
+                             int col_options, const char *name);
+/* xFilter's arguments under that plan: argv[0] a motion BLOB, decoded into *m polling mon (a
+ * NULL motion leaves *m NULL: no rows), and, when idx_num has bit 2, argv[1] the options as text
+ * (*text, *len; NULL or absent: *text = NULL). Errors into err (the caller prefixes its name):
+ * "the argument must be a motion BLOB, got text", "options must be a JSON object as text, got
+ * integer", "the argument is not a valid motion: …", AFFECT_ERR_NOMEM, AFFECT_ERR_INTERRUPTED. */
+affect_status ax_motion_tvf_args(int idx_num, int argc, sqlite3_value **argv, affect_monitor *mon,
+                                 affect_motion **m, const char **text, size_t *len,
+                                 affect_error *err);
+
 #endif

@@ -19,4 +19,7 @@ AX_FN(ax_laban_zvector);
 AX_FN(ax_motion_kinematics);
 AX_FN(ax_laban_names);
 
+/* laban_series, the windowed Effort series (vt_laban_series.c). */
+int ax_register_laban_series(sqlite3 *db);
+
 #endif

@@ -11,7 +11,9 @@
  * NULLs; a non-finite one is drawn as skipped in the plot's note); label is text, a number
  * (converted to text) or NULL (drawn as "(none)"); options is a JSON object with the keys
  * title, x_label, y_label (strings), width, height, radius (numbers), log_x, log_y, means
- * (booleans). The options are read from the first row and must be the same text on every
+ * (booleans), mode ("scatter", the default, or "series": a time series, each label's points
+ * joined by a line in x order — laban_plot(seconds, weight, part, '{"mode":"series"}') over
+ * laban_series). The options are read from the first row and must be the same text on every
  * row. The result is the SVG document as text; over no rows at all it is the empty plot with
  * the default options ("no data").
  *
@@ -35,7 +37,7 @@
 #include "affect/plot.h"
 
 static const char *const plot_keys[] = {"title", "x_label", "y_label", "width", "height",
-                                        "log_x", "log_y",   "radius",  "means", NULL};
+                                        "log_x", "log_y",   "radius",  "means", "mode", NULL};
 
 typedef struct plot_state {
     affect_scatter *sc;
@@ -59,6 +61,8 @@ static void state_free(plot_state *ps)
 /* Parses and checks the options (argument 4) of the first row into ps. */
 static ax_arg read_options(sqlite3_context *ctx, int argc, sqlite3_value **argv, plot_state *ps)
 {
+    static const char *const modes[] = {"scatter", "series", NULL};
+    int mode = 0;
     affect_plot_options_default(&ps->po);
     if (ax_opts_parse(ctx, argc, argv, 3, plot_keys, &ps->opts) != AX_OK)
         return AX_ERROR;
@@ -70,8 +74,10 @@ static ax_arg read_options(sqlite3_context *ctx, int argc, sqlite3_value **argv,
         ax_opt_number(ctx, &ps->opts, "radius", &ps->po.radius) ||
         ax_opt_bool(ctx, &ps->opts, "log_x", &ps->po.log_x) ||
         ax_opt_bool(ctx, &ps->opts, "log_y", &ps->po.log_y) ||
-        ax_opt_bool(ctx, &ps->opts, "means", &ps->po.means))
+        ax_opt_bool(ctx, &ps->opts, "means", &ps->po.means) ||
+        ax_opt_enum(ctx, &ps->opts, "mode", modes, &mode))
         return AX_ERROR;
+    ps->po.lines = mode == 1;
     affect_error err;
     if (affect_plot_options_check(&ps->po, &err)) {
         ax_error(ctx, &err);

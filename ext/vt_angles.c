@@ -148,45 +148,18 @@ static int angles_filter(sqlite3_vtab_cursor *cur, int idx_num, const char *idx_
     angles_cursor *c = (angles_cursor *)cur;
     angles_reset(c);
     affect_error err;
-    if (argc < 1 || sqlite3_value_type(argv[0]) == SQLITE_NULL)
-        return SQLITE_OK;
-    if (sqlite3_value_type(argv[0]) != SQLITE_BLOB) {
-        affect_fail(&err, AFFECT_ERR_INVALID, "the argument must be a motion BLOB, got %s",
-                    ax_type_name(argv[0]));
-        return vtab_error(cur->pVtab, &err);
-    }
-    const char *text = NULL;
-    size_t len = 0;
-    if ((idx_num & 2) && argc > 1 && sqlite3_value_type(argv[1]) != SQLITE_NULL) {
-        if (sqlite3_value_type(argv[1]) != SQLITE_TEXT) {
-            affect_fail(&err, AFFECT_ERR_INVALID, "options must be a JSON object as text, got %s",
-                        ax_type_name(argv[1]));
-            return vtab_error(cur->pVtab, &err);
-        }
-        text = (const char *)sqlite3_value_text(argv[1]);
-        if (!text)
-            return SQLITE_NOMEM;
-        len = (size_t)sqlite3_value_bytes(argv[1]);
-    }
-    const unsigned char *data = sqlite3_value_blob(argv[0]);
-    int n = sqlite3_value_bytes(argv[0]);
-    if (!data && n > 0)
-        return SQLITE_NOMEM;
+    const char *text;
+    size_t len;
     ax_monitor am; /* the decoding and inverse kinematics of a long motion stop when asked */
     char *msg = NULL;
     if (ax_monitor_begin_db(&am, ((angles_vtab *)cur->pVtab)->db, NULL, &msg) != SQLITE_OK) {
         sqlite3_free(msg); /* no progress function: cannot fail */
         return SQLITE_NOMEM;
     }
-    if (affect_motion_decode_monitored(data, (size_t)n, &am.mon, &c->m, &err)) {
+    affect_status st = ax_motion_tvf_args(idx_num, argc, argv, &am.mon, &c->m, &text, &len, &err);
+    if (st || !c->m) { /* an error, or a NULL motion: no rows */
         ax_monitor_end(&am);
-        if (err.status != AFFECT_ERR_NOMEM && err.status != AFFECT_ERR_INTERRUPTED) {
-            char emsg[AFFECT_ERROR_MSG_MAX];
-            memcpy(emsg, err.msg, sizeof emsg);
-            affect_fail(&err, AFFECT_ERR_FORMAT, "the argument is not a valid motion: %.200s",
-                        emsg);
-        }
-        return vtab_error(cur->pVtab, &err);
+        return st ? vtab_error(cur->pVtab, &err) : SQLITE_OK;
     }
     ax_skel_opts so;
     if (ax_skel_opts_parse(text, len, angle_keys, c->m, &so, &err)) {
@@ -194,7 +167,7 @@ static int angles_filter(sqlite3_vtab_cursor *cur, int idx_num, const char *idx_
         return vtab_error(cur->pVtab, &err);
     }
     so.ik.rigid.monitor = &am.mon; /* inverse kinematics of a long motion */
-    affect_status st = ax_skeletal(c->m, &so, &c->sk, &err);
+    st = ax_skeletal(c->m, &so, &c->sk, &err);
     ax_monitor_end(&am);
     if (!st) {
         size_t nj = c->sk->n_joints;
@@ -266,42 +239,7 @@ static int angles_rowid(sqlite3_vtab_cursor *cur, sqlite3_int64 *rowid)
 
 static int angles_best_index(sqlite3_vtab *vt, sqlite3_index_info *info)
 {
-    int motion = -1, options = -1, seen = 0;
-    for (int i = 0; i < info->nConstraint; i++) {
-        const struct sqlite3_index_constraint *k = &info->aConstraint[i];
-        if (k->iColumn != COL_MOTION && k->iColumn != COL_OPTIONS)
-            continue;
-        if (k->iColumn == COL_MOTION)
-            seen = 1;
-        if (!k->usable || k->op != SQLITE_INDEX_CONSTRAINT_EQ) {
-            if (k->iColumn == COL_OPTIONS)
-                return SQLITE_CONSTRAINT;
-            continue;
-        }
-        if (k->iColumn == COL_MOTION)
-            motion = i;
-        else
-            options = i;
-    }
-    if (motion < 0) {
-        if (seen)
-            return SQLITE_CONSTRAINT;
-        sqlite3_free(vt->zErrMsg);
-        vt->zErrMsg = sqlite3_mprintf("motion_angles: a motion argument is required, as in "
-                                      "SELECT * FROM motion_angles(:motion)");
-        return vt->zErrMsg ? SQLITE_ERROR : SQLITE_NOMEM;
-    }
-    info->aConstraintUsage[motion].argvIndex = 1;
-    info->aConstraintUsage[motion].omit = 1;
-    info->idxNum = 1;
-    if (options >= 0) {
-        info->aConstraintUsage[options].argvIndex = 2;
-        info->aConstraintUsage[options].omit = 1;
-        info->idxNum |= 2;
-    }
-    info->estimatedCost = 1000.0;
-    info->estimatedRows = 10000;
-    return SQLITE_OK;
+    return ax_motion_tvf_best_index(vt, info, COL_MOTION, COL_OPTIONS, "motion_angles");
 }
 
 static sqlite3_module angles_module = {

@@ -71,4 +71,16 @@ void affect_blas_end(void);
  * ev[k]. Returns LAPACK's info (0 on success). */
 int affect_sym_eigen(double *G, uint32_t n, double *ev, double *work);
 
+/* The filtered velocity and acceleration of n parts (1 to 6) of a motion (laban.c), exactly as
+ * affect_kinematics_compute gives them (to the bit), in one block (*block, affect_free it):
+ * part k's velocity and acceleration at frame t are vel[k] + t·stride and acc[k] + t·stride
+ * (3 doubles each). Checks opt (affect_laban_options) and that the motion has at least 4
+ * frames (AFFECT_ERR_RANGE); polls opt->monitor. For laban_series.c. */
+#include "affect/laban.h"
+affect_status affect_laban_kinematics_block(const affect_motion *m, const affect_part *parts,
+                                            uint32_t n, const affect_laban_options *opt,
+                                            double **block, const double *vel[6],
+                                            const double *acc[6], size_t *stride,
+                                            affect_error *err);
+
 #endif

@@ -1115,3 +1115,34 @@ done:
     affect_free(kin);
     return st;
 }
+
+/* ---- the kinematics of laban_series.c ---- */
+
+affect_status affect_laban_kinematics_block(const affect_motion *m, const affect_part *parts,
+                                            uint32_t n, const affect_laban_options *opt,
+                                            double **block, const double *vel[6],
+                                            const double *acc[6], size_t *stride,
+                                            affect_error *err)
+{
+    *block = NULL;
+    affect_status st = check_effort_input(m, n, opt, "the Laban series", err);
+    if (st)
+        return st;
+    affect_part p6[6];
+    memset(p6, 0, sizeof p6);
+    bool have[6] = {false, false, false, false, false, false};
+    for (uint32_t k = 0; k < n; k++) {
+        p6[k] = parts[k];
+        have[k] = true;
+    }
+    effort_series s;
+    st = vector_kinematics(m, p6, have, opt, block, &s, err);
+    if (st)
+        return st;
+    for (uint32_t k = 0; k < n; k++) {
+        vel[k] = s.vel[k];
+        acc[k] = s.acc[k];
+    }
+    *stride = s.stride;
+    return AFFECT_OK;
+}

@@ -60,6 +60,11 @@
  * class="note">. Text is XML-escaped; invalid UTF-8 becomes U+FFFD and control characters '?'.
  * Coordinates have one decimal and are clamped to ±1e6.
  *
+ * Time-series mode (opt->lines): each label's points, sorted by (x, y) as above, are one
+ * <path> in a <g class="series" data-label="…" data-count="N" stroke="#rrggbb"> inside
+ * <g class="lines"> (a label with one point gets its marker instead); the legend shows a short
+ * stretch of each label's line. Axes, means and the note are as for the scatter.
+ *
  * Errors: AFFECT_ERR_INVALID for options (affect_plot_options_check), AFFECT_ERR_RANGE when a
  * scatter would get more than 2^32 − 2 labels, AFFECT_ERR_NOMEM ("out of memory").
  */
@@ -122,6 +127,7 @@ void affect_plot_options_default(affect_plot_options *opt)
     opt->log_y = false;
     opt->radius = 3;
     opt->means = false;
+    opt->lines = false;
 }
 
 /* A number for a message, "%g"-like but independent of the locale. */
@@ -1104,6 +1110,41 @@ static void write_points(affect_strbuf *sb, const layout *L, const series *ser, 
     affect_strbuf_puts(sb, "</g>\n");
 }
 
+/* Time-series mode: each label's points (sorted by x, then y) joined by one path in its colour;
+ * a label with a single point gets its marker, as a path of one point would not show. */
+static void write_lines(affect_strbuf *sb, const layout *L, const series *ser, size_t n_series,
+                        const point *pts)
+{
+    affect_strbuf_puts(sb, "<g class=\"lines\" fill=\"none\" stroke-width=\"");
+    affect_strbuf_fixed(sb, 1.6 * L->k, 2);
+    affect_strbuf_puts(sb, "\" stroke-linejoin=\"round\" stroke-linecap=\"round\">\n");
+    for (size_t i = 0; i < n_series; i++) {
+        const series *s = &ser[i];
+        affect_strbuf_puts(sb, "<g class=\"series\" data-label=\"");
+        put_text(sb, s->name, SIZE_MAX);
+        affect_strbuf_printf(sb, "\" data-count=\"%zu\" stroke=\"%s\">", s->count,
+                             palette[i % 8]);
+        if (s->count == 1) {
+            const point *p = &pts[s->start];
+            affect_strbuf_printf(sb, "<g fill=\"%s\" stroke=\"none\">", palette[i % 8]);
+            put_marker(sb, (int)(i / 8 % 4), to_px(&L->x, p->x), to_px(&L->y, p->y), L->radius);
+            affect_strbuf_puts(sb, "</g>");
+        } else if (s->count > 1) {
+            affect_strbuf_puts(sb, "<path d=\"");
+            for (size_t k = 0; k < s->count; k++) {
+                const point *p = &pts[s->start + k];
+                affect_strbuf_putc(sb, k ? 'L' : 'M');
+                put_px(sb, clamp_coord(to_px(&L->x, p->x)));
+                affect_strbuf_putc(sb, ' ');
+                put_px(sb, clamp_coord(to_px(&L->y, p->y)));
+            }
+            affect_strbuf_puts(sb, "\"/>");
+        }
+        affect_strbuf_puts(sb, "</g>\n");
+    }
+    affect_strbuf_puts(sb, "</g>\n");
+}
+
 /* The path of a cross: bars of ± sd with end caps (nothing when sd is 0 on both axes). */
 static void cross_path(affect_strbuf *sb, const layout *L, const series *s)
 {
@@ -1196,12 +1237,22 @@ static void write_legend(affect_strbuf *sb, const layout *L, const affect_plot_o
     affect_strbuf_puts(sb, "<g class=\"legend\" fill=\"#222\">\n");
     for (size_t i = 0; i < L->legend_rows; i++, y += row) {
         const series *s = &ser[i];
-        affect_strbuf_printf(sb,
-                             "<g class=\"legend-item\"><g fill=\"%s\" stroke=\"#000\" "
-                             "stroke-opacity=\"0.4\" stroke-width=\"0.6\">",
-                             palette[i % 8]);
-        put_marker(sb, (int)(i / 8 % 4), x + 6 * k, y, r);
-        affect_strbuf_puts(sb, "</g>");
+        if (opt->lines) { /* a short stretch of the line */
+            affect_strbuf_printf(sb, "<g class=\"legend-item\"><path fill=\"none\" "
+                                     "stroke=\"%s\" stroke-width=\"",
+                                 palette[i % 8]);
+            affect_strbuf_fixed(sb, 2 * k, 2);
+            affect_strbuf_puts(sb, "\" d=\"");
+            put_tick(sb, x, y, 'h', 12 * k);
+            affect_strbuf_puts(sb, "\"/>");
+        } else {
+            affect_strbuf_printf(sb,
+                                 "<g class=\"legend-item\"><g fill=\"%s\" stroke=\"#000\" "
+                                 "stroke-opacity=\"0.4\" stroke-width=\"0.6\">",
+                                 palette[i % 8]);
+            put_marker(sb, (int)(i / 8 % 4), x + 6 * k, y, r);
+            affect_strbuf_puts(sb, "</g>");
+        }
         put_text_open(sb, "legend-text", x + 18 * k, y + fs * 0.35, fs, "start", "");
         put_text(sb, s->name, L->legend_chars);
         affect_strbuf_printf(sb, " <tspan fill=\"#777\">(%zu)</tspan></text></g>\n", s->count);
@@ -1241,7 +1292,10 @@ static void write_document(affect_strbuf *sb, const layout *L, const affect_plot
     affect_strbuf_puts(sb, "<g shape-rendering=\"crispEdges\" fill=\"none\">\n");
     write_grid(sb, L);
     affect_strbuf_puts(sb, "</g>\n");
-    write_points(sb, L, ser, n_series, pts);
+    if (opt->lines)
+        write_lines(sb, L, ser, n_series, pts);
+    else
+        write_points(sb, L, ser, n_series, pts);
     if (opt->means)
         write_means(sb, L, ser, n_series);
     affect_strbuf_puts(sb, "<g shape-rendering=\"crispEdges\">\n");

@@ -32,7 +32,11 @@
  *     flow (hull)     affect_laban_shape_flow, default options: per frame, gather the body joints
  *                     into doubles and affect_hull3d_volume (the vector's Shape Flow);
  *     flow (box)      the same with hull_box: the per-frame gather and bounding box;
- *     directional x2  affect_laban_shape_directional for the left and right hand.
+ *     directional x2  affect_laban_shape_directional for the left and right hand;
+ * and, not part of the vector, the windowed Effort series (affect_laban_series_new and every
+ * window by affect_laban_series_next: the six parts and their combination, a one-frame hop):
+ *     series 1 s      one-second windows;
+ *     series 10 s     ten-second windows (the cost does not grow with the window).
  * (affect_laban_shape_flow also resolves the roles, once per motion; the vector is given
  * them.) "effort + rest" is the vector's CPU time minus the pieces' (the
  * default: shaping, flow (hull), directional; box: shaping, flow (box), directional): the six
@@ -409,6 +413,38 @@ static int k_directional(const dataset *d, void *ctx)
     return 0;
 }
 
+/* ctx: the window in seconds (a double). The windowed Effort series of the six parts and their
+ * combination, one-frame hop: every window computed and read (affect_laban_series_next). */
+static int k_series(const dataset *d, void *ctx)
+{
+    const double *seconds = ctx;
+    for (size_t i = 0; i < d->n; i++) {
+        const affect_motion *m = d->e[i].m;
+        affect_laban_series_options so;
+        affect_laban_series_options_default(&so);
+        so.window = affect_laban_series_frames(*seconds, m->fps);
+        so.combined = true;
+        affect_laban_series *s = NULL;
+        affect_error err;
+        if (affect_laban_series_new(m, d->e[i].parts, 6, NULL, &so, &s, &err)) {
+            fprintf(stderr, "laban series of motion %zu: %s\n", i, err.msg);
+            return 1;
+        }
+        double v[7 * AFFECT_SERIES_N], sum = 0;
+        uint32_t first, last;
+        affect_status st;
+        while ((st = affect_laban_series_next(s, &first, &last, v, &err)) == AFFECT_OK)
+            sum += v[0] + v[6 * AFFECT_SERIES_N + AFFECT_SERIES_FLOW];
+        affect_laban_series_free(s);
+        if (st != AFFECT_ERR_RANGE) {
+            fprintf(stderr, "laban series of motion %zu: %s\n", i, err.msg);
+            return 1;
+        }
+        g_sink += sum;
+    }
+    return 0;
+}
+
 /* One kernel over a data set, measured by bench_measure (benchutil.h). */
 typedef struct pass_args {
     const dataset *d;
@@ -428,14 +464,15 @@ static int measure(const dataset *d, kernel_fn fn, void *ctx, unsigned repeat, r
     return bench_measure(one_pass, &a, repeat, r);
 }
 
-enum { K_READ, K_VECTOR, K_BOX, K_SHAPING, K_FLOW, K_FLOWBOX, K_DIR, K_COUNT };
+enum { K_READ, K_VECTOR, K_BOX, K_SHAPING, K_FLOW, K_FLOWBOX, K_DIR, K_SERIES, K_SERIES10,
+       K_COUNT };
 
 static const char *const kernel_names[K_COUNT] = {
     "read bound",   "laban vector", "vector (box)",   "  shaping",
-    "  flow (hull)", "  flow (box)", "  directional x2"};
+    "  flow (hull)", "  flow (box)", "  directional x2", "series 1 s", "series 10 s"};
 static const char *const kernel_keys[K_COUNT] = {
     "read_bound",  "laban_vector",   "laban_vector_box", "shape_shaping",
-    "shape_flow", "shape_flow_box", "directional2"};
+    "shape_flow", "shape_flow_box", "directional2", "laban_series_1s", "laban_series_10s"};
 
 /* Seconds per pass over the data set: wall clock (the median run) and that run's process CPU
  * time (which leaves out the time the process waited for its core on a shared machine). */
@@ -461,6 +498,7 @@ static void row(const char *name, const result *r, double frames, double vector_
 static int run_dataset(const dataset *d, const char *key, unsigned repeat)
 {
     affect_laban_options def, box;
+    double one_second = 1.0, ten_seconds = 10.0;
     affect_laban_options_default(&def);
     box = def;
     box.hull_box = true;
@@ -468,7 +506,8 @@ static int run_dataset(const dataset *d, const char *key, unsigned repeat)
         kernel_fn fn;
         void *ctx;
     } k[K_COUNT] = {{k_read, NULL},     {k_vector, &def}, {k_vector, &box}, {k_shaping, &def},
-                    {k_flow, &def},     {k_flow, &box},   {k_directional, &def}};
+                    {k_flow, &def},     {k_flow, &box},   {k_directional, &def},
+                    {k_series, &one_second}, {k_series, &ten_seconds}};
     result r[K_COUNT];
     for (int i = 0; i < K_COUNT; i++)
         if (measure(d, k[i].fn, k[i].ctx, repeat, &r[i]))

@@ -219,6 +219,55 @@ static void check_linear_axis(const char *svg, const char *which, double lo, dou
 
 /* ---- tests ---- */
 
+/* Time-series mode: each label's points joined in x order by one path (added out of order),
+ * a label of one point drawn as its marker, the legend's line swatches; the same axes as the
+ * scatter of the same points. */
+static void test_series_mode(void **state)
+{
+    affect_scatter *sc = new_scatter();
+    add(sc, 3, 1, "left_hand");
+    add(sc, 1, 2, "left_hand");
+    add(sc, 2, 5, "left_hand");
+    add(sc, 0, 4, "right_hand");
+    add(sc, 4, 3, "right_hand");
+    add(sc, 2, 2, "all");
+    affect_plot_options o;
+    affect_plot_options_default(&o);
+    assert_false(o.lines);
+    char *scatter = render(sc, &o);
+    o.lines = true;
+    char *svg = render(sc, &o);
+    assert_null(strstr(svg, "class=\"points\""));
+    assert_non_null(strstr(svg, "<g class=\"lines\""));
+    assert_int_equal(tu_count(svg, "<path d=\"M"), 2);
+    /* left_hand's path: three points, x increasing */
+    const char *g = strstr(svg, "data-label=\"left_hand\" data-count=\"3\"");
+    assert_non_null(g);
+    const char *d = strstr(g, "<path d=\"M");
+    assert_non_null(d);
+    d += strlen("<path d=\"M");
+    double x[3], y[3];
+    char sep[2];
+    assert_int_equal(sscanf(d, "%lf %lf%1[L]%lf %lf%1[L]%lf %lf", &x[0], &y[0], sep, &x[1], &y[1],
+                            sep, &x[2], &y[2]),
+                     8);
+    assert_true(x[0] < x[1] && x[1] < x[2]);
+    assert_true(y[1] < y[0] && y[1] < y[2]); /* y = 5 at x = 2 is the highest (smallest px) */
+    /* "all" has one point: a marker */
+    g = strstr(svg, "data-label=\"all\" data-count=\"1\"");
+    assert_non_null(g);
+    assert_true(strstr(g, "<circle") < strstr(g, "</g>\n"));
+    assert_int_equal(tu_count(svg, "class=\"legend-item\"><path"), 3);
+    /* the same ticks as the scatter */
+    const char *ts = strstr(scatter, "class=\"tick-x\""), *tl = strstr(svg, "class=\"tick-x\"");
+    assert_non_null(ts);
+    assert_non_null(tl);
+    assert_int_equal(tu_count(scatter, "class=\"tick-x\""), tu_count(svg, "class=\"tick-x\""));
+    affect_free(scatter);
+    affect_free(svg);
+    affect_scatter_free(sc);
+}
+
 static void test_defaults(void **state)
 {
     affect_plot_options o;
@@ -940,6 +989,7 @@ int main(void)
         cmocka_unit_test(test_deterministic_and_order_free),
         cmocka_unit_test(test_out_of_memory),
         cmocka_unit_test(test_failed_add_changes_nothing),
+        cmocka_unit_test(test_series_mode),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -3,7 +3,8 @@
  * them (ext/common.c ax_opts_parse and each wrapper's option reading), through a real
  * connection: motion import (BVH, CSV: options and document together), export, rigid bones,
  * roles, normalization, motion_svg, motion_synth, motion_angles, every laban_* descriptor,
- * laban_zvector (its options, and its index name as ?1), laban_plot, hmm_train, hmm_loglik, affect_train, affect_crossval(_json), laban_salient and
+ * laban_zvector (its options, and its index name as ?1), laban_series, laban_plot (its
+ * time-series mode too), hmm_train, hmm_loglik, affect_train, affect_crossval(_json), laban_salient and
  * affect_generate(_explain) (its classifier option as hex text included).
  *
  * Usage (see tests/fuzz/run.sh, or build with -DAFFECT_FUZZ=ON and clang):
@@ -14,7 +15,8 @@
  * motion_from_csv the options are the second line only and the rest of the input is the
  * document (?2; without a second line break the fixture's document is used). An unknown name
  * does nothing. The fixtures are fuzz_sql.h's; each input gets a fresh copy of them.
- * Seeds (tests/fuzz/corpus/fuzz_sql_options): <call>*.txt, options from docs/reference.md.
+ * Seeds (tests/fuzz/corpus/fuzz_sql_options): <call>*.txt, options from docs/reference.md;
+ * dictionary: tests/fuzz/fuzz_sql_options.dict (laban_series's and laban_plot's keys).
  * Checks beyond "no crash, no leak, no undefined behaviour" (fuzz_sql.c): an error carries a
  * message starting with "<function>: "; a motion result decodes and validates; a JSON result
  * is valid JSON; a trained model or classifier decodes and re-encodes to the same bytes.
@@ -73,6 +75,9 @@ static const call calls[] = {
     /* the index name itself (quoted into laban_zvector's reads of the index's tables) */
     {"laban_zvector_index", "laban_zvector", 'x', false, "SELECT laban_zvector(" M1 ", ?1)"},
     {"laban_plot", "laban_plot", 'x', false, "SELECT laban_plot(x, y, label, ?1) FROM points"},
+    {"laban_series", "laban_series", 'x', false,
+     "SELECT frame, seconds, first_frame, last_frame, part, weight, time, space, flow "
+     "FROM laban_series(" M1 ", ?1)"},
     {"hmm_train", "hmm_train", 'h', false,
      "SELECT hmm_train(motion, ?1) FROM motions WHERE label = 'angry'"},
     {"hmm_loglik", "hmm_loglik", 'x', false,

@@ -125,6 +125,13 @@ static const ir_case IR_CASES[] = {
     {"motion_angles by inverse kinematics, " IR_BIG,
      "SELECT count(*) FROM motion_angles((SELECT m FROM big))", "motion_angles", NULL, IR_THREAD,
      IR_INTERRUPT_AFTER, NULL},
+    {"laban_series, " IR_BIG,
+     "SELECT count(*), max(weight) FROM big, laban_series(big.m)", "laban_series",
+     NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
+    {"laban_series, one window, " IR_BIG,
+     "SELECT count(*) FROM big, laban_series(big.m, '{\"window_frames\":615701,"
+     "\"parts\":\"all\",\"time_method\":\"accumulated\"}')", "laban_series",
+     NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
     {"motion_from_bvh, " IR_BIG, "SELECT motion_from_bvh(t) FROM bigbvh",
      "motion_from_bvh", NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
     {"motion_bvh_error, " IR_BIG, "SELECT motion_bvh_error(t) FROM bigbvh",

@@ -116,7 +116,7 @@ SELECT laban_plot(1, 1, 'a', '{"radius":0}');
 -- error: laban_plot: radius must be between 0.5 and 20, got 0
 
 SELECT laban_plot(1, 1, 'a', '{"colour":"red"}');
--- error: laban_plot: unknown option "colour" (expected title, x_label, y_label, width, height, log_x, log_y, radius, means)
+-- error: laban_plot: unknown option "colour" (expected title, x_label, y_label, width, height, log_x, log_y, radius, means, mode)
 
 SELECT laban_plot(1, 1, 'a', '{"log_x":1}');
 -- error: laban_plot: option "log_x" must be true or false, got number

@@ -568,6 +568,7 @@ static const baseline baselines[] = {
     /* table-valued functions: their hidden arguments */
     {"motion_points", {M}, false},
     {"motion_angles", {M, OPT}, false},
+    {"laban_series", {M, OPT}, false},
     {"affect_salience", {CLS, "2"}, false},
     {"affect_crossval", {"'agg_rows'", "'m'", "'label'", "<crossval options>"}, true},
 };

@@ -180,6 +180,71 @@ affect_status affect_laban_l2_vector(const float x[AFFECT_LABAN_N],
                                      const double sd[AFFECT_LABAN_N], const int *comp,
                                      int n_comp, float *out, affect_error *err);
 
+/* ---- windowed Effort series (laban_series.c) ----
+ *
+ * Weight, Time, Space and Flow over a window sliding along the motion, for plotting an Effort
+ * over a take. The kinematics are those of the whole motion (filtered once, as for the per-clip
+ * values); each window then reduces the frames it covers with the per-clip definitions:
+ *   weight  Q1 (default) max over the window's frames t of Σ_k ‖v_k(t)‖², or Q2 the peak
+ *           deceleration max over t of Σ_k max(0, −d‖v_k‖/dt) (t and t − 1 in the window)
+ *   time    Q1 (default) max_t Σ_k ‖a_k(t)‖, or Q2 Σ_k Σ_t ‖v_k(t) − v_k(t−1)‖ / Δt (t and
+ *           t − 1 in the window; ÷ the window's duration, len / fps, with time_per_second)
+ *   space   Q2: mean over the parts of path / max(‖p_k(last) − p_k(first)‖, path / max_ratio)
+ *   flow    Σ_k Σ_t ‖a_k(t) − a_k(t−1)‖ / Δt (t and t − 1 in the window)
+ * so a window covering the whole motion gives the per-clip values: the peaks bit for bit, the
+ * sums to rounding (AFFECT_LABAN_SERIES_RTOL). Windows start at frames 0, hop, 2·hop, … while
+ * they fit (window i covers frames i·hop … i·hop + window − 1); a window longer than the motion
+ * is cut to it (one window). Cost O(frames · parts), whatever the window: the peaks come from
+ * monotone queues, the sums from running sums kept in double-double (TwoSum), so adding and
+ * removing frames does not drift. Memory: the parts' kinematics (6 doubles a frame and part),
+ * and for overlapping windows a ring of one window's step terms (3 · rows + parts doubles a
+ * frame). */
+
+/* Quantities of a row, in this order. */
+enum { AFFECT_SERIES_WEIGHT, AFFECT_SERIES_TIME, AFFECT_SERIES_SPACE, AFFECT_SERIES_FLOW,
+       AFFECT_SERIES_N };
+
+/* A window covering the whole motion equals the per-clip sums within this relative tolerance. */
+#define AFFECT_LABAN_SERIES_RTOL 1e-12
+
+typedef struct affect_laban_series_options {
+    uint32_t window;            /* frames per window, ≥ 2 */
+    uint32_t hop;               /* frames between window starts, ≥ 1 */
+    affect_laban_method weight; /* Q1 peak kinetic energy (default) or Q2 peak deceleration */
+    affect_laban_method time;   /* Q1 peak acceleration (default) or Q2 accumulated */
+    bool combined;              /* row 0 of each window: all the parts together ("all") */
+} affect_laban_series_options;
+
+/* window 0 (to be set: from affect_laban_series_frames), hop 1, Q1, Q1, combined false. */
+void affect_laban_series_options_default(affect_laban_series_options *so);
+
+/* Frames of a duration in seconds at fps: round(seconds · fps), at most UINT32_MAX (a window
+ * longer than any motion), or 0 when that is not a finite number of at least 0.5 (the caller
+ * reports it). */
+uint32_t affect_laban_series_frames(double seconds, double fps);
+
+typedef struct affect_laban_series affect_laban_series;
+
+/* Prepares the series of n parts (1 to 6) of m: checks both options (AFFECT_ERR_INVALID: window
+ * < 2, hop < 1; AFFECT_ERR_RANGE: fewer than 4 frames), computes the kinematics (polling
+ * opt->monitor, which the series keeps polling in affect_laban_series_next). m and opt (NULL:
+ * the defaults) must outlive the series; after an error of affect_laban_series_next only
+ * affect_laban_series_free may be called. */
+affect_status affect_laban_series_new(const affect_motion *m, const affect_part *parts,
+                                      uint32_t n, const affect_laban_options *opt,
+                                      const affect_laban_series_options *so,
+                                      affect_laban_series **out, affect_error *err);
+/* Windows in all, and rows per window (n, + 1 with combined). */
+uint32_t affect_laban_series_windows(const affect_laban_series *s);
+uint32_t affect_laban_series_rows(const affect_laban_series *s);
+/* The next window (in order, from window 0): its first and last frame and rows ×
+ * AFFECT_SERIES_N values (row 0 the combined one when asked, then the parts in order).
+ * AFFECT_ERR_RANGE once every window was given; AFFECT_ERR_INTERRUPTED when the monitor says
+ * stop (polled every few thousand frames). */
+affect_status affect_laban_series_next(affect_laban_series *s, uint32_t *first, uint32_t *last,
+                                       double *values, affect_error *err);
+void affect_laban_series_free(affect_laban_series *s);
+
 /* ---- geometry (exposed for tests) ---- */
 
 /* Area of the convex hull of n 2-D points (xy interleaved); 0 for fewer than 3 or collinear.

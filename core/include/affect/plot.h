@@ -1,7 +1,8 @@
 /*
  * affect/plot.h — scatter plots as standalone SVG: points grouped by a text label (emotion,
  * performer, cluster…), one colour per label, a legend with each label's point count, "nice"
- * axes (linear or log10) and, optionally, each label's mean ± 1 sd drawn as a cross.
+ * axes (linear or log10) and, optionally, each label's mean ± 1 sd drawn as a cross; or, in
+ * time-series mode (lines), each label's points joined by a line in x order.
  *
  * An affect_scatter is an accumulator: create it, add points one at a time (x, y, label), then
  * render it as often as wanted with different options, then free it. Rendering depends only
@@ -32,6 +33,9 @@ typedef struct affect_plot_options {
     bool log_y;
     double radius; /* point radius in pixels, 0.5..20 (default 3) */
     bool means;    /* draw each label's mean ± 1 sample sd as a cross (default false) */
+    bool lines;    /* time-series mode: each label's points joined in x order (then y) by a
+                      line instead of drawn as markers; a label of one point is a marker
+                      (default false) */
 } affect_plot_options;
 
 void affect_plot_options_default(affect_plot_options *opt);
