@@ -189,6 +189,8 @@ static const ax_aggregate aggregates[] = {
     {"laban_plot", 4, ax_laban_plot_step, ax_laban_plot_final},
     {"motion_svg_group", 2, ax_motion_svg_group_step, ax_motion_svg_group_final},
     {"motion_svg_group", 3, ax_motion_svg_group_step, ax_motion_svg_group_final},
+    {"affect_heatmap", 3, ax_affect_heatmap_step, ax_affect_heatmap_final},
+    {"affect_heatmap", 4, ax_affect_heatmap_step, ax_affect_heatmap_final},
     {"hmm_train", 1, ax_hmm_train_step, ax_hmm_train_final},
     {"hmm_train", 2, ax_hmm_train_step, ax_hmm_train_final},
     {"affect_train", 2, ax_affect_train_step, ax_affect_train_final},

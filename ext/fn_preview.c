@@ -47,6 +47,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "affect/heatmap.h"
 #include "affect/svg.h"
 
 static const char *const svg_keys[] = {"view",  "frames", "size",    "up",        "trajectories",
@@ -295,6 +296,189 @@ void ax_motion_svg_group_final(sqlite3_context *ctx)
         sqlite3_result_null(ctx);
     }
     group_free(gs);
+    if (slot)
+        *slot = NULL;
+}
+
+/* ---- affect_heatmap ---- */
+
+static const char *const heatmap_keys[] = {"title", "x_label", "y_label",      "cell",
+                                           "values", "min",    "max",          "sort_rows",
+                                           "sort_columns",     NULL};
+
+typedef struct heat_state {
+    affect_heatmap *hm;
+    ax_opts opts; /* the first row's options; owns the strings in ho */
+    affect_heatmap_options ho;
+    char *opts_text;
+    size_t opts_len;
+    bool failed;
+} heat_state;
+
+static void heat_free(heat_state *hs)
+{
+    if (!hs)
+        return;
+    affect_heatmap_free(hs->hm);
+    ax_opts_free(&hs->opts);
+    sqlite3_free(hs->opts_text);
+    sqlite3_free(hs);
+}
+
+/* The first row's options (argument 4) into hs, checked, with a copy of their text. */
+static ax_arg heat_options(sqlite3_context *ctx, int argc, sqlite3_value **argv, heat_state *hs)
+{
+    affect_heatmap_options_default(&hs->ho);
+    bool values = false;
+    if (ax_opts_parse(ctx, argc, argv, 3, heatmap_keys, &hs->opts) != AX_OK ||
+        ax_opt_string(ctx, &hs->opts, "title", &hs->ho.title) != AX_OK ||
+        ax_opt_string(ctx, &hs->opts, "x_label", &hs->ho.x_label) != AX_OK ||
+        ax_opt_string(ctx, &hs->opts, "y_label", &hs->ho.y_label) != AX_OK ||
+        ax_opt_number(ctx, &hs->opts, "cell", &hs->ho.cell) != AX_OK ||
+        ax_opt_bool(ctx, &hs->opts, "values", &values) != AX_OK ||
+        ax_opt_number(ctx, &hs->opts, "min", &hs->ho.min) != AX_OK ||
+        ax_opt_number(ctx, &hs->opts, "max", &hs->ho.max) != AX_OK ||
+        ax_opt_bool(ctx, &hs->opts, "sort_rows", &hs->ho.sort_rows) != AX_OK ||
+        ax_opt_bool(ctx, &hs->opts, "sort_columns", &hs->ho.sort_columns) != AX_OK)
+        return AX_ERROR;
+    if (ax_opt(&hs->opts, "values"))
+        hs->ho.values = values ? 1 : 0;
+    hs->ho.has_min = ax_opt(&hs->opts, "min") != NULL;
+    hs->ho.has_max = ax_opt(&hs->opts, "max") != NULL;
+    affect_error err;
+    if (affect_heatmap_options_check(&hs->ho, &err)) {
+        ax_error(ctx, &err);
+        return AX_ERROR;
+    }
+    if (argc > 3 && sqlite3_value_type(argv[3]) == SQLITE_TEXT) {
+        const unsigned char *text = sqlite3_value_text(argv[3]);
+        int n = sqlite3_value_bytes(argv[3]);
+        hs->opts_text = sqlite3_malloc64((sqlite3_uint64)n + 1);
+        if (!text || !hs->opts_text) {
+            sqlite3_result_error_nomem(ctx);
+            return AX_ERROR;
+        }
+        memcpy(hs->opts_text, text, (size_t)n);
+        hs->opts_text[n] = '\0';
+        hs->opts_len = (size_t)n;
+    }
+    return AX_OK;
+}
+
+/* A row or column label (argument i) as text; AX_NULL for NULL. */
+static ax_arg heat_label(sqlite3_context *ctx, sqlite3_value **argv, int i, const char *what,
+                         const char **out)
+{
+    int type = sqlite3_value_type(argv[i]);
+    if (type == SQLITE_NULL)
+        return AX_NULL;
+    if (type == SQLITE_BLOB) {
+        ax_errorf(ctx, "%s (argument %d) must be text or a number, got blob", what, i + 1);
+        return AX_ERROR;
+    }
+    *out = (const char *)sqlite3_value_text(argv[i]);
+    if (!*out) {
+        sqlite3_result_error_nomem(ctx);
+        return AX_ERROR;
+    }
+    return AX_OK;
+}
+
+static ax_arg heat_add(sqlite3_context *ctx, int argc, sqlite3_value **argv, heat_state *hs)
+{
+    if (argc > 3) { /* the same options on every row */
+        int type = sqlite3_value_type(argv[3]);
+        const unsigned char *text = type == SQLITE_TEXT ? sqlite3_value_text(argv[3]) : NULL;
+        if (type == SQLITE_TEXT && !text) {
+            sqlite3_result_error_nomem(ctx);
+            return AX_ERROR;
+        }
+        bool same = type == SQLITE_NULL
+                        ? hs->opts_text == NULL
+                        : type == SQLITE_TEXT && hs->opts_text &&
+                              (size_t)sqlite3_value_bytes(argv[3]) == hs->opts_len &&
+                              memcmp(text, hs->opts_text, hs->opts_len) == 0;
+        if (!same) {
+            ax_errorf(ctx, "options must be the same on every row");
+            return AX_ERROR;
+        }
+    }
+    const char *row = NULL, *col = NULL;
+    ax_arg ar = heat_label(ctx, argv, 0, "row", &row);
+    if (ar == AX_ERROR)
+        return AX_ERROR;
+    ax_arg ac = heat_label(ctx, argv, 1, "column", &col);
+    if (ac == AX_ERROR)
+        return AX_ERROR;
+    int vtype = sqlite3_value_type(argv[2]);
+    if (vtype != SQLITE_NULL && vtype != SQLITE_INTEGER && vtype != SQLITE_FLOAT) {
+        ax_errorf(ctx, "value (argument 3) must be a number, got %s", ax_type_name(argv[2]));
+        return AX_ERROR;
+    }
+    if (ar == AX_NULL || ac == AX_NULL || vtype == SQLITE_NULL)
+        return AX_OK;
+    affect_error err;
+    if (affect_heatmap_add(hs->hm, row, col, sqlite3_value_double(argv[2]), &err)) {
+        ax_error(ctx, &err);
+        return AX_ERROR;
+    }
+    return AX_OK;
+}
+
+void ax_affect_heatmap_step(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    heat_state **slot = sqlite3_aggregate_context(ctx, (int)sizeof *slot);
+    if (!slot) {
+        sqlite3_result_error_nomem(ctx);
+        return;
+    }
+    heat_state *hs = *slot;
+    if (hs && hs->failed)
+        return;
+    if (!hs) {
+        hs = sqlite3_malloc64(sizeof *hs);
+        if (!hs) {
+            sqlite3_result_error_nomem(ctx);
+            return;
+        }
+        memset(hs, 0, sizeof *hs);
+        *slot = hs;
+        affect_error err;
+        if (heat_options(ctx, argc, argv, hs) != AX_OK) {
+            hs->failed = true;
+            return;
+        }
+        if (affect_heatmap_create(&hs->hm, &err)) {
+            ax_error(ctx, &err);
+            hs->failed = true;
+            return;
+        }
+    }
+    if (heat_add(ctx, argc, argv, hs) != AX_OK)
+        hs->failed = true;
+}
+
+void ax_affect_heatmap_final(sqlite3_context *ctx)
+{
+    heat_state **slot = sqlite3_aggregate_context(ctx, 0);
+    heat_state *hs = slot ? *slot : NULL;
+    affect_heatmap *empty = NULL;
+    char *svg = NULL;
+    size_t len = 0;
+    affect_error err;
+    if (hs && hs->failed)
+        goto done;
+    if (!hs && affect_heatmap_create(&empty, &err)) { /* no rows: the empty map */
+        ax_error(ctx, &err);
+        goto done;
+    }
+    if (affect_heatmap_render(hs ? hs->hm : empty, hs ? &hs->ho : NULL, &svg, &len, &err))
+        ax_error(ctx, &err);
+    else
+        ax_result_text(ctx, svg, len);
+done:
+    affect_heatmap_free(empty);
+    heat_free(hs);
     if (slot)
         *slot = NULL;
 }
