@@ -1003,11 +1003,9 @@ static void write_anim_panel(const svg_ctx *ctx, affect_strbuf *sb, double x0, d
                            "stroke-linejoin=\"round\" stroke-width=\"");
     put_num(sb, stroke, 2);
     affect_strbuf_puts(sb, "\">\n");
-    if (skeleton)
-        for (int s = 0; s < 3; s++)
-            write_moving_path(ctx, sb, n_keys, s, false, r);
+    /* bones, or joint dots when there is no skeleton (round caps mark the joints) */
     for (int s = 0; s < 3; s++)
-        write_moving_path(ctx, sb, n_keys, s, true, r);
+        write_moving_path(ctx, sb, n_keys, s, !skeleton, r);
     affect_strbuf_puts(sb, "</g>\n");
     double cx, cy, ch, cv;
     panel_centre(ctx, 0, &ch, &cv);
