@@ -1,6 +1,7 @@
 /*
  * fn_motion.c — SQL wrappers of the motion_* functions: import (BVH, CSV, JSON), export,
- * inspection, editing, roles, normalization, previews and the synthetic generator.
+ * inspection, editing, roles, normalization and the synthetic generator (the previews,
+ * motion_svg and motion_svg_group, are in fn_preview.c).
  * Each wrapper only converts values and calls the core; see docs/reference.md for the SQL
  * signatures, results and errors.
  */

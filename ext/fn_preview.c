@@ -50,9 +50,9 @@
 #include "affect/heatmap.h"
 #include "affect/svg.h"
 
-static const char *const svg_keys[] = {"view",  "frames", "size",    "up",        "trajectories",
-                                       "labels", "title", "animate", "keyframes", "roles",
-                                       NULL};
+static const char *const svg_keys[] = {"view",         "frames", "size",  "up",
+                                       "trajectories", "labels", "title", "animate",
+                                       "keyframes",    "roles",  NULL};
 
 /* A whole number option in [0, 1e6] into *out (unchanged when absent). */
 static ax_arg whole(sqlite3_context *ctx, const ax_opts *opts, const char *key, uint32_t *out,
@@ -164,8 +164,7 @@ static void group_free(group_state *gs)
 }
 
 /* The first row's options (argument 3), parsed and kept with a copy of their text. */
-static ax_arg group_options(sqlite3_context *ctx, int argc, sqlite3_value **argv,
-                            group_state *gs)
+static ax_arg group_options(sqlite3_context *ctx, int argc, sqlite3_value **argv, group_state *gs)
 {
     if (ax_opts_parse(ctx, argc, argv, 2, svg_keys, &gs->opts) != AX_OK ||
         svg_options(ctx, &gs->opts, &gs->so) != AX_OK)
@@ -302,9 +301,9 @@ void ax_motion_svg_group_final(sqlite3_context *ctx)
 
 /* ---- affect_heatmap ---- */
 
-static const char *const heatmap_keys[] = {"title", "x_label", "y_label",      "cell",
-                                           "values", "min",    "max",          "sort_rows",
-                                           "sort_columns",     NULL};
+static const char *const heatmap_keys[] = {"title",        "x_label", "y_label", "cell",
+                                           "values",       "min",     "max",     "sort_rows",
+                                           "sort_columns", NULL};
 
 typedef struct heat_state {
     affect_heatmap *hm;

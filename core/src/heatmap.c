@@ -68,8 +68,11 @@ struct affect_heatmap {
     size_t n_nonfinite;
 };
 
-static const unsigned char ramp[5][3] = {
-    {0xf7, 0xfb, 0xff}, {0xc6, 0xdb, 0xef}, {0x6b, 0xae, 0xd6}, {0x21, 0x71, 0xb5}, {0x08, 0x30, 0x6b}};
+static const unsigned char ramp[5][3] = {{0xf7, 0xfb, 0xff},
+                                         {0xc6, 0xdb, 0xef},
+                                         {0x6b, 0xae, 0xd6},
+                                         {0x21, 0x71, 0xb5},
+                                         {0x08, 0x30, 0x6b}};
 
 void affect_heatmap_options_default(affect_heatmap_options *opt)
 {
@@ -458,7 +461,8 @@ affect_status affect_heatmap_render(const affect_heatmap *hm, const affect_heatm
                          (int)width, (int)height, (int)width, (int)height);
     affect_strbuf_puts(&sb, "<rect width=\"100%\" height=\"100%\" fill=\"#fff\"/>\n");
     if (has_text(opt->title)) {
-        text_open(&sb, "title", 8, 22, "start", " font-size=\"14\" font-weight=\"bold\" fill=\"#222\"");
+        text_open(&sb, "title", 8, 22, "start",
+                  " font-size=\"14\" font-weight=\"bold\" fill=\"#222\"");
         put_label(&sb, opt->title);
         affect_strbuf_puts(&sb, "</text>\n");
     }
@@ -470,8 +474,8 @@ affect_status affect_heatmap_render(const affect_heatmap *hm, const affect_heatm
             char col[8] = "#ececec";
             if (!isnan(v))
                 colour_of(hi > lo ? (v - lo) / (hi - lo) : 0.5, col);
-            affect_strbuf_printf(&sb, "<rect class=\"cell\" data-row=\"%zu\" data-column=\"%zu\" x=\"",
-                                 i, j);
+            affect_strbuf_printf(
+                &sb, "<rect class=\"cell\" data-row=\"%zu\" data-column=\"%zu\" x=\"", i, j);
             put_px(&sb, left + j * c);
             affect_strbuf_puts(&sb, "\" y=\"");
             put_px(&sb, top + i * c);
@@ -503,8 +507,9 @@ affect_status affect_heatmap_render(const affect_heatmap *hm, const affect_heatm
                 if (isnan(v))
                     continue;
                 double t = hi > lo ? (v - lo) / (hi - lo) : 0.5;
-                text_open(&sb, "value", left + j * c + (c - 1) / 2, top + i * c + (c - 1) / 2 + vfs * 0.35,
-                          "middle", t >= HM_DARK_TEXT ? " fill=\"#fff\"" : " fill=\"#222\"");
+                text_open(&sb, "value", left + j * c + (c - 1) / 2,
+                          top + i * c + (c - 1) / 2 + vfs * 0.35, "middle",
+                          t >= HM_DARK_TEXT ? " fill=\"#fff\"" : " fill=\"#222\"");
                 put_value(&sb, v);
                 affect_strbuf_puts(&sb, "</text>\n");
             }
@@ -519,7 +524,8 @@ affect_status affect_heatmap_render(const affect_heatmap *hm, const affect_heatm
     }
     for (size_t j = 0; j < nc; j++) {
         double x = left + j * c + (c - 1) / 2 + fs * 0.3, y = top + gh + 6;
-        affect_strbuf_puts(&sb, "<text class=\"column-label\" text-anchor=\"end\" transform=\"translate(");
+        affect_strbuf_puts(
+            &sb, "<text class=\"column-label\" text-anchor=\"end\" transform=\"translate(");
         put_px(&sb, x);
         affect_strbuf_putc(&sb, ' ');
         put_px(&sb, y);
@@ -529,7 +535,8 @@ affect_status affect_heatmap_render(const affect_heatmap *hm, const affect_heatm
     }
     affect_strbuf_puts(&sb, "</g>\n");
     if (has_text(opt->x_label)) {
-        text_open(&sb, "axis-title", left + gw / 2, below + 14, "middle", " font-size=\"12\" fill=\"#222\"");
+        text_open(&sb, "axis-title", left + gw / 2, below + 14, "middle",
+                  " font-size=\"12\" fill=\"#222\"");
         put_label(&sb, opt->x_label);
         affect_strbuf_puts(&sb, "</text>\n");
     }

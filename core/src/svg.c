@@ -10,11 +10,26 @@
  *       ...; affect_free(svg);
  *   }
  *
- * Layout: an optional title row, then opt->frames square panels of opt->panel_size pixels side
- * by side (frame k of n is round(k (T − 1) / (n − 1)), so the first and last frames are shown;
- * n is clamped to the frame count T, and n = 1 shows frame 0), then, when opt->labels, one
- * "frame N · T.TT s" caption under each panel (N is 0-based, T.TT = N / fps). Each panel is a
- * nested <svg> element, so whatever leaves it (trajectories, limbs) is clipped at its border.
+ * Layout of a strip: an optional title row, then opt->frames square panels of opt->panel_size
+ * pixels side by side (frame k of n is round(k (T − 1) / (n − 1)), so the first and last frames are
+ * shown; n is clamped to the frame count T, and n = 1 shows frame 0), then, when opt->labels, one
+ * "frame N · T.TT s" caption under each panel (N is 0-based, T.TT = N / fps; "state N+1" with
+ * opt->state_labels). Each panel is a nested <svg> element, so whatever leaves it (trajectories,
+ * limbs) is clipped at its border. A group (affect_motion_svg_group) stacks one such strip per
+ * motion, each under its caption, below one title row.
+ *
+ * Animation (opt->animate): one panel per motion side by side (title row above; under each a
+ * time bar, the caption and "T.TT s · N frames"). n keyframes at the times tf_k = k (T − 1) /
+ * (n − 1) (n = opt->keyframes, or 1 + ceil(AFFECT_SVG_KEY_RATE × (T − 1) / fps) up to
+ * AFFECT_SVG_KEY_AUTO_MAX; at most T), positions interpolated linearly between the frames around
+ * tf_k. Each bone colour is one <path> whose d is animated (<animate attributeName="d"
+ * values="d_0;…;d_n−1">): every keyframe writes every bone, zero-length ones included, so the
+ * lists have the same commands and the browser interpolates them; without a skeleton the joints
+ * are zero-length segments drawn with round caps. The head circle's cx and cy, the facing
+ * marker's points and the trajectories' translation are animated the same way, and the time
+ * bar's width grows from 0 to the panel's over the loop. Evenly spaced values need no keyTimes;
+ * every element has dur = (T − 1) / fps seconds and repeatCount="indefinite", so the loop plays
+ * in real time. A one-frame motion is drawn still.
  *
  * Axes. Let u = opt->up_axis and a < b the two other axes (y-up: a = x, b = z; z-up: a = x,
  * b = y; x-up: a = y, b = z). Screen right / screen up are:
@@ -24,13 +39,21 @@
  *                      (a, b, u) is a right-handed cycle (z-up, x-up) and −b otherwise (y-up).
  * SVG's y grows downward, so screen-up values are negated.
  *
+ * Top view: looking down the up axis; when the centre's travel from the first to the last frame
+ * is longer than SVG_TOP_TRAVEL × the body's size, the view is turned (a rotation, never a
+ * mirror) so that this travel points right: a walk reads left to right. Its only trajectory is
+ * the centre's (the pelvis's path: the five end-effector paths of a walk seen from above were a
+ * tangle), and a triangle beside the head points where the body faces, (left − right shoulder,
+ * else hip) × up, projected; none when neither pair resolves or the body is edge-on.
+ *
  * Scale and placement. Joints that are proper ancestors of the pelvis role joint (a ground
  * "reference" root such as the corpus's joint_Root, which stays at the origin while the body
  * walks away) are neither drawn nor measured. Each frame has a centre: the pelvis role joint,
  * or the centroid of the joints when there is no pelvis. ONE scale serves every panel: the
  * largest extent over ALL frames of (front/side) twice the largest horizontal distance of a
  * joint from its frame's centre and the whole motion's vertical range, or (top) twice the
- * largest distance from the centre along either axis, fitted into the panel minus margins.
+ * largest distance from the centre (any turn keeps it), fitted into the panel minus margins; a
+ * group uses the smallest of its motions' scales.
  * Each panel is centred horizontally on its frame's centre; vertically, front and side views
  * use one fixed placement for the whole motion (so jumps and crouches show), with a ground
  * line at the motion's lowest point; the top view centres both axes on the frame's centre.
@@ -53,22 +76,25 @@
  * the visible joints along any axis), moved outwards along the neck-to-head direction in
  * front and side views so that it sits on the neck.
  *
- * Trajectories of the head, hands and feet roles (those that resolve) are sampled at ≤ 200
- * evenly spaced frames and written once into <defs> as polylines in the coordinates of the
+ * Trajectories (front and side) of the head, hands and feet roles (those that resolve) are sampled
+ * at ≤ 200 evenly spaced frames and written once into <defs> as polylines in the coordinates of the
  * first frame's centre; each panel shows them with a <use> translated by the shift of its own
  * centre, so in every panel they sit exactly where the joints pass relative to that frame's
- * body. Their ids, "afm<16 hex digits>-<k>", are a hash of the polylines themselves, so
- * several previews inlined in one HTML page never collide (equal ids mean equal content).
+ * body. Their ids, "afm<16 hex digits>-<k>", are a hash of the polylines themselves (and of
+ * the motion's place in a group, after the first), so several previews inlined in one HTML page
+ * never collide (equal ids mean equal content).
  *
  * Numbers: coordinates with one decimal (two for transforms and stroke widths), clamped to
  * ±1e6 so that pathological data cannot produce huge literals; output is byte-for-byte
  * deterministic. NULL options mean the defaults. Errors: AFFECT_ERR_INVALID for options ("frames
- * must be between 1 and 64, got 0", "panel_size must be between 32 and 1024, got 16", "up_axis must
+ * must be between 1 and 64, got 0", "keyframes must be 0 (automatic) or between 2 and 1000, got
+ * 1", "panel_size must be between 32 and 1024, got 16", "up_axis must
  * be 0 (x), 1 (y) or 2 (z), got 3", "view must be 0 (front), 1 (side) or 2 (top), got 3"),
  * AFFECT_ERR_RANGE for a role or parent index outside the motion ("role left_hand: joint 40 out of
  * range (the motion has 27 joints)", "joint 3: parent 99 out of range (the motion has 27 joints)"),
  * AFFECT_ERR_FORMAT for a non-finite coordinate ("frame 5, joint 2: coordinate is not
- * finite"), AFFECT_ERR_NOMEM ("out of memory"); an empty motion
+ * finite"; in a group of several, "motion 2: " before it), AFFECT_ERR_NOMEM ("out of memory"),
+ * "a group holds 1 to 64 motions, got 0"; an empty motion
  * (AFFECT_ERR_INVALID, "the motion has no frames or no joints") cannot come from
  * affect_motion_create.
  */
@@ -666,9 +692,8 @@ static bool head_at(const svg_ctx *ctx, double tf, double ch, double cv, double 
  * shoulders (else the hips); false when neither pair resolves or the body is seen edge-on. */
 static bool facing_at(const svg_ctx *ctx, double tf, double *fx, double *fy)
 {
-    static const affect_role pairs[2][2] = {
-        {AFFECT_ROLE_LEFT_SHOULDER, AFFECT_ROLE_RIGHT_SHOULDER},
-        {AFFECT_ROLE_LEFT_HIP, AFFECT_ROLE_RIGHT_HIP}};
+    static const affect_role pairs[2][2] = {{AFFECT_ROLE_LEFT_SHOULDER, AFFECT_ROLE_RIGHT_SHOULDER},
+                                            {AFFECT_ROLE_LEFT_HIP, AFFECT_ROLE_RIGHT_HIP}};
     for (int k = 0; k < 2; k++) {
         int32_t l = ctx->role[pairs[k][0]], r = ctx->role[pairs[k][1]];
         if (l < 0 || r < 0)
@@ -963,8 +988,8 @@ static void facing_value(const svg_ctx *ctx, affect_strbuf *sb, double tf, int w
 }
 
 /* An <animate> (or, for "transform", <animateTransform type="translate">) element. */
-static void write_animate(const svg_ctx *ctx, affect_strbuf *sb, uint32_t n_keys,
-                          const char *attr, value_fn fn, int which)
+static void write_animate(const svg_ctx *ctx, affect_strbuf *sb, uint32_t n_keys, const char *attr,
+                          value_fn fn, int which)
 {
     if (n_keys < 2)
         return;
@@ -1225,8 +1250,7 @@ static affect_status setup(svg_ctx *ctx, const affect_motion *m, const affect_ro
     if (!ctx->side)
         return affect_nomem(err);
     ctx->hidden = ctx->side + m->n_joints;
-    classify_joints(ctx, ctx->side + 2 * (size_t)m->n_joints,
-                    ctx->side + 3 * (size_t)m->n_joints);
+    classify_joints(ctx, ctx->side + 2 * (size_t)m->n_joints, ctx->side + 3 * (size_t)m->n_joints);
     measure(ctx);
     return AFFECT_OK;
 }

@@ -69,7 +69,8 @@ static void test_cells_and_labels(void **state)
     /* labels written (not only in tooltips), in first-appearance order, escaped */
     assert_int_equal(tu_count(svg, "<text class=\"row-label\""), 2);
     assert_int_equal(tu_count(svg, "<text class=\"column-label\""), 3);
-    const char *r2 = strstr(svg, ">sad · state 2</text>"), *r1 = strstr(svg, ">sad · state 1</text>");
+    const char *r2 = strstr(svg, ">sad · state 2</text>"),
+               *r1 = strstr(svg, ">sad · state 1</text>");
     assert_non_null(r1);
     assert_non_null(r2);
     assert_true(r2 < r1);

@@ -21,18 +21,18 @@ extern "C" {
 #endif
 
 #define AFFECT_HEATMAP_MAX_LABELS 1000 /* most rows, and most columns */
-#define AFFECT_HEATMAP_MIN_CELL 8.0     /* cell side, pixels */
+#define AFFECT_HEATMAP_MIN_CELL 8.0    /* cell side, pixels */
 #define AFFECT_HEATMAP_MAX_CELL 120.0
 
 typedef struct affect_heatmap_options {
-    const char *title;   /* above the grid; NULL or "" for none */
-    const char *x_label; /* under the column labels; NULL or "" for none */
-    const char *y_label; /* left of the row labels (rotated); NULL or "" for none */
-    double cell;         /* cell side in whole pixels, 8..120 (default 24) */
-    int values;          /* print the values in the cells: 1 yes, 0 no, −1 (default) when the
-                            cells are at least 30 px wide */
-    bool sort_rows;      /* rows in byte order of their labels (default: first appearance) */
-    bool sort_columns;   /* likewise the columns */
+    const char *title;     /* above the grid; NULL or "" for none */
+    const char *x_label;   /* under the column labels; NULL or "" for none */
+    const char *y_label;   /* left of the row labels (rotated); NULL or "" for none */
+    double cell;           /* cell side in whole pixels, 8..120 (default 24) */
+    int values;            /* print the values in the cells: 1 yes, 0 no, −1 (default) when the
+                              cells are at least 30 px wide */
+    bool sort_rows;        /* rows in byte order of their labels (default: first appearance) */
+    bool sort_columns;     /* likewise the columns */
     bool has_min, has_max; /* the colour scale's ends; default the values' range */
     double min, max;
 } affect_heatmap_options;

@@ -4,7 +4,8 @@
  * end-effector trajectories (head, hands, feet when the roles resolve) drawn faintly behind.
  *
  * Views: "front" looks along −z at the x–up plane, "side" along +x at the z–up plane, "top"
- * down the up axis at the x–z plane (for y-up data; the axes rotate with opt->up_axis). All
+ * down the up axis at the x–z plane (for y-up data; the axes rotate with opt->up_axis), turned
+ * so that a travelling motion goes to the right, with the pelvis's path and a facing mark. All
  * panels share one scale so sizes compare across frames; each panel is centred horizontally
  * on the pelvis (or the body's centroid) at its frame, so travelling motions stay in view.
  *
