@@ -568,6 +568,19 @@ static void write_trajectories(const svg_ctx *ctx, affect_strbuf *sb, affect_str
     affect_strbuf_puts(sb, "</defs>\n");
 }
 
+/* "Mx0 y0Lx1 y1", tenths of a pixel. */
+static void put_segment(affect_strbuf *sb, long x0, long y0, long x1, long y1)
+{
+    affect_strbuf_putc(sb, 'M');
+    put_tenths(sb, x0);
+    affect_strbuf_putc(sb, ' ');
+    put_tenths(sb, y0);
+    affect_strbuf_putc(sb, 'L');
+    put_tenths(sb, x1);
+    affect_strbuf_putc(sb, ' ');
+    put_tenths(sb, y1);
+}
+
 /* Whether bone j (joint j to its parent) is drawn in colour side. */
 static bool bone_shown(const svg_ctx *ctx, uint32_t j, int side)
 {
@@ -587,14 +600,7 @@ static void bones_d(const svg_ctx *ctx, affect_strbuf *sb, double tf, double ch,
         long x0, y0, x1, y1;
         project(ctx, tf, (uint32_t)m->parents[j], ch, cv, &x0, &y0);
         project(ctx, tf, j, ch, cv, &x1, &y1);
-        affect_strbuf_putc(sb, 'M');
-        put_tenths(sb, x0);
-        affect_strbuf_putc(sb, ' ');
-        put_tenths(sb, y0);
-        affect_strbuf_putc(sb, 'L');
-        put_tenths(sb, x1);
-        affect_strbuf_putc(sb, ' ');
-        put_tenths(sb, y1);
+        put_segment(sb, x0, y0, x1, y1);
     }
 }
 
@@ -616,14 +622,7 @@ static void write_bones(const svg_ctx *ctx, affect_strbuf *sb, uint32_t t, doubl
             affect_strbuf_printf(sb, "<path stroke=\"%s\" d=\"", side_colour[side]);
             open = true;
         }
-        affect_strbuf_putc(sb, 'M');
-        put_tenths(sb, x0);
-        affect_strbuf_putc(sb, ' ');
-        put_tenths(sb, y0);
-        affect_strbuf_putc(sb, 'L');
-        put_tenths(sb, x1);
-        affect_strbuf_putc(sb, ' ');
-        put_tenths(sb, y1);
+        put_segment(sb, x0, y0, x1, y1);
     }
     if (open)
         affect_strbuf_puts(sb, "\"/>\n");
