@@ -115,6 +115,7 @@
 #define SVG_HEAD_RADIUS 0.065  /* head radius as a fraction of the body's size */
 #define SVG_TOP_TRAVEL 0.25    /* top view: travel (× body size) from which the view turns */
 #define SVG_TIME_BAR 3.0       /* animated panels: height of the time bar, pixels */
+#define SVG_CAPTION_EM 0.6     /* estimated advance of a caption's character, em */
 
 enum { SIDE_CENTRE = 0, SIDE_LEFT = 1, SIDE_RIGHT = 2, SIDE_NONE = 3 };
 
@@ -589,18 +590,28 @@ static bool bone_shown(const svg_ctx *ctx, uint32_t j, int side)
 }
 
 /* The path data of every bone of one colour at time tf (an animation's keyframes must all have
- * the same commands, so bones of zero length on screen are kept). */
+ * the same commands, so bones of zero length on screen are kept); a bone that starts where the
+ * previous one ended continues its line ("L" only), a third shorter for the usual skeletons. */
 static void bones_d(const svg_ctx *ctx, affect_strbuf *sb, double tf, double ch, double cv,
                     int side)
 {
     const affect_motion *m = ctx->m;
+    int64_t last = -1; /* the joint the pen stands on */
     for (uint32_t j = 0; j < m->n_joints; j++) {
         if (!bone_shown(ctx, j, side))
             continue;
         long x0, y0, x1, y1;
-        project(ctx, tf, (uint32_t)m->parents[j], ch, cv, &x0, &y0);
         project(ctx, tf, j, ch, cv, &x1, &y1);
-        put_segment(sb, x0, y0, x1, y1);
+        if (m->parents[j] == last) { /* a chain goes on (joints in depth-first order) */
+            affect_strbuf_putc(sb, 'L');
+            put_tenths(sb, x1);
+            affect_strbuf_putc(sb, ' ');
+            put_tenths(sb, y1);
+        } else {
+            project(ctx, tf, (uint32_t)m->parents[j], ch, cv, &x0, &y0);
+            put_segment(sb, x0, y0, x1, y1);
+        }
+        last = j;
     }
 }
 
@@ -1105,6 +1116,29 @@ static void put_text_at(affect_strbuf *sb, double x, double y, double fs, const 
     affect_strbuf_printf(sb, "\"%s>", attrs);
 }
 
+/* Text escaped for XML, cut to at most max_cp code points (the last one "…" when cut): an
+ * animated panel's caption within its panel's width. */
+static void put_cut(affect_strbuf *sb, const char *s, size_t max_cp)
+{
+    size_t n = 0;
+    for (const char *p = s; *p; p++)
+        n += ((unsigned char)*p & 0xC0) != 0x80;
+    if (n <= max_cp) {
+        affect_strbuf_xml(sb, s);
+        return;
+    }
+    size_t keep = max_cp - 1, k = 0;
+    const char *p = s;
+    char one[2] = {0, 0};
+    for (; *p; p++) {
+        if (((unsigned char)*p & 0xC0) != 0x80 && k++ == keep)
+            break;
+        one[0] = *p;
+        affect_strbuf_xml(sb, one);
+    }
+    affect_strbuf_puts(sb, "\xe2\x80\xa6");
+}
+
 /* The root element, background, and the title row with its left / right legend. */
 static void open_document(const svg_ctx *ctxs, size_t n, affect_strbuf *sb, double width,
                           double height, double title_fs)
@@ -1213,7 +1247,7 @@ static void write_animations(const svg_ctx *ctxs, size_t n_motions, const char *
         if (captions && captions[i]) {
             put_text_at(sb, x0 + panel / 2.0, y + cap_fs, cap_fs,
                         " class=\"caption\" text-anchor=\"middle\" fill=\"#333\"");
-            affect_strbuf_xml(sb, captions[i]);
+            put_cut(sb, captions[i], (size_t)fmax(4, floor(panel / (SVG_CAPTION_EM * cap_fs))));
             affect_strbuf_puts(sb, "</text>\n");
         }
         y += cap_h;

@@ -770,6 +770,14 @@ static void test_group(void **state)
     /* trajectory ids differ between the two motions */
     assert_int_equal(tu_count(svg, "<defs>"), 2);
     affect_free(svg);
+    /* a caption longer than its panel is cut with an ellipsis */
+    const char *long_captions[2] = {"dataset-1_walk_angry_001 generated at strength 1.5", "b"};
+    assert_int_equal(affect_motion_svg_group(ms, roles, long_captions, 2, &opt, &svg, &len, &err),
+                     AFFECT_OK);
+    tu_assert_svg_well_formed(svg, len);
+    /* 100 px at 11.1 px: 15 characters, the last the ellipsis */
+    assert_non_null(strstr(svg, ">dataset-1_walk\xe2\x80\xa6</text>"));
+    affect_free(svg);
     /* strips: one row per motion with its caption above */
     opt.animate = false;
     opt.frames = 3;
