@@ -5,9 +5,10 @@
 #
 # 1. Builds demo.db and demo.html as `./run.sh demo` does (sql/schema.sql, synth_corpus.sql,
 #    the real corpus through import_bvh.sql when SHARED_DIR/corpora/bandai-namco-1/data exists,
-#    then sql/demo.sql), plus two standalone documents: an animated motion_svg and an
-#    affect_heatmap, each written to its own .svg file (a standalone SVG is parsed as XML, so a
-#    well-formedness error shows up in the DOM as a <parsererror>).
+#    then sql/demo.sql), plus standalone documents: an animated motion_svg, an affect_heatmap,
+#    an animated motion_svg_group in the top view and a strip labelled by state, each written to
+#    its own .svg file, parsed first by Python's XML parser (well-formedness); a standalone SVG
+#    is parsed as XML by the browser too, so an error shows up in its DOM as a <parsererror>.
 # 2. Checks that the console capture works: a canary page with a bad SVG attribute and a
 #    script error must produce both console lines (else the test itself is broken).
 # 3. For each document: `chromium --headless --enable-logging=stderr --v=0 --dump-dom` and
@@ -80,8 +81,18 @@ q "SELECT writefile('anim.svg', motion_svg(motion_synth('wave', 'happy', 1),
    SELECT writefile('heat.svg', affect_heatmap(r.value, c.value, r.key * 3 + c.key,
                                 '{\"title\":\"a <b> & c\",\"x_label\":\"joint\"}'))
      FROM json_each('[\"sad · state 1\",\"sad · state 2\"]') AS r,
-          json_each('[\"Hand_L\",\"Head\",\"Foot_R\"]') AS c;" >/dev/null ||
+          json_each('[\"Hand_L\",\"Head\",\"Foot_R\"]') AS c;
+   SELECT writefile('group.svg', motion_svg_group(m, c, '{\"animate\":true,\"view\":\"top\"}'))
+     FROM (SELECT motion_synth('walk', e.value, 1) AS m, e.value AS c
+             FROM json_each('[\"sad\",\"angry\"]') AS e);
+   SELECT writefile('states.svg', motion_svg(motion_synth('bow', 'sad', 1),
+                                  '{\"labels\":\"state\",\"frames\":4}'));" >/dev/null ||
     { bad "writing the standalone SVG documents"; finish; }
+# each standalone document is well-formed XML (Python's parser, before any browser)
+for f in anim.svg heat.svg group.svg states.svg; do
+    if err=$(python3 -c 'import sys, xml.etree.ElementTree as E; E.parse(sys.argv[1])' "$f" 2>&1)
+    then ok "$f: well-formed XML"; else bad "$f: not well-formed XML: $err"; fi
+done
 
 # 2. the canary: the console capture must see an SVG attribute error and a script error
 cat > canary.html <<'EOF'
@@ -132,6 +143,8 @@ check_doc() { # check_doc FILE WIDTH,HEIGHT
 check_doc demo.html 1280,3000
 check_doc anim.svg 200,220
 check_doc heat.svg 400,300
+check_doc group.svg 340,220
+check_doc states.svg 660,200
 
 # 4. SMIL in the DOM, and an animation that moves
 n_anim=$(grep -o '<animate ' demo.dom | wc -l)
