@@ -25,7 +25,8 @@
  * Colour: t = (v − min) / (max − min) clamped to [0, 1] (t = 0.5 when max = min) through the
  * ColorBrewer "Blues" ramp (#f7fbff #c6dbef #6baed6 #2171b5 #08306b, interpolated linearly in
  * sRGB between those five stops); values printed in a cell are white from t = 0.55. A cell
- * without a value is light grey. Every cell carries a <title> tooltip "row × column: value".
+ * without a value is light grey. Every cell carries a <title> tooltip "row × column: value"
+ * (the value with six significant digits).
  *
  * Structure (stable, for tools and tests): <g class="cells"> holds one <rect class="cell"
  * data-row="i" data-column="j"> per cell (0-based); the labels are <text class="row-label">
@@ -442,7 +443,7 @@ affect_status affect_heatmap_render(const affect_heatmap *hm, const affect_heatm
     double top = has_text(opt->title) ? 36 : 10;
     double gw = (double)nc * c, gh = (double)nr * c;
     double bar_h = fmin(fmax(gh, 60), HM_BAR_MAX), bar_x = left + gw + 16;
-    char a[40], b[40];
+    char a[40], b[40], tip[40];
     affect_format_g(a, sizeof a, 3, hi);
     affect_format_g(b, sizeof b, 3, lo);
     double bar_text = fmax(strlen(a), strlen(b)) * HM_EM * fs;
@@ -491,7 +492,7 @@ affect_status affect_heatmap_render(const affect_heatmap *hm, const affect_heatm
             if (isnan(v))
                 affect_strbuf_puts(&sb, "no value");
             else
-                affect_strbuf_double(&sb, v);
+                affect_strbuf_puts(&sb, num_text(tip, v)); /* six significant digits */
             affect_strbuf_puts(&sb, "</title></rect>\n");
         }
     }
