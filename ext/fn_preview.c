@@ -136,59 +136,6 @@ void ax_motion_svg(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     affect_motion_free(m);
 }
 
-/* ---- the options of an aggregate: read on the first row, the same text on every row ---- */
-
-typedef struct opts_copy {
-    char *text; /* the first row's options text (sqlite3_malloc'd), NULL when none */
-    size_t len;
-} opts_copy;
-
-/* Keeps a copy of argument i's text (nothing when it is absent or not text). */
-static ax_arg opts_keep(sqlite3_context *ctx, int argc, sqlite3_value **argv, int i, opts_copy *oc)
-{
-    if (argc <= i || sqlite3_value_type(argv[i]) != SQLITE_TEXT)
-        return AX_OK;
-    const unsigned char *text = sqlite3_value_text(argv[i]);
-    int n = sqlite3_value_bytes(argv[i]);
-    oc->text = text ? sqlite3_malloc64((sqlite3_uint64)n + 1) : NULL;
-    if (!oc->text) {
-        sqlite3_result_error_nomem(ctx);
-        return AX_ERROR;
-    }
-    memcpy(oc->text, text, (size_t)n);
-    oc->text[n] = '\0';
-    oc->len = (size_t)n;
-    return AX_OK;
-}
-
-/* AX_OK when argument i is the first row's options (the same text, or both absent). */
-static ax_arg opts_same(sqlite3_context *ctx, int argc, sqlite3_value **argv, int i,
-                        const opts_copy *oc)
-{
-    if (argc <= i)
-        return AX_OK;
-    int type = sqlite3_value_type(argv[i]);
-    bool same;
-    if (type == SQLITE_NULL) {
-        same = oc->text == NULL;
-    } else if (type != SQLITE_TEXT || oc->text == NULL) {
-        same = false;
-    } else {
-        const unsigned char *text = sqlite3_value_text(argv[i]);
-        if (!text) {
-            sqlite3_result_error_nomem(ctx);
-            return AX_ERROR;
-        }
-        same =
-            (size_t)sqlite3_value_bytes(argv[i]) == oc->len && memcmp(text, oc->text, oc->len) == 0;
-    }
-    if (!same) {
-        ax_errorf(ctx, "options must be the same on every row");
-        return AX_ERROR;
-    }
-    return AX_OK;
-}
-
 /* ---- motion_svg_group ---- */
 
 typedef struct group_state {
@@ -198,7 +145,7 @@ typedef struct group_state {
     size_t n;
     ax_opts opts; /* the first row's options; owns the strings in so */
     affect_svg_options so;
-    opts_copy oc;
+    ax_opts_text oc;
     bool failed; /* an error was reported: xFinal only frees */
 } group_state;
 
@@ -221,13 +168,13 @@ static ax_arg group_options(sqlite3_context *ctx, int argc, sqlite3_value **argv
     if (ax_opts_parse(ctx, argc, argv, 2, svg_keys, &gs->opts) != AX_OK ||
         svg_options(ctx, &gs->opts, &gs->so) != AX_OK)
         return AX_ERROR;
-    return opts_keep(ctx, argc, argv, 2, &gs->oc);
+    return ax_opts_text_keep(ctx, argc, argv, 2, &gs->oc);
 }
 
 /* One row: its caption checked, its motion decoded and kept with its roles. */
 static ax_arg group_add(sqlite3_context *ctx, int argc, sqlite3_value **argv, group_state *gs)
 {
-    if (opts_same(ctx, argc, argv, 2, &gs->oc) != AX_OK)
+    if (ax_opts_text_same(ctx, argc, argv, 2, &gs->oc) != AX_OK)
         return AX_ERROR;
     int ctype = sqlite3_value_type(argv[1]);
     if (ctype == SQLITE_BLOB) {
@@ -321,7 +268,7 @@ typedef struct heat_state {
     affect_heatmap *hm;
     ax_opts opts; /* the first row's options; owns the strings in ho */
     affect_heatmap_options ho;
-    opts_copy oc;
+    ax_opts_text oc;
     bool failed;
 } heat_state;
 
@@ -360,7 +307,7 @@ static ax_arg heat_options(sqlite3_context *ctx, int argc, sqlite3_value **argv,
         ax_error(ctx, &err);
         return AX_ERROR;
     }
-    return opts_keep(ctx, argc, argv, 3, &hs->oc);
+    return ax_opts_text_keep(ctx, argc, argv, 3, &hs->oc);
 }
 
 /* A row or column label (argument i) as text; AX_NULL for NULL. */
@@ -384,7 +331,7 @@ static ax_arg heat_label(sqlite3_context *ctx, sqlite3_value **argv, int i, cons
 
 static ax_arg heat_add(sqlite3_context *ctx, int argc, sqlite3_value **argv, heat_state *hs)
 {
-    if (opts_same(ctx, argc, argv, 3, &hs->oc) != AX_OK)
+    if (ax_opts_text_same(ctx, argc, argv, 3, &hs->oc) != AX_OK)
         return AX_ERROR;
     const char *row = NULL, *col = NULL;
     ax_arg ar = heat_label(ctx, argv, 0, "row", &row);

@@ -746,13 +746,10 @@ static void facing_points(affect_strbuf *sb, double cx, double cy, double r, dou
     }
 }
 
-static void write_head(const svg_ctx *ctx, affect_strbuf *sb, uint32_t t, double ch, double cv,
-                       double stroke)
+/* The head circle's opening tag, without its closing "/>" or ">". */
+static void open_head(const svg_ctx *ctx, affect_strbuf *sb, double cx, double cy, double r,
+                      double stroke)
 {
-    double cx, cy, r = ctx->top ? 0.6 * ctx->head_r : ctx->head_r;
-    if (!head_at(ctx, t, ch, cv, &cx, &cy))
-        return;
-    int head_side = ctx->side[ctx->role[AFFECT_ROLE_HEAD]];
     affect_strbuf_puts(sb, "<circle cx=\"");
     put_num(sb, cx, 1);
     affect_strbuf_puts(sb, "\" cy=\"");
@@ -760,9 +757,21 @@ static void write_head(const svg_ctx *ctx, affect_strbuf *sb, uint32_t t, double
     affect_strbuf_puts(sb, "\" r=\"");
     put_num(sb, r, 1);
     affect_strbuf_printf(sb, "\" fill=\"%s\" stroke=\"%s\" stroke-width=\"",
-                         ctx->top ? "none" : "#fff", side_colour[head_side]);
+                         ctx->top ? "none" : "#fff",
+                         side_colour[ctx->side[ctx->role[AFFECT_ROLE_HEAD]]]);
     put_num(sb, stroke, 2);
-    affect_strbuf_puts(sb, "\"/>\n");
+    affect_strbuf_putc(sb, '"');
+}
+
+static void write_head(const svg_ctx *ctx, affect_strbuf *sb, uint32_t t, double ch, double cv,
+                       double stroke)
+{
+    double cx, cy, r = ctx->top ? 0.6 * ctx->head_r : ctx->head_r;
+    if (!head_at(ctx, t, ch, cv, &cx, &cy))
+        return;
+    int head_side = ctx->side[ctx->role[AFFECT_ROLE_HEAD]];
+    open_head(ctx, sb, cx, cy, r, stroke);
+    affect_strbuf_puts(sb, "/>\n");
     double fx, fy;
     if (ctx->top && facing_at(ctx, t, &fx, &fy)) {
         affect_strbuf_printf(sb, "<polygon class=\"facing\" fill=\"%s\" points=\"",
@@ -1046,17 +1055,8 @@ static void write_anim_panel(const svg_ctx *ctx, affect_strbuf *sb, double x0, d
     panel_centre(ctx, 0, &ch, &cv);
     if (head_at(ctx, 0, ch, cv, &cx, &cy)) {
         int head_side = ctx->side[ctx->role[AFFECT_ROLE_HEAD]];
-        double hr = ctx->top ? 0.6 * ctx->head_r : ctx->head_r;
-        affect_strbuf_puts(sb, "<circle cx=\"");
-        put_num(sb, cx, 1);
-        affect_strbuf_puts(sb, "\" cy=\"");
-        put_num(sb, cy, 1);
-        affect_strbuf_puts(sb, "\" r=\"");
-        put_num(sb, hr, 1);
-        affect_strbuf_printf(sb, "\" fill=\"%s\" stroke=\"%s\" stroke-width=\"",
-                             ctx->top ? "none" : "#fff", side_colour[head_side]);
-        put_num(sb, stroke * 0.8, 2);
-        affect_strbuf_puts(sb, "\">");
+        open_head(ctx, sb, cx, cy, ctx->top ? 0.6 * ctx->head_r : ctx->head_r, stroke * 0.8);
+        affect_strbuf_putc(sb, '>');
         write_animate(ctx, sb, n_keys, "cx", head_value, 0);
         write_animate(ctx, sb, n_keys, "cy", head_value, 1);
         affect_strbuf_puts(sb, "</circle>\n");
