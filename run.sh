@@ -8,11 +8,11 @@
 #                             "Install": /usr/local, so that `.load affect` works from anywhere)
 #   ./run.sh test             install what is missing, build, and run the whole test suite:
 #                             unit, SQL and out-of-memory tests, examples and scripts, the real
-#                             corpus (skipped when absent), Blender importing our BVH files
-#                             (blender is installed for this command only), sqlite-vec's vec0
-#                             finding the laban index's neighbours (npm package, under
-#                             build/npm), a sanitizer build,
-#                             and the fuzzers
+#                             corpus (skipped when absent), Blender importing our BVH files and
+#                             headless Chromium rendering demo.html (blender and chromium are
+#                             installed for this command only), sqlite-vec's vec0 finding the
+#                             laban index's neighbours (npm package, under build/npm), a
+#                             sanitizer build, and the fuzzers
 #
 # Works on a fresh Debian 12 machine as root (or with sudo). Set AFFECT_FUZZ_SECONDS to change
 # the time each fuzz target runs (default 20). OpenBLAS runs single-threaded unless
@@ -27,9 +27,10 @@ PACKAGES=(build-essential cmake pkg-config sqlite3 libsqlite3-dev libopenblas-de
           libsvm-dev libcmocka-dev clang python3)
 # The Python package (python/) and its tests: NumPy, and an offline venv + pip install.
 PACKAGES+=(python3-numpy python3-venv python3-setuptools python3-wheel)
-# Only for ./run.sh test: the real client of tests/client/blender_test.sh (headless Blender
-# imports our BVH files). If it cannot be installed the tests go on and that one is skipped.
-TEST_PACKAGES=(blender)
+# Only for ./run.sh test: the real clients of tests/client/blender_test.sh (headless Blender
+# imports our BVH files) and tests/client/chromium_test.sh (headless Chromium renders demo.html).
+# If one cannot be installed the tests go on and its test is skipped.
+TEST_PACKAGES=(blender chromium)
 # Only for ./run.sh test: sqlite-vec (the npm package sqlite-vec-linux-x64, its vec0.so, under
 # build/npm), the real client of tests/client/sqlite_vec_test.sh (vec0 over laban_zvector
 # finds the laban index's neighbours). If it cannot be installed that test is skipped.
@@ -108,8 +109,9 @@ case "${1:-}" in
     install) install_missing; build; cmake --install build ;;
     test)
         install_missing
-        install_missing "${TEST_PACKAGES[@]}" ||
-            echo "== could not install ${TEST_PACKAGES[*]}: client/blender will be skipped"
+        for p in "${TEST_PACKAGES[@]}"; do
+            install_missing "$p" || echo "== could not install $p: client/$p will be skipped"
+        done
         install_sqlite_vec ||
             echo "== could not install sqlite-vec-linux-x64 (npm): client/sqlite-vec will be skipped"
         build; tests ;;

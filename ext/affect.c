@@ -24,6 +24,7 @@
 #include "fn_strength.h"
 #include "vt_laban.h"
 #include "fn_plot.h"
+#include "fn_preview.h"
 #include "affect/strbuf.h"
 
 #include <svm.h>
@@ -186,6 +187,10 @@ typedef struct ax_aggregate {
 static const ax_aggregate aggregates[] = {
     {"laban_plot", 3, ax_laban_plot_step, ax_laban_plot_final},
     {"laban_plot", 4, ax_laban_plot_step, ax_laban_plot_final},
+    {"motion_svg_group", 2, ax_motion_svg_group_step, ax_motion_svg_group_final},
+    {"motion_svg_group", 3, ax_motion_svg_group_step, ax_motion_svg_group_final},
+    {"affect_heatmap", 3, ax_affect_heatmap_step, ax_affect_heatmap_final},
+    {"affect_heatmap", 4, ax_affect_heatmap_step, ax_affect_heatmap_final},
     {"hmm_train", 1, ax_hmm_train_step, ax_hmm_train_final},
     {"hmm_train", 2, ax_hmm_train_step, ax_hmm_train_final},
     {"affect_train", 2, ax_affect_train_step, ax_affect_train_final},

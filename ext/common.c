@@ -616,4 +616,51 @@ affect_status ax_motion_tvf_args(int idx_num, int argc, sqlite3_value **argv, af
                          emsg);
     }
     return st;
+/* ---- an aggregate's options: read on the first row, the same text on every row ---- */
+
+/* Keeps a copy of argument i's text (nothing when it is absent or not text). */
+ax_arg ax_opts_text_keep(sqlite3_context *ctx, int argc, sqlite3_value **argv, int i,
+                         ax_opts_text *oc)
+{
+    if (argc <= i || sqlite3_value_type(argv[i]) != SQLITE_TEXT)
+        return AX_OK;
+    const unsigned char *text = sqlite3_value_text(argv[i]);
+    int n = sqlite3_value_bytes(argv[i]);
+    oc->text = text ? sqlite3_malloc64((sqlite3_uint64)n + 1) : NULL;
+    if (!oc->text) {
+        sqlite3_result_error_nomem(ctx);
+        return AX_ERROR;
+    }
+    memcpy(oc->text, text, (size_t)n);
+    oc->text[n] = '\0';
+    oc->len = (size_t)n;
+    return AX_OK;
+}
+
+/* AX_OK when argument i is the first row's options (the same text, or both absent). */
+ax_arg ax_opts_text_same(sqlite3_context *ctx, int argc, sqlite3_value **argv, int i,
+                         const ax_opts_text *oc)
+{
+    if (argc <= i)
+        return AX_OK;
+    int type = sqlite3_value_type(argv[i]);
+    bool same;
+    if (type == SQLITE_NULL) {
+        same = oc->text == NULL;
+    } else if (type != SQLITE_TEXT || oc->text == NULL) {
+        same = false;
+    } else {
+        const unsigned char *text = sqlite3_value_text(argv[i]);
+        if (!text) {
+            sqlite3_result_error_nomem(ctx);
+            return AX_ERROR;
+        }
+        same =
+            (size_t)sqlite3_value_bytes(argv[i]) == oc->len && memcmp(text, oc->text, oc->len) == 0;
+    }
+    if (!same) {
+        ax_errorf(ctx, "options must be the same on every row");
+        return AX_ERROR;
+    }
+    return AX_OK;
 }

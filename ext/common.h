@@ -111,6 +111,18 @@ ax_arg ax_opt_string(sqlite3_context *ctx, const ax_opts *opts, const char *key,
 /* A string that must be one of choices (NULL-terminated); *out gets its index. */
 ax_arg ax_opt_enum(sqlite3_context *ctx, const ax_opts *opts, const char *key,
                    const char *const *choices, int *out);
+/* An aggregate reads its options on the first row and requires the same text on every row:
+ * ax_opts_text_keep copies argument i's text (nothing when it is absent or not text; free
+ * ot->text with sqlite3_free), ax_opts_text_same fails with "options must be the same on every
+ * row" unless argument i is that text (or both are absent). */
+typedef struct ax_opts_text {
+    char *text;
+    size_t len;
+} ax_opts_text;
+ax_arg ax_opts_text_keep(sqlite3_context *ctx, int argc, sqlite3_value **argv, int i,
+                         ax_opts_text *ot);
+ax_arg ax_opts_text_same(sqlite3_context *ctx, int argc, sqlite3_value **argv, int i,
+                         const ax_opts_text *ot);
 /* "up": "x" | "y" | "z" → 0..2. */
 ax_arg ax_opt_up(sqlite3_context *ctx, const ax_opts *opts, int *up);
 /* Resolves the motion's roles, then applies the "roles" option: {"left_hand": "MyHand", …}

@@ -1,6 +1,7 @@
 /*
  * fn_motion.c — SQL wrappers of the motion_* functions: import (BVH, CSV, JSON), export,
- * inspection, editing, roles, normalization, previews and the synthetic generator.
+ * inspection, editing, roles, normalization and the synthetic generator (the previews,
+ * motion_svg and motion_svg_group, are in fn_preview.c).
  * Each wrapper only converts values and calls the core; see docs/reference.md for the SQL
  * signatures, results and errors.
  */
@@ -13,7 +14,6 @@
 #include "affect/normalize.h"
 #include "affect/skeleton.h"
 #include "affect/strbuf.h"
-#include "affect/svg.h"
 #include "affect/synth.h"
 
 /* Sets the result from a core status: the motion on success, the error otherwise; frees it.
@@ -534,50 +534,6 @@ void ax_motion_normalize(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         no.scale_arm = scale == 1;
         affect_error err;
         finish_motion(ctx, affect_motion_normalize(m, &roles, &no, &out, &err), &out, &err);
-    }
-    ax_opts_free(&opts);
-    affect_motion_free(m);
-}
-
-/* ---- previews ---- */
-
-static const char *const svg_keys[] = {"view", "frames", "size", "up", "trajectories",
-                                       "labels", "title", "roles", NULL};
-
-void ax_motion_svg(sqlite3_context *ctx, int argc, sqlite3_value **argv)
-{
-    static const char *const views[] = {"front", "side", "top", NULL};
-    affect_motion *m;
-    if (ax_arg_motion(ctx, argv, 0, &m) != AX_OK)
-        return;
-    ax_opts opts;
-    affect_roles roles;
-    affect_svg_options so;
-    affect_svg_options_default(&so);
-    int view = (int)so.view;
-    double frames = so.frames, size = so.panel_size;
-    if (ax_opts_parse(ctx, argc, argv, 1, svg_keys, &opts) == AX_OK &&
-        ax_opt_enum(ctx, &opts, "view", views, &view) == AX_OK &&
-        ax_opt_number(ctx, &opts, "frames", &frames) == AX_OK &&
-        ax_opt_number(ctx, &opts, "size", &size) == AX_OK &&
-        ax_opt_up(ctx, &opts, &so.up_axis) == AX_OK &&
-        ax_opt_bool(ctx, &opts, "trajectories", &so.trajectories) == AX_OK &&
-        ax_opt_bool(ctx, &opts, "labels", &so.labels) == AX_OK &&
-        ax_opt_string(ctx, &opts, "title", &so.title) == AX_OK &&
-        ax_opt_roles(ctx, &opts, m, &roles) == AX_OK) {
-        if (frames != floor(frames) || size != floor(size) || frames < 0 || size < 0 ||
-            frames > 1e6 || size > 1e6) {
-            ax_errorf(ctx, "options \"frames\" and \"size\" must be whole numbers");
-        } else {
-            so.view = (affect_svg_view)view;
-            so.frames = (uint32_t)frames;
-            so.panel_size = (uint32_t)size;
-            char *text = NULL;
-            size_t len = 0;
-            affect_error err;
-            finish_text(ctx, affect_motion_svg(m, &roles, &so, &text, &len, &err), &text, &len,
-                        &err, false);
-        }
     }
     ax_opts_free(&opts);
     affect_motion_free(m);

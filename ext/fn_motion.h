@@ -20,7 +20,6 @@ AX_FN(ax_motion_resample);
 AX_FN(ax_motion_select);
 AX_FN(ax_motion_roles);
 AX_FN(ax_motion_normalize);
-AX_FN(ax_motion_svg);
 AX_FN(ax_motion_synth);
 
 /* The motion_points table-valued function (vt_points.c). */

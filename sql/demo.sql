@@ -1,6 +1,10 @@
 -- demo.sql — the demo's summary and its HTML page (run by `./run.sh demo` after the corpus
 -- is built; see README). Prints what the database holds, then writes demo.html with SVG film
--- strips of the synthetic corpus and, when it was imported, of the real one.
+-- strips of the synthetic corpus and, when it was imported, of the real one; animations
+-- (motion_svg's "animate", motion_svg_group: the source, generated and real motions side by
+-- side), a walk's top view, the salient joints as a heat map (affect_heatmap) and the emotion
+-- HMMs' key postures labelled by state. tests/client/chromium_test.sh renders the page in
+-- headless Chromium.
 --
 --   sqlite3 demo.db -cmd '.load ./build/affect' < sql/demo.sql
 .headers on
@@ -179,10 +183,15 @@ SELECT '<!doctype html><html><head><meta charset="utf-8"><title>sqlite-affect de
     || '<style>body{font-family:sans-serif;margin:2em;color:#222}h2{margin-top:2em}'
     || 'figure{display:inline-block;margin:0 1em 1em 0;vertical-align:top}'
     || 'figcaption{font-size:13px;color:#555}</style></head><body>'
-    || '<h1>sqlite-affect demo</h1><p>Film strips drawn by <code>motion_svg(motion, options)</code>, '
+    || '<h1>sqlite-affect demo</h1><p>Film strips and animations drawn by <code>motion_svg(motion, options)</code>, '
     || 'straight from <code>demo.db</code>. Blue: left side, red: right side; faint lines: '
-    || 'paths of the head, hands and feet.</p>';
-SELECT '<h2>Synthetic corpus (motion_synth, performer seed 1)</h2>';
+    || 'paths of the head, hands and feet; the grey bar under an animation shows its time.</p>';
+SELECT '<h2>Synthetic corpus (motion_synth, performer seed 1)</h2>'
+    || '<p>One action in four emotions, animated side by side at one scale: '
+    || '<code>motion_svg_group(motion, emotion, ''{"animate":true}'')</code>.</p>'
+    || motion_svg_group(motion, emotion, '{"animate":true,"size":130,"title":"knock"}')
+  FROM (SELECT * FROM motions WHERE source = 'synth' AND performer = 'synth-1' AND content = 'knock'
+         ORDER BY CASE emotion WHEN 'neutral' THEN 0 WHEN 'happy' THEN 1 WHEN 'sad' THEN 2 ELSE 3 END);
 SELECT '<h3>' || content || '</h3>' || group_concat(
            '<figure>' || motion_svg(motion, json_object(
                'frames', 6, 'size', 110,
@@ -208,12 +217,39 @@ SELECT '<h3>' || content || '</h3>' || group_concat(
          ORDER BY content, CASE emotion WHEN 'normal' THEN 0 WHEN 'happy' THEN 1
                                         WHEN 'sad' THEN 2 ELSE 3 END)
  GROUP BY content ORDER BY content;
+SELECT '<h2>A walk seen from above</h2><p><code>motion_svg(motion, ''{"view":"top"}'')</code>: '
+    || 'each panel is centred on the pelvis and turned so that the walk goes to the right; the grey '
+    || 'line is the pelvis''s path, the triangle at the head points where the body faces.</p>'
+    || '<figure>' || motion_svg(motion, json_object('view', 'top', 'frames', 6, 'size', 110,
+                                'title', 'top · ' || name))
+    || '</figure><figure>' || motion_svg(motion, json_object('view', 'top', 'animate', json('true'),
+                                'size', 110, 'title', 'animated'))
+    || '</figure>'
+  FROM (SELECT * FROM motions WHERE content = 'walk' AND emotion IN ('angry', 'neutral')
+         ORDER BY source = 'synth', name LIMIT 1);
 SELECT '<h2>Generation: the source, the generated motion at three strengths, the real recording (SCIENCE.md §5)</h2>'
     || '<p><code>affect_generate(''gen_laban'', motion, target, json_object(''source_label'', emotion, ''strength'', s))</code>'
     || ' over a laban index that leaves the source''s content out: the emotion''s change, learned '
     || 'from donor pairs of other contents, applied to the source itself (its action, timing and '
     || 'path stay); right: the actor''s own recording of that content in the target emotion '
     || '(ground truth, not used).</p>';
+SELECT '<h3>Animated: the source, each target generated at strength 1, and its real recording</h3>'
+    || '<p><code>motion_svg_group(motion, caption, ''{"animate":true}'')</code> over the rows '
+    || 'source, generated, real: one scale for all, each looping at its own duration.</p>'
+    || motion_svg_group(motion, caption, '{"animate":true,"size":120,"view":"front"}')
+  FROM (SELECT 0 AS k, 'source · ' || s.emotion AS caption, s.motion FROM gen_source AS s
+        UNION ALL
+        SELECT 1 + 2 * t.rank, 'generated · ' || g.target, g.motion
+          FROM generated AS g JOIN (SELECT target, row_number() OVER (ORDER BY target) AS rank
+                                      FROM generated GROUP BY target) AS t USING (target)
+         WHERE g.strength = 1
+        UNION ALL
+        SELECT 2 + 2 * t.rank, 'real · ' || g.target, r.motion
+          FROM generated AS g JOIN indexed AS r ON r.id = g.truth_id
+          JOIN (SELECT target, row_number() OVER (ORDER BY target) AS rank
+                  FROM generated GROUP BY target) AS t USING (target)
+         WHERE g.strength = 1
+         ORDER BY k);
 SELECT '<h3>' || s.name || ' → ' || g1.target || '</h3>'
     || '<figure>' || motion_svg(s.motion, json_object('frames', 6, 'size', 110, 'view', 'front',
                                  'title', 'source · ' || s.emotion))
@@ -247,28 +283,38 @@ SELECT '<h2>Emotion recognition: the sPCA embedding of the Fisher scores (thesis
                   || '"y_label":"sPCA axis 2","means":true}')
   FROM (SELECT d.emotion, affect_scores(c.model, d.motion) AS s
           FROM rec_data AS d, classifiers AS c);
-SELECT '<h2>Salient features: the heaviest sPCA weight among each HMM component''s covariance '
-    || 'scores (thesis Fig. 4.6)</h2><p>Rows: emotion HMMs; columns: states (mixture 0). Darker '
-    || 'is more discriminative; the tooltip names the top covariance entries. From '
-    || '<code>SELECT * FROM affect_salience(model)</code>.</p>'
-    || '<svg xmlns="http://www.w3.org/2000/svg" width="' || (120 + 60 * max(state + 1)) || '" height="'
-    || (40 + 40 * count(DISTINCT label)) || '" font-family="sans-serif" font-size="12">'
-    || group_concat(cell, '') || '</svg>'
-  FROM (SELECT label, state,
-               CASE WHEN state = 0 THEN printf('<text x="110" y="%d" text-anchor="end">%s</text>',
-                                               49 + 40 * li, label) ELSE '' END
-               || CASE WHEN li = 0 THEN printf('<text x="%d" y="20" text-anchor="middle">state %d</text>',
-                                               145 + 60 * state, state + 1) ELSE '' END
-               || printf('<rect x="%d" y="%d" width="56" height="36" fill="rgb(%d,%d,%d)"><title>%s, state %d: %s</title></rect>',
-                         117 + 60 * state, 27 + 40 * li,
-                         255 - CAST(200 * weight / wmax AS INTEGER), 255 - CAST(140 * weight / wmax AS INTEGER), 255,
-                         label, state + 1, replace(replace(top, '"', ''), '<', ''))
-               || printf('<text x="%d" y="%d" text-anchor="middle" fill="#000">%.3f</text>',
-                         145 + 60 * state, 50 + 40 * li, weight) AS cell
-          FROM (SELECT a.*, (SELECT max(weight) FROM affect_salience((SELECT model FROM classifiers))) AS wmax,
-                       dense_rank() OVER (ORDER BY label) - 1 AS li
-                  FROM affect_salience((SELECT model FROM classifiers)) AS a WHERE mixture = 0)
-         ORDER BY label, state);
+SELECT '<h2>Salient joints: the heaviest sPCA weight of each HMM state''s covariance scores, by '
+    || 'joint (thesis Fig. 4.6)</h2><p>Rows: emotion HMMs and their states (mixture 0); columns: '
+    || 'the joints, in skeleton order; a cell is the largest weight among the state''s 32 heaviest '
+    || 'covariance entries that name the joint (grey: none of them does). Darker is more '
+    || 'discriminative. From <code>affect_salience(model, 32)</code>, drawn by '
+    || '<code>affect_heatmap(row, column, value, options)</code>.</p>'
+    || affect_heatmap(row, joint, w, '{"title":"Salient joints per HMM state","x_label":"joint",'
+                                     || '"y_label":"emotion HMM, state","sort_rows":true}')
+  FROM (SELECT a.label || ' · state ' || (a.state + 1) AS row, j.joint, j.k,
+               max(json_extract(e.value, '$.weight')) AS w
+          FROM affect_salience((SELECT model FROM classifiers), 32) AS a,
+               json_each(a.top) AS e, json_each(e.value, '$.coordinates') AS c,
+               (SELECT key AS k, value AS joint
+                  FROM json_each(motion_info((SELECT posture FROM affect_salience(
+                                                (SELECT model FROM classifiers)) LIMIT 1)),
+                                 '$.names')) AS j
+         -- a coordinate is "joint.axis", "v.joint.axis" for a velocity
+         WHERE a.mixture = 0
+           AND j.joint = substr(c.value, CASE WHEN c.value LIKE 'v.%' THEN 3 ELSE 1 END,
+                                length(c.value) - 2 - CASE WHEN c.value LIKE 'v.%' THEN 2 ELSE 0 END)
+         GROUP BY a.label, a.state, j.joint
+         ORDER BY j.k, a.label, a.state);
+SELECT '<h2>Key postures of the emotion HMMs</h2><p>A five-state HMM per emotion '
+    || '(<code>hmm_train(motion, ''{"states":5,"covariance":"diag"}'')</code> on the recognizer''s '
+    || 'training motions), '
+    || 'each state''s mean posture from <code>hmm_postures(model)</code>, labelled by state: '
+    || '<code>motion_svg(hmm_postures(model), ''{"labels":"state"}'')</code>.</p>'
+    || group_concat('<figure>' || motion_svg(hmm_postures(model), json_object(
+           'labels', 'state', 'size', 100, 'trajectories', json('false'), 'title', label))
+       || '</figure>', '')
+  FROM (SELECT emotion AS label, hmm_train(motion, '{"states":5,"covariance":"diag"}') AS model
+          FROM rec_data GROUP BY emotion ORDER BY emotion);
 SELECT '</body></html>';
 .output stdout
 SELECT 'wrote demo.html';

@@ -642,6 +642,239 @@ static void test_deterministic(void **state)
     affect_motion_free(m);
 }
 
+
+/* ---- animations, groups, the top view's turn, state labels ---- */
+
+/* The text of the values="…" attribute following the n-th occurrence of key, malloc'd. */
+static char *values_after(const char *s, const char *key, size_t n)
+{
+    const char *p = s;
+    for (size_t i = 0; i <= n; i++) {
+        p = strstr(i ? p + 1 : p, key);
+        assert_non_null(p);
+    }
+    p = strstr(p, "values=\"");
+    assert_non_null(p);
+    p += 8;
+    const char *e = strchr(p, '"');
+    assert_non_null(e);
+    char *out = malloc((size_t)(e - p) + 1);
+    assert_non_null(out);
+    memcpy(out, p, (size_t)(e - p));
+    out[e - p] = '\0';
+    return out;
+}
+
+static void test_animation(void **state)
+{
+    affect_motion *m = make_human(91); /* 3 s at 30 fps */
+    affect_roles roles;
+    human_roles(&roles);
+    affect_svg_options opt;
+    affect_svg_options_default(&opt);
+    opt.animate = true;
+    opt.title = "walk";
+    size_t len;
+    char *svg = render(m, &roles, &opt, &len);
+    /* one panel, no film strip labels, the duration and frame count under it */
+    assert_int_equal(tu_count(svg, "<svg x="), 1);
+    assert_int_equal(tu_count(svg, "frame 0"), 0);
+    assert_non_null(strstr(svg, ">3.03 s \xc2\xb7 91 frames</text>"));
+    /* bones of three colours move; real time: dur = (T - 1) / fps = 3 s, looping */
+    assert_int_equal(tu_count(svg, "<animate attributeName=\"d\""), 3);
+    assert_int_equal(tu_count(svg, "dur=\"3s\" repeatCount=\"indefinite\""),
+                     tu_count(svg, "<animate"));
+    assert_int_equal(tu_count(svg, "<animateTransform attributeName=\"transform\""), 1);
+    assert_non_null(strstr(svg, "<animate attributeName=\"cx\""));
+    assert_non_null(strstr(svg, "<rect class=\"time\""));
+    /* automatic keyframes: 15 per second, 1 + ceil(3 × 15) = 46; every one has the same
+     * commands (SMIL interpolates paths only then); the first is the static d */
+    char *v = values_after(svg, "<animate attributeName=\"d\"", 0);
+    assert_int_equal(tu_count(v, ";") + 1, 46);
+    size_t moves = tu_count(v, "M");
+    assert_int_equal(moves % 46, 0);
+    char *first = strstr(svg, "<path stroke=\"" GREY "\" d=\"");
+    assert_non_null(first);
+    first += strlen("<path stroke=\"" GREY "\" d=\"");
+    assert_true(strncmp(first, v, strcspn(v, ";")) == 0);
+    free(v);
+    affect_free(svg);
+    /* explicit keyframes, clamped to the frame count */
+    opt.keyframes = 5;
+    svg = render(m, &roles, &opt, NULL);
+    v = values_after(svg, "<animate attributeName=\"d\"", 1);
+    assert_int_equal(tu_count(v, ";") + 1, 5);
+    free(v);
+    affect_free(svg);
+    opt.keyframes = 1000;
+    svg = render(m, &roles, &opt, NULL);
+    v = values_after(svg, "<animate attributeName=\"d\"", 2);
+    assert_int_equal(tu_count(v, ";") + 1, 91);
+    free(v);
+    affect_free(svg);
+    /* a one-frame motion: a still figure, no animation element */
+    affect_motion *one = make_human(1);
+    svg = render(one, &roles, &opt, NULL);
+    assert_int_equal(tu_count(svg, "<animate"), 0);
+    affect_free(svg);
+    affect_motion_free(one);
+    /* a bad keyframe count */
+    affect_error err;
+    char *out = NULL;
+    opt.keyframes = 1;
+    assert_int_equal(affect_motion_svg(m, &roles, &opt, &out, NULL, &err), AFFECT_ERR_INVALID);
+    assert_string_equal(err.msg, "keyframes must be 0 (automatic) or between 2 and 1000, got 1");
+    assert_null(out);
+    affect_motion_free(m);
+}
+
+static void test_group(void **state)
+{
+    affect_motion *a = make_human(31), *b = make_human(61);
+    /* b is a twice larger copy of a's first 31 frames and more */
+    for (uint32_t t = 0; t < b->n_frames; t++)
+        for (uint32_t j = 0; j < b->n_joints; j++) {
+            float *p = affect_motion_at(b, t, j);
+            p[0] *= 2, p[1] *= 2, p[2] *= 2;
+        }
+    affect_roles roles[2];
+    human_roles(&roles[0]);
+    human_roles(&roles[1]);
+    const affect_motion *ms[2] = {a, b};
+    const char *captions[2] = {"source <a>", "real"};
+    affect_svg_options opt;
+    affect_svg_options_default(&opt);
+    opt.animate = true;
+    opt.panel_size = 100;
+    char *svg = NULL;
+    size_t len = 0;
+    affect_error err;
+    assert_int_equal(affect_motion_svg_group(ms, roles, captions, 2, &opt, &svg, &len, &err),
+                     AFFECT_OK);
+    tu_assert_svg_well_formed(svg, len);
+    /* side by side, captions escaped, each looping at its own duration */
+    assert_int_equal(tu_count(svg, "<svg x="), 2);
+    assert_non_null(strstr(svg, "<svg x=\"100\" y=\"0\""));
+    assert_true(strncmp(svg, "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"200\"", 50) == 0);
+    assert_non_null(strstr(svg, ">source &lt;a&gt;</text>"));
+    assert_non_null(strstr(svg, ">real</text>"));
+    assert_non_null(strstr(svg, "dur=\"1s\""));
+    assert_non_null(strstr(svg, "dur=\"2s\""));
+    /* one scale: the head circle of the larger body is twice the smaller one's */
+    char *p0 = panel_text(svg, 0), *p1 = panel_text(svg, 1);
+    double r0 = strtod(strstr(strstr(p0, "<circle cx="), " r=\"") + 4, NULL);
+    double r1 = strtod(strstr(strstr(p1, "<circle cx="), " r=\"") + 4, NULL);
+    assert_true(fabs(r1 - 2 * r0) <= 0.11);
+    free(p0);
+    free(p1);
+    /* trajectory ids differ between the two motions */
+    assert_int_equal(tu_count(svg, "<defs>"), 2);
+    affect_free(svg);
+    /* a caption longer than its panel is cut with an ellipsis */
+    const char *long_captions[2] = {"dataset-1_walk_angry_001 generated at strength 1.5", "b"};
+    assert_int_equal(affect_motion_svg_group(ms, roles, long_captions, 2, &opt, &svg, &len, &err),
+                     AFFECT_OK);
+    tu_assert_svg_well_formed(svg, len);
+    /* 100 px at 11.1 px: 15 characters, the last the ellipsis */
+    assert_non_null(strstr(svg, ">dataset-1_walk\xe2\x80\xa6</text>"));
+    affect_free(svg);
+    /* strips: one row per motion with its caption above */
+    opt.animate = false;
+    opt.frames = 3;
+    assert_int_equal(affect_motion_svg_group(ms, roles, captions, 2, &opt, &svg, &len, &err),
+                     AFFECT_OK);
+    tu_assert_svg_well_formed(svg, len);
+    assert_int_equal(tu_count(svg, "<svg x="), 6);
+    assert_int_equal(tu_count(svg, "class=\"caption\""), 2);
+    affect_free(svg);
+    /* a group of one without caption is motion_svg's document */
+    char *single = render(a, &roles[0], &opt, NULL);
+    assert_int_equal(affect_motion_svg_group(ms, roles, NULL, 1, &opt, &svg, &len, &err),
+                     AFFECT_OK);
+    assert_string_equal(svg, single);
+    affect_free(svg);
+    affect_free(single);
+    /* errors: the group's size, and one motion's error named by its place */
+    assert_int_equal(affect_motion_svg_group(ms, roles, captions, 0, &opt, &svg, &len, &err),
+                     AFFECT_ERR_INVALID);
+    assert_string_equal(err.msg, "a group holds 1 to 64 motions, got 0");
+    affect_motion_at(b, 4, 2)[1] = NAN;
+    assert_int_equal(affect_motion_svg_group(ms, roles, captions, 2, &opt, &svg, &len, &err),
+                     AFFECT_ERR_FORMAT);
+    assert_string_equal(err.msg, "motion 1: frame 4, joint 2: coordinate is not finite");
+    assert_null(svg);
+    affect_motion_free(a);
+    affect_motion_free(b);
+}
+
+/* Top view of a walk along +z (y up): turned so that the walk goes right, the pelvis path is a
+ * horizontal line through the centre, and a facing marker points right (the walker faces +z). */
+static void test_top_view_turn(void **state)
+{
+    affect_motion *m = make_human(61);
+    affect_roles roles;
+    human_roles(&roles);
+    /* a straight walk: no bounce, so that the pelvis moves along +z only */
+    for (uint32_t t = 0; t < m->n_frames; t++)
+        affect_motion_at(m, t, H_HIPS)[1] = 95;
+    affect_svg_options opt;
+    affect_svg_options_default(&opt);
+    opt.view = AFFECT_SVG_TOP;
+    opt.frames = 2;
+    char *svg = render(m, &roles, &opt, NULL);
+    /* one trajectory only, the pelvis's: every point on y = 0 and x growing */
+    assert_int_equal(tu_count(svg, "<polyline"), 1);
+    const char *p = strstr(svg, "points=\"");
+    assert_non_null(p);
+    p += 8;
+    double prev = -1e9;
+    while (*p != '"') {
+        char *end;
+        double x = strtod(p, &end);
+        assert_true(*end == ',');
+        double y = strtod(end + 1, &end);
+        assert_true(fabs(y) < 0.05);
+        assert_true(x > prev);
+        prev = x;
+        p = end + (*end == ' ');
+    }
+    /* the facing marker's tip is right of the head */
+    const char *f = strstr(svg, "<polygon class=\"facing\"");
+    assert_non_null(f);
+    f = strstr(f, "points=\"") + 8;
+    double tip = strtod(f, NULL);
+    char *panel = panel_text(svg, 0);
+    const char *head = strstr(panel, "fill=\"none\" stroke=");
+    assert_non_null(head);
+    affect_free(svg);
+    /* the head circle is the last circle before the marker; its centre is left of the tip */
+    double cx, cy;
+    size_t n_circles = tu_count(panel, "<circle cx=\"");
+    circle_at(panel, n_circles - 1, &cx, &cy);
+    assert_true(tip > cx + 1);
+    free(panel);
+    affect_motion_free(m);
+}
+
+static void test_state_labels(void **state)
+{
+    affect_motion *m = make_human(5);
+    affect_roles roles;
+    human_roles(&roles);
+    affect_svg_options opt;
+    affect_svg_options_default(&opt);
+    opt.state_labels = true;
+    char *svg = render(m, &roles, &opt, NULL);
+    assert_int_equal(tu_count(svg, "frame "), 0);
+    for (int k = 1; k <= 5; k++) {
+        char key[32];
+        snprintf(key, sizeof key, ">state %d</text>", k);
+        assert_int_equal(tu_count(svg, key), 1);
+    }
+    affect_free(svg);
+    affect_motion_free(m);
+}
+
 /* ---- out of memory: every allocation of a render fails in turn (tu_oom_sweep) ---- */
 
 typedef struct svg_oom {
@@ -664,6 +897,47 @@ static void oom_render_finish(void *ctx, affect_status st)
     if (st != AFFECT_OK)
         assert_null(c->svg);
     affect_free(c->svg);
+}
+
+typedef struct group_oom {
+    const affect_motion *const *m;
+    const affect_roles *roles;
+    const char *const *captions;
+    const affect_svg_options *opt;
+    char *svg;
+} group_oom;
+
+static affect_status oom_group(void *ctx, affect_error *err)
+{
+    group_oom *c = ctx;
+    c->svg = NULL;
+    return affect_motion_svg_group(c->m, c->roles, c->captions, 2, c->opt, &c->svg, NULL, err);
+}
+
+static void oom_group_finish(void *ctx, affect_status st)
+{
+    group_oom *c = ctx;
+    if (st != AFFECT_OK)
+        assert_null(c->svg);
+    affect_free(c->svg);
+}
+
+static void test_out_of_memory_animated_group(void **state)
+{
+    affect_motion *a = make_human(60), *b = make_human(90);
+    affect_roles roles[2];
+    human_roles(&roles[0]);
+    human_roles(&roles[1]);
+    const affect_motion *ms[2] = {a, b};
+    const char *captions[2] = {"a", NULL};
+    affect_svg_options opt;
+    affect_svg_options_default(&opt);
+    opt.animate = true;
+    opt.view = AFFECT_SVG_TOP;
+    group_oom c = {ms, roles, captions, &opt, NULL};
+    assert_true(tu_oom_sweep(oom_group, &c, oom_group_finish, NULL) >= 5);
+    affect_motion_free(a);
+    affect_motion_free(b);
 }
 
 static void test_out_of_memory(void **state)
@@ -693,7 +967,12 @@ int main(void)
         cmocka_unit_test(test_degenerate),
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_deterministic),
+        cmocka_unit_test(test_animation),
+        cmocka_unit_test(test_group),
+        cmocka_unit_test(test_top_view_turn),
+        cmocka_unit_test(test_state_labels),
         cmocka_unit_test(test_out_of_memory),
+        cmocka_unit_test(test_out_of_memory_animated_group),
     };
     return cmocka_run_group_tests_name("svg", tests, NULL, NULL);
 }

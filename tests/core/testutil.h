@@ -44,7 +44,8 @@ size_t tu_count(const char *s, const char *needle);
 /* Fails the test unless s is a well-formed standalone SVG document of len bytes as our
  * writers emit it: strlen(s) == len; it starts with
  * `<svg xmlns="http://www.w3.org/2000/svg" width="` and ends with "</svg>\n"; no "nan" or
- * "inf" in any case; valid UTF-8; tag names of lowercase ASCII letters (under 16), followed
+ * "inf" in any case; valid UTF-8; tag names of ASCII letters starting lowercase (camelCase
+ * such as animateTransform; under 20), followed
  * by a space, newline, '/' or '>'; every tag closed by '>' with balanced double quotes, no
  * '<' anywhere inside it and no '>' inside a quoted attribute; no stray '>' in text; only
  * the five predefined entities; tags properly nested (at most 64 deep) under one root

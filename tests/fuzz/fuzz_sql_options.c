@@ -2,9 +2,10 @@
  * fuzz_sql_options.c — libFuzzer target for the JSON options of every SQL function that takes
  * them (ext/common.c ax_opts_parse and each wrapper's option reading), through a real
  * connection: motion import (BVH, CSV: options and document together), export, rigid bones,
- * roles, normalization, motion_svg, motion_synth, motion_angles, every laban_* descriptor,
- * laban_zvector (its options, and its index name as ?1), laban_series, laban_plot (its
- * time-series mode too), hmm_train, hmm_loglik, affect_train, affect_crossval(_json), laban_salient and
+ * roles, normalization, motion_svg (film strip and animation), motion_svg_group, affect_heatmap,
+ * motion_synth, motion_angles, every laban_* descriptor, laban_zvector (its options, and its
+ * index name as ?1), laban_series, laban_plot (its time-series mode too), hmm_train,
+ * hmm_loglik, affect_train, affect_crossval(_json), laban_salient and
  * affect_generate(_explain) (its classifier option as hex text included).
  *
  * Usage (see tests/fuzz/run.sh, or build with -DAFFECT_FUZZ=ON and clang):
@@ -16,7 +17,8 @@
  * document (?2; without a second line break the fixture's document is used). An unknown name
  * does nothing. The fixtures are fuzz_sql.h's; each input gets a fresh copy of them.
  * Seeds (tests/fuzz/corpus/fuzz_sql_options): <call>*.txt, options from docs/reference.md;
- * dictionary: tests/fuzz/fuzz_sql_options.dict (laban_series's and laban_plot's keys).
+ * tests/fuzz/fuzz_sql_options.dict holds the option keys and values of the previews, of
+ * laban_series and of laban_plot's time-series mode.
  * Checks beyond "no crash, no leak, no undefined behaviour" (fuzz_sql.c): an error carries a
  * message starting with "<function>: "; a motion result decodes and validates; a JSON result
  * is valid JSON; a trained model or classifier decodes and re-encodes to the same bytes.
@@ -52,6 +54,10 @@ static const call calls[] = {
     {"motion_roles", "motion_roles", 'j', false, "SELECT motion_roles(" M1 ", ?1)"},
     {"motion_normalize", "motion_normalize", 'm', false, "SELECT motion_normalize(" M1 ", ?1)"},
     {"motion_svg", "motion_svg", 'x', false, "SELECT motion_svg(" M1 ", ?1)"},
+    {"motion_svg_group", "motion_svg_group", 'x', false,
+     "SELECT motion_svg_group(motion, label, ?1) FROM motions"},
+    {"affect_heatmap", "affect_heatmap", 'x', false,
+     "SELECT affect_heatmap(label, CAST(round(y) AS TEXT), x, ?1) FROM points"},
     {"motion_synth", "motion_synth", 'm', false, "SELECT motion_synth('wave', 'happy', 3, ?1)"},
     {"motion_angles", "motion_angles", 'x', false,
      "SELECT frame, joint, name, qw, qx, qy, qz, \"order\", rx, ry, rz, speed "

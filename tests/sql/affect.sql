@@ -25,7 +25,7 @@ INSERT INTO hexbyte SELECT printf('%02X', i), i FROM n;
 SELECT group_concat(name || '/' || narg || '/' || type, ' ') FROM (
   SELECT DISTINCT name, narg, type FROM pragma_function_list
    WHERE (name LIKE 'affect\_%' ESCAPE '\' OR name LIKE 'fisher\_%' ESCAPE '\')
-     AND name NOT IN ('affect_version', 'affect_build_info', 'affect_generate', 'affect_generate_explain', 'affect_strength') ORDER BY name, narg);
+     AND name NOT IN ('affect_version', 'affect_build_info', 'affect_generate', 'affect_generate_explain', 'affect_strength', 'affect_heatmap') ORDER BY name, narg);
 -- expect: affect_classify/2/s affect_classify/3/s affect_crossval_json/4/a affect_embed/2/s affect_info/1/s affect_scores/2/s affect_train/2/a affect_train/3/a fisher_score/2/s
 
 SELECT 'the recognizer functions are deterministic and innocuous', count(*) = 9

@@ -42,7 +42,7 @@ SELECT group_concat(name || '/' || narg, ' ') FROM (
   SELECT DISTINCT name, narg FROM pragma_function_list
    WHERE name LIKE 'motion\_%' ESCAPE '\' OR name IN ('affect_version', 'affect_build_info')
    ORDER BY name, narg);
--- expect: affect_build_info/0 affect_version/0 motion_bvh_error/1 motion_bvh_error/2 motion_dtw/2 motion_duration/1 motion_fps/1 motion_frames/1 motion_from_bvh/1 motion_from_bvh/2 motion_from_csv/2 motion_from_csv/3 motion_from_json/1 motion_info/1 motion_joints/1 motion_keyframes/1 motion_keyframes/2 motion_kinematics/1 motion_kinematics/2 motion_normalize/1 motion_normalize/2 motion_resample/2 motion_rigid/1 motion_rigid/2 motion_rigid/3 motion_roles/1 motion_roles/2 motion_select/2 motion_slice/3 motion_svg/1 motion_svg/2 motion_synth/3 motion_synth/4 motion_to_bvh/1 motion_to_bvh/2 motion_to_csv/1 motion_to_json/1
+-- expect: affect_build_info/0 affect_version/0 motion_bvh_error/1 motion_bvh_error/2 motion_dtw/2 motion_duration/1 motion_fps/1 motion_frames/1 motion_from_bvh/1 motion_from_bvh/2 motion_from_csv/2 motion_from_csv/3 motion_from_json/1 motion_info/1 motion_joints/1 motion_keyframes/1 motion_keyframes/2 motion_kinematics/1 motion_kinematics/2 motion_normalize/1 motion_normalize/2 motion_resample/2 motion_rigid/1 motion_rigid/2 motion_rigid/3 motion_roles/1 motion_roles/2 motion_select/2 motion_slice/3 motion_svg/1 motion_svg/2 motion_svg_group/2 motion_svg_group/3 motion_synth/3 motion_synth/4 motion_to_bvh/1 motion_to_bvh/2 motion_to_csv/1 motion_to_json/1
 
 SELECT 'pure functions are deterministic and innocuous', count(*) = 0 FROM pragma_function_list
  WHERE (name LIKE 'motion\_%' ESCAPE '\' OR name LIKE 'affect\_%' ESCAPE '\')
@@ -346,13 +346,13 @@ SELECT motion_svg(m, '{"frames":0}') FROM t WHERE name = 'small';
 -- error: motion_svg: frames must be between 1 and 64, got 0
 
 SELECT motion_svg(m, '{"frames":2.5}') FROM t WHERE name = 'small';
--- error: motion_svg: options "frames" and "size" must be whole numbers
+-- error: motion_svg: options "frames", "size" and "keyframes" must be whole numbers
 
 SELECT motion_svg(m, '{"view":"back"}') FROM t WHERE name = 'small';
 -- error: motion_svg: option "view" must be one of "front", "side", "top", got "back"
 
 SELECT motion_svg(m, '{"labels":1}') FROM t WHERE name = 'small';
--- error: motion_svg: option "labels" must be true or false, got number
+-- error: motion_svg: option "labels" must be true, false, "frame" or "state", got number
 
 -- ---- synthetic movements ----
 SELECT 'motion_synth is deterministic for a seed, and seeds are performers',

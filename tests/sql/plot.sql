@@ -154,3 +154,186 @@ SELECT label, laban_plot(x, y, label) FROM (SELECT 1 AS x, 1 AS y, 'a' AS label
                                             UNION ALL SELECT 2, 2, 'b'
                                             UNION ALL SELECT 3, 'oops', 'b') GROUP BY label;
 -- error: laban_plot: y (argument 2) must be a number, got text
+
+-- =====================================================================================
+-- motion_svg's animation and labels, motion_svg_group, affect_heatmap (issue 17)
+-- =====================================================================================
+CREATE TABLE mv(name TEXT, m BLOB);
+INSERT INTO mv VALUES ('wave', motion_synth('wave', 'happy', 1)),   -- 117 frames at 30 fps
+                      ('knock', motion_synth('knock', 'sad', 2)),
+                      ('walk', motion_synth('walk', 'angry', 3));
+
+SELECT group_concat(name || '/' || narg || '/' || type, ' ') FROM (
+  SELECT DISTINCT name, narg, type FROM pragma_function_list
+   WHERE name IN ('motion_svg_group', 'affect_heatmap') ORDER BY name, narg);
+-- expect: affect_heatmap/3/a affect_heatmap/4/a motion_svg_group/2/a motion_svg_group/3/a
+
+SELECT 'the new aggregates are deterministic and innocuous', count(*) = 4
+  FROM pragma_function_list WHERE name IN ('motion_svg_group', 'affect_heatmap')
+   AND (flags & 0x000000800) <> 0 AND (flags & 0x000200000) <> 0;
+
+-- ---- motion_svg {"animate":true} ----
+WITH a(svg, frames, fps) AS (SELECT motion_svg(m, '{"animate":true}'), motion_frames(m), motion_fps(m)
+                               FROM mv WHERE name = 'wave')
+SELECT 'an animated SVG: SMIL that loops in real time, one panel, no script',
+       svg LIKE '<svg xmlns="http://www.w3.org/2000/svg"%</svg>' || char(10)
+   AND instr(svg, '<animate attributeName="d"') > 0
+   AND instr(svg, '<animateTransform attributeName="transform" type="translate"') > 0
+   AND instr(svg, 'dur="' || printf('%g', round((frames - 1) / fps, 3)) || 's" repeatCount="indefinite"') > 0
+   AND (length(svg) - length(replace(svg, '<svg x=', ''))) / 7 = 1
+   AND instr(svg, '<script') = 0 AND instr(svg, 'frame 0 ·') = 0 FROM a;
+
+-- automatic keyframes: 15 per second (117 frames at 30 fps: 1 + ceil(116 / 30 × 15) = 59)
+WITH a(v) AS (SELECT substr(svg, instr(svg, 'values="') + 8) FROM
+               (SELECT substr(s, instr(s, '<animate attributeName="d"')) AS svg
+                  FROM (SELECT motion_svg(m, '{"animate":true}') AS s FROM mv WHERE name = 'wave')))
+SELECT 'automatic keyframes', length(substr(v, 1, instr(v, '"') - 1))
+         - length(replace(substr(v, 1, instr(v, '"') - 1), ';', '')) + 1 = 59 FROM a;
+
+WITH a(v) AS (SELECT substr(svg, instr(svg, 'values="') + 8) FROM
+               (SELECT substr(s, instr(s, '<animate attributeName="d"')) AS svg
+                  FROM (SELECT motion_svg(m, '{"animate":true,"keyframes":7}') AS s FROM mv WHERE name = 'wave')))
+SELECT 'keyframes as asked', length(substr(v, 1, instr(v, '"') - 1))
+         - length(replace(substr(v, 1, instr(v, '"') - 1), ';', '')) + 1 = 7 FROM a;
+
+SELECT 'the film strip stays the default; animations are deterministic',
+       motion_svg(m) = motion_svg(m, '{"animate":false}')
+   AND instr(motion_svg(m), '<animate') = 0
+   AND motion_svg(m, '{"animate":true,"view":"top"}') = motion_svg(m, '{"animate":true,"view":"top"}')
+  FROM mv WHERE name = 'walk';
+
+SELECT 'the top view turns the walk and marks where the body faces',
+       instr(motion_svg(m, '{"view":"top"}'), 'class="facing"') > 0
+   AND instr(motion_svg(m, '{"view":"top","animate":true}'), '<animate attributeName="points"') > 0
+  FROM mv WHERE name = 'walk';
+
+SELECT 'labels "state": state N under panel N (hmm_postures)',
+       instr(motion_svg(motion_slice(m, 0, 3), '{"labels":"state"}'), '>state 3</text>') > 0
+   AND instr(motion_svg(motion_slice(m, 0, 3), '{"labels":"state"}'), 'frame ') = 0
+   AND motion_svg(m, '{"labels":"frame"}') = motion_svg(m, '{"labels":true}')
+  FROM mv WHERE name = 'knock';
+
+SELECT 'NULL in, NULL out', motion_svg(NULL, '{"animate":true}') IS NULL;
+
+SELECT motion_svg(m, '{"animate":true,"keyframes":1}') FROM mv WHERE name = 'wave';
+-- error: motion_svg: keyframes must be 0 (automatic) or between 2 and 1000, got 1
+
+SELECT motion_svg(m, '{"animate":true,"keyframes":2.5}') FROM mv WHERE name = 'wave';
+-- error: motion_svg: options "frames", "size" and "keyframes" must be whole numbers
+
+SELECT motion_svg(m, '{"animate":true,"frames":4}') FROM mv WHERE name = 'wave';
+-- error: motion_svg: option "frames" is for the film strip (an animation takes "keyframes")
+
+SELECT motion_svg(m, '{"keyframes":4}') FROM mv WHERE name = 'wave';
+-- error: motion_svg: option "keyframes" needs "animate":true
+
+SELECT motion_svg(m, '{"animate":"yes"}') FROM mv WHERE name = 'wave';
+-- error: motion_svg: option "animate" must be true or false, got string
+
+SELECT motion_svg(m, '{"labels":"time"}') FROM mv WHERE name = 'wave';
+-- error: motion_svg: option "labels" must be one of "frame", "state", got "time"
+
+SELECT motion_svg(m, '{"labels":null}') FROM mv WHERE name = 'wave';
+-- error: motion_svg: option "labels" must be true, false, "frame" or "state", got null
+
+SELECT motion_svg(m, '{"animte":true}') FROM mv WHERE name = 'wave';
+-- error: motion_svg: unknown option "animte" (expected view, frames, size, up, trajectories, labels, title, animate, keyframes, roles)
+
+-- ---- motion_svg_group ----
+WITH g(svg) AS (SELECT motion_svg_group(m, name, '{"animate":true,"size":100}')
+                  FROM (SELECT * FROM mv ORDER BY name))
+SELECT 'animated side by side, in row order, with captions',
+       svg LIKE '<svg xmlns="http://www.w3.org/2000/svg" width="300" %</svg>' || char(10)
+   AND (length(svg) - length(replace(svg, '<svg x=', ''))) / 7 = 3
+   AND instr(svg, '>knock</text>') < instr(svg, '>walk</text>')
+   AND instr(svg, '>walk</text>') < instr(svg, '>wave</text>')
+   AND (length(svg) - length(replace(svg, 'repeatCount="indefinite"', ''))) > 3 FROM g;
+
+WITH g(svg) AS (SELECT motion_svg_group(m, name, '{"frames":3}') FROM mv)
+SELECT 'strips: one per row, with its caption above',
+       (length(svg) - length(replace(svg, '<svg x=', ''))) / 7 = 9
+   AND (length(svg) - length(replace(svg, 'class="caption"', ''))) / 15 = 3
+   AND instr(svg, '<animate') = 0 FROM g;
+
+SELECT 'a group of one without caption is motion_svg',
+       (SELECT motion_svg_group(m, NULL) FROM mv WHERE name = 'wave')
+       = (SELECT motion_svg(m) FROM mv WHERE name = 'wave')
+   AND (SELECT motion_svg_group(m, NULL, '{"animate":true}') FROM mv WHERE name = 'wave')
+       = (SELECT motion_svg(m, '{"animate":true}') FROM mv WHERE name = 'wave');
+
+SELECT 'NULL motions are skipped; none at all gives NULL',
+       (SELECT motion_svg_group(NULL, 'x')) IS NULL
+   AND (SELECT motion_svg_group(m, name) FROM mv WHERE 0) IS NULL
+   AND (SELECT motion_svg_group(CASE WHEN name = 'wave' THEN m END, name) FROM mv)
+       = (SELECT motion_svg_group(m, name) FROM mv WHERE name = 'wave');
+
+SELECT 'a number caption is text', instr(motion_svg_group(m, 42), '>42</text>') > 0
+  FROM mv WHERE name = 'wave';
+
+SELECT motion_svg_group(m, x'00') FROM mv;
+-- error: motion_svg_group: caption (argument 2) must be text, a number or NULL, got blob
+
+SELECT motion_svg_group(m, name, CASE name WHEN 'wave' THEN '{}' ELSE '{"animate":true}' END)
+  FROM (SELECT * FROM mv ORDER BY name);
+-- error: motion_svg_group: options must be the same on every row
+
+SELECT motion_svg_group('walk', 'a');
+-- error: motion_svg_group: argument 1 must be a motion BLOB, got text
+
+SELECT motion_svg_group(m, name, '{"animate":true,"frames":3}') FROM mv;
+-- error: motion_svg_group: option "frames" is for the film strip (an animation takes "keyframes")
+
+WITH RECURSIVE k(i) AS (SELECT 1 UNION ALL SELECT i + 1 FROM k WHERE i < 65)
+SELECT motion_svg_group(m, i) FROM k, mv WHERE mv.name = 'knock';
+-- error: motion_svg_group: at most 64 motions in a group
+
+-- ---- affect_heatmap ----
+CREATE TABLE cells(r, c, v);
+INSERT INTO cells VALUES ('sad · state 1', 'Head', 0.5), ('sad · state 1', 'Hand_L', 1),
+                         ('sad · state 2', 'Head', 0.25), ('sad · state 2', 'Head', 0.75),
+                         ('angry <1>', 'Foot_R', 0), (NULL, 'Head', 1), ('x', NULL, 1),
+                         ('y', 'Head', NULL);
+
+WITH h(svg) AS (SELECT affect_heatmap(r, c, v, '{"title":"salience","cell":30}') FROM cells)
+SELECT 'joint names on the axes, not only in tooltips',
+       svg LIKE '<svg xmlns="http://www.w3.org/2000/svg"%</svg>' || char(10)
+   AND (length(svg) - length(replace(svg, '<text class="row-label"', ''))) / 23 = 3
+   AND (length(svg) - length(replace(svg, '<text class="column-label"', ''))) / 26 = 3
+   AND instr(svg, 'rotate(-45)">Hand_L</text>') > 0
+   AND instr(svg, '>angry &lt;1&gt;</text>') > 0
+   AND instr(svg, '<title>sad · state 2 × Head: 0.75</title>') > 0   -- a repeated cell: the larger
+   AND (length(svg) - length(replace(svg, '<rect class="cell"', ''))) / 18 = 9
+   AND instr(svg, '>salience</text>') > 0 FROM h;
+
+SELECT 'sorted rows and columns',
+       instr(svg, '>Foot_R</text>') < instr(svg, '>Hand_L</text>')
+   AND instr(svg, '>Hand_L</text>') < instr(svg, '>Head</text>')
+   AND instr(svg, '>angry &lt;1&gt;</text>') < instr(svg, '>sad · state 1</text>')
+  FROM (SELECT affect_heatmap(r, c, v, '{"sort_rows":true,"sort_columns":true}') AS svg
+          FROM (SELECT * FROM cells ORDER BY v DESC));
+
+SELECT 'no rows: the empty map', instr(affect_heatmap(r, c, v), '>no data</text>') > 0
+  FROM cells WHERE 0;
+
+SELECT 'values printed when asked',
+       instr(affect_heatmap(r, c, v, '{"values":true}'), 'class="value"') > 0
+   AND instr(affect_heatmap(r, c, v, '{"values":false,"cell":60}'), 'class="value"') = 0 FROM cells;
+
+SELECT affect_heatmap(r, c, 'high') FROM cells;
+-- error: affect_heatmap: value (argument 3) must be a number, got text
+
+SELECT affect_heatmap(x'01', 'c', 1);
+-- error: affect_heatmap: row (argument 1) must be text or a number, got blob
+
+SELECT affect_heatmap(r, c, v, '{"cell":4}') FROM cells;
+-- error: affect_heatmap: cell must be between 8 and 120, got 4
+
+SELECT affect_heatmap(r, c, v, '{"min":1,"max":1}') FROM cells;
+-- error: affect_heatmap: min must be below max, got 1 and 1
+
+SELECT affect_heatmap(r, c, v, '{"colours":"viridis"}') FROM cells;
+-- error: affect_heatmap: unknown option "colours" (expected title, x_label, y_label, cell, values, min, max, sort_rows, sort_columns)
+
+WITH RECURSIVE k(i) AS (SELECT 1 UNION ALL SELECT i + 1 FROM k WHERE i < 1001)
+SELECT affect_heatmap('r', 'c' || i, i) FROM k;
+-- error: affect_heatmap: more than 1000 columns

@@ -111,6 +111,11 @@ grep -q "wrote demo.html" summary.txt || fail "demo page"
 grep -q '</html>' demo.html || fail "demo.html is incomplete"
 grep -q "Laban nearest neighbours" summary.txt || fail "demo: nearest neighbours"
 grep -q "Laban Weight vs Time" demo.html || fail "demo: the Weight vs Time figure"
+[ "$(grep -o '<animate attributeName="d"' demo.html | wc -l)" -ge 10 ] || fail "demo: animated figures"
+grep -q 'caption" text-anchor="middle" fill="#333">real · ' demo.html || fail "demo: source / generated / real animated side by side"
+grep -q 'class="column-label"' demo.html || fail "demo: the salience heat map with joint names"
+grep -q '>state 5</text>' demo.html || fail "demo: HMM postures labelled by state"
+grep -q 'class="facing"' demo.html || fail "demo: the top view of a walk"
 grep -q "generated (strengths 0.5, 1, 1.5) vs source vs the real recording" summary.txt ||
     fail "demo: generation summary"
 [ "$(q "SELECT count(*) FROM generated WHERE motion_frames(motion) > 0")" = 9 ] ||

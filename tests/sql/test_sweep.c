@@ -559,6 +559,8 @@ static const baseline baselines[] = {
     {"rank_score", {RNK, "<laban vector>"}, false},
     /* aggregates, over agg_rows */
     {"laban_plot", {"@x", "@y", "@label", OPT}, false},
+    {"motion_svg_group", {"@m", "@label", OPT}, false},
+    {"affect_heatmap", {"@label", "@label", "@x", OPT}, false},
     {"hmm_train", {"@m", "@hmm_opt"}, true},
     {"affect_train", {"@m", "@label", "@cls_opt"}, true},
     {"affect_crossval_json", {"@m", "@label", "@grp", "@cv_opt"}, true},
