@@ -616,6 +616,8 @@ affect_status ax_motion_tvf_args(int idx_num, int argc, sqlite3_value **argv, af
                          emsg);
     }
     return st;
+}
+
 /* ---- an aggregate's options: read on the first row, the same text on every row ---- */
 
 /* Keeps a copy of argument i's text (nothing when it is absent or not text). */
