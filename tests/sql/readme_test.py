@@ -185,10 +185,12 @@ def main():
                 else:
                     cmd += ["-cmd", ".load ./build/affect"]
                 if problem is None:
-                    script = "".join(s.rstrip().rstrip(";") + ";\n" for s, _ in steps)
+                    script = "".join(s + "\n" if s.startswith(".") else
+                                     s.rstrip().rstrip(";") + ";\n" for s, _ in steps)
                     code, out, err = run(cmd, cwd, script)
-                    got = [shell_error(l) for l in (out + err).splitlines()]
-                    want = [l for _, o in steps for l in o]
+                    # compared without trailing blanks (column mode pads its last column)
+                    got = [shell_error(l).rstrip() for l in (out + err).splitlines()]
+                    want = [l.rstrip() for _, o in steps for l in o]
                     if abridged:
                         bad = [l for l in got if "error" in l and l not in want]
                         if bad:
