@@ -17,6 +17,9 @@ is the module under test and `sql/`, `examples/` and `python/` are the checkout'
 - every ```sh block that queries demo.db (starts with `sqlite3 demo.db`): its sqlite3 commands,
   through bash; the other sh blocks install or build, and run.sh itself runs them.
 
+It also checks that docs/reference.md's contents list names every function and module the
+module registers.
+
 A block that needs something the machine lacks is skipped with a message: the real corpus's
 rows (when BVH_DIR is absent, a block naming `dataset-1_` or `bandai-namco` is skipped), a
 Python that cannot load extensions, or sqlite-vec (MODULE's folder/npm, where run.sh test
@@ -87,6 +90,31 @@ def shell_error(line):
     # the shell prints "Runtime error near line 3: …" when reading a script, "Runtime error: …"
     # at its prompt (what the README's transcripts show)
     return re.sub(r"^(Runtime|Parse) error near line \d+:", r"\1 error:", line)
+
+
+def registered(shell, module):
+    """The names of the functions and modules the module registers (those present once it is
+    loaded and not before)."""
+    q = "SELECT name FROM pragma_function_list UNION SELECT name FROM pragma_module_list"
+    before = set(run([shell, ":memory:", q], "/")[1].split())
+    after = set(run([shell, ":memory:", "-cmd", ".load " + module, q], "/")[1].split())
+    return sorted(after - before)
+
+
+def reference_contents(shell, module, src):
+    """docs/reference.md's contents list (its first paragraph starting "Contents:") names every
+    function and module: the number of those it does not name, each printed."""
+    with open(os.path.join(src, "docs", "reference.md"), encoding="utf-8") as f:
+        text = f.read()
+    start = text.index("\nContents:")
+    contents = text[start:text.index("\n\n", start)]
+    names = registered(shell, module)
+    missing = [n for n in names if not re.search(r"\b%s\b" % re.escape(n), contents)]
+    for n in missing:
+        print("FAIL docs/reference.md: the contents list does not name %s" % n)
+    print("docs/reference.md contents: %d functions and modules, %d missing"
+          % (len(names), len(missing)))
+    return len(missing)
 
 
 def main():
@@ -205,6 +233,7 @@ def main():
             else:
                 print("ok   %s" % where)
         print("README examples: %d run, %d failed, %d skipped" % (ran, failures, skipped))
+        failures += reference_contents(shell, module, src)
         return 1 if failures else 0
     finally:
         shutil.rmtree(work, ignore_errors=True)
