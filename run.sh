@@ -24,7 +24,7 @@ cd "$(dirname "$0")"
 ROOT=$(pwd)
 
 PACKAGES=(build-essential cmake pkg-config sqlite3 libsqlite3-dev libopenblas-dev liblapacke-dev
-          libsvm-dev libcmocka-dev clang python3)
+          libsvm-dev libcmocka-dev clang clang-format python3)
 # The Python package (python/) and its tests: NumPy, and an offline venv + pip install.
 PACKAGES+=(python3-numpy python3-venv python3-setuptools python3-wheel)
 # Only for ./run.sh test: the real clients of tests/client/blender_test.sh (headless Blender

@@ -217,20 +217,17 @@ static const ax_function classifier_functions[] = {
 
 /* The functions on a functional model BLOB (fn_fda.c), each with its one-model cache. */
 static const ax_function fda_functions[] = {
-    {"fda_embed", 2, false, ax_fda_embed},
-    {"fda_classify", 2, false, ax_fda_classify},
-    {"fda_classify", 3, false, ax_fda_classify},
-    {"fda_info", 1, true, ax_fda_info},
-    {"fda_prototype", 2, false, ax_fda_prototype},
-    {"fda_plot", 1, false, ax_fda_plot},
+    {"fda_embed", 2, false, ax_fda_embed},         {"fda_classify", 2, false, ax_fda_classify},
+    {"fda_classify", 3, false, ax_fda_classify},   {"fda_info", 1, true, ax_fda_info},
+    {"fda_prototype", 2, false, ax_fda_prototype}, {"fda_plot", 1, false, ax_fda_plot},
     {"fda_plot", 2, false, ax_fda_plot},
 };
 
 #ifdef _WIN32
 __declspec(dllexport)
 #endif
-__attribute__((visibility("default"))) int sqlite3_affect_init(sqlite3 *db, char **err,
-                                                               const sqlite3_api_routines *api);
+    __attribute__((visibility("default"))) int sqlite3_affect_init(sqlite3 *db, char **err,
+                                                                   const sqlite3_api_routines *api);
 
 int sqlite3_affect_init(sqlite3 *db, char **err, const sqlite3_api_routines *api)
 {
@@ -272,8 +269,8 @@ int sqlite3_affect_init(sqlite3 *db, char **err, const sqlite3_api_routines *api
         if (!user)
             return SQLITE_NOMEM;
         int flags = AX_PURE | (f->json ? subtype_flag : 0);
-        int rc = sqlite3_create_function_v2(db, f->name, f->n_arg, flags, user, f->fn, NULL,
-                                            NULL, ax_cls_fn_free); /* frees user on failure */
+        int rc = sqlite3_create_function_v2(db, f->name, f->n_arg, flags, user, f->fn, NULL, NULL,
+                                            ax_cls_fn_free); /* frees user on failure */
         if (rc != SQLITE_OK) {
             *err = sqlite3_mprintf("affect: cannot register %s/%d: %s", f->name, f->n_arg,
                                    sqlite3_errmsg(db));
@@ -286,8 +283,8 @@ int sqlite3_affect_init(sqlite3 *db, char **err, const sqlite3_api_routines *api
         if (!user)
             return SQLITE_NOMEM;
         int flags = AX_PURE | (f->json ? subtype_flag : 0);
-        int rc = sqlite3_create_function_v2(db, f->name, f->n_arg, flags, user, f->fn, NULL,
-                                            NULL, ax_fda_fn_free); /* frees user on failure */
+        int rc = sqlite3_create_function_v2(db, f->name, f->n_arg, flags, user, f->fn, NULL, NULL,
+                                            ax_fda_fn_free); /* frees user on failure */
         if (rc != SQLITE_OK) {
             *err = sqlite3_mprintf("affect: cannot register %s/%d: %s", f->name, f->n_arg,
                                    sqlite3_errmsg(db));
@@ -310,8 +307,8 @@ int sqlite3_affect_init(sqlite3 *db, char **err, const sqlite3_api_routines *api
         if (!user)
             return SQLITE_NOMEM;
         int flags = SQLITE_UTF8 | SQLITE_DIRECTONLY | (f->json ? subtype_flag : 0);
-        int rc = sqlite3_create_function_v2(db, f->name, f->n_arg, flags, user, f->fn, NULL,
-                                            NULL, ax_gen_fn_free);
+        int rc = sqlite3_create_function_v2(db, f->name, f->n_arg, flags, user, f->fn, NULL, NULL,
+                                            ax_gen_fn_free);
         if (rc != SQLITE_OK) {
             *err = sqlite3_mprintf("affect: cannot register %s/%d: %s", f->name, f->n_arg,
                                    sqlite3_errmsg(db));
@@ -356,8 +353,7 @@ int sqlite3_affect_init(sqlite3 *db, char **err, const sqlite3_api_routines *api
         *err = sqlite3_mprintf("affect: cannot register laban_series: %s", sqlite3_errmsg(db));
         return rc;
     }
-    static const ax_laban_cache_kind laban_caches[] = {{"rmlr", ax_gen_check_fit},
-                                                        {NULL, NULL}};
+    static const ax_laban_cache_kind laban_caches[] = {{"rmlr", ax_gen_check_fit}, {NULL, NULL}};
     rc = ax_register_laban(db, laban_caches);
     if (rc != SQLITE_OK) {
         *err = sqlite3_mprintf("affect: cannot register laban: %s", sqlite3_errmsg(db));

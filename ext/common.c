@@ -68,11 +68,16 @@ char *ax_mprintf(const char *fmt, ...)
 const char *ax_type_name(sqlite3_value *v)
 {
     switch (sqlite3_value_type(v)) {
-    case SQLITE_INTEGER: return "integer";
-    case SQLITE_FLOAT: return "real";
-    case SQLITE_TEXT: return "text";
-    case SQLITE_BLOB: return "blob";
-    default: return "null";
+    case SQLITE_INTEGER:
+        return "integer";
+    case SQLITE_FLOAT:
+        return "real";
+    case SQLITE_TEXT:
+        return "text";
+    case SQLITE_BLOB:
+        return "blob";
+    default:
+        return "null";
     }
 }
 
@@ -315,8 +320,8 @@ ax_arg ax_opts_parse(sqlite3_context *ctx, int argc, sqlite3_value **argv, int i
             char list[448] = ""; /* affect_crossval's 29 keys take 283 bytes */
             size_t used = 0;
             for (int k = 0; allowed[k]; k++) {
-                int w = snprintf(list + used, sizeof list - used, "%s%s", k ? ", " : "",
-                                 allowed[k]);
+                int w =
+                    snprintf(list + used, sizeof list - used, "%s%s", k ? ", " : "", allowed[k]);
                 if (w < 0 || (size_t)w >= sizeof list - used) {
                     list[used] = '\0'; /* never a key cut in the middle */
                     break;
@@ -374,8 +379,7 @@ ax_arg ax_opt_number(sqlite3_context *ctx, const ax_opts *opts, const char *key,
     return AX_OK;
 }
 
-ax_arg ax_opt_string(sqlite3_context *ctx, const ax_opts *opts, const char *key,
-                     const char **out)
+ax_arg ax_opt_string(sqlite3_context *ctx, const ax_opts *opts, const char *key, const char **out)
 {
     const affect_json_node *n = ax_opt(opts, key);
     if (!n)
@@ -455,8 +459,8 @@ ax_arg ax_opt_roles(sqlite3_context *ctx, const ax_opts *opts, const affect_moti
 /* The probe counts to 100 so that it also runs about 1,000 VM steps: a progress handler
  * installed with N ≤ 1,000 is asked at every poll, one with N = 10,000 every tenth (20–50 µs
  * per poll, every 10 ms at most). */
-#define AX_PROBE_SQL                                                                              \
-    "WITH RECURSIVE c(i) AS (SELECT 1 UNION ALL SELECT i + 1 FROM c WHERE i < 100) "             \
+#define AX_PROBE_SQL                                                                               \
+    "WITH RECURSIVE c(i) AS (SELECT 1 UNION ALL SELECT i + 1 FROM c WHERE i < 100) "               \
     "SELECT count(*) FROM c"
 
 static bool monitor_stop(void *arg)
@@ -612,8 +616,8 @@ affect_status ax_motion_tvf_args(int idx_num, int argc, sqlite3_value **argv, af
     if (st && st != AFFECT_ERR_NOMEM && st != AFFECT_ERR_INTERRUPTED) {
         char emsg[AFFECT_ERROR_MSG_MAX];
         memcpy(emsg, err->msg, sizeof emsg);
-        st = affect_fail(err, AFFECT_ERR_FORMAT, "the argument is not a valid motion: %.200s",
-                         emsg);
+        st =
+            affect_fail(err, AFFECT_ERR_FORMAT, "the argument is not a valid motion: %.200s", emsg);
     }
     return st;
 }

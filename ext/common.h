@@ -106,8 +106,7 @@ const affect_json_node *ax_opt(const ax_opts *opts, const char *key);
 /* Typed getters: leave *out unchanged when the key is absent; error on a wrong type. */
 ax_arg ax_opt_bool(sqlite3_context *ctx, const ax_opts *opts, const char *key, bool *out);
 ax_arg ax_opt_number(sqlite3_context *ctx, const ax_opts *opts, const char *key, double *out);
-ax_arg ax_opt_string(sqlite3_context *ctx, const ax_opts *opts, const char *key,
-                     const char **out);
+ax_arg ax_opt_string(sqlite3_context *ctx, const ax_opts *opts, const char *key, const char **out);
 /* A string that must be one of choices (NULL-terminated); *out gets its index. */
 ax_arg ax_opt_enum(sqlite3_context *ctx, const ax_opts *opts, const char *key,
                    const char *const *choices, int *out);

@@ -83,8 +83,7 @@ static void cls_train_free(cls_train *t)
 /* The "groups" option into a mask. */
 static ax_arg opt_groups(sqlite3_context *ctx, const ax_opts *opts, unsigned *groups)
 {
-    static const char *const names[] = {"start", "transitions", "weights", "means",
-                                        "covariances"};
+    static const char *const names[] = {"start", "transitions", "weights", "means", "covariances"};
     const affect_json_node *n = ax_opt(opts, "groups");
     if (!n)
         return AX_OK;
@@ -104,8 +103,10 @@ static ax_arg opt_groups(sqlite3_context *ctx, const ax_opts *opts, unsigned *gr
             if (strcmp(e->str, names[g]) == 0)
                 bit = 1u << g;
         if (!bit) {
-            ax_errorf(ctx, "option \"groups\": unknown group \"%s\" (start, transitions, "
-                           "weights, means, covariances)", e->str);
+            ax_errorf(ctx,
+                      "option \"groups\": unknown group \"%s\" (start, transitions, "
+                      "weights, means, covariances)",
+                      e->str);
             return AX_ERROR;
         }
         mask |= bit;
@@ -164,13 +165,15 @@ static ax_arg opt_grid(sqlite3_context *ctx, const ax_opts *opts, cls_train *t)
         for (int k = 0; keys[k]; k++)
             known = known || strcmp(e->key, keys[k]) == 0;
         if (!known) {
-            ax_errorf(ctx, "option \"grid\": unknown key \"%s\" (spca_dims, spca_sigma, knn_k, "
-                           "folds)", e->key);
+            ax_errorf(ctx,
+                      "option \"grid\": unknown key \"%s\" (spca_dims, spca_sigma, knn_k, "
+                      "folds)",
+                      e->key);
             return AX_ERROR;
         }
         if (strcmp(e->key, "folds") == 0) {
-            if (e->type != AFFECT_JSON_NUMBER || e->num != floor(e->num) ||
-                e->num < 2 || e->num > 1000) {
+            if (e->type != AFFECT_JSON_NUMBER || e->num != floor(e->num) || e->num < 2 ||
+                e->num > 1000) {
                 ax_errorf(ctx, "option \"grid\": \"folds\" must be a whole number from 2 to 1000");
                 return AX_ERROR;
             }
@@ -250,7 +253,7 @@ static ax_arg read_classifier_options(sqlite3_context *ctx, const ax_opts *opts,
         ax_opt_enum(ctx, opts, "storage", storages, &storage))
         return AX_ERROR;
     cfg->storage = (affect_classifier_storage)storage; /* the list's order is the enum's */
-    cfg->descriptors = (unsigned)desc; /* the list's order is the mask's */
+    cfg->descriptors = (unsigned)desc;                 /* the list's order is the mask's */
     t->s.desc_mask = cfg->descriptors;
     cfg->zscore = norm == 0;
     cfg->spca_kernel = kernel ? AFFECT_SPCA_RBF : AFFECT_SPCA_LINEAR;
@@ -573,8 +576,8 @@ static affect_status eval_all(const affect_classifier *c, const double *x, uint3
     return affect_classifier_eval(c, x, T, desc, ml_only, &b->o, mon, err);
 }
 
-static ax_arg evaluate(sqlite3_context *ctx, sqlite3_value **argv, bool ml_only,
-                       bool want_fisher, const affect_classifier **c, eval_buf *b)
+static ax_arg evaluate(sqlite3_context *ctx, sqlite3_value **argv, bool ml_only, bool want_fisher,
+                       const affect_classifier **c, eval_buf *b)
 {
     double *x = NULL, *desc = NULL;
     uint32_t T = 0;
@@ -656,7 +659,7 @@ void ax_affect_scores(sqlite3_context *ctx, int argc, sqlite3_value **argv)
                     continue;
                 uint32_t lo = k < q ? k : q, hi = k < q ? q : k;
                 double v = b.o.decision[affect_svm_pair_index(affect_classifier_svm(c), lo, hi)];
-                double mine = k == lo ? v : -v; /* positive: k wins against q */
+                double mine = k == lo ? v : -v;          /* positive: k wins against q */
                 svm_votes += k == lo ? v > 0 : !(v > 0); /* libsvm's vote: ties to hi */
                 if (!first)
                     affect_strbuf_putc(&sb, ',');
@@ -754,10 +757,11 @@ void ax_affect_info(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     }
     static const char *const descs[] = {"none", "kinematics", "laban", "all"};
     uint32_t dd = affect_descriptors_dim(cfg->descriptors);
-    affect_strbuf_printf(&sb, "},\"mirror\":%s,\"dimensions\":{\"observation\":%u,"
-                              "\"per_hmm\":%zu,\"fisher\":%zu,\"descriptors\":%u,"
-                              "\"representation\":%zu,\"spca\":%u},\"descriptors\":\"%s\","
-                              "\"descriptor_weight\":",
+    affect_strbuf_printf(&sb,
+                         "},\"mirror\":%s,\"dimensions\":{\"observation\":%u,"
+                         "\"per_hmm\":%zu,\"fisher\":%zu,\"descriptors\":%u,"
+                         "\"representation\":%zu,\"spca\":%u},\"descriptors\":\"%s\","
+                         "\"descriptor_weight\":",
                          cfg->mirror == AFFECT_MIRROR_ON ? "true" : "false", cfg->hmm.dim,
                          affect_classifier_part_dim(c), affect_classifier_dim(c) - dd, dd,
                          affect_classifier_dim(c), affect_spca_dims(sp),
@@ -769,8 +773,8 @@ void ax_affect_info(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     ax_json_features(&sb, affect_classifier_features(c));
     affect_strbuf_puts(&sb, ",\"groups\":");
     put_groups(&sb, cfg->groups);
-    affect_strbuf_printf(&sb, ",\"score_normalization\":\"%s\",\"score_clip\":",
-                         cfg->zscore ? "zscore" : "none");
+    affect_strbuf_printf(
+        &sb, ",\"score_normalization\":\"%s\",\"score_clip\":", cfg->zscore ? "zscore" : "none");
     affect_strbuf_double(&sb, cfg->score_clip);
     affect_strbuf_puts(&sb, ",\"svm\":{\"C\":");
     affect_strbuf_double(&sb, rep.svm_c);
@@ -795,16 +799,31 @@ void ax_affect_info(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 
 /* ---- affect_crossval_json (the engine of the affect_crossval table) ---- */
 
-static const char *const cv_keys[] = {
-    AX_SEQS_KEYS, "groups",      "score_normalization", "score_clip", "svm_c",
-    "svm_folds",  "spca_dims",   "spca_kernel",         "spca_sigma", "knn_k",
-    "grid",       "folds",       "descriptors",         "descriptor_weight",
-    "mirror",     "group",       "methods",             "verbose",    "threads",
-    "storage",    NULL};
+static const char *const cv_keys[] = {AX_SEQS_KEYS,
+                                      "groups",
+                                      "score_normalization",
+                                      "score_clip",
+                                      "svm_c",
+                                      "svm_folds",
+                                      "spca_dims",
+                                      "spca_kernel",
+                                      "spca_sigma",
+                                      "knn_k",
+                                      "grid",
+                                      "folds",
+                                      "descriptors",
+                                      "descriptor_weight",
+                                      "mirror",
+                                      "group",
+                                      "methods",
+                                      "verbose",
+                                      "threads",
+                                      "storage",
+                                      NULL};
 
 typedef struct cv_state {
-    cls_train t;    /* first (freed through cls_train_free) */
-    char **groups;  /* one per sequence, or NULL entries (k-fold) */
+    cls_train t;   /* first (freed through cls_train_free) */
+    char **groups; /* one per sequence, or NULL entries (k-fold) */
     uint32_t folds;
     unsigned methods; /* bit m = AFFECT_CV_* */
     bool verbose;
@@ -993,8 +1012,8 @@ static void put_metric(affect_strbuf *sb, const char *key, double v)
     put_number_or_null(sb, v);
 }
 
-static void cv_json(affect_strbuf *sb, const cv_state *s, const affect_cv_result *r,
-                    char **classes, char **group_names, bool by_group)
+static void cv_json(affect_strbuf *sb, const cv_state *s, const affect_cv_result *r, char **classes,
+                    char **group_names, bool by_group)
 {
     static const char *const names[] = {"ml", "svm", "knn"};
     uint32_t C = r->n_classes;
@@ -1016,8 +1035,9 @@ static void cv_json(affect_strbuf *sb, const cv_state *s, const affect_cv_result
                 uint32_t n = 0;
                 for (uint32_t k = 0; k < r->n_folds; k++)
                     n += r->folds[k].n_test;
-                affect_strbuf_printf(sb, ",\"fold\":null,\"held_out\":null,\"n_train\":null,"
-                                         "\"n_test\":%u",
+                affect_strbuf_printf(sb,
+                                     ",\"fold\":null,\"held_out\":null,\"n_train\":null,"
+                                     "\"n_test\":%u",
                                      n);
                 put_metric(sb, "accuracy", r->mean_accuracy[m]);
                 put_metric(sb, "balanced_accuracy", r->mean_balanced[m]);

@@ -55,9 +55,9 @@
 /* ---- fda_train ---- */
 
 static const char *const train_keys[] = {
-    "joints", "normalize", "scale", "up", "velocity", "frame", "root", "progress",
-    "method", "basis", "order", "lambda", "dims", "kernel", "sigma", "ffda_reg",
-    "isomap_k", "proto_dims", NULL};
+    "joints",   "normalize", "scale",    "up",         "velocity", "frame", "root",
+    "progress", "method",    "basis",    "order",      "lambda",   "dims",  "kernel",
+    "sigma",    "ffda_reg",  "isomap_k", "proto_dims", NULL};
 
 static const char *const method_names[] = {"fpca", "ffda", "fspca", "fisomap", NULL};
 
@@ -83,8 +83,7 @@ static ax_arg read_fda_options(sqlite3_context *ctx, const ax_opts *opts, affect
     int method = (int)cfg->method, kernel = (int)cfg->kernel;
     if (ax_opt_enum(ctx, opts, "method", method_names, &method) ||
         ax_opt_u32(ctx, opts, "basis", &cfg->n_basis) ||
-        ax_opt_u32(ctx, opts, "order", &cfg->order) ||
-        ax_opt_u32(ctx, opts, "dims", &cfg->dims) ||
+        ax_opt_u32(ctx, opts, "order", &cfg->order) || ax_opt_u32(ctx, opts, "dims", &cfg->dims) ||
         ax_opt_enum(ctx, opts, "kernel", kernels, &kernel) ||
         ax_opt_number(ctx, opts, "sigma", &cfg->sigma) ||
         ax_opt_number(ctx, opts, "ffda_reg", &cfg->ffda_reg) ||
@@ -249,9 +248,9 @@ static void train_final(sqlite3_context *ctx, fda_train *t)
     if (ax_monitor_begin(&am, ctx, t->s.progress) != AX_OK)
         goto done;
     t->cfg.monitor = &am.mon;
-    affect_status st = affect_fda_train(&t->cfg, t->s.feat, t->s.seqs, n,
-                                        affect_features_dim(t->s.feat), y,
-                                        (const char *const *)classes, n_classes, &f, &err);
+    affect_status st =
+        affect_fda_train(&t->cfg, t->s.feat, t->s.seqs, n, affect_features_dim(t->s.feat), y,
+                         (const char *const *)classes, n_classes, &f, &err);
     ax_monitor_end(&am);
     if (st) {
         ax_error(ctx, &err);
@@ -446,8 +445,9 @@ void ax_fda_info(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     affect_strbuf_printf(&sb, "{\"method\":\"%s\",\"order\":%u,\"basis\":%u,\"lambda\":",
                          method_names[cfg->method], cfg->order, cfg->n_basis);
     affect_strbuf_double(&sb, cfg->lambda);
-    affect_strbuf_printf(&sb, ",\"lambda_from\":\"%s\",\"dims\":%u,\"dims_requested\":%u,"
-                              "\"coordinates\":%u,\"motions\":%u,\"classes\":[",
+    affect_strbuf_printf(&sb,
+                         ",\"lambda_from\":\"%s\",\"dims\":%u,\"dims_requested\":%u,"
+                         "\"coordinates\":%u,\"motions\":%u,\"classes\":[",
                          cfg->gcv ? "gcv" : "option", p, cfg->dims, affect_fda_coords(f),
                          affect_fda_train_size(f));
     for (uint32_t k = 0; k < c; k++) {
@@ -469,8 +469,8 @@ void ax_fda_info(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     ax_json_doubles(&sb, affect_fda_fpca_eigenvalues(f), affect_fda_fpca_rank(f));
     affect_strbuf_puts(&sb, ",\"total_variance\":");
     affect_strbuf_double(&sb, affect_fda_total_variance(f));
-    affect_strbuf_printf(&sb, ",\"kernel\":\"%s\",\"sigma\":",
-                         cfg->kernel == AFFECT_SPCA_RBF ? "rbf" : "linear");
+    affect_strbuf_printf(
+        &sb, ",\"kernel\":\"%s\",\"sigma\":", cfg->kernel == AFFECT_SPCA_RBF ? "rbf" : "linear");
     affect_strbuf_double(&sb, cfg->sigma);
     affect_strbuf_puts(&sb, ",\"ffda_reg\":");
     affect_strbuf_double(&sb, cfg->ffda_reg);
@@ -518,8 +518,8 @@ void ax_fda_prototype(sqlite3_context *ctx, int argc, sqlite3_value **argv)
             sqlite3_result_error_nomem(ctx);
             return;
         }
-        ax_errorf(ctx, "no class \"%.*s\" in the model (%s)", (int)(len > 200 ? 200 : len),
-                  label, names);
+        ax_errorf(ctx, "no class \"%.*s\" in the model (%s)", (int)(len > 200 ? 200 : len), label,
+                  names);
         affect_free(names);
         return;
     }
@@ -594,9 +594,8 @@ static void perturbation_plot(sqlite3_context *ctx, const affect_fda *f, uint32_
 
 void ax_fda_plot(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 {
-    static const char *const keys[] = {"x",      "y",          "title", "width", "height",
-                                       "radius", "means",      "axis",  "coordinate", "alpha",
-                                       NULL};
+    static const char *const keys[] = {"x",     "y",    "title",      "width", "height", "radius",
+                                       "means", "axis", "coordinate", "alpha", NULL};
     const affect_fda *f;
     if (arg_model(ctx, argv, &f) != AX_OK)
         return;
@@ -618,8 +617,7 @@ void ax_fda_plot(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         ax_opt_number(ctx, &opts, "height", &po.height) ||
         ax_opt_number(ctx, &opts, "radius", &po.radius) ||
         ax_opt_bool(ctx, &opts, "means", &po.means) || ax_opt_u32(ctx, &opts, "axis", &axis) ||
-        ax_opt_u32(ctx, &opts, "coordinate", &coord) ||
-        ax_opt_number(ctx, &opts, "alpha", &alpha))
+        ax_opt_u32(ctx, &opts, "coordinate", &coord) || ax_opt_number(ctx, &opts, "alpha", &alpha))
         goto done;
     if (ax_opt(&opts, "coordinate")) {
         if (coord < 1 || axis < 1) {

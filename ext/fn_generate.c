@@ -77,8 +77,9 @@
 
 #define N_COMP AFFECT_LABAN_N
 /* Versions the cached fit's key: a fit stored under another tag is refitted. */
-#define RMLR_CACHE_TAG "affect-rmlr-cache-3" /* 3: the Newton solver (a fit made by the
-                                             * coordinate-descent solver is refitted) */
+#define RMLR_CACHE_TAG                                                                             \
+    "affect-rmlr-cache-3" /* 3: the Newton solver (a fit made by the                               \
+                           * coordinate-descent solver is refitted) */
 
 /* ---- the per-function cache of RMLR fits ---- */
 
@@ -141,11 +142,11 @@ typedef struct gen_index {
     uint64_t key;           /* FNV-1a of the cache tag, component names, labels and vectors */
     uint32_t n;             /* rows with a label */
     sqlite3_int64 *ids;
-    double *x;              /* n × N_COMP, missing components imputed by the mean */
-    uint32_t *y;            /* class of each row */
-    char **labels;          /* n: each row's label (owned) */
+    double *x;     /* n × N_COMP, missing components imputed by the mean */
+    uint32_t *y;   /* class of each row */
+    char **labels; /* n: each row's label (owned) */
     uint32_t n_classes;
-    char **classes;         /* distinct labels in byte order (pointers into labels) */
+    char **classes; /* distinct labels in byte order (pointers into labels) */
 } gen_index;
 
 static void index_free(gen_index *ix)
@@ -187,8 +188,8 @@ static sqlite3_stmt *prepare(sqlite3_context *ctx, const char *what, const char 
     char *sql = sqlite3_vmprintf(fmt, ap);
     va_end(ap);
     sqlite3_stmt *st = NULL;
-    if (!sql || sqlite3_prepare_v2(sqlite3_context_db_handle(ctx), sql, -1, &st, NULL) !=
-                    SQLITE_OK) {
+    if (!sql ||
+        sqlite3_prepare_v2(sqlite3_context_db_handle(ctx), sql, -1, &st, NULL) != SQLITE_OK) {
         sqlite3_finalize(st);
         st = NULL;
         db_error(ctx, what);
@@ -274,8 +275,8 @@ static ax_arg index_rows(sqlite3_context *ctx, gen_index *ix)
             ix->classes[k++] = ix->classes[i];
     ix->n_classes = k;
     for (uint32_t i = 0; i < ix->n; i++) {
-        char **hit = bsearch(&ix->labels[i], ix->classes, ix->n_classes, sizeof *ix->classes,
-                             cmp_text);
+        char **hit =
+            bsearch(&ix->labels[i], ix->classes, ix->n_classes, sizeof *ix->classes, cmp_text);
         ix->y[i] = (uint32_t)(hit - ix->classes);
     }
     r = AX_OK;
@@ -313,8 +314,8 @@ static void fit_key(const gen_index *ix, uint64_t seed, uint32_t folds, char out
  * read past the fit's arrays). */
 static bool fit_matches(const affect_rmlr *fit, const gen_index *ix)
 {
-    return affect_rmlr_n_classes(fit) == ix->n_classes &&
-           affect_rmlr_n_features(fit) == N_COMP && affect_rmlr_n_train(fit) == ix->n;
+    return affect_rmlr_n_classes(fit) == ix->n_classes && affect_rmlr_n_features(fit) == N_COMP &&
+           affect_rmlr_n_train(fit) == ix->n;
 }
 
 /* The persisted fit of the index (the index's cache, vt_laban.h), if its key (the index's
@@ -364,9 +365,9 @@ static const char *parse_digits(const char *p, int base, int max_digits, uint64_
     uint64_t v = 0;
     int n = 0;
     for (;; p++, n++) {
-        int d = *p >= '0' && *p <= '9'              ? *p - '0'
+        int d = *p >= '0' && *p <= '9'                 ? *p - '0'
                 : base == 16 && *p >= 'a' && *p <= 'f' ? *p - 'a' + 10
-                                                        : -1;
+                                                       : -1;
         if (d < 0)
             break;
         if (n == max_digits || v > (UINT64_MAX - (uint64_t)d) / (uint64_t)base)
@@ -409,8 +410,8 @@ int ax_gen_check_fit(const ax_laban_rows *rows, const char *tag, const void *blo
         }
         what = sqlite3_mprintf("it is not an RMLR fit (%s)", err.msg);
     } else if (r.off != r.size) {
-        what = sqlite3_mprintf("%llu bytes follow the RMLR fit",
-                               (unsigned long long)(r.size - r.off));
+        what =
+            sqlite3_mprintf("%llu bytes follow the RMLR fit", (unsigned long long)(r.size - r.off));
     } else if (affect_rmlr_n_features(fit) != N_COMP) {
         what = sqlite3_mprintf("the fit has %llu components, expected %d",
                                (unsigned long long)affect_rmlr_n_features(fit), N_COMP);
@@ -459,8 +460,8 @@ done:
 
 /* The index's RMLR fit: from this function's cache, the index's _info, or fitted now (the
  * α grid in `threads` threads; the fit does not depend on it). */
-static ax_arg rmlr_fit(sqlite3_context *ctx, const gen_index *ix, uint64_t seed,
-                       uint32_t folds, uint32_t threads, const affect_rmlr **out)
+static ax_arg rmlr_fit(sqlite3_context *ctx, const gen_index *ix, uint64_t seed, uint32_t folds,
+                       uint32_t threads, const affect_rmlr **out)
 {
     ax_gen_fn *fn = sqlite3_user_data(ctx);
     if (fn->fit && fn->key == ix->key && fn->seed == seed && fn->folds == folds &&
@@ -470,8 +471,8 @@ static ax_arg rmlr_fit(sqlite3_context *ctx, const gen_index *ix, uint64_t seed,
     }
     gen_cache_clear(fn);
     if (ix->n_classes < 2) {
-        ax_errorf(ctx, "index \"%s\" has %u label%s; salient components need at least 2",
-                  ix->name, ix->n_classes, ix->n_classes == 1 ? "" : "s");
+        ax_errorf(ctx, "index \"%s\" has %u label%s; salient components need at least 2", ix->name,
+                  ix->n_classes, ix->n_classes == 1 ? "" : "s");
         return AX_ERROR;
     }
     sqlite3 *db = sqlite3_context_db_handle(ctx);
@@ -489,8 +490,8 @@ static ax_arg rmlr_fit(sqlite3_context *ctx, const gen_index *ix, uint64_t seed,
         if (ax_monitor_begin(&am, ctx, NULL) != AX_OK)
             return AX_ERROR;
         o.monitor = &am.mon;
-        affect_status st = affect_rmlr_cv(ix->x, ix->n, N_COMP, ix->y, ix->n_classes, &o, &fit,
-                                          &err);
+        affect_status st =
+            affect_rmlr_cv(ix->x, ix->n, N_COMP, ix->y, ix->n_classes, &o, &fit, &err);
         ax_monitor_end(&am);
         if (st) {
             if (err.status == AFFECT_ERR_NOMEM || err.status == AFFECT_ERR_INTERRUPTED)
@@ -567,7 +568,8 @@ void ax_laban_salient(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     const affect_rmlr *fit;
     if (ax_opt_whole(ctx, &opts, "seed", 9007199254740992.0, &seed) ||
         ax_opt_u32(ctx, &opts, "folds", &folds) || ax_opt_u32(ctx, &opts, "threads", &threads) ||
-        check_threads(ctx, threads) || index_load(ctx, name, &ix) || rmlr_fit(ctx, &ix, (uint64_t)seed, folds, threads, &fit))
+        check_threads(ctx, threads) || index_load(ctx, name, &ix) ||
+        rmlr_fit(ctx, &ix, (uint64_t)seed, folds, threads, &fit))
         goto done;
     affect_strbuf sb;
     affect_strbuf_init(&sb);
@@ -614,13 +616,32 @@ done:
 
 /* ---- affect_generate and affect_generate_explain ---- */
 
-static const char *const gen_keys[] = {"method",     "strength",     "pairs",      "bands",
-                                       "max_ratio",  "keep_contacts", "copies",    "states",
-                                       "epsilon",    "k",            "components", "source_label",
-                                       "classifier", "cutoff_hz",    "covariance_scale",
-                                       "seed",       "render",       "keep_path",  "threads",
-                                       "pair_by",    "min_neighbours", "prefer_action", "amplitude",
-                                       "pooled",     "pairing",    NULL};
+static const char *const gen_keys[] = {"method",
+                                       "strength",
+                                       "pairs",
+                                       "bands",
+                                       "max_ratio",
+                                       "keep_contacts",
+                                       "copies",
+                                       "states",
+                                       "epsilon",
+                                       "k",
+                                       "components",
+                                       "source_label",
+                                       "classifier",
+                                       "cutoff_hz",
+                                       "covariance_scale",
+                                       "seed",
+                                       "render",
+                                       "keep_path",
+                                       "threads",
+                                       "pair_by",
+                                       "min_neighbours",
+                                       "prefer_action",
+                                       "amplitude",
+                                       "pooled",
+                                       "pairing",
+                                       NULL};
 /* In the order of affect_generate_render. */
 static const char *const render_names[] = {"steps", "linear", NULL};
 
@@ -649,8 +670,8 @@ static const char *const amplitude_names[] = {"velocity", "displacement", NULL};
 typedef struct gen_opts {
     int method;
     affect_transfer_options tr;
-    uint32_t pairs;          /* donor pairs (transfer) */
-    int pairing;             /* PAIRING_ACTION (default) or PAIRING_LABAN */
+    uint32_t pairs; /* donor pairs (transfer) */
+    int pairing;    /* PAIRING_ACTION (default) or PAIRING_LABAN */
     affect_generate_options g;
     double epsilon;
     uint32_t k;              /* 0: by epsilon */
@@ -658,10 +679,10 @@ typedef struct gen_opts {
     bool prefer_action;      /* hmm_nn: candidates ranked by DTW to the desired motion (true) */
     uint32_t threads;        /* for the RMLR fit when it is not cached (1) */
     bool auto_components;
-    bool use[N_COMP];        /* the components asked for (not auto) */
+    bool use[N_COMP]; /* the components asked for (not auto) */
     const char *source_label;
     const char *classifier_hex;
-    const char *pair_by;     /* content table column naming each row's content (transfer) */
+    const char *pair_by; /* content table column naming each row's content (transfer) */
 } gen_opts;
 
 /* The "components" option: "auto" or an array of component names. */
@@ -684,8 +705,9 @@ static ax_arg opt_components(sqlite3_context *ctx, const ax_opts *opts, gen_opts
             if (strcmp(e->str, affect_laban_names[j]) == 0)
                 found = j;
         if (found < 0) {
-            ax_errorf(ctx, "option \"components\": %s%s%s is not a Laban component name "
-                           "(laban_names())",
+            ax_errorf(ctx,
+                      "option \"components\": %s%s%s is not a Laban component name "
+                      "(laban_names())",
                       e->type == AFFECT_JSON_STRING ? "\"" : "",
                       e->type == AFFECT_JSON_STRING ? e->str : affect_json_type_name(e->type),
                       e->type == AFFECT_JSON_STRING ? "\"" : "");
@@ -702,9 +724,8 @@ static ax_arg opt_bands(sqlite3_context *ctx, const ax_opts *opts, double band_h
     const affect_json_node *n = ax_opt(opts, "bands");
     if (!n)
         return AX_OK;
-    const affect_json_node *e = n->type == AFFECT_JSON_ARRAY && n->count == 2
-                                    ? affect_json_first(opts->doc, n)
-                                    : NULL;
+    const affect_json_node *e =
+        n->type == AFFECT_JSON_ARRAY && n->count == 2 ? affect_json_first(opts->doc, n) : NULL;
     const affect_json_node *f = e ? affect_json_next_sibling(opts->doc, e) : NULL;
     if (!e || !f || e->type != AFFECT_JSON_NUMBER || f->type != AFFECT_JSON_NUMBER) {
         ax_errorf(ctx, "option \"bands\" must be an array of two frequencies in Hz, [low, high]");
@@ -715,8 +736,8 @@ static ax_arg opt_bands(sqlite3_context *ctx, const ax_opts *opts, double band_h
     return AX_OK;
 }
 
-static ax_arg read_gen_options(sqlite3_context *ctx, int argc, sqlite3_value **argv,
-                               ax_opts *opts, gen_opts *o)
+static ax_arg read_gen_options(sqlite3_context *ctx, int argc, sqlite3_value **argv, ax_opts *opts,
+                               gen_opts *o)
 {
     memset(o, 0, sizeof *o);
     affect_generate_options_default(&o->g);
@@ -772,13 +793,12 @@ static ax_arg read_gen_options(sqlite3_context *ctx, int argc, sqlite3_value **a
     for (int i = 0; other[i]; i++)
         if (ax_opt(opts, other[i])) {
             ax_errorf(ctx, "option \"%s\" applies to {\"method\":\"%s\"} only", other[i],
-                      method_names[o->method == METHOD_TRANSFER ? METHOD_HMM_NN
-                                                                : METHOD_TRANSFER]);
+                      method_names[o->method == METHOD_TRANSFER ? METHOD_HMM_NN : METHOD_TRANSFER]);
             return AX_ERROR;
         }
     if (o->min_neighbours < 1 || o->min_neighbours > MAX_NEIGHBOURS / 3) {
-        ax_errorf(ctx, "option \"min_neighbours\" must be from 1 to %u, got %u",
-                  MAX_NEIGHBOURS / 3, o->min_neighbours);
+        ax_errorf(ctx, "option \"min_neighbours\" must be from 1 to %u, got %u", MAX_NEIGHBOURS / 3,
+                  o->min_neighbours);
         return AX_ERROR;
     }
     if (o->pairs < 1 || o->pairs > MAX_PAIRS) {
@@ -825,9 +845,9 @@ static void unknown_label(sqlite3_context *ctx, const gen_index *ix, const char 
 
 /* Where the source emotion came from. */
 typedef struct source_info {
-    int cls;            /* class index, or −1 */
-    const char *how;    /* "option", "index", "classifier", "none" */
-    char *recognized;   /* classifier's label (affect_free) */
+    int cls;          /* class index, or −1 */
+    const char *how;  /* "option", "index", "classifier", "none" */
+    char *recognized; /* classifier's label (affect_free) */
 } source_info;
 
 static uint8_t hex_digit(char c, bool *bad)
@@ -927,9 +947,9 @@ static ax_arg find_source(sqlite3_context *ctx, const gen_index *ix, const gen_o
         return AX_OK;
     }
     char *label = NULL, *msg = NULL;
-    int rc = ax_laban_label_of(sqlite3_context_db_handle(ctx), ix->name,
-                               sqlite3_value_blob(desired), sqlite3_value_bytes(desired), &label,
-                               &msg);
+    int rc =
+        ax_laban_label_of(sqlite3_context_db_handle(ctx), ix->name, sqlite3_value_blob(desired),
+                          sqlite3_value_bytes(desired), &label, &msg);
     if (rc != SQLITE_OK) {
         if (rc == SQLITE_NOMEM)
             sqlite3_result_error_nomem(ctx);
@@ -971,8 +991,7 @@ static ax_arg choose_components(sqlite3_context *ctx, const gen_index *ix, const
         salient_of(cc->fit, (uint32_t)src->cls, cc->sal_o);
     memcpy(salient, cc->sal_o, sizeof cc->sal_o);
     memcpy(salient + N_COMP, cc->sal_t, sizeof cc->sal_t);
-    cc->fell_back = affect_transfer_components(salient, N_COMP, src->cls >= 0 ? 0 : -1, 1,
-                                               cc->use);
+    cc->fell_back = affect_transfer_components(salient, N_COMP, src->cls >= 0 ? 0 : -1, 1, cc->use);
     return AX_OK;
 }
 
@@ -1114,9 +1133,9 @@ static ax_arg find_neighbours(sqlite3_context *ctx, const gen_index *ix, const g
 static ax_arg load_motions(sqlite3_context *ctx, const gen_index *ix, const sqlite3_int64 *ids,
                            uint32_t n, affect_motion **out)
 {
-    sqlite3_stmt *st = prepare(ctx, "reading the content table",
-                               "SELECT \"%w\" FROM \"%w\" WHERE rowid = ?1", ix->motion,
-                               ix->content);
+    sqlite3_stmt *st =
+        prepare(ctx, "reading the content table", "SELECT \"%w\" FROM \"%w\" WHERE rowid = ?1",
+                ix->motion, ix->content);
     if (!st)
         return AX_ERROR;
     ax_arg r = AX_OK;
@@ -1124,8 +1143,10 @@ static ax_arg load_motions(sqlite3_context *ctx, const gen_index *ix, const sqli
         sqlite3_reset(st);
         sqlite3_bind_int64(st, 1, ids[i]);
         if (sqlite3_step(st) != SQLITE_ROW || sqlite3_column_type(st, 0) != SQLITE_BLOB) {
-            ax_errorf(ctx, "content row %" PRId64 " of \"%s\" has no motion (run the index's "
-                           "'check' command)", (int64_t)ids[i], ix->name);
+            ax_errorf(ctx,
+                      "content row %" PRId64 " of \"%s\" has no motion (run the index's "
+                      "'check' command)",
+                      (int64_t)ids[i], ix->name);
             r = AX_ERROR;
             break;
         }
@@ -1151,9 +1172,9 @@ static ax_arg load_donors(sqlite3_context *ctx, ax_gen_fn *fn, const gen_index *
                           const sqlite3_int64 *ids, uint32_t n, affect_monitor *mon,
                           affect_motion **out)
 {
-    sqlite3_stmt *st = prepare(ctx, "reading the content table",
-                               "SELECT \"%w\" FROM \"%w\" WHERE rowid = ?1", ix->motion,
-                               ix->content);
+    sqlite3_stmt *st =
+        prepare(ctx, "reading the content table", "SELECT \"%w\" FROM \"%w\" WHERE rowid = ?1",
+                ix->motion, ix->content);
     if (!st)
         return AX_ERROR;
     affect_ik_options io;
@@ -1164,8 +1185,10 @@ static ax_arg load_donors(sqlite3_context *ctx, ax_gen_fn *fn, const gen_index *
         sqlite3_reset(st);
         sqlite3_bind_int64(st, 1, ids[i]);
         if (sqlite3_step(st) != SQLITE_ROW || sqlite3_column_type(st, 0) != SQLITE_BLOB) {
-            ax_errorf(ctx, "content row %" PRId64 " of \"%s\" has no motion (run the index's "
-                           "'check' command)", (int64_t)ids[i], ix->name);
+            ax_errorf(ctx,
+                      "content row %" PRId64 " of \"%s\" has no motion (run the index's "
+                      "'check' command)",
+                      (int64_t)ids[i], ix->name);
             r = AX_ERROR;
             break;
         }
@@ -1181,8 +1204,8 @@ static ax_arg load_donors(sqlite3_context *ctx, ax_gen_fn *fn, const gen_index *
                               : affect_motion_decode(blob, size, &out[i], &err);
         if (!s && !hit) {
             affect_motion *made = NULL, *keep = NULL;
-            affect_status k = affect_motion_skeletal(out[i], AFFECT_ROTATIONS_AUTO, &io, &made,
-                                                     &err);
+            affect_status k =
+                affect_motion_skeletal(out[i], AFFECT_ROTATIONS_AUTO, &io, &made, &err);
             if (k == AFFECT_ERR_INTERRUPTED || k == AFFECT_ERR_NOMEM)
                 s = k;
             else if (!k && made) {
@@ -1241,16 +1264,14 @@ static void explain_head(affect_strbuf *sb, const gen_index *ix, const gen_opts 
             affect_strbuf_puts(sb, ",\"salient_source\":");
             put_components(sb, cc->sal_o, true);
         }
-        affect_strbuf_printf(sb, ",\"all_salient_fallback\":%s",
-                             cc->fell_back ? "true" : "false");
+        affect_strbuf_printf(sb, ",\"all_salient_fallback\":%s", cc->fell_back ? "true" : "false");
     }
     affect_strbuf_puts(sb, "}");
 }
 
 static void explain_json(sqlite3_context *ctx, const gen_index *ix, const gen_opts *o,
                          const char *target, const source_info *src, const comp_choice *cc,
-                         const neighbours *nb, const affect_generate_report *rep,
-                         uint32_t frames)
+                         const neighbours *nb, const affect_generate_report *rep, uint32_t frames)
 {
     affect_strbuf sb;
     affect_strbuf_init(&sb);
@@ -1262,8 +1283,9 @@ static void explain_json(sqlite3_context *ctx, const gen_index *ix, const gen_op
         affect_strbuf_puts(&sb, "\"epsilon\",\"epsilon\":");
         affect_strbuf_double(&sb, o->epsilon);
     }
-    affect_strbuf_printf(&sb, ",\"min_neighbours\":%u,\"filled_to_min\":%s,"
-                              "\"ranked_by_action\":%s,\"rows\":[",
+    affect_strbuf_printf(&sb,
+                         ",\"min_neighbours\":%u,\"filled_to_min\":%s,"
+                         "\"ranked_by_action\":%s,\"rows\":[",
                          o->min_neighbours, nb->filled ? "true" : "false",
                          nb->ranked ? "true" : "false");
     for (uint32_t i = 0; i < nb->n; i++) {
@@ -1279,8 +1301,9 @@ static void explain_json(sqlite3_context *ctx, const gen_index *ix, const gen_op
         }
         affect_strbuf_putc(&sb, '}');
     }
-    affect_strbuf_printf(&sb, "],\"used\":%u,\"excluded_skeleton\":%u},\"hmm\":{\"states\":%u,"
-                              "\"copies\":%u,\"iterations\":%u,\"loglik\":",
+    affect_strbuf_printf(&sb,
+                         "],\"used\":%u,\"excluded_skeleton\":%u},\"hmm\":{\"states\":%u,"
+                         "\"copies\":%u,\"iterations\":%u,\"loglik\":",
                          rep->neighbours_used, rep->excluded, o->g.states, o->g.copies,
                          rep->iterations);
     affect_strbuf_double(&sb, rep->loglik);
@@ -1302,11 +1325,11 @@ static void explain_json(sqlite3_context *ctx, const gen_index *ix, const gen_op
 
 typedef struct donors {
     uint32_t n;
-    uint32_t from[MAX_PAIRS], to[MAX_PAIRS]; /* index rows */
-    uint32_t cand[MAX_PAIRS * PAIR_CANDIDATES];   /* the target candidates of each pair */
+    uint32_t from[MAX_PAIRS], to[MAX_PAIRS];    /* index rows */
+    uint32_t cand[MAX_PAIRS * PAIR_CANDIDATES]; /* the target candidates of each pair */
     double cand_dist[MAX_PAIRS * PAIR_CANDIDATES];
-    double dq[MAX_PAIRS], dist[MAX_PAIRS];   /* desired → from, from → to */
-    sqlite3_int64 ids[2 * MAX_PAIRS];        /* content rowids: the from rows, then the to rows */
+    double dq[MAX_PAIRS], dist[MAX_PAIRS]; /* desired → from, from → to */
+    sqlite3_int64 ids[2 * MAX_PAIRS];      /* content rowids: the from rows, then the to rows */
 } donors;
 
 static int cmp_id(const void *a, const void *b)
@@ -1324,7 +1347,8 @@ static ax_arg query_distances(sqlite3_context *ctx, const gen_index *ix, sqlite3
         dq[i] = NAN;
     sqlite3_stmt *st = prepare(ctx, "the donor search",
                                "SELECT rowid, distance FROM \"%w\" WHERE query = ?1 AND "
-                               "components = ?2 AND k = ?3", ix->name);
+                               "components = ?2 AND k = ?3",
+                               ix->name);
     if (!st)
         return AX_ERROR;
     sqlite3_bind_value(st, 1, desired);
@@ -1354,9 +1378,9 @@ static ax_arg content_keys(sqlite3_context *ctx, const gen_index *ix, const char
         group[i] = INT64_MIN;
     sqlite3 *db = sqlite3_context_db_handle(ctx);
     /* a double-quoted name that is not a column would be read as a string: check it first */
-    sqlite3_stmt *chk = prepare(ctx, "reading the content table",
-                                "SELECT count(*) FROM pragma_table_info(%Q) WHERE name = %Q",
-                                ix->content, column);
+    sqlite3_stmt *chk =
+        prepare(ctx, "reading the content table",
+                "SELECT count(*) FROM pragma_table_info(%Q) WHERE name = %Q", ix->content, column);
     if (!chk)
         return AX_ERROR;
     bool exists = sqlite3_step(chk) == SQLITE_ROW && sqlite3_column_int(chk, 0) > 0;
@@ -1367,7 +1391,8 @@ static ax_arg content_keys(sqlite3_context *ctx, const gen_index *ix, const char
         return AX_ERROR;
     }
     char *sql = sqlite3_mprintf("SELECT rowid, dense_rank() OVER (ORDER BY \"%w\") FROM \"%w\" "
-                                "WHERE \"%w\" IS NOT NULL", column, ix->content, column);
+                                "WHERE \"%w\" IS NOT NULL",
+                                column, ix->content, column);
     sqlite3_stmt *st = NULL;
     if (!sql) {
         sqlite3_result_error_nomem(ctx);
@@ -1379,8 +1404,10 @@ static ax_arg content_keys(sqlite3_context *ctx, const gen_index *ix, const char
         if (rc == SQLITE_NOMEM)
             sqlite3_result_error_nomem(ctx);
         else
-            ax_errorf(ctx, "option \"pair_by\": \"%s\" is not a column of the content table "
-                           "\"%s\" (%s)", column, ix->content, sqlite3_errmsg(db));
+            ax_errorf(ctx,
+                      "option \"pair_by\": \"%s\" is not a column of the content table "
+                      "\"%s\" (%s)",
+                      column, ix->content, sqlite3_errmsg(db));
         return AX_ERROR;
     }
     while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
@@ -1400,8 +1427,7 @@ static ax_arg content_keys(sqlite3_context *ctx, const gen_index *ix, const char
 /* Pairing "action": each source row takes, among its PAIR_CANDIDATES nearest target rows, the
  * one nearest to it by DTW (affect_generate_rank_by_action: the same action), preferring one
  * that no earlier pair took. */
-static ax_arg choose_by_action(sqlite3_context *ctx, const gen_index *ix, uint32_t nc,
-                               donors *dn)
+static ax_arg choose_by_action(sqlite3_context *ctx, const gen_index *ix, uint32_t nc, donors *dn)
 {
     affect_motion *a = NULL, *cand[PAIR_CANDIDATES] = {NULL};
     ax_arg r = AX_OK;
@@ -1483,9 +1509,10 @@ static ax_arg find_donors(sqlite3_context *ctx, const gen_index *ix, const gen_o
         goto done;
     }
     if (dn->n == 0) {
-        ax_errorf(ctx, "index \"%s\": no motion can donate the change (no row of the source "
-                       "emotion with a row of the target emotion%s)", ix->name,
-                  o->pair_by ? " of the same pair_by value" : "");
+        ax_errorf(ctx,
+                  "index \"%s\": no motion can donate the change (no row of the source "
+                  "emotion with a row of the target emotion%s)",
+                  ix->name, o->pair_by ? " of the same pair_by value" : "");
         goto done;
     }
     for (uint32_t k = 0; k < dn->n; k++) {
@@ -1537,20 +1564,19 @@ static void explain_transfer(sqlite3_context *ctx, const gen_index *ix, const ge
     affect_strbuf_double(&sb, o->tr.strength);
     affect_strbuf_puts(&sb, ",\"pairs\":[");
     for (uint32_t k = 0; k < dn->n; k++) {
-        affect_strbuf_printf(&sb, "%s{\"from\":{\"rowid\":%" PRId64 ",\"label\":",
-                             k ? "," : "", (int64_t)dn->ids[k]);
+        affect_strbuf_printf(&sb, "%s{\"from\":{\"rowid\":%" PRId64 ",\"label\":", k ? "," : "",
+                             (int64_t)dn->ids[k]);
         affect_strbuf_json_string(&sb, ix->labels[dn->from[k]]);
         affect_strbuf_puts(&sb, ",\"distance\":");
         affect_strbuf_double(&sb, dn->dq[k]);
-        affect_strbuf_printf(&sb, "},\"to\":{\"rowid\":%" PRId64 ",\"label\":",
-                             (int64_t)dn->ids[dn->n + k]);
+        affect_strbuf_printf(
+            &sb, "},\"to\":{\"rowid\":%" PRId64 ",\"label\":", (int64_t)dn->ids[dn->n + k]);
         affect_strbuf_json_string(&sb, ix->labels[dn->to[k]]);
         affect_strbuf_puts(&sb, ",\"distance\":");
         affect_strbuf_double(&sb, dn->dist[k]);
         affect_strbuf_puts(&sb, "}}");
     }
-    affect_strbuf_printf(&sb, "],\"change\":{\"joints\":%u,\"posture_deg\":",
-                         rep->joints_changed);
+    affect_strbuf_printf(&sb, "],\"change\":{\"joints\":%u,\"posture_deg\":", rep->joints_changed);
     affect_strbuf_double(&sb, rep->posture_deg);
     affect_strbuf_puts(&sb, ",\"amplitude_ratios\":[");
     for (int b = 0; b < AFFECT_TRANSFER_BANDS; b++) {
@@ -1563,8 +1589,9 @@ static void explain_transfer(sqlite3_context *ctx, const gen_index *ix, const ge
     affect_strbuf_double(&sb, o->tr.band_hz[1]);
     affect_strbuf_puts(&sb, "],\"max_ratio\":");
     affect_strbuf_double(&sb, o->tr.max_ratio);
-    affect_strbuf_printf(&sb, "},\"contacts\":{\"kept\":%s,\"left_frames\":%u,"
-                              "\"right_frames\":%u},\"laban_change\":{",
+    affect_strbuf_printf(&sb,
+                         "},\"contacts\":{\"kept\":%s,\"left_frames\":%u,"
+                         "\"right_frames\":%u},\"laban_change\":{",
                          o->tr.keep_contacts ? "true" : "false", rep->contact_frames[0],
                          rep->contact_frames[1]);
     for (int j = 0; j < N_COMP; j++) {
@@ -1688,8 +1715,8 @@ static void run_generation(sqlite3_context *ctx, int argc, sqlite3_value **argv,
     if (ax_monitor_begin(&am, ctx, NULL) != AX_OK)
         goto done;
     o.g.monitor = &am.mon;
-    affect_status st = affect_generate(m, (const affect_motion *const *)motions, nb->n, &o.g, &out,
-                                       &rep, &err);
+    affect_status st =
+        affect_generate(m, (const affect_motion *const *)motions, nb->n, &o.g, &out, &rep, &err);
     o.g.monitor = NULL;
     ax_monitor_end(&am);
     if (st) {

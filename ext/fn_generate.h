@@ -22,7 +22,7 @@ AX_FN(ax_motion_dtw);
 /* The 'check' of a laban index's cache entry "rmlr" (ax_laban_cache_kind, vt_laban.h): the
  * stored RMLR fit must decode exactly, with the 27 components and the row count of its key;
  * a fit whose key names the index's current rows must also have its classes. */
-int ax_gen_check_fit(const ax_laban_rows *rows, const char *tag, const void *blob,
-                     int size, char **why);
+int ax_gen_check_fit(const ax_laban_rows *rows, const char *tag, const void *blob, int size,
+                     char **why);
 
 #endif

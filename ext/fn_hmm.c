@@ -160,8 +160,7 @@ static ax_arg arg_model(sqlite3_context *ctx, sqlite3_value **argv, model_arg *m
     if (type == SQLITE_NULL)
         return AX_NULL;
     if (type != SQLITE_BLOB) {
-        ax_errorf(ctx, "argument 1 must be a model BLOB (from hmm_train), got %s",
-                  ax_type_name(v));
+        ax_errorf(ctx, "argument 1 must be a model BLOB (from hmm_train), got %s", ax_type_name(v));
         return AX_ERROR;
     }
     ma->ref = sqlite3_get_auxdata(ctx, 0);

@@ -75,7 +75,8 @@ static ax_arg call_begin(sqlite3_context *ctx, int argc, sqlite3_value **argv, i
  * the caller asked for {"missing": "null"}. */
 static void laban_error(sqlite3_context *ctx, const laban_call *c, const affect_error *err)
 {
-    if (c->lo.missing_null && (err->status == AFFECT_ERR_MISSING || err->status == AFFECT_ERR_RANGE)) {
+    if (c->lo.missing_null &&
+        (err->status == AFFECT_ERR_MISSING || err->status == AFFECT_ERR_RANGE)) {
         sqlite3_result_null(ctx);
         return;
     }
@@ -100,8 +101,8 @@ static void result_value(sqlite3_context *ctx, const laban_call *c, affect_statu
 
 /* The part argument (index i, default "all"): all six parts, or one. */
 static ax_arg parts_arg(sqlite3_context *ctx, int argc, sqlite3_value **argv, int i,
-                        const laban_call *c, affect_part parts[6], uint32_t *n,
-                        affect_error *err, affect_status *st)
+                        const laban_call *c, affect_part parts[6], uint32_t *n, affect_error *err,
+                        affect_status *st)
 {
     const char *name = "all";
     size_t len;
@@ -121,11 +122,11 @@ static ax_arg parts_arg(sqlite3_context *ctx, int argc, sqlite3_value **argv, in
 }
 
 static const char *const weight_keys[] = {"method", "cutoff_hz", "up", "roles", "missing", NULL};
-static const char *const time_keys[] = {"method", "per_second", "cutoff_hz", "up", "roles",
-                                        "missing", NULL};
+static const char *const time_keys[] = {"method", "per_second", "cutoff_hz", "up",
+                                        "roles",  "missing",    NULL};
 static const char *const flow_keys[] = {"cutoff_hz", "up", "roles", "missing", NULL};
-static const char *const space_keys[] = {"method", "max_ratio", "cutoff_hz", "up", "roles",
-                                         "missing", NULL};
+static const char *const space_keys[] = {"method", "max_ratio", "cutoff_hz", "up",
+                                         "roles",  "missing",   NULL};
 
 typedef enum effort { EFFORT_WEIGHT, EFFORT_TIME, EFFORT_FLOW, EFFORT_SPACE } effort;
 
@@ -207,8 +208,8 @@ void ax_laban_space(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     effort_fn(ctx, argc, argv, EFFORT_SPACE);
 }
 
-static const char *const directional_keys[] = {"speed_floor", "cutoff_hz", "up", "roles",
-                                               "missing", NULL};
+static const char *const directional_keys[] = {"speed_floor", "cutoff_hz", "up",
+                                               "roles",       "missing",   NULL};
 
 /* laban_shape_directional(motion, hand [, options]): hand is 'left', 'right' or a joint. */
 void ax_laban_shape_directional(sqlite3_context *ctx, int argc, sqlite3_value **argv)
@@ -273,8 +274,8 @@ void ax_laban_shape_flow(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     call_free(&c);
 }
 
-static const char *const vector_keys[] = {"cutoff_hz", "up", "roles", "missing", "hull",
-                                          "per_second", "speed_floor", "max_ratio",
+static const char *const vector_keys[] = {"cutoff_hz",   "up",         "roles",       "missing",
+                                          "hull",        "per_second", "speed_floor", "max_ratio",
                                           "standardize", NULL};
 
 /* The 27 components of a motion, or an error already set on ctx (returns false). */
@@ -339,8 +340,8 @@ void ax_laban_vector(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 
 /* The "components" option of laban_zvector: out gets the chosen component indices in
  * laban_names() order (*n of them; all 27 when absent), as the index's components = ? does. */
-static ax_arg zvector_components(sqlite3_context *ctx, const ax_opts *opts,
-                                 int out[AFFECT_LABAN_N], int *n)
+static ax_arg zvector_components(sqlite3_context *ctx, const ax_opts *opts, int out[AFFECT_LABAN_N],
+                                 int *n)
 {
     const affect_json_node *arr = ax_opt(opts, "components");
     bool on[AFFECT_LABAN_N] = {false};
@@ -352,8 +353,9 @@ static ax_arg zvector_components(sqlite3_context *ctx, const ax_opts *opts,
         return AX_OK;
     }
     if (arr->type != AFFECT_JSON_ARRAY || arr->count == 0) {
-        ax_errorf(ctx, "option \"components\" must be a non-empty array of component names "
-                       "(see laban_names()), got %s%s",
+        ax_errorf(ctx,
+                  "option \"components\" must be a non-empty array of component names "
+                  "(see laban_names()), got %s%s",
                   arr->type == AFFECT_JSON_ARRAY ? "an empty " : "",
                   affect_json_type_name(arr->type));
         return AX_ERROR;
@@ -361,17 +363,19 @@ static ax_arg zvector_components(sqlite3_context *ctx, const ax_opts *opts,
     for (const affect_json_node *m = affect_json_first(opts->doc, arr); m;
          m = affect_json_next_sibling(opts->doc, m)) {
         if (m->type != AFFECT_JSON_STRING) {
-            ax_errorf(ctx, "option \"components\" must be an array of component names, got %s "
-                           "in it",
+            ax_errorf(ctx,
+                      "option \"components\" must be an array of component names, got %s "
+                      "in it",
                       affect_json_type_name(m->type));
             return AX_ERROR;
         }
         int j = strlen(m->str) == m->str_len ? affect_laban_index(m->str) : -1;
         affect_json_quote(q, sizeof q, m->str, m->str_len);
         if (j < 0 || on[j]) {
-            ax_errorf(ctx, j < 0 ? "option \"components\": unknown component %s (see "
-                                   "laban_names())"
-                                 : "option \"components\": component %s is listed twice",
+            ax_errorf(ctx,
+                      j < 0 ? "option \"components\": unknown component %s (see "
+                              "laban_names())"
+                            : "option \"components\": component %s is listed twice",
                       q);
             return AX_ERROR;
         }
@@ -413,8 +417,9 @@ void ax_laban_zvector(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         if (rc == SQLITE_NOMEM)
             sqlite3_result_error_nomem(ctx);
         else if (rc == SQLITE_NOTFOUND)
-            ax_errorf(ctx, "\"%s\" is not a laban table (CREATE VIRTUAL TABLE %s USING "
-                           "laban(…))",
+            ax_errorf(ctx,
+                      "\"%s\" is not a laban table (CREATE VIRTUAL TABLE %s USING "
+                      "laban(…))",
                       name, name);
         else
             ax_errorf(ctx, "%s", msg);

@@ -169,8 +169,8 @@ done:
     ax_opts_free(&opts);
 }
 
-static const char *const csv_keys[] = {"header", "delimiter", "unit", "parents", "max_samples",
-                                       NULL};
+static const char *const csv_keys[] = {"header",  "delimiter",   "unit",
+                                       "parents", "max_samples", NULL};
 
 /* The "parents" option: one item per joint, a parent's index, its name, or null / −1 for a
  * root. */
@@ -180,8 +180,10 @@ static ax_arg set_parents(sqlite3_context *ctx, const ax_opts *opts, affect_moti
     if (!n)
         return AX_OK;
     if (n->type != AFFECT_JSON_ARRAY || n->count != m->n_joints) {
-        ax_errorf(ctx, "option \"parents\" must be an array of %u parents (an index, a joint name, or "
-                  "null for a root)", m->n_joints);
+        ax_errorf(ctx,
+                  "option \"parents\" must be an array of %u parents (an index, a joint name, or "
+                  "null for a root)",
+                  m->n_joints);
         return AX_ERROR;
     }
     int32_t *parents = sqlite3_malloc64((sqlite3_uint64)m->n_joints * sizeof *parents);
@@ -203,8 +205,10 @@ static ax_arg set_parents(sqlite3_context *ctx, const ax_opts *opts, affect_moti
         else
             parents[i] = -2;
         if (parents[i] == -2 || (e->type == AFFECT_JSON_STRING && parents[i] < 0)) {
-            ax_errorf(ctx, "option \"parents\": item %u is not a joint index (-1 .. %u), a joint name "
-                      "or null", i, m->n_joints - 1);
+            ax_errorf(ctx,
+                      "option \"parents\": item %u is not a joint index (-1 .. %u), a joint name "
+                      "or null",
+                      i, m->n_joints - 1);
             rc = AX_ERROR;
         }
     }
@@ -222,7 +226,8 @@ void ax_motion_from_csv(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     const char *text;
     size_t len;
     double fps;
-    if (ax_arg_document(ctx, argv, 0, &text, &len) != AX_OK || ax_arg_double(ctx, argv, 1, &fps) != AX_OK)
+    if (ax_arg_document(ctx, argv, 0, &text, &len) != AX_OK ||
+        ax_arg_double(ctx, argv, 1, &fps) != AX_OK)
         return;
     ax_opts opts;
     if (ax_opts_parse(ctx, argc, argv, 2, csv_keys, &opts))
@@ -247,7 +252,8 @@ void ax_motion_from_csv(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         goto done;
     if (delim) {
         if (strlen(delim) != 1) {
-            ax_errorf(ctx, "option \"delimiter\" must be one character: \",\", \";\", \"\\t\" or \" \"");
+            ax_errorf(ctx,
+                      "option \"delimiter\" must be one character: \",\", \";\", \"\\t\" or \" \"");
             goto done;
         }
         co.delimiter = delim[0];
@@ -287,8 +293,8 @@ void ax_motion_from_json(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 
 /* ---- export and inspection ---- */
 
-typedef affect_status (*motion_writer)(const affect_motion *, char **, size_t *,
-                                       affect_monitor *, affect_error *);
+typedef affect_status (*motion_writer)(const affect_motion *, char **, size_t *, affect_monitor *,
+                                       affect_error *);
 
 /* Writes the motion argument as text with a core writer. */
 static void write_motion(sqlite3_context *ctx, sqlite3_value **argv, motion_writer writer,
@@ -362,8 +368,8 @@ void ax_motion_info(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     affect_strbuf_puts(&sb, ",\"max\":");
     put_floats(&sb, hi, 3);
     affect_strbuf_puts(&sb, "}");
-    affect_strbuf_printf(&sb, ",\"skeleton\":%s,\"rotations\":%s",
-                         m->skel ? "true" : "false", m->rot ? "true" : "false");
+    affect_strbuf_printf(&sb, ",\"skeleton\":%s,\"rotations\":%s", m->skel ? "true" : "false",
+                         m->rot ? "true" : "false");
     double variation;
     int32_t worst;
     affect_error err;
@@ -510,8 +516,8 @@ void ax_motion_roles(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     affect_motion_free(m);
 }
 
-static const char *const normalize_keys[] = {"up", "translation", "vertical", "heading",
-                                             "scale", "roles", NULL};
+static const char *const normalize_keys[] = {"up",    "translation", "vertical", "heading",
+                                             "scale", "roles",       NULL};
 
 void ax_motion_normalize(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 {

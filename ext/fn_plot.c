@@ -36,8 +36,8 @@
 
 #include "affect/plot.h"
 
-static const char *const plot_keys[] = {"title", "x_label", "y_label", "width", "height",
-                                        "log_x", "log_y",   "radius",  "means", "mode", NULL};
+static const char *const plot_keys[] = {"title", "x_label", "y_label", "width", "height", "log_x",
+                                        "log_y", "radius",  "means",   "mode",  NULL};
 
 typedef struct plot_state {
     affect_scatter *sc;

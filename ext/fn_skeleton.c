@@ -15,8 +15,8 @@ static affect_status opt_whole(const affect_json_node *n, const char *key, doubl
                                double *out, affect_error *err)
 {
     if (n->type != AFFECT_JSON_NUMBER || n->num != floor(n->num) || n->num < lo || n->num > hi)
-        return affect_fail(err, AFFECT_ERR_INVALID, "option \"%s\" must be a whole number from %g to %g",
-                           key, lo, hi);
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "option \"%s\" must be a whole number from %g to %g", key, lo, hi);
     *out = n->num;
     return AFFECT_OK;
 }
@@ -25,12 +25,14 @@ static affect_status opt_free(const affect_json_doc *doc, const affect_json_node
                               const affect_motion *m, ax_skel_opts *so, affect_error *err)
 {
     if (n->type != AFFECT_JSON_ARRAY)
-        return affect_fail(err, AFFECT_ERR_INVALID, "option \"free\" must be an array of joint names");
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "option \"free\" must be an array of joint names");
     so->free_link = affect_calloc(m->n_joints, sizeof *so->free_link);
     if (!so->free_link)
         return affect_nomem(err);
     uint32_t i = 0;
-    for (const affect_json_node *e = affect_json_first(doc, n); e; e = affect_json_next_sibling(doc, e), i++) {
+    for (const affect_json_node *e = affect_json_first(doc, n); e;
+         e = affect_json_next_sibling(doc, e), i++) {
         int32_t j = e->type == AFFECT_JSON_STRING ? affect_motion_find_joint(m, e->str) : -1;
         if (j < 0) {
             char shown[80];
@@ -38,8 +40,10 @@ static affect_status opt_free(const affect_json_doc *doc, const affect_json_node
                 affect_json_quote(shown, sizeof shown, e->str, e->str_len);
             else
                 snprintf(shown, sizeof shown, "a %s", affect_json_type_name(e->type));
-            return affect_fail(err, AFFECT_ERR_INVALID, "option \"free\": item %u is not a joint name of "
-                               "the motion: %s", i, shown);
+            return affect_fail(err, AFFECT_ERR_INVALID,
+                               "option \"free\": item %u is not a joint name of "
+                               "the motion: %s",
+                               i, shown);
         }
         so->free_link[j] = true;
     }
@@ -91,10 +95,13 @@ static affect_status skel_opt(const affect_json_doc *doc, const affect_json_node
         if (!(st = opt_whole(n, key, 1, 9, &v, err)))
             so->bvh.precision = (int)v;
     } else if (strcmp(key, "frame_time") == 0) {
-        if (n->type != AFFECT_JSON_NUMBER || !(n->num > 0) || !(1.0 / n->num <= AFFECT_MOTION_MAX_FPS))
-            return affect_fail(err, AFFECT_ERR_INVALID,
-                               "option \"frame_time\" must be a positive number of seconds (at most "
-                               "%g frames per second)", AFFECT_MOTION_MAX_FPS);
+        if (n->type != AFFECT_JSON_NUMBER || !(n->num > 0) ||
+            !(1.0 / n->num <= AFFECT_MOTION_MAX_FPS))
+            return affect_fail(
+                err, AFFECT_ERR_INVALID,
+                "option \"frame_time\" must be a positive number of seconds (at most "
+                "%g frames per second)",
+                AFFECT_MOTION_MAX_FPS);
         so->bvh.frame_time = n->num;
     } else if (strcmp(key, "order") == 0) {
         if (n->type != AFFECT_JSON_STRING || !affect_euler_order_parse(n->str, so->ik.order))
@@ -106,7 +113,8 @@ static affect_status skel_opt(const affect_json_doc *doc, const affect_json_node
     } else if (strcmp(key, "root") == 0) {
         if (n->type != AFFECT_JSON_STRING || n->str_len == 0 || n->str_len != strlen(n->str) ||
             n->str_len > AFFECT_MOTION_MAX_NAME)
-            return affect_fail(err, AFFECT_ERR_INVALID, "option \"root\" must be a joint name (1 .. %u bytes)",
+            return affect_fail(err, AFFECT_ERR_INVALID,
+                               "option \"root\" must be a joint name (1 .. %u bytes)",
                                AFFECT_MOTION_MAX_NAME);
         so->bvh.root_name = n->str;
     } else if (strcmp(key, "free") == 0) {
@@ -206,8 +214,9 @@ static ax_arg opts_text(sqlite3_context *ctx, int argc, sqlite3_value **argv, in
     return ax_arg_text(ctx, argv, i, text, len) == AX_ERROR ? AX_ERROR : AX_OK;
 }
 
-static const char *const bvh_keys[] = {"order", "frame_time", "precision", "root", "rotations",
-                                       "rest_frame", "lengths", "free", "siblings", NULL};
+static const char *const bvh_keys[] = {"order",     "frame_time", "precision", "root",
+                                       "rotations", "rest_frame", "lengths",   "free",
+                                       "siblings",  NULL};
 
 void ax_motion_to_bvh(sqlite3_context *ctx, int argc, sqlite3_value **argv)
 {
@@ -265,7 +274,8 @@ void ax_motion_rigid(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     affect_error err;
     if (ax_opt_enum(ctx, &opts, "lengths", lengths, &which) ||
         ax_opt_enum(ctx, &opts, "model", models, &model) ||
-        ax_opt_number(ctx, &opts, "sweeps", &sweeps) || ax_opt_number(ctx, &opts, "tolerance", &tol))
+        ax_opt_number(ctx, &opts, "sweeps", &sweeps) ||
+        ax_opt_number(ctx, &opts, "tolerance", &tol))
         goto done;
     if (sweeps != floor(sweeps) || sweeps < 1 || sweeps > 100000) {
         ax_errorf(ctx, "option \"sweeps\" must be a whole number from 1 to 100000");

@@ -13,9 +13,9 @@
 typedef struct ax_skel_opts {
     affect_rotation_source rotations;
     affect_ik_options ik;
-    bool order_given;              /* "order" was set */
-    affect_bvh_write_options bvh;  /* motion_to_bvh's own keys */
-    bool *free_link;               /* from "free" (n_joints flags), or NULL */
+    bool order_given;             /* "order" was set */
+    affect_bvh_write_options bvh; /* motion_to_bvh's own keys */
+    bool *free_link;              /* from "free" (n_joints flags), or NULL */
 } ax_skel_opts;
 
 /* Parses a JSON options object (text may be NULL: defaults) whose keys must be in allowed.

@@ -116,12 +116,12 @@ static char *dup_text(const char *s, size_t n)
     return d;
 }
 
-static const char *const strength_keys[] = {"order",    "pairs",     "label",    "content",
-                                            "fraction", "similar",   "C",        "seed",
-                                            "progress", "keyframes", "pca_dims", "regression",
-                                            "relative", "standardize", NULL};
-static const char *const rank_keys[] = {"order", "pairs", "label", "content", "fraction",
-                                        "similar", "C", "seed", "progress", "clusters", NULL};
+static const char *const strength_keys[] = {
+    "order",    "pairs",     "label",    "content",    "fraction", "similar",     "C", "seed",
+    "progress", "keyframes", "pca_dims", "regression", "relative", "standardize", NULL};
+static const char *const rank_keys[] = {"order",    "pairs",    "label", "content",
+                                        "fraction", "similar",  "C",     "seed",
+                                        "progress", "clusters", NULL};
 
 static ax_arg read_options(sqlite3_context *ctx, int argc, sqlite3_value **argv, int opt_i,
                            train_state *ts)
@@ -180,13 +180,13 @@ static ax_arg read_options(sqlite3_context *ctx, int argc, sqlite3_value **argv,
         goto done;
     }
     if (!ts->vectors && ts->so.pca_dims > AFFECT_STRENGTH_MAX_PCA) {
-        ax_errorf(ctx, "option \"pca_dims\" must be from 0 to %u, got %u",
-                  AFFECT_STRENGTH_MAX_PCA, ts->so.pca_dims);
+        ax_errorf(ctx, "option \"pca_dims\" must be from 0 to %u, got %u", AFFECT_STRENGTH_MAX_PCA,
+                  ts->so.pca_dims);
         goto done;
     }
     if (ts->vectors && (ts->clusters < 1 || ts->clusters > AFFECT_RANK_MAX_CLUSTERS)) {
-        ax_errorf(ctx, "option \"clusters\" must be from 1 to %u, got %u",
-                  AFFECT_RANK_MAX_CLUSTERS, ts->clusters);
+        ax_errorf(ctx, "option \"clusters\" must be from 1 to %u, got %u", AFFECT_RANK_MAX_CLUSTERS,
+                  ts->clusters);
         goto done;
     }
     ts->label_key = dup_text(lk, strlen(lk));
@@ -208,8 +208,7 @@ static ax_arg read_options(sqlite3_context *ctx, int argc, sqlite3_value **argv,
                   order->count <= AFFECT_STRENGTH_MAX_LEVELS;
         for (const affect_json_node *e = ok ? affect_json_first(opts.doc, order) : NULL; e && ok;
              e = affect_json_next_sibling(opts.doc, e))
-            ok = e->type == AFFECT_JSON_STRING && e->str_len > 0 &&
-                 strlen(e->str) == e->str_len;
+            ok = e->type == AFFECT_JSON_STRING && e->str_len > 0 && strlen(e->str) == e->str_len;
         if (ok) {
             ts->order = sqlite3_malloc64(sizeof(char *) * order->count);
             if (!ts->order) {
@@ -230,8 +229,9 @@ static ax_arg read_options(sqlite3_context *ctx, int argc, sqlite3_value **argv,
             }
         }
         if (!ok) {
-            ax_errorf(ctx, "option \"order\" must be an array of 2 to %u distinct non-empty "
-                           "labels",
+            ax_errorf(ctx,
+                      "option \"order\" must be an array of 2 to %u distinct non-empty "
+                      "labels",
                       AFFECT_STRENGTH_MAX_LEVELS);
             goto done;
         }
@@ -322,9 +322,8 @@ static ax_arg read_label(sqlite3_context *ctx, sqlite3_value *v, train_state *ts
                 return AX_ERROR;
             }
             const affect_json_node *root = affect_json_root(doc);
-            const affect_json_node *l = root->type == AFFECT_JSON_OBJECT
-                                            ? affect_json_get(doc, root, ts->label_key)
-                                            : NULL;
+            const affect_json_node *l =
+                root->type == AFFECT_JSON_OBJECT ? affect_json_get(doc, root, ts->label_key) : NULL;
             const affect_json_node *c = root->type == AFFECT_JSON_OBJECT
                                             ? affect_json_get(doc, root, ts->content_key)
                                             : NULL;
@@ -355,8 +354,9 @@ static ax_arg read_label(sqlite3_context *ctx, sqlite3_value *v, train_state *ts
                     cs = num;
                 }
                 if (!cs) {
-                    ax_errorf(ctx, "row %" PRIu64 ": \"pairs\": \"same_content\" needs the "
-                                   "label's \"%s\" (a string or a number)",
+                    ax_errorf(ctx,
+                              "row %" PRIu64 ": \"pairs\": \"same_content\" needs the "
+                              "label's \"%s\" (a string or a number)",
                               ts->rows, ts->content_key);
                     r = AX_ERROR;
                 } else {
@@ -375,13 +375,13 @@ static ax_arg read_label(sqlite3_context *ctx, sqlite3_value *v, train_state *ts
             return AX_ERROR;
         }
     } else {
-        ax_errorf(ctx, "argument 2 (the label) must be text or a number, got %s",
-                  ax_type_name(v));
+        ax_errorf(ctx, "argument 2 (the label) must be text or a number, got %s", ax_type_name(v));
         return AX_ERROR;
     }
     if (ts->same_content) {
-        ax_errorf(ctx, "row %" PRIu64 ": \"pairs\": \"same_content\" needs labels as JSON "
-                       "objects with a \"%s\"",
+        ax_errorf(ctx,
+                  "row %" PRIu64 ": \"pairs\": \"same_content\" needs labels as JSON "
+                  "objects with a \"%s\"",
                   ts->rows, ts->content_key);
         sqlite3_free(lb->text);
         lb->text = NULL;
@@ -432,15 +432,14 @@ static ax_arg arg_vector(sqlite3_context *ctx, sqlite3_value **argv, int i, cons
     if (sqlite3_value_type(v) == SQLITE_NULL)
         return AX_NULL;
     if (sqlite3_value_type(v) != SQLITE_BLOB) {
-        ax_errorf(ctx, "argument %d must be a float32 vector BLOB, got %s", i + 1,
-                  ax_type_name(v));
+        ax_errorf(ctx, "argument %d must be a float32 vector BLOB, got %s", i + 1, ax_type_name(v));
         return AX_ERROR;
     }
     int n = sqlite3_value_bytes(v);
     *data = sqlite3_value_blob(v);
     if (n == 0 || n % 4 != 0 || (uint32_t)n / 4 > AFFECT_RANK_MAX_DIM) {
-        ax_errorf(ctx, "argument %d must be a float32 vector BLOB (%s), got %d bytes", i + 1,
-                  what, n);
+        ax_errorf(ctx, "argument %d must be a float32 vector BLOB (%s), got %d bytes", i + 1, what,
+                  n);
         return AX_ERROR;
     }
     if (!*data) {
@@ -502,15 +501,16 @@ static void train_step(sqlite3_context *ctx, int argc, sqlite3_value **argv, boo
         if (ts->n == 0 && ts->cap == 0)
             ts->dim = dim;
         if (dim != ts->dim) {
-            ax_errorf(ctx, "row %" PRIu64 ": the vector has %u dimensions, the first %u",
-                      ts->rows, dim, ts->dim);
+            ax_errorf(ctx, "row %" PRIu64 ": the vector has %u dimensions, the first %u", ts->rows,
+                      dim, ts->dim);
             goto fail;
         }
     } else {
         uint32_t q = ts->so.keyframes;
         if (m->n_frames < q) {
-            ax_errorf(ctx, "row %" PRIu64 ": the motion has %u frames, fewer than the %u "
-                           "keyframes",
+            ax_errorf(ctx,
+                      "row %" PRIu64 ": the motion has %u frames, fewer than the %u "
+                      "keyframes",
                       ts->rows, m->n_frames, q);
             goto fail;
         }
@@ -520,8 +520,9 @@ static void train_step(sqlite3_context *ctx, int argc, sqlite3_value **argv, boo
             for (uint32_t j = 0; same && j < m->n_joints; j++)
                 same = strcmp(m->names[j], f->names[j]) == 0;
             if (!same) {
-                ax_errorf(ctx, "row %" PRIu64 ": the motion's joints differ from the first "
-                               "motion's (%u joints, the first has %u)",
+                ax_errorf(ctx,
+                          "row %" PRIu64 ": the motion's joints differ from the first "
+                          "motion's (%u joints, the first has %u)",
                           ts->rows, m->n_joints, f->n_joints);
                 goto fail;
             }
@@ -534,8 +535,8 @@ static void train_step(sqlite3_context *ctx, int argc, sqlite3_value **argv, boo
         for (uint32_t k = 0; k < dim; k++) {
             x[k] = ax_get_f32(vd + 4 * (size_t)k);
             if (!isfinite(x[k])) {
-                ax_errorf(ctx, "row %" PRIu64 ": value %u of the vector is not finite",
-                          ts->rows, k);
+                ax_errorf(ctx, "row %" PRIu64 ": value %u of the vector is not finite", ts->rows,
+                          k);
                 goto fail;
             }
         }
@@ -599,8 +600,7 @@ static ax_arg assign_levels(sqlite3_context *ctx, train_state *ts, int32_t *leve
         if (d == 0 || vals[i] != vals[d - 1])
             vals[d++] = vals[i];
     if (d > AFFECT_STRENGTH_MAX_LEVELS) {
-        ax_errorf(ctx, "at most %u distinct label values (got %u)", AFFECT_STRENGTH_MAX_LEVELS,
-                  d);
+        ax_errorf(ctx, "at most %u distinct label values (got %u)", AFFECT_STRENGTH_MAX_LEVELS, d);
         sqlite3_free(vals);
         return AX_ERROR;
     }
@@ -676,8 +676,8 @@ static void train_final(sqlite3_context *ctx, bool vectors)
         affect_strength *s = NULL;
         ts->so.monitor = &am.mon;
         st = affect_strength_train((const affect_motion *const *)ts->motions, level,
-                                   ts->same_content ? group : NULL, ts->n, names, n_levels,
-                                   &ts->so, &s, &err);
+                                   ts->same_content ? group : NULL, ts->n, names, n_levels, &ts->so,
+                                   &s, &err);
         if (st == AFFECT_OK)
             st = affect_strength_encode(s, &blob, &size, &err);
         affect_strength_free(s);
@@ -740,8 +740,8 @@ static ax_arg arg_model(sqlite3_context *ctx, sqlite3_value **argv, bool ranker,
     int type = sqlite3_value_type(v);
     if (type == SQLITE_NULL)
         return AX_NULL;
-    const char *kind = ranker ? "ranker BLOB (from rank_train)"
-                              : "strength model BLOB (from strength_train)";
+    const char *kind =
+        ranker ? "ranker BLOB (from rank_train)" : "strength model BLOB (from strength_train)";
     if (type != SQLITE_BLOB) {
         ax_errorf(ctx, "argument 1 must be a %s, got %s", kind, ax_type_name(v));
         return AX_ERROR;
@@ -759,15 +759,15 @@ static ax_arg arg_model(sqlite3_context *ctx, sqlite3_value **argv, bool ranker,
         return AX_ERROR;
     }
     affect_error err;
-    affect_status st = ranker ? affect_ranker_decode(data, (size_t)n, (affect_ranker **)out, &err)
-                              : affect_strength_decode(data, (size_t)n, (affect_strength **)out,
-                                                       &err);
+    affect_status st = ranker
+                           ? affect_ranker_decode(data, (size_t)n, (affect_ranker **)out, &err)
+                           : affect_strength_decode(data, (size_t)n, (affect_strength **)out, &err);
     if (st != AFFECT_OK) {
         if (err.status == AFFECT_ERR_NOMEM)
             ax_error(ctx, &err);
         else
-            ax_errorf(ctx, "argument 1 is not a valid %s: %s",
-                      ranker ? "ranker" : "strength model", err.msg);
+            ax_errorf(ctx, "argument 1 is not a valid %s: %s", ranker ? "ranker" : "strength model",
+                      err.msg);
         return AX_ERROR;
     }
     return AX_OK;

@@ -15,10 +15,9 @@
 
 #include "affect/strbuf.h"
 
-
 /* A whole-number option in [0, max] into *out (unchanged when absent). */
 ax_arg ax_opt_whole(sqlite3_context *ctx, const ax_opts *opts, const char *key, double max,
-                        double *out)
+                    double *out)
 {
     double v = *out;
     if (ax_opt_number(ctx, opts, key, &v) != AX_OK)
@@ -34,8 +33,7 @@ ax_arg ax_opt_whole(sqlite3_context *ctx, const ax_opts *opts, const char *key, 
     return AX_OK;
 }
 
-ax_arg ax_opt_u32(sqlite3_context *ctx, const ax_opts *opts, const char *key,
-                      uint32_t *out)
+ax_arg ax_opt_u32(sqlite3_context *ctx, const ax_opts *opts, const char *key, uint32_t *out)
 {
     double v = *out;
     if (ax_opt_whole(ctx, opts, key, 4294967295.0, &v) != AX_OK)
@@ -43,8 +41,6 @@ ax_arg ax_opt_u32(sqlite3_context *ctx, const ax_opts *opts, const char *key,
     *out = (uint32_t)v;
     return AX_OK;
 }
-
-
 
 void ax_seqs_free(ax_seqs *ts)
 {
@@ -72,9 +68,10 @@ static ax_arg read_joints(sqlite3_context *ctx, const ax_opts *opts, ax_seqs *ts
     if (!n)
         return AX_OK;
     if (n->type != AFFECT_JSON_ARRAY || n->count == 0) {
-        ax_errorf(ctx, "option \"joints\" must be a non-empty array of joint or role names, "
-                       "got %s", n->type == AFFECT_JSON_ARRAY ? "an empty array"
-                                                              : affect_json_type_name(n->type));
+        ax_errorf(ctx,
+                  "option \"joints\" must be a non-empty array of joint or role names, "
+                  "got %s",
+                  n->type == AFFECT_JSON_ARRAY ? "an empty array" : affect_json_type_name(n->type));
         return AX_ERROR;
     }
     ts->joints = affect_calloc(n->count, sizeof *ts->joints);
@@ -87,9 +84,10 @@ static ax_arg read_joints(sqlite3_context *ctx, const ax_opts *opts, ax_seqs *ts
          e = affect_json_next_sibling(opts->doc, e), i++) {
         if (e->type != AFFECT_JSON_STRING || e->str_len == 0 || strlen(e->str) != e->str_len) {
             ax_errorf(ctx, "option \"joints\": entry %u must be a joint or role name, got %s",
-                      i + 1, e->type == AFFECT_JSON_STRING ? "a string that is empty or "
-                                                             "contains NUL"
-                                                           : affect_json_type_name(e->type));
+                      i + 1,
+                      e->type == AFFECT_JSON_STRING ? "a string that is empty or "
+                                                      "contains NUL"
+                                                    : affect_json_type_name(e->type));
             return AX_ERROR;
         }
         ts->joints[i] = affect_strndup(e->str, e->str_len);
@@ -132,11 +130,9 @@ ax_arg ax_seqs_options(sqlite3_context *ctx, int argc, sqlite3_value **argv, int
         ax_opt_u32(ctx, opts, "max_iter", &ts->cfg.max_iter) ||
         ax_opt_number(ctx, opts, "tol", &ts->cfg.tol) ||
         ax_opt_number(ctx, opts, "reg", &ts->cfg.reg) ||
-        ax_opt_whole(ctx, opts, "seed", 9007199254740992.0, &seed) ||
-        read_joints(ctx, opts, ts) ||
+        ax_opt_whole(ctx, opts, "seed", 9007199254740992.0, &seed) || read_joints(ctx, opts, ts) ||
         ax_opt_bool(ctx, opts, "normalize", &ts->fo.normalize) ||
-        ax_opt_enum(ctx, opts, "scale", scales, &scale) ||
-        ax_opt_up(ctx, opts, &ts->fo.up_axis) ||
+        ax_opt_enum(ctx, opts, "scale", scales, &scale) || ax_opt_up(ctx, opts, &ts->fo.up_axis) ||
         ax_opt_bool(ctx, opts, "velocity", &ts->fo.velocity) ||
         ax_opt_enum(ctx, opts, "frame", frames, &frame) ||
         ax_opt_bool(ctx, opts, "root", &ts->fo.root))
@@ -184,8 +180,7 @@ done:
 }
 
 /* Whether a later row's options are the first row's (the same text, or both absent). */
-static ax_arg same_options(sqlite3_context *ctx, int argc, sqlite3_value **argv,
-                           const ax_seqs *ts)
+static ax_arg same_options(sqlite3_context *ctx, int argc, sqlite3_value **argv, const ax_seqs *ts)
 {
     int i = ts->opt_i;
     if (argc <= i)
@@ -231,10 +226,11 @@ static ax_arg first_motion(sqlite3_context *ctx, ax_seqs *ts, const affect_motio
     }
     uint32_t dim = affect_features_dim(ts->feat);
     if (dim > AFFECT_HMM_MAX_DIM) {
-        ax_errorf(ctx, "the observations would have %u dimensions (%u joints x 3%s%s); at most "
-                       "%u: choose fewer joints with \"joints\"", dim, ts->feat->n_joints,
-                  ts->feat->velocity ? " x 2 with velocity" : "", ts->feat->root ? " + 4" : "",
-                  AFFECT_HMM_MAX_DIM);
+        ax_errorf(ctx,
+                  "the observations would have %u dimensions (%u joints x 3%s%s); at most "
+                  "%u: choose fewer joints with \"joints\"",
+                  dim, ts->feat->n_joints, ts->feat->velocity ? " x 2 with velocity" : "",
+                  ts->feat->root ? " + 4" : "", AFFECT_HMM_MAX_DIM);
         return AX_ERROR;
     }
     ts->cfg.dim = dim;
@@ -264,8 +260,10 @@ ax_arg ax_seqs_add(sqlite3_context *ctx, int argc, sqlite3_value **argv, ax_seqs
         char a[32], b[32];
         affect_format_g(a, sizeof a, 10, m->fps);
         affect_format_g(b, sizeof b, 10, ts->feat->fps);
-        ax_errorf(ctx, "row %" PRIu64 ": the motion has %s fps, the first one %s (resample it "
-                       "with motion_resample)", ts->rows, a, b);
+        ax_errorf(ctx,
+                  "row %" PRIu64 ": the motion has %s fps, the first one %s (resample it "
+                  "with motion_resample)",
+                  ts->rows, a, b);
         goto done;
     }
     if (m->n_frames < ts->cfg.n_states) {
@@ -379,11 +377,11 @@ void ax_json_names(affect_strbuf *sb, char *const *names, uint32_t n)
 
 void ax_json_hmm_config(affect_strbuf *sb, const affect_hmm_config *c)
 {
-    affect_strbuf_printf(sb, "{\"states\":%u,\"mixtures\":%u,\"dim\":%u,\"covariance\":\"%s\","
-                             "\"topology\":\"%s\",\"max_jump\":%u,\"start\":\"%s\","
-                             "\"max_iter\":%u,\"tol\":",
-                         c->n_states, c->n_mix, c->dim,
-                         c->cov == AFFECT_HMM_DIAG ? "diag" : "full",
+    affect_strbuf_printf(sb,
+                         "{\"states\":%u,\"mixtures\":%u,\"dim\":%u,\"covariance\":\"%s\","
+                         "\"topology\":\"%s\",\"max_jump\":%u,\"start\":\"%s\","
+                         "\"max_iter\":%u,\"tol\":",
+                         c->n_states, c->n_mix, c->dim, c->cov == AFFECT_HMM_DIAG ? "diag" : "full",
                          c->topology == AFFECT_HMM_LEFT_RIGHT ? "left-right" : "ergodic",
                          c->max_jump, c->learn_start ? "learn" : "first", c->max_iter);
     affect_strbuf_double(sb, c->tol);
@@ -402,8 +400,9 @@ void ax_json_features(affect_strbuf *sb, const affect_features *f)
     affect_strbuf_puts(sb, ",\"parents\":[");
     for (uint32_t j = 0; j < f->n_joints; j++)
         affect_strbuf_printf(sb, "%s%d", j ? "," : "", (int)f->parents[j]);
-    affect_strbuf_printf(sb, "],\"frame\":\"%s\",\"normalize\":%s,\"scale\":\"%s\",\"up\":\"%s\","
-                             "\"velocity\":%s,\"root\":%s,\"fps\":",
+    affect_strbuf_printf(sb,
+                         "],\"frame\":\"%s\",\"normalize\":%s,\"scale\":\"%s\",\"up\":\"%s\","
+                         "\"velocity\":%s,\"root\":%s,\"fps\":",
                          f->frame == AFFECT_FEATURES_FRAME_BODY ? "body" : "first",
                          f->normalize ? "true" : "false", f->scale_arm ? "arm" : "none",
                          axes[f->up_axis], f->velocity ? "true" : "false",

@@ -19,32 +19,31 @@
 #include "affect/hmm.h"
 
 typedef struct ax_seqs {
-    bool failed;             /* an error was reported: xFinal only frees */
-    int opt_i;               /* the options' argument index */
-    char *opts_text;         /* the first row's options text, NULL when none */
+    bool failed;     /* an error was reported: xFinal only frees */
+    int opt_i;       /* the options' argument index */
+    char *opts_text; /* the first row's options text, NULL when none */
     size_t opts_len;
     affect_hmm_config cfg;
     affect_features_options fo;
-    char **joints;           /* fo.joints storage: copies of the "joints" option's names */
+    char **joints; /* fo.joints storage: copies of the "joints" option's names */
     uint32_t n_joints;
-    affect_features *feat;   /* fixed by the first non-NULL motion */
-    affect_hmm_seq *seqs;    /* observation sequences (each x owned) */
+    affect_features *feat; /* fixed by the first non-NULL motion */
+    affect_hmm_seq *seqs;  /* observation sequences (each x owned) */
     uint32_t n_seqs, cap;
-    bool preset;             /* cfg and fo hold the caller's defaults (set before
-                                ax_seqs_options); otherwise the HMM's and observations' own */
-    unsigned desc_mask;      /* set by the caller before the rows: descriptors to compute */
-    double *desc;            /* n_seqs × affect_descriptors_dim(desc_mask), or NULL */
-    uint64_t rows;           /* rows seen, NULL motions included */
-    char *progress;          /* the "progress" option: an SQL function's name, or NULL */
-    ax_monitor probe;        /* asked after every row (see ax_seqs_add) */
-    bool probing;            /* probe begun */
+    bool preset;        /* cfg and fo hold the caller's defaults (set before
+                           ax_seqs_options); otherwise the HMM's and observations' own */
+    unsigned desc_mask; /* set by the caller before the rows: descriptors to compute */
+    double *desc;       /* n_seqs × affect_descriptors_dim(desc_mask), or NULL */
+    uint64_t rows;      /* rows seen, NULL motions included */
+    char *progress;     /* the "progress" option: an SQL function's name, or NULL */
+    ax_monitor probe;   /* asked after every row (see ax_seqs_add) */
+    bool probing;       /* probe begun */
 } ax_seqs;
 
 /* The HMM and observation option keys (states … seed), for building an allowed-keys list. */
-#define AX_SEQS_KEYS                                                                              \
-    "states", "mixtures", "covariance", "topology", "max_jump", "start", "joints", "normalize",  \
-        "scale", "up", "velocity", "frame", "root", "max_iter", "tol", "reg", "seed", \
-        "progress"
+#define AX_SEQS_KEYS                                                                               \
+    "states", "mixtures", "covariance", "topology", "max_jump", "start", "joints", "normalize",    \
+        "scale", "up", "velocity", "frame", "root", "max_iter", "tol", "reg", "seed", "progress"
 
 /* Parses the first row's options (argument opt_i; keys must be in allowed) into opts and reads
  * the HMM and observation keys into ts; on AX_OK the caller frees opts. */

@@ -69,8 +69,10 @@ static int cv_fill(sqlite3 *db, int argc, sqlite3_value **argv, ax_rows *rows, c
             *msg = sqlite3_mprintf("affect_crossval: argument %d (%s) must be a name, as in "
                                    "SELECT * FROM affect_crossval('motions', 'motion', "
                                    "'emotion', '{\"folds\":10}')",
-                                   i + 1, i == 0 ? "table" : i == 1 ? "motion column"
-                                                                    : "label column");
+                                   i + 1,
+                                   i == 0   ? "table"
+                                   : i == 1 ? "motion column"
+                                            : "label column");
             return *msg ? SQLITE_ERROR : SQLITE_NOMEM;
         }
     const char *table = (const char *)sqlite3_value_text(argv[0]);
@@ -243,24 +245,28 @@ static int salience_rows(const affect_classifier *c, uint32_t top, ax_rows *rows
     return rc;
 }
 
-static int salience_fill(sqlite3 *db, int argc, sqlite3_value **argv, ax_rows *rows,
-                         char **msg)
+static int salience_fill(sqlite3 *db, int argc, sqlite3_value **argv, ax_rows *rows, char **msg)
 {
     (void)db;
     if (argc < 1 || sqlite3_value_type(argv[0]) == SQLITE_NULL)
         return SQLITE_OK;
     if (sqlite3_value_type(argv[0]) != SQLITE_BLOB)
-        return salience_error(msg, "affect_salience: argument 1 must be a classifier BLOB "
-                                   "(from affect_train), got %s", ax_type_name(argv[0]));
+        return salience_error(msg,
+                              "affect_salience: argument 1 must be a classifier BLOB "
+                              "(from affect_train), got %s",
+                              ax_type_name(argv[0]));
     uint32_t top = 5;
     if (argc > 1 && sqlite3_value_type(argv[1]) != SQLITE_NULL) {
         if (sqlite3_value_type(argv[1]) != SQLITE_INTEGER)
-            return salience_error(msg, "affect_salience: argument 2 (top) must be an integer "
-                                       "from 1 to 32, got %s", ax_type_name(argv[1]));
+            return salience_error(msg,
+                                  "affect_salience: argument 2 (top) must be an integer "
+                                  "from 1 to 32, got %s",
+                                  ax_type_name(argv[1]));
         if (sqlite3_value_int64(argv[1]) < 1 ||
             sqlite3_value_int64(argv[1]) > AFFECT_SALIENCE_TOP_MAX) {
             *msg = sqlite3_mprintf("affect_salience: argument 2 (top) must be an integer from 1 "
-                                   "to 32, got %lld", sqlite3_value_int64(argv[1]));
+                                   "to 32, got %lld",
+                                   sqlite3_value_int64(argv[1]));
             return *msg ? SQLITE_ERROR : SQLITE_NOMEM;
         }
         top = (uint32_t)sqlite3_value_int64(argv[1]);
@@ -274,8 +280,10 @@ static int salience_fill(sqlite3 *db, int argc, sqlite3_value **argv, ax_rows *r
     if (affect_classifier_decode(data, (size_t)n, &c, &err))
         return err.status == AFFECT_ERR_NOMEM
                    ? SQLITE_NOMEM
-                   : salience_error(msg, "affect_salience: argument 1 is not a valid "
-                                         "classifier: %s", err.msg);
+                   : salience_error(msg,
+                                    "affect_salience: argument 1 is not a valid "
+                                    "classifier: %s",
+                                    err.msg);
     int rc = salience_rows(c, top, rows, msg);
     affect_classifier_free(c);
     return rc;

@@ -26,8 +26,20 @@
 #include "affect/quat.h"
 
 enum {
-    COL_FRAME, COL_JOINT, COL_NAME, COL_QW, COL_QX, COL_QY, COL_QZ, COL_ORDER, COL_RX, COL_RY,
-    COL_RZ, COL_SPEED, COL_MOTION, COL_OPTIONS
+    COL_FRAME,
+    COL_JOINT,
+    COL_NAME,
+    COL_QW,
+    COL_QX,
+    COL_QY,
+    COL_QZ,
+    COL_ORDER,
+    COL_RX,
+    COL_RY,
+    COL_RZ,
+    COL_SPEED,
+    COL_MOTION,
+    COL_OPTIONS
 };
 
 typedef struct angles_vtab {
@@ -37,9 +49,9 @@ typedef struct angles_vtab {
 
 typedef struct angles_cursor {
     sqlite3_vtab_cursor base;
-    affect_motion *m, *sk;   /* the argument and its skeletal form (may be the same) */
-    int *orders;             /* per joint, 3 axes */
-    double *prev;            /* per joint, the Euler angles of the last frame computed */
+    affect_motion *m, *sk; /* the argument and its skeletal form (may be the same) */
+    int *orders;           /* per joint, 3 axes */
+    double *prev;          /* per joint, the Euler angles of the last frame computed */
     sqlite3_int64 row, n_rows;
     double q[4], deg[3], speed;
 } angles_cursor;
@@ -47,9 +59,10 @@ typedef struct angles_cursor {
 static int angles_connect(sqlite3 *db, void *aux, int argc, const char *const *argv,
                           sqlite3_vtab **out, char **err)
 {
-    int rc = sqlite3_declare_vtab(db, "CREATE TABLE x(frame INTEGER, joint INTEGER, name TEXT, "
-                                      "qw REAL, qx REAL, qy REAL, qz REAL, \"order\" TEXT, rx REAL, "
-                                      "ry REAL, rz REAL, speed REAL, motion HIDDEN, options HIDDEN)");
+    int rc =
+        sqlite3_declare_vtab(db, "CREATE TABLE x(frame INTEGER, joint INTEGER, name TEXT, "
+                                 "qw REAL, qx REAL, qy REAL, qz REAL, \"order\" TEXT, rx REAL, "
+                                 "ry REAL, rz REAL, speed REAL, motion HIDDEN, options HIDDEN)");
     if (rc != SQLITE_OK)
         return rc;
     angles_vtab *vt = sqlite3_malloc(sizeof *vt);
@@ -139,8 +152,8 @@ static void joint_orders(const affect_motion *sk, const ax_skel_opts *so, int *o
     }
 }
 
-static const char *const angle_keys[] = {"order", "rotations", "rest_frame", "lengths", "free",
-                                         "siblings", NULL};
+static const char *const angle_keys[] = {"order", "rotations", "rest_frame", "lengths",
+                                         "free",  "siblings",  NULL};
 
 static int angles_filter(sqlite3_vtab_cursor *cur, int idx_num, const char *idx_str, int argc,
                          sqlite3_value **argv)
@@ -207,17 +220,28 @@ static int angles_column(sqlite3_vtab_cursor *cur, sqlite3_context *ctx, int col
     uint32_t frame = (uint32_t)(c->row / nj), joint = (uint32_t)(c->row % nj);
     char order[4];
     switch (col) {
-    case COL_FRAME: sqlite3_result_int64(ctx, frame); break;
-    case COL_JOINT: sqlite3_result_int64(ctx, joint); break;
-    case COL_NAME: sqlite3_result_text(ctx, c->sk->names[joint], -1, SQLITE_TRANSIENT); break;
-    case COL_QW: case COL_QX: case COL_QY: case COL_QZ:
+    case COL_FRAME:
+        sqlite3_result_int64(ctx, frame);
+        break;
+    case COL_JOINT:
+        sqlite3_result_int64(ctx, joint);
+        break;
+    case COL_NAME:
+        sqlite3_result_text(ctx, c->sk->names[joint], -1, SQLITE_TRANSIENT);
+        break;
+    case COL_QW:
+    case COL_QX:
+    case COL_QY:
+    case COL_QZ:
         sqlite3_result_double(ctx, c->q[col - COL_QW]);
         break;
     case COL_ORDER:
         affect_euler_order_name(c->orders + (size_t)joint * 3, order);
         sqlite3_result_text(ctx, order, 3, SQLITE_TRANSIENT);
         break;
-    case COL_RX: case COL_RY: case COL_RZ: { /* deg[k] is about axis orders[k] */
+    case COL_RX:
+    case COL_RY:
+    case COL_RZ: { /* deg[k] is about axis orders[k] */
         const int *o = c->orders + (size_t)joint * 3;
         int axis = col - COL_RX;
         for (int k = 0; k < 3; k++)
@@ -225,8 +249,12 @@ static int angles_column(sqlite3_vtab_cursor *cur, sqlite3_context *ctx, int col
                 sqlite3_result_double(ctx, c->deg[k]);
         break;
     }
-    case COL_SPEED: sqlite3_result_double(ctx, c->speed); break;
-    default: sqlite3_result_null(ctx); break; /* the hidden argument columns */
+    case COL_SPEED:
+        sqlite3_result_double(ctx, c->speed);
+        break;
+    default:
+        sqlite3_result_null(ctx);
+        break; /* the hidden argument columns */
     }
     return SQLITE_OK;
 }

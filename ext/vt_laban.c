@@ -47,16 +47,16 @@
  * Standardization: z = (x − mean) / sd per component over the indexed rows, skipping missing
  * values; sd is the sample standard deviation (n − 1), and 1 where it is 0 or undefined (fewer
  * than two values) (affect_laban_stats, core/src/laban_std.c, which also gives laban_zvector
- * the vectors whose plain L2 distances are these distances, for sqlite-vec's vec0). mean and sd are recomputed when a transaction that changed the index
- * commits (xSync), so a transaction of many per-row 'refresh' commands pays for them once;
- * queries always standardize with the statistics of the rows they see.
- * Distance: Euclidean over the chosen components (default all 27) of the standardized vectors;
- * a component missing in either vector is skipped, and a row that shares no component with the
- * query is not a candidate. Ties are broken by rowid ascending, so results are deterministic.
- * Each connection caches the vectors (raw and standardized) in memory, keyed by the generation
- * in _info: a query re-reads one _info row and reloads the cache only when the index changed
- * (here or in another connection); a rollback drops the cache. Cursors hold a reference to the
- * cache they started with, so a write during a scan cannot pull it from under them.
+ * the vectors whose plain L2 distances are these distances, for sqlite-vec's vec0). mean and sd are
+ * recomputed when a transaction that changed the index commits (xSync), so a transaction of many
+ * per-row 'refresh' commands pays for them once; queries always standardize with the statistics of
+ * the rows they see. Distance: Euclidean over the chosen components (default all 27) of the
+ * standardized vectors; a component missing in either vector is skipped, and a row that shares no
+ * component with the query is not a candidate. Ties are broken by rowid ascending, so results are
+ * deterministic. Each connection caches the vectors (raw and standardized) in memory, keyed by the
+ * generation in _info: a query re-reads one _info row and reloads the cache only when the index
+ * changed (here or in another connection); a rollback drops the cache. Cursors hold a reference to
+ * the cache they started with, so a write during a scan cannot pull it from under them.
  *
  * Queries. xBestIndex uses these equality constraints; idxNum says which are present, and they
  * are passed to xFilter in this order:
@@ -149,11 +149,11 @@ typedef struct lab_cache {
     int refs;
     sqlite3_int64 generation;
     size_t n, cap;
-    sqlite3_int64 *ids;      /* ascending */
-    int32_t *label;          /* per row: index into labels, −1 for a NULL label */
-    float *raw;              /* n × LAB_N, NaN where missing */
-    double *z;               /* n × LAB_N standardized */
-    sqlite3_value **labels;  /* distinct labels (slots may be NULL) */
+    sqlite3_int64 *ids;     /* ascending */
+    int32_t *label;         /* per row: index into labels, −1 for a NULL label */
+    float *raw;             /* n × LAB_N, NaN where missing */
+    double *z;              /* n × LAB_N standardized */
+    sqlite3_value **labels; /* distinct labels (slots may be NULL) */
     size_t n_labels;
     double mean[LAB_N], sd[LAB_N];
 } lab_cache;
@@ -161,12 +161,12 @@ typedef struct lab_cache {
 typedef struct lab_vtab {
     sqlite3_vtab base;
     sqlite3 *db;
-    char *schema, *name;           /* where the index lives */
+    char *schema, *name; /* where the index lives */
     char *content, *motion, *label;
-    char *options_json;            /* normalized */
+    char *options_json; /* normalized */
     affect_laban_options opt;
     lab_cache *cache;
-    bool dirty;                    /* _info statistics are out of date until xSync */
+    bool dirty;                        /* _info statistics are out of date until xSync */
     const ax_laban_cache_kind *caches; /* the module's aux: what 'check' validates in _info */
 } lab_vtab;
 
@@ -325,8 +325,8 @@ static bool lab_vector_corrupt(int type, const unsigned char *p, int n, char *wh
     }
     for (int j = 0; j < LAB_N; j++) {
         const unsigned char *b = p + 4 * j;
-        uint32_t bits = (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 |
-                        (uint32_t)b[3] << 24;
+        uint32_t bits =
+            (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
         float f = ax_get_f32(b);
         if (bits == LAB_MISSING_BITS || (isfinite(f) && f >= 0))
             continue;
@@ -337,8 +337,9 @@ static bool lab_vector_corrupt(int type, const unsigned char *p, int n, char *wh
             sqlite3_snprintf(sizeof what, what, "%s", f > 0 ? "inf" : "-inf");
         else
             sqlite3_snprintf(sizeof what, what, "%.9g", (double)f);
-        sqlite3_snprintf(size, why, "%s is %s, expected a finite number >= 0 or NaN 0x%08x for "
-                                    "missing",
+        sqlite3_snprintf(size, why,
+                         "%s is %s, expected a finite number >= 0 or NaN 0x%08x for "
+                         "missing",
                          affect_laban_names[j], what, LAB_MISSING_BITS);
         return true;
     }
@@ -625,8 +626,7 @@ static int lab_generation(lab_vtab *vt, char **err, sqlite3_int64 *out)
         if (!format && sqlite3_column_type(st, 0) != SQLITE_NULL)
             rc = SQLITE_NOMEM;
         else if (!format || strcmp((const char *)format, LAB_FORMAT) != 0)
-            rc = lab_error(err, "%s_info has format %s%s%s; this version reads format "
-                                LAB_FORMAT,
+            rc = lab_error(err, "%s_info has format %s%s%s; this version reads format " LAB_FORMAT,
                            vt->name, format ? "\"" : "", format ? (const char *)format : "NULL",
                            format ? "\"" : "");
         else {
@@ -706,8 +706,9 @@ static int lab_parse_arg(const char *arg, lab_args *a, char **err)
             sqlite3_strnicmp(lab_keys[i], k0, (int)(k1 - k0)) == 0)
             key = i;
     if (key < 0)
-        return lab_error(err, "unknown argument \"%.*s\" (expected content, motion, label, "
-                              "options)",
+        return lab_error(err,
+                         "unknown argument \"%.*s\" (expected content, motion, label, "
+                         "options)",
                          (int)(k1 - k0), k0);
     if (a->value[key])
         return lab_error(err, "duplicate argument \"%s\"", lab_keys[key]);
@@ -845,8 +846,9 @@ static int lab_parse_options(lab_vtab *vt, const char *text, char **err)
                 }
                 o->time_per_second = m->type == AFFECT_JSON_TRUE;
             } else {
-                rc = lab_error(err, "unknown option %s (expected cutoff_hz, hull, speed_floor, "
-                                    "max_ratio, up, per_second)",
+                rc = lab_error(err,
+                               "unknown option %s (expected cutoff_hz, hull, speed_floor, "
+                               "max_ratio, up, per_second)",
                                lab_quote_key(m, q, sizeof q));
                 goto done;
             }
@@ -862,8 +864,8 @@ static int lab_parse_options(lab_vtab *vt, const char *text, char **err)
     affect_strbuf_puts(&sb, ",\"max_ratio\":");
     affect_strbuf_double(&sb, o->max_ratio);
     affect_strbuf_printf(&sb, ",\"up\":\"%c\"", "xyz"[o->up_axis]);
-    affect_strbuf_puts(&sb, o->time_per_second ? ",\"per_second\":true}"
-                                               : ",\"per_second\":false}");
+    affect_strbuf_puts(&sb,
+                       o->time_per_second ? ",\"per_second\":true}" : ",\"per_second\":false}");
     size_t len;
     affect_error e;
     if (affect_strbuf_finish(&sb, &vt->options_json, &len, &e))
@@ -893,8 +895,8 @@ static void lab_free(lab_vtab *vt)
 /* Every column name of the declared schema, for the name check. */
 static bool lab_is_column_name(const char *name)
 {
-    static const char *const hidden[] = {"label", "distance", "query", "k", "radius",
-                                         "components", "rowid", "oid", "_rowid_"};
+    static const char *const hidden[] = {"label",      "distance", "query", "k",      "radius",
+                                         "components", "rowid",    "oid",   "_rowid_"};
     for (size_t i = 0; i < sizeof hidden / sizeof hidden[0]; i++)
         if (!sqlite3_stricmp(name, hidden[i]))
             return true;
@@ -923,8 +925,9 @@ static int lab_init(sqlite3 *db, void *aux, int argc, const char *const *argv, l
         if ((rc = lab_parse_arg(argv[i], &a, err)) != SQLITE_OK)
             goto done;
     if (!a.value[ARG_CONTENT]) {
-        rc = lab_error(err, "the content argument is required, as in CREATE VIRTUAL TABLE %s "
-                            "USING laban(content=motions, motion=motion, label=emotion)",
+        rc = lab_error(err,
+                       "the content argument is required, as in CREATE VIRTUAL TABLE %s "
+                       "USING laban(content=motions, motion=motion, label=emotion)",
                        argv[2]);
         goto done;
     }
@@ -948,8 +951,9 @@ static int lab_init(sqlite3 *db, void *aux, int argc, const char *const *argv, l
     sqlite3_str_appendall(decl, "CREATE TABLE x(label");
     for (int i = 0; i < LAB_N; i++)
         sqlite3_str_appendf(decl, ", %s REAL", affect_laban_names[i]);
-    sqlite3_str_appendf(decl, ", distance REAL HIDDEN, query HIDDEN, k HIDDEN, radius HIDDEN, "
-                              "components HIDDEN, \"%w\" HIDDEN)",
+    sqlite3_str_appendf(decl,
+                        ", distance REAL HIDDEN, query HIDDEN, k HIDDEN, radius HIDDEN, "
+                        "components HIDDEN, \"%w\" HIDDEN)",
                         argv[2]);
     char *sql = sqlite3_str_finish(decl);
     decl = NULL;
@@ -983,8 +987,8 @@ static int lab_check_content(lab_vtab *vt, char **err)
             return lab_error(err, "the content table cannot be %s itself or its shadow tables",
                              vt->name);
     sqlite3_stmt *st = NULL;
-    int rc = lab_prepare(vt->db, err, &st, "PRAGMA \"%w\".table_xinfo(%Q)", vt->schema,
-                         vt->content);
+    int rc =
+        lab_prepare(vt->db, err, &st, "PRAGMA \"%w\".table_xinfo(%Q)", vt->schema, vt->content);
     if (rc)
         return rc;
     bool any = false, motion = false, label = false;
@@ -1086,8 +1090,8 @@ static int lab_store_row(lab_vtab *vt, sqlite3_stmt *ins, sqlite3_int64 id, sqli
     if (type == SQLITE_NULL)
         return SQLITE_OK;
     if (type != SQLITE_BLOB)
-        return lab_error(err, "row %lld of %s: the motion must be a BLOB, got %s", id,
-                         vt->content, ax_type_name(motion));
+        return lab_error(err, "row %lld of %s: the motion must be a BLOB, got %s", id, vt->content,
+                         ax_type_name(motion));
     const unsigned char *data = sqlite3_value_blob(motion);
     int n = sqlite3_value_bytes(motion);
     if (!data && n > 0)
@@ -1131,8 +1135,9 @@ static int lab_rebuild(lab_vtab *vt, char **err)
     int rc = lab_exec(vt->db, err, "DELETE FROM \"%w\".\"%w_data\"", vt->schema, vt->name);
     if (rc)
         return rc;
-    rc = lab_prepare(vt->db, err, &sel, "SELECT rowid, \"%w\", \"%w\" FROM \"%w\".\"%w\" "
-                                        "ORDER BY rowid",
+    rc = lab_prepare(vt->db, err, &sel,
+                     "SELECT rowid, \"%w\", \"%w\" FROM \"%w\".\"%w\" "
+                     "ORDER BY rowid",
                      vt->label, vt->motion, vt->schema, vt->content);
     if (rc || (rc = lab_prepare_insert(vt, err, &ins)) != SQLITE_OK)
         goto done;
@@ -1155,8 +1160,9 @@ static int lab_refresh(lab_vtab *vt, sqlite3_int64 id, bool remove, char **err)
     sqlite3_stmt *sel = NULL, *old = NULL, *st = NULL;
     int rc = SQLITE_OK;
     if (!remove) {
-        rc = lab_prepare(vt->db, err, &sel, "SELECT \"%w\", \"%w\" FROM \"%w\".\"%w\" "
-                                            "WHERE rowid = ?1",
+        rc = lab_prepare(vt->db, err, &sel,
+                         "SELECT \"%w\", \"%w\" FROM \"%w\".\"%w\" "
+                         "WHERE rowid = ?1",
                          vt->label, vt->motion, vt->schema, vt->content);
         if (rc)
             goto done;
@@ -1194,8 +1200,9 @@ static int lab_refresh(lab_vtab *vt, sqlite3_int64 id, bool remove, char **err)
         rc = SQLITE_NOMEM;
         goto done;
     }
-    rc = lab_prepare(vt->db, err, &old, "SELECT msize, mhash FROM \"%w\".\"%w_data\" "
-                                        "WHERE id = ?1",
+    rc = lab_prepare(vt->db, err, &old,
+                     "SELECT msize, mhash FROM \"%w\".\"%w_data\" "
+                     "WHERE id = ?1",
                      vt->schema, vt->name);
     if (rc)
         goto done;
@@ -1211,8 +1218,9 @@ static int lab_refresh(lab_vtab *vt, sqlite3_int64 id, bool remove, char **err)
     if (rc == SQLITE_ROW && sqlite3_value_type(motion) == SQLITE_BLOB &&
         sqlite3_column_int64(old, 0) == n &&
         sqlite3_column_int64(old, 1) == lab_fnv1a(data, (size_t)n)) {
-        rc = lab_prepare(vt->db, err, &st, "UPDATE \"%w\".\"%w_data\" SET label = ?2 "
-                                           "WHERE id = ?1",
+        rc = lab_prepare(vt->db, err, &st,
+                         "UPDATE \"%w\".\"%w_data\" SET label = ?2 "
+                         "WHERE id = ?1",
                          vt->schema, vt->name);
         if (rc)
             goto done;
@@ -1245,11 +1253,13 @@ static int lab_check_caches(lab_vtab *vt, char **err);
 static int lab_check(lab_vtab *vt, char **err)
 {
     sqlite3_stmt *cs = NULL, *is = NULL;
-    int rc = lab_prepare(vt->db, err, &cs, "SELECT rowid, \"%w\", \"%w\" FROM \"%w\".\"%w\" "
-                                           "WHERE \"%w\" IS NOT NULL ORDER BY rowid",
+    int rc = lab_prepare(vt->db, err, &cs,
+                         "SELECT rowid, \"%w\", \"%w\" FROM \"%w\".\"%w\" "
+                         "WHERE \"%w\" IS NOT NULL ORDER BY rowid",
                          vt->label, vt->motion, vt->schema, vt->content, vt->motion);
-    if (rc || (rc = lab_prepare(vt->db, err, &is, "SELECT id, label, msize, mhash, vector FROM "
-                                                  "\"%w\".\"%w_data\" ORDER BY id",
+    if (rc || (rc = lab_prepare(vt->db, err, &is,
+                                "SELECT id, label, msize, mhash, vector FROM "
+                                "\"%w\".\"%w_data\" ORDER BY id",
                                 vt->schema, vt->name)) != SQLITE_OK)
         goto done;
     sqlite3_int64 stale = 0, first = 0, corrupt = 0, first_corrupt = 0;
@@ -1267,8 +1277,8 @@ static int lab_check(lab_vtab *vt, char **err)
                 rc = SQLITE_NOMEM;
                 goto done;
             }
-            int same = lab_value_equal(sqlite3_column_value(cs, 1),
-                                       sqlite3_column_value(is, 1), true);
+            int same =
+                lab_value_equal(sqlite3_column_value(cs, 1), sqlite3_column_value(is, 1), true);
             if (same < 0) {
                 rc = SQLITE_NOMEM;
                 goto done;
@@ -1314,8 +1324,9 @@ static int lab_check(lab_vtab *vt, char **err)
             rc = SQLITE_NOMEM;
             goto done;
         }
-        rc = lab_error(err, "%lld %s stale (first: rowid %lld); run INSERT INTO %s(%s) "
-                            "VALUES('rebuild')",
+        rc = lab_error(err,
+                       "%lld %s stale (first: rowid %lld); run INSERT INTO %s(%s) "
+                       "VALUES('rebuild')",
                        stale, stale == 1 ? "row is" : "rows are", first, ident, ident);
         sqlite3_free(ident);
     } else {
@@ -1327,8 +1338,8 @@ done:
     return rc;
 }
 
-static int lab_create(sqlite3 *db, void *aux, int argc, const char *const *argv,
-                      sqlite3_vtab **out, char **err)
+static int lab_create(sqlite3 *db, void *aux, int argc, const char *const *argv, sqlite3_vtab **out,
+                      char **err)
 {
     lab_vtab *vt = NULL;
     sqlite3_stmt *st = NULL;
@@ -1337,17 +1348,20 @@ static int lab_create(sqlite3 *db, void *aux, int argc, const char *const *argv,
         return rc;
     if ((rc = lab_check_content(vt, err)) != SQLITE_OK)
         goto done;
-    rc = lab_exec(db, err, "CREATE TABLE \"%w\".\"%w_data\"(id INTEGER PRIMARY KEY, label, "
-                           "vector BLOB, msize INTEGER, mhash INTEGER)",
+    rc = lab_exec(db, err,
+                  "CREATE TABLE \"%w\".\"%w_data\"(id INTEGER PRIMARY KEY, label, "
+                  "vector BLOB, msize INTEGER, mhash INTEGER)",
                   vt->schema, vt->name);
-    if (rc || (rc = lab_exec(db, err, "CREATE TABLE \"%w\".\"%w_info\"(key TEXT PRIMARY KEY, "
-                                      "value) WITHOUT ROWID",
+    if (rc || (rc = lab_exec(db, err,
+                             "CREATE TABLE \"%w\".\"%w_info\"(key TEXT PRIMARY KEY, "
+                             "value) WITHOUT ROWID",
                              vt->schema, vt->name)) != SQLITE_OK)
         goto done;
-    rc = lab_prepare(db, err, &st, "INSERT INTO \"%w\".\"%w_info\"(key, value) VALUES"
-                                   "('format', '" LAB_FORMAT "'), ('content', ?1), "
-                                   "('motion', ?2), ('label', ?3), ('options', ?4), "
-                                   "('generation', 0)",
+    rc = lab_prepare(db, err, &st,
+                     "INSERT INTO \"%w\".\"%w_info\"(key, value) VALUES"
+                     "('format', '" LAB_FORMAT "'), ('content', ?1), "
+                     "('motion', ?2), ('label', ?3), ('options', ?4), "
+                     "('generation', 0)",
                      vt->schema, vt->name);
     if (rc)
         goto done;
@@ -1390,11 +1404,11 @@ static int lab_disconnect(sqlite3_vtab *tab)
 static int lab_destroy(sqlite3_vtab *tab)
 {
     lab_vtab *vt = (lab_vtab *)tab;
-    int rc = lab_exec(vt->db, &tab->zErrMsg, "DROP TABLE IF EXISTS \"%w\".\"%w_data\"",
-                      vt->schema, vt->name);
+    int rc = lab_exec(vt->db, &tab->zErrMsg, "DROP TABLE IF EXISTS \"%w\".\"%w_data\"", vt->schema,
+                      vt->name);
     if (rc == SQLITE_OK)
-        rc = lab_exec(vt->db, &tab->zErrMsg, "DROP TABLE IF EXISTS \"%w\".\"%w_info\"",
-                      vt->schema, vt->name);
+        rc = lab_exec(vt->db, &tab->zErrMsg, "DROP TABLE IF EXISTS \"%w\".\"%w_info\"", vt->schema,
+                      vt->name);
     if (rc == SQLITE_OK)
         lab_free(vt);
     return rc;
@@ -1405,8 +1419,9 @@ static int lab_rename(sqlite3_vtab *tab, const char *name)
     lab_vtab *vt = (lab_vtab *)tab;
     static const char *const suffix[] = {"_data", "_info"};
     if (lab_is_column_name(name)) /* it would not reconnect */
-        return lab_error(&tab->zErrMsg, "a laban table cannot be named \"%s\": that is one of "
-                                        "its columns",
+        return lab_error(&tab->zErrMsg,
+                         "a laban table cannot be named \"%s\": that is one of "
+                         "its columns",
                          name);
     char *copy = sqlite3_mprintf("%s", name);
     if (!copy)
@@ -1487,8 +1502,9 @@ static int lab_update(sqlite3_vtab *tab, int argc, sqlite3_value **argv, sqlite3
     if (refresh || !strcmp(cmd, "delete")) {
         sqlite3_value *id = argv[1];
         if (sqlite3_value_type(id) == SQLITE_NULL)
-            return lab_error(err, "'%s' needs a rowid, as in INSERT INTO %s(%s, rowid) "
-                                  "VALUES('%s', 12)",
+            return lab_error(err,
+                             "'%s' needs a rowid, as in INSERT INTO %s(%s, rowid) "
+                             "VALUES('%s', 12)",
                              cmd, vt->name, vt->name, cmd);
         if (sqlite3_value_type(id) != SQLITE_INTEGER) {
             char buf[40];
@@ -1505,8 +1521,7 @@ static int lab_update(sqlite3_vtab *tab, int argc, sqlite3_value **argv, sqlite3
 
 static int lab_best_index(sqlite3_vtab *tab, sqlite3_index_info *info)
 {
-    static const int cols[IDX_BITS] = {COL_QUERY, COL_LABEL, COL_K, COL_RADIUS, COL_COMPONENTS,
-                                       -1};
+    static const int cols[IDX_BITS] = {COL_QUERY, COL_LABEL, COL_K, COL_RADIUS, COL_COMPONENTS, -1};
     int use[IDX_BITS];
     bool seen[IDX_BITS];
     for (int b = 0; b < IDX_BITS; b++) {
@@ -1621,8 +1636,7 @@ static int lab_arg_radius(sqlite3_value *v, double *r, char **err)
     if ((t == SQLITE_INTEGER || t == SQLITE_FLOAT) && *r > 0 && *r <= 1)
         return SQLITE_OK;
     char buf[40];
-    return lab_error(err, "radius must be in (0, 1], got %s",
-                     lab_value_desc(v, buf, sizeof buf));
+    return lab_error(err, "radius must be in (0, 1], got %s", lab_value_desc(v, buf, sizeof buf));
 }
 
 /* components: a JSON array of distinct component names, or NULL (or absent) for all; out in
@@ -1664,8 +1678,9 @@ static int lab_arg_components(sqlite3_value *v, int out[LAB_N], int *n, char **e
     for (const affect_json_node *m = affect_json_first(doc, root); m;
          m = affect_json_next_sibling(doc, m)) {
         if (m->type != AFFECT_JSON_STRING) {
-            rc = lab_error(err, "components must be a JSON array of component names, got %s "
-                                "in it",
+            rc = lab_error(err,
+                           "components must be a JSON array of component names, got %s "
+                           "in it",
                            affect_json_type_name(m->type));
             goto done;
         }
@@ -1762,8 +1777,9 @@ static int lab_query_vector(lab_vtab *vt, const lab_cache *ca, sqlite3_value *q,
         return SQLITE_OK;
     }
     if (t != SQLITE_BLOB)
-        return lab_error(err, "query must be a motion BLOB or a rowid of the content table, "
-                              "got %s",
+        return lab_error(err,
+                         "query must be a motion BLOB or a rowid of the content table, "
+                         "got %s",
                          ax_type_name(q));
     const unsigned char *data = sqlite3_value_blob(q);
     int n = sqlite3_value_bytes(q);
@@ -2116,8 +2132,8 @@ static int rows_load(sqlite3 *db, const char *schema, const char *name, ax_laban
             char **l = sqlite3_realloc64(out->labels, cap * sizeof *l);
             if (l)
                 out->labels = l;
-            unsigned char *vv = sqlite3_realloc64(out->vectors, (sqlite3_uint64)cap *
-                                                                    LAB_VECTOR_BYTES);
+            unsigned char *vv =
+                sqlite3_realloc64(out->vectors, (sqlite3_uint64)cap * LAB_VECTOR_BYTES);
             if (vv)
                 out->vectors = vv;
             if (!ids || !l || !vv) {
@@ -2186,16 +2202,18 @@ static int lab_check_caches(lab_vtab *vt, char **err)
         if (!has_value && !has_tag)
             continue;
         if (!has_value || !has_tag) {
-            rc = lab_error(err, "cache entry '%s' is corrupt: %s_info has its row '%s%s' but "
-                                "not '%s%s'",
+            rc = lab_error(err,
+                           "cache entry '%s' is corrupt: %s_info has its row '%s%s' but "
+                           "not '%s%s'",
                            k->key, vt->name, k->key, has_value ? "" : "_key", k->key,
                            has_value ? "_key" : "");
             break;
         }
         int vtype = sqlite3_column_type(st, 0), ttype = sqlite3_column_type(st, 1);
         if (vtype != SQLITE_BLOB || ttype != SQLITE_TEXT) {
-            rc = lab_error(err, "cache entry '%s' is corrupt: its value is %s and its key %s, "
-                                "expected a blob and text",
+            rc = lab_error(err,
+                           "cache entry '%s' is corrupt: its value is %s and its key %s, "
+                           "expected a blob and text",
                            k->key, ax_type_name(sqlite3_column_value(st, 0)),
                            ax_type_name(sqlite3_column_value(st, 1)));
             break;
@@ -2219,8 +2237,8 @@ static int lab_check_caches(lab_vtab *vt, char **err)
         }
         rc = k->check(&rows, tag, blob, size, &why);
         if (rc == SQLITE_ERROR)
-            rc = why ? lab_error(err, "cache entry '%s' is corrupt: %s", k->key, why)
-                     : SQLITE_NOMEM;
+            rc =
+                why ? lab_error(err, "cache entry '%s' is corrupt: %s", k->key, why) : SQLITE_NOMEM;
     }
     sqlite3_finalize(st);
     sqlite3_free(why);
@@ -2260,8 +2278,8 @@ int ax_laban_label_of(sqlite3 *db, const char *name, const void *blob, int size,
     return rc;
 }
 
-int ax_laban_cache_get(sqlite3 *db, const char *name, const char *key, const char *tag,
-                       void **blob, int *size)
+int ax_laban_cache_get(sqlite3 *db, const char *name, const char *key, const char *tag, void **blob,
+                       int *size)
 {
     *blob = NULL;
     *size = 0;
@@ -2294,7 +2312,8 @@ int ax_laban_cache_put(sqlite3 *db, const char *name, const char *key, const cha
                        const void *blob, int size)
 {
     char *sql = sqlite3_mprintf("INSERT OR REPLACE INTO \"%w_info\"(key, value) "
-                                "VALUES (%Q, ?1), (%Q || '_key', ?2)", name, key, key);
+                                "VALUES (%Q, ?1), (%Q || '_key', ?2)",
+                                name, key, key);
     if (!sql)
         return SQLITE_NOMEM;
     sqlite3_stmt *st = NULL;
@@ -2427,10 +2446,10 @@ int ax_laban_stats_read(sqlite3 *db, const char *name, ax_laban_stats *out, char
             rc = SQLITE_NOMEM;
             goto done;
         }
-        rc = rows_error(err, "%s_info has format %s%s%s; this version reads format " LAB_FORMAT
-                        " (index \"%w\")",
-                        name, format ? "\"" : "", format ? format : "NULL", format ? "\"" : "",
-                        name);
+        rc = rows_error(
+            err,
+            "%s_info has format %s%s%s; this version reads format " LAB_FORMAT " (index \"%w\")",
+            name, format ? "\"" : "", format ? format : "NULL", format ? "\"" : "", name);
         goto done;
     }
     char why[200];
@@ -2465,9 +2484,9 @@ int ax_laban_stats_read(sqlite3 *db, const char *name, ax_laban_stats *out, char
         rc = SQLITE_OK;
     }
     const char *row = bad ? "options" : NULL;
-    if (!bad && (bad = stats_array((const char *)sqlite3_column_text(st, 2),
-                                   sqlite3_column_type(st, 2), "mean", true, out->mean, why,
-                                   (int)sizeof why, &nomem)) != NULL)
+    if (!bad &&
+        (bad = stats_array((const char *)sqlite3_column_text(st, 2), sqlite3_column_type(st, 2),
+                           "mean", true, out->mean, why, (int)sizeof why, &nomem)) != NULL)
         row = "mean";
     if (!bad && !nomem &&
         (bad = stats_array((const char *)sqlite3_column_text(st, 3), sqlite3_column_type(st, 3),
@@ -2498,7 +2517,8 @@ int ax_laban_stats_read(sqlite3 *db, const char *name, ax_laban_stats *out, char
         bad = why;
     }
     if (bad) {
-        rc = rows_error(err, "corrupt statistics: %s (index \"%w\", %s_info row '%s'); run "
+        rc = rows_error(err,
+                        "corrupt statistics: %s (index \"%w\", %s_info row '%s'); run "
                         "INSERT INTO %s(%s) VALUES('rebuild')",
                         bad, name, name, row, ident, ident);
         goto done;
@@ -2507,7 +2527,8 @@ int ax_laban_stats_read(sqlite3 *db, const char *name, ax_laban_stats *out, char
     out->rows = sqlite3_column_int64(st, 6);
     if (sqlite3_column_type(st, 5) == SQLITE_INTEGER &&
         sqlite3_column_int64(st, 5) != out->generation) {
-        rc = rows_error(err, "the statistics of index \"%w\" are out of date until the "
+        rc = rows_error(err,
+                        "the statistics of index \"%w\" are out of date until the "
                         "transaction that changed it commits (generation %lld, statistics of "
                         "generation %lld)",
                         name, out->generation, sqlite3_column_int64(st, 5));

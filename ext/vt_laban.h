@@ -12,11 +12,11 @@
 /* What the rest of the extension reads of an index: the index owns its shadow tables, and no
  * other file reads them. */
 typedef struct ax_laban_rows {
-    char *content, *motion;  /* the content table and its motion column */
-    uint32_t n;              /* rows with a label, by content rowid ascending */
-    sqlite3_int64 *ids;      /* their content rowids */
-    char **labels;           /* their labels as text */
-    unsigned char *vectors;  /* n × 27 little-endian float32 (NaN: missing), as stored */
+    char *content, *motion; /* the content table and its motion column */
+    uint32_t n;             /* rows with a label, by content rowid ascending */
+    sqlite3_int64 *ids;     /* their content rowids */
+    char **labels;          /* their labels as text */
+    unsigned char *vectors; /* n × 27 little-endian float32 (NaN: missing), as stored */
 } ax_laban_rows;
 
 /* A kind of cache entry that another part of the extension keeps in an index
@@ -52,8 +52,8 @@ int ax_laban_label_of(sqlite3 *db, const char *name, const void *blob, int size,
  * get: *blob (sqlite3_free it) and *size, or NULL when there is no entry or it has another tag;
  * SQLITE_OK or SQLITE_NOMEM. put: SQLITE_OK or the database's error code (a read-only or busy
  * database: the caller may keep the entry elsewhere). */
-int ax_laban_cache_get(sqlite3 *db, const char *name, const char *key, const char *tag,
-                       void **blob, int *size);
+int ax_laban_cache_get(sqlite3 *db, const char *name, const char *key, const char *tag, void **blob,
+                       int *size);
 int ax_laban_cache_put(sqlite3 *db, const char *name, const char *key, const char *tag,
                        const void *blob, int size);
 

@@ -51,14 +51,23 @@
 #include "affect/laban.h"
 
 enum {
-    COL_FRAME, COL_SECONDS, COL_FIRST, COL_LAST, COL_PART, COL_WEIGHT, COL_TIME, COL_SPACE,
-    COL_FLOW, COL_MOTION, COL_OPTIONS
+    COL_FRAME,
+    COL_SECONDS,
+    COL_FIRST,
+    COL_LAST,
+    COL_PART,
+    COL_WEIGHT,
+    COL_TIME,
+    COL_SPACE,
+    COL_FLOW,
+    COL_MOTION,
+    COL_OPTIONS
 };
 
 #define MAX_SHOWN 16 /* rows per window the "parts" option may ask for */
 
-static const char *const standard_parts[6] = {"torso", "head", "left_hand", "right_hand",
-                                              "left_foot", "right_foot"};
+static const char *const standard_parts[6] = {"torso",      "head",      "left_hand",
+                                              "right_hand", "left_foot", "right_foot"};
 
 typedef struct series_vtab {
     sqlite3_vtab base;
@@ -162,10 +171,13 @@ static int vtab_error(sqlite3_vtab *vt, const affect_error *err)
 
 /* ---- options ---- */
 
-static const char *const series_keys[] = {"window", "window_frames", "hop", "hop_frames",
-                                          "parts", "weight_method", "time_method",
-                                          "per_second", "max_ratio", "cutoff_hz", "up",
-                                          "roles", "missing", NULL};
+static const char *const series_keys[] = {"window",      "window_frames",
+                                          "hop",         "hop_frames",
+                                          "parts",       "weight_method",
+                                          "time_method", "per_second",
+                                          "max_ratio",   "cutoff_hz",
+                                          "up",          "roles",
+                                          "missing",     NULL};
 
 typedef struct series_opts {
     affect_json_doc *doc;
@@ -323,8 +335,7 @@ static affect_status opt_roles(const series_opts *o, const affect_motion *m, aff
                                "got %s",
                                r->key, affect_json_type_name(r->type));
         affect_error e;
-        if (affect_roles_set(m, roles, r->key, r->type == AFFECT_JSON_STRING ? r->str : NULL,
-                             &e)) {
+        if (affect_roles_set(m, roles, r->key, r->type == AFFECT_JSON_STRING ? r->str : NULL, &e)) {
             if (e.status == AFFECT_ERR_NOMEM)
                 return affect_nomem(err);
             return affect_fail(err, AFFECT_ERR_INVALID, "option \"roles\": %s", e.msg);
@@ -338,9 +349,8 @@ static affect_status opt_parts(const series_opts *o, series_cursor *c, affect_er
 {
     const affect_json_node *n = opt_get(o, "parts");
     if (!n) {
-        static const char *const defaults[7] = {"all",       "torso",      "head",
-                                                "left_hand", "right_hand", "left_foot",
-                                                "right_foot"};
+        static const char *const defaults[7] = {"all",        "torso",     "head",      "left_hand",
+                                                "right_hand", "left_foot", "right_foot"};
         for (int i = 0; i < 7; i++)
             if (!(c->names[c->n_shown++] = sqlite3_mprintf("%s", defaults[i])))
                 return affect_nomem(err);
@@ -350,8 +360,7 @@ static affect_status opt_parts(const series_opts *o, series_cursor *c, affect_er
         return wrong_type("parts", "a part name or an array of them", n, err);
     if (n->type == AFFECT_JSON_ARRAY && (n->count < 1 || n->count > MAX_SHOWN))
         return affect_fail(err, AFFECT_ERR_INVALID,
-                           "option \"parts\" must name 1 to %d parts, got %u", MAX_SHOWN,
-                           n->count);
+                           "option \"parts\" must name 1 to %d parts, got %u", MAX_SHOWN, n->count);
     const affect_json_node *e = n->type == AFFECT_JSON_STRING ? n : affect_json_first(o->doc, n);
     for (; e; e = n->type == AFFECT_JSON_STRING ? NULL : affect_json_next_sibling(o->doc, e)) {
         if (e->type != AFFECT_JSON_STRING)
@@ -366,8 +375,7 @@ static affect_status opt_parts(const series_opts *o, series_cursor *c, affect_er
             if (strcmp(c->names[i], e->str) == 0) {
                 char q[80];
                 affect_json_quote(q, sizeof q, e->str, e->str_len);
-                return affect_fail(err, AFFECT_ERR_INVALID,
-                                   "option \"parts\" names %s twice", q);
+                return affect_fail(err, AFFECT_ERR_INVALID, "option \"parts\" names %s twice", q);
             }
         if (!(c->names[c->n_shown++] = sqlite3_mprintf("%s", e->str)))
             return affect_nomem(err);
@@ -438,12 +446,12 @@ static affect_status start_series(series_cursor *c, const affect_roles *roles,
             return st;
     }
     for (uint32_t i = 0; i < c->n_shown; i++)
-        c->core_row[i] = part_of[i] == -2 ? (so.combined ? 0 : -1)
+        c->core_row[i] = part_of[i] == -2  ? (so.combined ? 0 : -1)
                          : part_of[i] >= 0 ? part_of[i] + (so.combined ? 1 : 0)
                                            : -1;
     uint32_t rows = n + (so.combined ? 1 : 0);
-    c->values = sqlite3_malloc64((sqlite3_uint64)(rows ? rows : 1) * AFFECT_SERIES_N *
-                                 sizeof *c->values);
+    c->values =
+        sqlite3_malloc64((sqlite3_uint64)(rows ? rows : 1) * AFFECT_SERIES_N * sizeof *c->values);
     return c->values ? AFFECT_OK : affect_nomem(err);
 }
 
@@ -534,7 +542,7 @@ static int series_filter(sqlite3_vtab_cursor *cur, int idx_num, const char *idx_
     st = start_series(c, &roles, &so, &err);
     if (st)
         return vtab_error(cur->pVtab, &err);
-    c->n_windows = c->series ? affect_laban_series_windows(c->series)
+    c->n_windows = c->series                 ? affect_laban_series_windows(c->series)
                    : c->window < c->n_frames ? (c->n_frames - c->window) / c->hop + 1
                                              : 1;
     c->eof = false;
@@ -565,12 +573,25 @@ static int series_column(sqlite3_vtab_cursor *cur, sqlite3_context *ctx, int col
     series_cursor *c = (series_cursor *)cur;
     int r = c->core_row[c->row];
     switch (col) {
-    case COL_FRAME: sqlite3_result_int64(ctx, c->first + (c->last - c->first) / 2); break;
-    case COL_SECONDS: sqlite3_result_double(ctx, ((double)c->first + c->last) / 2.0 / c->fps); break;
-    case COL_FIRST: sqlite3_result_int64(ctx, c->first); break;
-    case COL_LAST: sqlite3_result_int64(ctx, c->last); break;
-    case COL_PART: sqlite3_result_text(ctx, c->names[c->row], -1, SQLITE_TRANSIENT); break;
-    case COL_WEIGHT: case COL_TIME: case COL_SPACE: case COL_FLOW: {
+    case COL_FRAME:
+        sqlite3_result_int64(ctx, c->first + (c->last - c->first) / 2);
+        break;
+    case COL_SECONDS:
+        sqlite3_result_double(ctx, ((double)c->first + c->last) / 2.0 / c->fps);
+        break;
+    case COL_FIRST:
+        sqlite3_result_int64(ctx, c->first);
+        break;
+    case COL_LAST:
+        sqlite3_result_int64(ctx, c->last);
+        break;
+    case COL_PART:
+        sqlite3_result_text(ctx, c->names[c->row], -1, SQLITE_TRANSIENT);
+        break;
+    case COL_WEIGHT:
+    case COL_TIME:
+    case COL_SPACE:
+    case COL_FLOW: {
         static const int q[4] = {AFFECT_SERIES_WEIGHT, AFFECT_SERIES_TIME, AFFECT_SERIES_SPACE,
                                  AFFECT_SERIES_FLOW};
         double v = r < 0 ? NAN : c->values[(size_t)r * AFFECT_SERIES_N + q[col - COL_WEIGHT]];
@@ -580,7 +601,9 @@ static int series_column(sqlite3_vtab_cursor *cur, sqlite3_context *ctx, int col
             sqlite3_result_double(ctx, v);
         break;
     }
-    default: sqlite3_result_null(ctx); break; /* the hidden argument columns */
+    default:
+        sqlite3_result_null(ctx);
+        break; /* the hidden argument columns */
     }
     return SQLITE_OK;
 }

@@ -86,7 +86,8 @@ static int points_filter(sqlite3_vtab_cursor *cur, int idx_num, const char *idx_
     if (argc < 1 || sqlite3_value_type(argv[0]) == SQLITE_NULL)
         return SQLITE_OK;
     if (sqlite3_value_type(argv[0]) != SQLITE_BLOB)
-        return set_vtab_error(cur->pVtab, "motion_points: the argument must be a motion BLOB, got %s",
+        return set_vtab_error(cur->pVtab,
+                              "motion_points: the argument must be a motion BLOB, got %s",
                               ax_type_name(argv[0]));
     const unsigned char *data = sqlite3_value_blob(argv[0]);
     int n = sqlite3_value_bytes(argv[0]);
@@ -122,13 +123,27 @@ static int points_column(sqlite3_vtab_cursor *cur, sqlite3_context *ctx, int col
     uint32_t frame = (uint32_t)(c->row / nj), joint = (uint32_t)(c->row % nj);
     const float *p = affect_motion_at(c->m, frame, joint);
     switch (col) {
-    case COL_FRAME: sqlite3_result_int64(ctx, frame); break;
-    case COL_JOINT: sqlite3_result_int64(ctx, joint); break;
-    case COL_NAME: sqlite3_result_text(ctx, c->m->names[joint], -1, SQLITE_TRANSIENT); break;
-    case COL_X: sqlite3_result_double(ctx, p[0]); break;
-    case COL_Y: sqlite3_result_double(ctx, p[1]); break;
-    case COL_Z: sqlite3_result_double(ctx, p[2]); break;
-    default: sqlite3_result_null(ctx); break; /* the hidden argument column */
+    case COL_FRAME:
+        sqlite3_result_int64(ctx, frame);
+        break;
+    case COL_JOINT:
+        sqlite3_result_int64(ctx, joint);
+        break;
+    case COL_NAME:
+        sqlite3_result_text(ctx, c->m->names[joint], -1, SQLITE_TRANSIENT);
+        break;
+    case COL_X:
+        sqlite3_result_double(ctx, p[0]);
+        break;
+    case COL_Y:
+        sqlite3_result_double(ctx, p[1]);
+        break;
+    case COL_Z:
+        sqlite3_result_double(ctx, p[2]);
+        break;
+    default:
+        sqlite3_result_null(ctx);
+        break; /* the hidden argument column */
     }
     return SQLITE_OK;
 }
@@ -153,8 +168,9 @@ static int points_best_index(sqlite3_vtab *vt, sqlite3_index_info *info)
     if (usable < 0) {
         if (seen)
             return SQLITE_CONSTRAINT;
-        return set_vtab_error(vt, "%s", "motion_points: a motion argument is required, as in "
-                                        "SELECT * FROM motion_points(:motion)");
+        return set_vtab_error(vt, "%s",
+                              "motion_points: a motion argument is required, as in "
+                              "SELECT * FROM motion_points(:motion)");
     }
     info->aConstraintUsage[usable].argvIndex = 1;
     info->aConstraintUsage[usable].omit = 1;

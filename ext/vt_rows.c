@@ -7,8 +7,8 @@
  * argument whose constraint exists but is unusable in this plan (its value comes from a table
  * joined later) gets SQLITE_CONSTRAINT, so SQLite picks a plan that knows it. A plan without
  * a required argument (SQLite asks for such plans when it splits an OR of constraints) gets a
- * huge cost and, should it still be chosen, fails in xFilter with the usage. xFilter rebuilds the argument
- * list (NULL for the ones not given), clears the previous rows, and calls fill. Cells are
+ * huge cost and, should it still be chosen, fails in xFilter with the usage. xFilter rebuilds the
+ * argument list (NULL for the ones not given), clears the previous rows, and calls fill. Cells are
  * returned as stored (text and BLOBs copied by SQLite, SQLITE_TRANSIENT).
  */
 #include "vt_rows.h"
@@ -278,15 +278,23 @@ static int rows_column(sqlite3_vtab_cursor *cur, sqlite3_context *ctx, int col)
     }
     const ax_cell *cell = &c->rows.cells[c->row * (size_t)c->rows.n_cols + (size_t)col];
     switch (cell->type) {
-    case SQLITE_INTEGER: sqlite3_result_int64(ctx, cell->i); break;
-    case SQLITE_FLOAT: sqlite3_result_double(ctx, cell->d); break;
+    case SQLITE_INTEGER:
+        sqlite3_result_int64(ctx, cell->i);
+        break;
+    case SQLITE_FLOAT:
+        sqlite3_result_double(ctx, cell->d);
+        break;
     case SQLITE_TEXT:
         sqlite3_result_text64(ctx, cell->p, cell->len, SQLITE_TRANSIENT, SQLITE_UTF8);
         if (cell->json)
             sqlite3_result_subtype(ctx, AX_JSON_SUBTYPE);
         break;
-    case SQLITE_BLOB: sqlite3_result_blob64(ctx, cell->p, cell->len, SQLITE_TRANSIENT); break;
-    default: sqlite3_result_null(ctx); break;
+    case SQLITE_BLOB:
+        sqlite3_result_blob64(ctx, cell->p, cell->len, SQLITE_TRANSIENT);
+        break;
+    default:
+        sqlite3_result_null(ctx);
+        break;
     }
     return SQLITE_OK;
 }

@@ -21,7 +21,7 @@
 #include "common.h"
 
 typedef struct ax_cell {
-    int type; /* SQLITE_INTEGER, SQLITE_FLOAT, SQLITE_TEXT, SQLITE_BLOB, SQLITE_NULL */
+    int type;  /* SQLITE_INTEGER, SQLITE_FLOAT, SQLITE_TEXT, SQLITE_BLOB, SQLITE_NULL */
     bool json; /* text with the JSON subtype */
     sqlite3_int64 i;
     double d;
@@ -30,14 +30,13 @@ typedef struct ax_cell {
 } ax_cell;
 
 typedef struct ax_rows {
-    int n_cols;      /* visible columns */
-    ax_cell *cells;  /* rows × n_cols */
+    int n_cols;     /* visible columns */
+    ax_cell *cells; /* rows × n_cols */
     size_t n_cells, cap;
     bool nomem;
 } ax_rows;
 
-typedef int (*ax_rows_fill)(sqlite3 *db, int argc, sqlite3_value **argv, ax_rows *rows,
-                            char **msg);
+typedef int (*ax_rows_fill)(sqlite3 *db, int argc, sqlite3_value **argv, ax_rows *rows, char **msg);
 
 typedef struct ax_rows_spec {
     const char *name;
@@ -46,8 +45,8 @@ typedef struct ax_rows_spec {
     int n_args;         /* hidden argument columns */
     int min_args;       /* arguments that must be given */
     ax_rows_fill fill;
-    const char *usage;  /* shown when arguments are missing */
-    bool direct_only;   /* SQLITE_VTAB_DIRECTONLY (reads other tables), else INNOCUOUS */
+    const char *usage; /* shown when arguments are missing */
+    bool direct_only;  /* SQLITE_VTAB_DIRECTONLY (reads other tables), else INNOCUOUS */
 } ax_rows_spec;
 
 int ax_rows_register(sqlite3 *db, const ax_rows_spec *spec);

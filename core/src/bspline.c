@@ -238,8 +238,8 @@ void affect_bspline_normal(const affect_bspline *b, const double *t, const doubl
 }
 
 affect_status affect_bspline_fit(const affect_bspline *b, const double *r, const double *t,
-                                 const double *x, uint32_t T, uint32_t m, double lambda,
-                                 double *c, double *work, affect_error *err)
+                                 const double *x, uint32_t T, uint32_t m, double lambda, double *c,
+                                 double *work, affect_error *err)
 {
     uint32_t k = b->order, G = b->n;
     if (T == 0)
@@ -247,8 +247,10 @@ affect_status affect_bspline_fit(const affect_bspline *b, const double *r, const
     for (uint32_t s = 0; s < T; s++)
         for (uint32_t j = 0; j < m; j++)
             if (!isfinite(x[(size_t)s * m + j]))
-                return affect_fail(err, AFFECT_ERR_INVALID, "sample %u, column %u: non-finite "
-                                   "value", s, j);
+                return affect_fail(err, AFFECT_ERR_INVALID,
+                                   "sample %u, column %u: non-finite "
+                                   "value",
+                                   s, j);
     double *a = work;
     affect_bspline_normal(b, t, x, T, m, a, c);
     for (size_t i = 0; i < (size_t)G * k; i++)

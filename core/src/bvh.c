@@ -127,8 +127,8 @@ static affect_status expected(parser *ps, const char *what, const char *tok, siz
                            ps->line, what);
     char shown[168];
     excerpt(tok, len, shown);
-    return affect_fail(ps->err, AFFECT_ERR_FORMAT, "line %u: expected %s, found %s", ps->line,
-                       what, shown);
+    return affect_fail(ps->err, AFFECT_ERR_FORMAT, "line %u: expected %s, found %s", ps->line, what,
+                       shown);
 }
 
 static affect_status expect_word(parser *ps, const char *word)
@@ -309,7 +309,6 @@ static affect_status parse_root(parser *ps)
     return AFFECT_OK;
 }
 
-
 /* Open-addressing set of the names given so far (indices into m->names). */
 static bool name_taken(const affect_motion *m, const int32_t *slots, uint32_t mask,
                        const char *name, uint32_t *slot)
@@ -486,8 +485,7 @@ static void keep_skeleton(const parser *ps, affect_motion *m, double scale)
 /* parse_frames polls the monitor every this many frames */
 #define POLL_FRAMES 1024
 
-static affect_status parse_frames(parser *ps, affect_motion *m, double scale,
-                                  affect_monitor *mon)
+static affect_status parse_frames(parser *ps, affect_motion *m, double scale, affect_monitor *mon)
 {
     uint32_t nv = ps->n_values, nj = ps->n_joints;
     double *values = affect_malloc_array(nv ? nv : 1, sizeof *values);
@@ -540,8 +538,8 @@ static affect_status parse_frames(parser *ps, affect_motion *m, double scale,
                     char shown[168];
                     excerpt(s, (size_t)(e - s), shown);
                     st = affect_fail(ps->err, AFFECT_ERR_FORMAT,
-                                     "line %u: value %u of frame %u is not a number: %s",
-                                     ps->line, k + 1, f, shown);
+                                     "line %u: value %u of frame %u is not a number: %s", ps->line,
+                                     k + 1, f, shown);
                     goto done;
                 }
                 if (k < nv)
@@ -552,9 +550,9 @@ static affect_status parse_frames(parser *ps, affect_motion *m, double scale,
                     ps->p++;
             }
             if (k != nv) {
-                st = affect_fail(ps->err, AFFECT_ERR_FORMAT,
-                                 "line %u: frame %u has %u values, expected %u", ps->line, f, k,
-                                 nv);
+                st =
+                    affect_fail(ps->err, AFFECT_ERR_FORMAT,
+                                "line %u: frame %u has %u values, expected %u", ps->line, f, k, nv);
                 goto done;
             }
             if (ps->p < ps->end) {
@@ -646,14 +644,12 @@ affect_status affect_bvh_parse(const char *text, size_t len, const affect_bvh_op
         st = affect_fail(err, AFFECT_ERR_RANGE,
                          "line %u: %u frames x %u joints is %llu samples, above the limit of %llu "
                          "(option max_samples)",
-                         ps.line, n_frames, ps.n_joints,
-                         (unsigned long long)n_frames * ps.n_joints,
+                         ps.line, n_frames, ps.n_joints, (unsigned long long)n_frames * ps.n_joints,
                          (unsigned long long)max_samples);
         goto done;
     }
     /* every frame line sets all positions, rotations and translations (parse_frames) */
-    st = affect_motion_create_as(n_frames, ps.n_joints, snap_fps(1.0 / frame_time), false, &m,
-                                 err);
+    st = affect_motion_create_as(n_frames, ps.n_joints, snap_fps(1.0 / frame_time), false, &m, err);
     if (st)
         goto done;
     for (uint32_t i = 0; i < ps.n_joints; i++)

@@ -72,15 +72,33 @@ static void split_fixed(uint64_t u, int prec, uint64_t *ip, uint64_t *fp)
         *fp = u - *ip * (p10);                                                                     \
     } while (0)
     switch (prec) {
-    case 1: SPLIT(10u); break;
-    case 2: SPLIT(100u); break;
-    case 3: SPLIT(1000u); break;
-    case 4: SPLIT(10000u); break;
-    case 5: SPLIT(100000u); break;
-    case 6: SPLIT(1000000u); break;
-    case 7: SPLIT(10000000u); break;
-    case 8: SPLIT(100000000u); break;
-    default: SPLIT(1000000000u); break;
+    case 1:
+        SPLIT(10u);
+        break;
+    case 2:
+        SPLIT(100u);
+        break;
+    case 3:
+        SPLIT(1000u);
+        break;
+    case 4:
+        SPLIT(10000u);
+        break;
+    case 5:
+        SPLIT(100000u);
+        break;
+    case 6:
+        SPLIT(1000000u);
+        break;
+    case 7:
+        SPLIT(10000000u);
+        break;
+    case 8:
+        SPLIT(100000000u);
+        break;
+    default:
+        SPLIT(1000000000u);
+        break;
     }
 #undef SPLIT
 }
@@ -152,8 +170,8 @@ static bool put_indent(out_buf *b, uint32_t depth, const char *s)
     return true;
 }
 
-static const char *const channel_names[AFFECT_CH_COUNT] = {
-    "Xposition", "Yposition", "Zposition", "Xrotation", "Yrotation", "Zrotation"};
+static const char *const channel_names[AFFECT_CH_COUNT] = {"Xposition", "Yposition", "Zposition",
+                                                           "Xrotation", "Yrotation", "Zrotation"};
 
 /* The channels written for joint j: its own, or with rotations replaced by the order asked. */
 static int joint_channels(const affect_skel_joint *s, const affect_bvh_write_options *opt,
@@ -176,7 +194,7 @@ typedef struct writer {
     const affect_motion *m;
     const affect_bvh_write_options *opt;
     out_buf b;
-    uint32_t *seq;  /* joints in file order */
+    uint32_t *seq; /* joints in file order */
     uint32_t n_seq;
     uint32_t *first_child, *next_sibling;
 } writer;
@@ -207,7 +225,8 @@ static bool write_tree(writer *w, uint32_t r, bool first_root)
         } else {
             if (!put_indent(&w->b, depth, j == r ? "ROOT " : "JOINT "))
                 return false;
-            const char *name = j == r && first_root && w->opt->root_name ? w->opt->root_name : m->names[j];
+            const char *name =
+                j == r && first_root && w->opt->root_name ? w->opt->root_name : m->names[j];
             if (!put_name(&w->b, name) || !reserve(&w->b, 1))
                 return false;
             w->b.p[w->b.len++] = '\n';
@@ -320,8 +339,8 @@ static affect_status write_frames(writer *w, affect_error *err)
         return affect_nomem(err);
     size_t per_frame = (size_t)w->n_seq * 6 * NUMBER_MAX_BYTES + 1;
     for (uint32_t t = 0; t < m->n_frames; t++) {
-        affect_status st = t % POLL_FRAMES == 0 ? affect_monitor_check(w->opt->monitor, err)
-                                                : AFFECT_OK;
+        affect_status st =
+            t % POLL_FRAMES == 0 ? affect_monitor_check(w->opt->monitor, err) : AFFECT_OK;
         if (st) {
             affect_free(prev);
             return st;
@@ -371,14 +390,16 @@ affect_status affect_bvh_write(const affect_motion *m, const affect_bvh_write_op
     if (!m->skel || !m->rot)
         return affect_fail(err, AFFECT_ERR_INVALID, "the motion has no joint rotations");
     if (opt->precision < 1 || opt->precision > 9)
-        return affect_fail(err, AFFECT_ERR_INVALID, "precision %d out of range (1 .. 9)", opt->precision);
+        return affect_fail(err, AFFECT_ERR_INVALID, "precision %d out of range (1 .. 9)",
+                           opt->precision);
     double frame_time = opt->frame_time > 0 ? opt->frame_time : 1.0 / m->fps;
     if (!isfinite(frame_time) || frame_time <= 0)
         return affect_fail(err, AFFECT_ERR_INVALID, "frame time must be a positive number");
     if (opt->root_name) {
         size_t n = strlen(opt->root_name);
         if (n == 0 || n > AFFECT_MOTION_MAX_NAME)
-            return affect_fail(err, AFFECT_ERR_INVALID, "root name length %zu out of range (1 .. %u)", n,
+            return affect_fail(err, AFFECT_ERR_INVALID,
+                               "root name length %zu out of range (1 .. %u)", n,
                                AFFECT_MOTION_MAX_NAME);
     }
     uint32_t nj = m->n_joints;

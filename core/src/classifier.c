@@ -7,10 +7,9 @@
  *     affect_classifier_config_default(&cfg);
  *     cfg.hmm.dim = affect_features_dim(feat);
  *     affect_classifier *c;
- *     if (affect_classifier_train(&cfg, feat, seqs, NULL, y, n, labels, 4, &c, &err) == AFFECT_OK) {
- *         affect_classifier_out o = {0};
- *         affect_classifier_eval(c, x, T, NULL, false, &o, NULL, &err);   (o.svm, o.knn, o.ml)
- *         affect_classifier_free(c);
+ *     if (affect_classifier_train(&cfg, feat, seqs, NULL, y, n, labels, 4, &c, &err) == AFFECT_OK)
+ * { affect_classifier_out o = {0}; affect_classifier_eval(c, x, T, NULL, false, &o, NULL, &err);
+ * (o.svm, o.knn, o.ml) affect_classifier_free(c);
  *     }
  *
  * How it works. Training (train_on) never holds the n × D matrix of representations (D = C ×
@@ -29,22 +28,18 @@
  * after knn_k and is read as descriptors 0, weight 1, no mirror images):
  *     "AFCL", u32 version, u32 flags (0)
  *     u32 C, C × (u32 length, bytes) labels
- *     u32 groups, u8 zscore, f64 score_clip, f64 svm_c, u32 svm_folds, u32 spca_dims, u8 kernel, f64 sigma,
- *     u32 knn_k (the chosen values when a grid was searched)
- *     u32 descriptors, f64 descriptor_weight, u8 mirror
- *     u32 grid n_dims, n_sigma, n_k, folds; the lists (u32, f64, u32); f64 grid CV accuracy
- *     f64 C used, f64 its inner CV accuracy, f64 × 3 training accuracies (ML, SVM, kNN)
- *     C × (u64 length, the class HMM's model BLOB)
- *     u64 D, D × f64 mean, D × f64 scale
- *     the SVM (affect_svm_encode), the sPCA (affect_spca_encode)
- *     u32 n, n × u32 training labels, n × p × f64 training coordinates
- *     u64 FNV-1a 64 of every byte before it
- * Every HMM BLOB carries the feature definition; the decoder requires them to be identical and
- * keeps the first.
- * Version 3, the compact storage (make_compact; "storage" of affect/classifier.h): each class HMM
- * as u8 form, u64 length, bytes (form 1: covariances as lower triangles, no checksum); the mean
- * and scale as 24-bit floats; the SVM record's version 3 and the sPCA record's flag 2 (4-bit
- * blocks, affect/quant.h). Version 2 is still written for the float32 storage.
+ *     u32 groups, u8 zscore, f64 score_clip, f64 svm_c, u32 svm_folds, u32 spca_dims, u8 kernel,
+ * f64 sigma, u32 knn_k (the chosen values when a grid was searched) u32 descriptors, f64
+ * descriptor_weight, u8 mirror u32 grid n_dims, n_sigma, n_k, folds; the lists (u32, f64, u32); f64
+ * grid CV accuracy f64 C used, f64 its inner CV accuracy, f64 × 3 training accuracies (ML, SVM,
+ * kNN) C × (u64 length, the class HMM's model BLOB) u64 D, D × f64 mean, D × f64 scale the SVM
+ * (affect_svm_encode), the sPCA (affect_spca_encode) u32 n, n × u32 training labels, n × p × f64
+ * training coordinates u64 FNV-1a 64 of every byte before it Every HMM BLOB carries the feature
+ * definition; the decoder requires them to be identical and keeps the first. Version 3, the compact
+ * storage (make_compact; "storage" of affect/classifier.h): each class HMM as u8 form, u64 length,
+ * bytes (form 1: covariances as lower triangles, no checksum); the mean and scale as 24-bit floats;
+ * the SVM record's version 3 and the sPCA record's flag 2 (4-bit blocks, affect/quant.h). Version 2
+ * is still written for the float32 storage.
  */
 #include "affect/classifier.h"
 
@@ -66,11 +61,11 @@ struct affect_classifier {
     char **labels;
     affect_features *feat;
     affect_hmm **hmms;
-    size_t part;  /* Fisher entries per class HMM */
-    size_t fdim;  /* n_classes × part: the Fisher block */
+    size_t part;   /* Fisher entries per class HMM */
+    size_t fdim;   /* n_classes × part: the Fisher block */
     uint32_t ddim; /* descriptors appended after it */
     double desc_w; /* ω, the descriptor block's factor */
-    size_t dim;   /* fdim + ddim */
+    size_t dim;    /* fdim + ddim */
     double *mean, *scale;
     bool compact; /* the compact storage (version 3): mean and scale are 24-bit floats */
     affect_svm *svm;
@@ -213,18 +208,16 @@ static bool set_dims(affect_classifier *c)
 {
     c->part = affect_fisher_dim(&c->cfg.hmm, c->cfg.groups);
     c->ddim = c->cfg.descriptors ? affect_descriptors_dim(c->cfg.descriptors) : 0;
-    c->desc_w = c->ddim ? sqrt(c->cfg.descriptor_weight * (double)c->part * c->n_classes /
-                               c->ddim)
-                        : 1.0;
+    c->desc_w =
+        c->ddim ? sqrt(c->cfg.descriptor_weight * (double)c->part * c->n_classes / c->ddim) : 1.0;
     return affect_mul_size(c->part, c->n_classes, &c->fdim) &&
            affect_add_size(c->fdim, c->ddim, &c->dim);
 }
 
 /* The Fisher scores of x under class HMM k into out (part values), its log-likelihood into
  * *ll (ll may be NULL). */
-static affect_status score_part(const affect_classifier *c, uint32_t k, const double *x,
-                                uint32_t T, double *out, double *ll, affect_monitor *mon,
-                                affect_error *err)
+static affect_status score_part(const affect_classifier *c, uint32_t k, const double *x, uint32_t T,
+                                double *out, double *ll, affect_monitor *mon, affect_error *err)
 {
     if (affect_fisher_score(c->hmms[k], x, T, c->cfg.groups, out, ll, mon, err))
         return affect_prefix(err, "Fisher score under the HMM of class \"%s\"", c->labels[k]);
@@ -308,10 +301,10 @@ static uint32_t block_count(const affect_classifier *c)
  * product is the one cblas call on one array, as before slabs existed, and gives the same
  * bits. */
 typedef struct block_rows {
-    double **slab;  /* n_slabs allocations */
+    double **slab; /* n_slabs allocations */
     uint32_t n_slabs, per;
-    double **row;   /* n pointers: row i of the current block */
-    double *cols;   /* several slabs: n × cols_w, a band of columns for the SVM and sPCA */
+    double **row; /* n pointers: row i of the current block */
+    double *cols; /* several slabs: n × cols_w, a band of columns for the SVM and sPCA */
     size_t cols_w;
 } block_rows;
 
@@ -433,8 +426,8 @@ static affect_status rows_gram(const block_rows *R, uint32_t n, size_t w, double
  * overflow): with u = f / a, mean = a · mean(u) and scale = a · sd(u) (population). A column
  * that is constant over the training set (sd 0) keeps scale 1. Without z-scores: mean 0,
  * scale 1. */
-static affect_status fit_block(affect_classifier *c, const double *const *B, uint32_t n,
-                               size_t w, size_t col0, affect_error *err)
+static affect_status fit_block(affect_classifier *c, const double *const *B, uint32_t n, size_t w,
+                               size_t col0, affect_error *err)
 {
     for (size_t e = 0; e < w; e++) {
         if (e % 256 == 0 && affect_monitor_stopped(c->cfg.hmm.monitor))
@@ -605,8 +598,8 @@ static affect_status grid_fold(const affect_classifier *c, const double *G, cons
         return AFFECT_OK;
     for (uint32_t i = 0, a = 0, t = 0; i < n;
          i++) { /* rows: training, held out; columns: training */
-        double *row = w->fold_of[i] == fold ? w->te_k + (size_t)t++ * n_tr
-                                            : w->sub_gram + (size_t)a++ * n_tr;
+        double *row =
+            w->fold_of[i] == fold ? w->te_k + (size_t)t++ * n_tr : w->sub_gram + (size_t)a++ * n_tr;
         for (uint32_t j = 0, b = 0; j < n; j++)
             if (w->fold_of[j] != fold)
                 row[b++] = G[(size_t)i * n + j];
@@ -632,8 +625,7 @@ static affect_status grid_fold(const affect_classifier *c, const double *G, cons
                 for (uint32_t t = 0; t < n_te; t++) {
                     uint32_t label;
                     st = affect_knn_classify(w->tr_p, w->tr_y, n_tr, p, c->n_classes,
-                                             w->te_p + (size_t)t * p, g->k[ki], &label, NULL,
-                                             err);
+                                             w->te_p + (size_t)t * p, g->k[ki], &label, NULL, err);
                     if (st)
                         return st;
                     w->hits[((size_t)di * g->n_sigma + s) * g->n_k + ki] += label == w->te_y[t];
@@ -679,8 +671,8 @@ done:
 /* Steps 4 and 5 on the Gram matrix G (n × n) of the normalized rows: C, the SVM's dual, the
  * grid, the sPCA's dual and the training coordinates (signs fixed later, by
  * affect_spca_finish); the ML and SVM training accuracies. */
-static affect_status fit_dual(affect_classifier *c, const double *G, const uint32_t *y,
-                              uint32_t n, const double *ll, affect_error *err)
+static affect_status fit_dual(affect_classifier *c, const double *G, const uint32_t *y, uint32_t n,
+                              const double *ll, affect_error *err)
 {
     const affect_classifier_config *cfg = &c->cfg;
     size_t D = c->dim;
@@ -688,8 +680,7 @@ static affect_status fit_dual(affect_classifier *c, const double *G, const uint3
     if (C == 0) {
         static const double grid[] = AFFECT_CLASSIFIER_C_GRID;
         if (affect_svm_select_c_gram(G, n, D, y, c->n_classes, grid, sizeof grid / sizeof grid[0],
-                                     cfg->svm_folds, cfg->hmm.seed, &C, &cv, cfg->hmm.monitor,
-                                     err))
+                                     cfg->svm_folds, cfg->hmm.seed, &C, &cv, cfg->hmm.monitor, err))
             return affect_prefix(err, "choosing the SVM's C");
     }
     affect_monitor_report(cfg->hmm.monitor, "SVM, sPCA grid and sPCA", 0, 3);
@@ -740,9 +731,9 @@ typedef struct train_job {
     const uint32_t *y;
     uint32_t n;
     const double *desc;
-    uint32_t block; /* the block being computed */
-    block_rows *B;  /* the block being computed, in slabs of rows */
-    double *ll;     /* NULL: the second pass */
+    uint32_t block;        /* the block being computed */
+    block_rows *B;         /* the block being computed, in slabs of rows */
+    double *ll;            /* NULL: the second pass */
     affect_hmm_config hmm; /* the class HMMs' configuration: stopped with the call, silent */
 } train_job;
 
@@ -776,10 +767,10 @@ static affect_status block_row(void *ctx, uint32_t i, affect_error *err)
         return st;
     affect_monitor_step(c->cfg.hmm.monitor);
     st = j->block < c->n_classes
-            ? score_part(c, j->block, j->seqs[i].x, j->seqs[i].n_frames, row,
-                         j->ll ? &j->ll[(size_t)i * c->n_classes + j->block] : NULL,
-                         c->cfg.hmm.monitor, err)
-            : copy_descriptors(c, j->desc + (size_t)i * c->ddim, row, err);
+             ? score_part(c, j->block, j->seqs[i].x, j->seqs[i].n_frames, row,
+                          j->ll ? &j->ll[(size_t)i * c->n_classes + j->block] : NULL,
+                          c->cfg.hmm.monitor, err)
+             : copy_descriptors(c, j->desc + (size_t)i * c->ddim, row, err);
     return st ? affect_prefix(err, "motion %u", i) : AFFECT_OK;
 }
 
@@ -794,8 +785,8 @@ static affect_status compute_block(train_job *j, uint32_t b, bool fit, affect_er
     affect_monitor_report(c->cfg.hmm.monitor,
                           fit ? "Fisher scores, first pass" : "Fisher scores, second pass",
                           (uint64_t)b * j->n, (uint64_t)block_count(c) * j->n);
-    affect_status st = affect_parallel_for(j->n, c->cfg.threads, block_row, j,
-                                           c->cfg.hmm.monitor, err);
+    affect_status st =
+        affect_parallel_for(j->n, c->cfg.threads, block_row, j, c->cfg.hmm.monitor, err);
     if (st)
         return st;
     if (fit && (st = fit_block(c, (const double *const *)j->B->row, j->n, w, col0, err)))
@@ -847,8 +838,8 @@ static affect_status make_compact(affect_classifier *c, affect_error *err)
     factor = affect_malloc_array(D, sizeof *factor);
     affect_status st = AFFECT_OK;
     if (!mean || !scale || !factor) {
-        st = affect_nomem_of(err, D, 3 * sizeof *mean, "the compact normalization of %zu values",
-                             D);
+        st =
+            affect_nomem_of(err, D, 3 * sizeof *mean, "the compact normalization of %zu values", D);
         goto done;
     }
     for (size_t e = 0; e < D; e++) {
@@ -936,8 +927,8 @@ static affect_status train_on(const affect_classifier_config *cfg, const affect_
     train_job job = {c, seqs, y, n, desc, 0, NULL, NULL, cfg->hmm};
     job.hmm.monitor = affect_monitor_child(&child, cfg->hmm.monitor);
     affect_monitor_report(cfg->hmm.monitor, "class HMMs", 0, n_classes);
-    if ((st = affect_parallel_for(n_classes, cfg->threads, train_class, &job,
-                                   cfg->hmm.monitor, err)) != AFFECT_OK)
+    if ((st = affect_parallel_for(n_classes, cfg->threads, train_class, &job, cfg->hmm.monitor,
+                                  err)) != AFFECT_OK)
         goto done;
     if ((st = copy_features(feat, &c->feat, err)) != AFFECT_OK)
         goto done;
@@ -952,8 +943,8 @@ static affect_status train_on(const affect_classifier_config *cfg, const affect_
             widest = block_width(c, b);
     if (!affect_mul_size(widest, n, &cells) || !affect_mul_size(n, n, &nn) || widest > INT_MAX ||
         n > INT_MAX) {
-        st = affect_fail(err, AFFECT_ERR_RANGE, "%u motions of %zu-value blocks are too many",
-                         n, widest);
+        st = affect_fail(err, AFFECT_ERR_RANGE, "%u motions of %zu-value blocks are too many", n,
+                         widest);
         goto done;
     }
     if ((st = rows_alloc(&B, n ? n : 1, widest ? widest : 1, cfg->slab_bytes, err)) != AFFECT_OK)
@@ -1285,8 +1276,9 @@ affect_status affect_classifier_salience(const affect_classifier *c, uint32_t to
         return affect_fail(err, AFFECT_ERR_INVALID, "top must be between 1 and %u",
                            AFFECT_SALIENCE_TOP_MAX);
     if (!(c->cfg.groups & AFFECT_FISHER_COVS))
-        return affect_fail(err, AFFECT_ERR_INVALID, "the classifier has no covariance scores "
-                                                    "(trained without the covariances group)");
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "the classifier has no covariance scores "
+                           "(trained without the covariances group)");
     uint32_t N = c->cfg.hmm.n_states, M = c->cfg.hmm.n_mix, C = c->n_classes;
     size_t count = (size_t)C * N * M;
     affect_salience_row *out = affect_calloc(count, sizeof *out);
@@ -1547,11 +1539,9 @@ static affect_status decode_head(affect_br *r, affect_classifier **out, affect_e
                            "unknown classifier format version %u (this build reads 1 .. %u)",
                            version, AFFECT_CLASSIFIER_VERSION);
     if (flags != 0)
-        return affect_fail(err, AFFECT_ERR_FORMAT, "unknown classifier flags %u (offset 8)",
-                           flags);
+        return affect_fail(err, AFFECT_ERR_FORMAT, "unknown classifier flags %u (offset 8)", flags);
     if (n_classes < 2 || n_classes > AFFECT_CLASSIFIER_MAX_CLASSES)
-        return affect_fail(err, AFFECT_ERR_FORMAT, "invalid class count %u (offset 12)",
-                           n_classes);
+        return affect_fail(err, AFFECT_ERR_FORMAT, "invalid class count %u (offset 12)", n_classes);
     affect_classifier *c = alloc_classifier(n_classes);
     if (!c)
         return affect_nomem(err);
@@ -1578,16 +1568,16 @@ static affect_status decode_head(affect_br *r, affect_classifier **out, affect_e
     cfg->mirror = AFFECT_MIRROR_OFF;
     uint8_t zscore, kernel, mirror = 0;
     if (!affect_br_u32(r, &cfg->groups) || !affect_br_u8(r, &zscore) ||
-        !affect_br_f64(r, &cfg->score_clip) || !affect_br_f64(r, &cfg->svm_c) || !affect_br_u32(r, &cfg->svm_folds) ||
-        !affect_br_u32(r, &cfg->spca_dims) || !affect_br_u8(r, &kernel) ||
-        !affect_br_f64(r, &cfg->spca_sigma) || !affect_br_u32(r, &cfg->knn_k) ||
-        (version >= 2 && (!affect_br_u32(r, &cfg->descriptors) ||
-                          !affect_br_f64(r, &cfg->descriptor_weight) ||
-                          !affect_br_u8(r, &mirror))) ||
+        !affect_br_f64(r, &cfg->score_clip) || !affect_br_f64(r, &cfg->svm_c) ||
+        !affect_br_u32(r, &cfg->svm_folds) || !affect_br_u32(r, &cfg->spca_dims) ||
+        !affect_br_u8(r, &kernel) || !affect_br_f64(r, &cfg->spca_sigma) ||
+        !affect_br_u32(r, &cfg->knn_k) ||
+        (version >= 2 &&
+         (!affect_br_u32(r, &cfg->descriptors) || !affect_br_f64(r, &cfg->descriptor_weight) ||
+          !affect_br_u8(r, &mirror))) ||
         !decode_grid(r, &cfg->grid) || !affect_br_f64(r, &c->report.grid_cv_acc) ||
         !affect_br_f64(r, &c->report.svm_c) || !affect_br_f64(r, &c->report.svm_cv_acc) ||
-        !affect_br_f64(r, &c->report.train_acc_ml) ||
-        !affect_br_f64(r, &c->report.train_acc_svm) ||
+        !affect_br_f64(r, &c->report.train_acc_ml) || !affect_br_f64(r, &c->report.train_acc_svm) ||
         !affect_br_f64(r, &c->report.train_acc_knn))
         return truncated(err, r, "the configuration");
     if (zscore > 1 || kernel > 1 || mirror > 1)
@@ -1600,8 +1590,8 @@ static affect_status decode_head(affect_br *r, affect_classifier **out, affect_e
 }
 
 /* Whether two feature definitions have the same binary form. */
-static affect_status same_features(const affect_features *a, const affect_features *b,
-                                   bool *same, affect_error *err)
+static affect_status same_features(const affect_features *a, const affect_features *b, bool *same,
+                                   affect_error *err)
 {
     size_t na, nb;
     if (!affect_features_encoded_size(a, &na) || !affect_features_encoded_size(b, &nb))
@@ -1640,8 +1630,8 @@ static affect_status decode_hmms(affect_br *r, affect_classifier *c, affect_erro
         unsigned char *whole = NULL;
         size_t whole_len = (size_t)len;
         affect_status st = AFFECT_OK;
-        if (form == 1 && (st = hmm_from_triangles(p, (size_t)len, &whole, &whole_len, err)) ==
-                             AFFECT_OK)
+        if (form == 1 &&
+            (st = hmm_from_triangles(p, (size_t)len, &whole, &whole_len, err)) == AFFECT_OK)
             p = whole;
         affect_features *f = NULL;
         if (st == AFFECT_OK)
@@ -1677,8 +1667,7 @@ static affect_status decode_hmms(affect_br *r, affect_classifier *c, affect_erro
         if (hc->n_states != h0->n_states || hc->n_mix != h0->n_mix || hc->dim != h0->dim ||
             hc->cov != h0->cov || hc->learn_start != h0->learn_start)
             return affect_fail(err, AFFECT_ERR_FORMAT,
-                               "the HMM of class \"%s\" has another configuration",
-                               c->labels[k]);
+                               "the HMM of class \"%s\" has another configuration", c->labels[k]);
     }
     c->cfg.hmm = *affect_hmm_get_config(c->hmms[0]);
     return AFFECT_OK;
@@ -1722,7 +1711,8 @@ static affect_status decode_rest(affect_br *r, affect_classifier *c, affect_erro
         affect_spca_input_dim(c->spca) != c->dim)
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "the SVM or sPCA does not match the classifier's %u classes and %zu "
-                           "dimensions", c->n_classes, c->dim);
+                           "dimensions",
+                           c->n_classes, c->dim);
     uint32_t p = affect_spca_dims(c->spca), n;
     if (!affect_br_u32(r, &n))
         return truncated(err, r, "the training set");
@@ -1769,8 +1759,10 @@ affect_status affect_classifier_decode(const unsigned char *data, size_t size,
     if (st == AFFECT_OK)
         st = decode_rest(&r, c, err);
     if (st == AFFECT_OK && r.off != r.size)
-        st = affect_fail(err, AFFECT_ERR_FORMAT, "%zu unexpected bytes after the training set "
-                         "(offset %zu)", r.size - r.off, r.off);
+        st = affect_fail(err, AFFECT_ERR_FORMAT,
+                         "%zu unexpected bytes after the training set "
+                         "(offset %zu)",
+                         r.size - r.off, r.off);
     if (st) {
         affect_classifier_free(c);
         return st;

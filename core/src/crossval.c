@@ -7,7 +7,8 @@
  *     affect_cv_config_default(&cfg);
  *     cfg.cls.hmm.dim = affect_features_dim(feat);
  *     affect_cv_result *r;
- *     if (affect_crossval(&cfg, feat, seqs, NULL, y, n, labels, 4, NULL, 0, &r, &err) == AFFECT_OK) {
+ *     if (affect_crossval(&cfg, feat, seqs, NULL, y, n, labels, 4, NULL, 0, &r, &err) == AFFECT_OK)
+ * {
  *         ... r->mean_accuracy[AFFECT_CV_SVM] ...
  *         affect_cv_result_free(r);
  *     }
@@ -110,9 +111,8 @@ static void progress(const affect_cv_config *cfg, const affect_cv_fold *f, uint3
     if (!cfg->progress)
         return;
     char line[256];
-    snprintf(line, sizeof line,
-             "fold %u/%u: %u training, %u held out, svm %.3f, knn %.3f, ml %.3f", f->fold + 1,
-             n_folds, f->n_train, f->n_test, f->accuracy[AFFECT_CV_SVM],
+    snprintf(line, sizeof line, "fold %u/%u: %u training, %u held out, svm %.3f, knn %.3f, ml %.3f",
+             f->fold + 1, n_folds, f->n_train, f->n_test, f->accuracy[AFFECT_CV_SVM],
              f->accuracy[AFFECT_CV_KNN], f->accuracy[AFFECT_CV_ML]);
     cfg->progress(cfg->progress_ctx, line);
 }
@@ -191,9 +191,8 @@ static affect_status run_fold(const run_ctx *rc, uint32_t fold, fold_ws *w, affe
         if (fold_of[i] != fold)
             continue;
         affect_classifier_out o = {0};
-        st = affect_classifier_eval(c, seqs[i].x, seqs[i].n_frames,
-                                    dd ? rc->desc + i * dd : NULL, false, &o, rc->cls->hmm.monitor,
-                                    err);
+        st = affect_classifier_eval(c, seqs[i].x, seqs[i].n_frames, dd ? rc->desc + i * dd : NULL,
+                                    false, &o, rc->cls->hmm.monitor, err);
         if (st) {
             if (st != AFFECT_ERR_NOMEM) {
                 char msg[AFFECT_ERROR_MSG_MAX];
@@ -243,9 +242,9 @@ static bool fold_ws_alloc(fold_ws *w, uint32_t n, uint32_t n_classes, uint32_t d
 typedef struct worker {
     const run_ctx *rc;
     mtx_t *lock;
-    uint32_t *next;       /* the next fold to take (under lock) */
-    bool *stop;           /* set (under lock) by the first failure */
-    uint32_t *finished;   /* workers that returned (under lock) */
+    uint32_t *next;        /* the next fold to take (under lock) */
+    bool *stop;            /* set (under lock) by the first failure */
+    uint32_t *finished;    /* workers that returned (under lock) */
     affect_status *status; /* per fold */
     affect_error *errs;    /* per fold */
     fold_ws w;
@@ -366,8 +365,7 @@ static void summarize(affect_cv_result *r)
 
 affect_status affect_crossval(const affect_cv_config *cfg, const affect_features *feat,
                               const affect_hmm_seq *seqs, const double *desc, const uint32_t *y,
-                              uint32_t n,
-                              const char *const *labels, uint32_t n_classes,
+                              uint32_t n, const char *const *labels, uint32_t n_classes,
                               const uint32_t *group, uint32_t n_groups, affect_cv_result **out,
                               affect_error *err)
 {

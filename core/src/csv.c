@@ -125,9 +125,9 @@ typedef struct csv_parser {
     uint32_t n_frames;
     float *pos; /* n_frames * n_cols values, capacity cap_pos */
     size_t cap_pos;
-    size_t first_len;  /* bytes of the first data row and its line end; 0 until known */
-    bool estimated;    /* the capacity has been sized from first_len */
-    size_t header_row; /* 0 when there is no header */
+    size_t first_len;     /* bytes of the first data row and its line end; 0 until known */
+    bool estimated;       /* the capacity has been sized from first_len */
+    size_t header_row;    /* 0 when there is no header */
     uint64_t max_samples; /* frames × joints at most */
     affect_motion *m;
 } csv_parser;
@@ -798,8 +798,8 @@ static void put_header_field(affect_strbuf *sb, const char *name, char axis, boo
     affect_strbuf_putc(sb, '"');
 }
 
-affect_status affect_csv_write(const affect_motion *m, char **out, size_t *len,
-                               affect_monitor *mon, affect_error *err)
+affect_status affect_csv_write(const affect_motion *m, char **out, size_t *len, affect_monitor *mon,
+                               affect_error *err)
 {
     *out = NULL;
     if (len)

@@ -41,8 +41,8 @@ struct affect_fda {
     affect_features *feat;
     char **classes;
     uint32_t *y;
-    double *frames;    /* c */
-    double *fpca_eig;  /* R */
+    double *frames;   /* c */
+    double *fpca_eig; /* R */
     double total_var;
     double *eig;       /* p */
     double *explained; /* p */
@@ -154,8 +154,8 @@ static affect_status sym_eig(double *a, uint32_t n, double *w, double *z, affect
     lapack_int found = 0, info;
     AFFECT_BLAS(info = LAPACKE_dsyevr_work(LAPACK_COL_MAJOR, 'V', 'A', 'U', (lapack_int)n, a,
                                            (lapack_int)n, 0.0, 0.0, 0, 0, 0.0, &found, w, z,
-                                           (lapack_int)n, iwork + liwork, work,
-                                           (lapack_int)lwork, iwork, (lapack_int)liwork));
+                                           (lapack_int)n, iwork + liwork, work, (lapack_int)lwork,
+                                           iwork, (lapack_int)liwork));
     if (info != 0 || found != (lapack_int)n)
         st = affect_fail(err, AFFECT_ERR_RANGE,
                          "the eigendecomposition did not converge (LAPACK info %d)", (int)info);
@@ -258,8 +258,8 @@ static affect_status choose_lambda(const affect_fda_config *cfg, const affect_bs
         for (uint32_t i = 0; i < n && isfinite(total); i++) {
             if ((st = affect_monitor_check(cfg->monitor, err)) != AFFECT_OK)
                 goto done;
-            total += affect_bspline_gcv(b, rband, NULL, seqs[i].x, seqs[i].n_frames, m, lam,
-                                        NULL, work);
+            total +=
+                affect_bspline_gcv(b, rband, NULL, seqs[i].x, seqs[i].n_frames, m, lam, NULL, work);
         }
         affect_monitor_report(cfg->monitor, "GCV", (uint64_t)(e - GCV_E_MIN + 1),
                               (uint64_t)(GCV_E_MAX - GCV_E_MIN + 1));
@@ -269,7 +269,8 @@ static affect_status choose_lambda(const affect_fda_config *cfg, const affect_bs
         }
     }
     if (!isfinite(best))
-        st = affect_fail(err, AFFECT_ERR_INVALID, "GCV is infinite for every lambda of the grid "
+        st = affect_fail(err, AFFECT_ERR_INVALID,
+                         "GCV is infinite for every lambda of the grid "
                          "(motions too short for the basis: use a smaller basis)");
     *lambda = best_lam;
 done:
@@ -343,21 +344,20 @@ static void upper_solve(const double *l, uint32_t n, double *x)
 typedef struct train_ctx {
     affect_fda *f;
     const affect_fda_config *cfg;
-    double *cc;   /* n × h centred coefficients */
-    double *w;    /* n × h: C̃ (M ⊗ I) */
-    double *k;    /* n × n Gram of the centred functions (kept intact) */
-    double *v;    /* n × n: eigenvector r (descending order) at v + r n, signs fixed */
-    double *lam;  /* n eigenvalues of K, descending */
-    double *q;    /* n × R FPCA scores */
+    double *cc;  /* n × h centred coefficients */
+    double *w;   /* n × h: C̃ (M ⊗ I) */
+    double *k;   /* n × n Gram of the centred functions (kept intact) */
+    double *v;   /* n × n: eigenvector r (descending order) at v + r n, signs fixed */
+    double *lam; /* n eigenvalues of K, descending */
+    double *q;   /* n × R FPCA scores */
 } train_ctx;
 
 /* Axes of a linear method whose training coordinates are K g_r: axis_r = Wᵀ g_r. g: p × n. */
 static void axes_from_dual(train_ctx *t, const double *g, uint32_t p)
 {
     affect_fda *f = t->f;
-    AFFECT_BLAS(cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, (int)p, (int)f->h,
-                            (int)f->n, 1.0, g, (int)f->n, t->w, (int)f->h, 0.0, f->axes,
-                            (int)f->h));
+    AFFECT_BLAS(cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, (int)p, (int)f->h, (int)f->n,
+                            1.0, g, (int)f->n, t->w, (int)f->h, 0.0, f->axes, (int)f->h));
 }
 
 static affect_status fit_fpca(train_ctx *t, affect_error *err)
@@ -395,8 +395,8 @@ static affect_status fit_fspca(train_ctx *t, const uint32_t *y, affect_error *er
     affect_fda *f = t->f;
     uint32_t n = f->n;
     affect_spca *s = NULL;
-    affect_status st = affect_spca_fit_dual(t->k, n, f->h, y, f->c, t->cfg->kernel,
-                                            t->cfg->sigma, t->cfg->dims, &s, err);
+    affect_status st = affect_spca_fit_dual(t->k, n, f->h, y, f->c, t->cfg->kernel, t->cfg->sigma,
+                                            t->cfg->dims, &s, err);
     if (st)
         return st;
     uint32_t p = affect_spca_dims(s);
@@ -476,8 +476,10 @@ static affect_status fit_ffda(train_ctx *t, const uint32_t *y, affect_error *err
         }
     }
     if (!dense_cholesky(sw, R)) {
-        st = affect_fail(err, AFFECT_ERR_INVALID, "the within-class scatter is singular (every "
-                         "class is one point in %u dimensions): give a positive ffda_reg", R);
+        st = affect_fail(err, AFFECT_ERR_INVALID,
+                         "the within-class scatter is singular (every "
+                         "class is one point in %u dimensions): give a positive ffda_reg",
+                         R);
         goto done;
     }
     /* tm = L⁻¹ S_b L⁻ᵀ: columns of S_b through L⁻¹, then the rows of the result */
@@ -588,8 +590,8 @@ static affect_status fit_isomap(train_ctx *t, affect_error *err)
     }
     for (uint32_t i = 0; i < n; i++)
         for (uint32_t j = 0; j < n; j++) {
-            double s = t->k[(size_t)i * n + i] + t->k[(size_t)j * n + j] -
-                       2.0 * t->k[(size_t)i * n + j];
+            double s =
+                t->k[(size_t)i * n + i] + t->k[(size_t)j * n + j] - 2.0 * t->k[(size_t)i * n + j];
             d0[(size_t)i * n + j] = i == j ? 0.0 : sqrt(s > 0 ? s : 0.0);
         }
     for (size_t i = 0; i < nn; i++)
@@ -618,9 +620,10 @@ static affect_status fit_isomap(train_ctx *t, affect_error *err)
     }
     for (uint32_t i = 1; i < n; i++)
         if (!isfinite(f->geo[i])) {
-            st = affect_fail(err, AFFECT_ERR_INVALID, "the %u-nearest-neighbour graph is not "
-                             "connected (motion %u cannot reach motion 0): raise isomap_k", kk,
-                             i);
+            st = affect_fail(err, AFFECT_ERR_INVALID,
+                             "the %u-nearest-neighbour graph is not "
+                             "connected (motion %u cannot reach motion 0): raise isomap_k",
+                             kk, i);
             goto done;
         }
     /* B = −½ H D² H */
@@ -654,7 +657,8 @@ static affect_status fit_isomap(train_ctx *t, affect_error *err)
     while (p < t->cfg->dims && p < n && lmax > 0 && ev[n - 1 - p] > AFFECT_FDA_RANK_TOL * lmax)
         p++;
     if (p == 0) {
-        st = affect_fail(err, AFFECT_ERR_INVALID, "the training functions are all equal (no "
+        st = affect_fail(err, AFFECT_ERR_INVALID,
+                         "the training functions are all equal (no "
                          "variance)");
         goto done;
     }
@@ -712,12 +716,14 @@ static affect_status check_train(const affect_fda_config *cfg, const affect_feat
                            m, affect_features_dim(feat));
     size_t h, cells;
     if (!affect_mul_size(cfg->n_basis, m, &h) || h > INT32_MAX)
-        return affect_fail(err, AFFECT_ERR_RANGE, "%u basis functions x %u coordinates exceed "
-                           "the BLAS limit", cfg->n_basis, m);
+        return affect_fail(err, AFFECT_ERR_RANGE,
+                           "%u basis functions x %u coordinates exceed "
+                           "the BLAS limit",
+                           cfg->n_basis, m);
     if (n > INT32_MAX || !affect_mul_size(n, h > n ? h : n, &cells) ||
         !affect_mul_size(cells, sizeof(double), &cells))
-        return affect_fail(err, AFFECT_ERR_RANGE, "%u motions x %zu coefficients are too many",
-                           n, h);
+        return affect_fail(err, AFFECT_ERR_RANGE, "%u motions x %zu coefficients are too many", n,
+                           h);
     for (uint32_t k = 0; k < c; k++) {
         if (!classes || !classes[k])
             return affect_fail(err, AFFECT_ERR_INVALID, "class %u has no name", k);
@@ -727,8 +733,10 @@ static affect_status check_train(const affect_fda_config *cfg, const affect_feat
     }
     for (uint32_t i = 0; i < n; i++) {
         if (y[i] >= c)
-            return affect_fail(err, AFFECT_ERR_INVALID, "motion %u: label %u is out of range "
-                               "(%u classes)", i, y[i], c);
+            return affect_fail(err, AFFECT_ERR_INVALID,
+                               "motion %u: label %u is out of range "
+                               "(%u classes)",
+                               i, y[i], c);
         if (seqs[i].n_frames < 1 || !seqs[i].x)
             return affect_fail(err, AFFECT_ERR_INVALID, "motion %u has no frames", i);
     }
@@ -862,7 +870,8 @@ affect_status affect_fda_train(const affect_fda_config *cfg, const affect_featur
     }
     f->total_var = trace / (n - 1);
     if (!isfinite(trace)) {
-        st = affect_fail(err, AFFECT_ERR_RANGE, "the data are too large: the Gram matrix "
+        st = affect_fail(err, AFFECT_ERR_RANGE,
+                         "the data are too large: the Gram matrix "
                          "overflows");
         goto fail;
     }
@@ -897,7 +906,8 @@ affect_status affect_fda_train(const affect_fda_config *cfg, const affect_featur
         affect_free(mw);
     }
     if (!(t.lam[0] > 0) || !(trace > AFFECT_FDA_NOVAR_TOL * energy)) {
-        st = affect_fail(err, AFFECT_ERR_INVALID, "the training functions are all equal (no "
+        st = affect_fail(err, AFFECT_ERR_INVALID,
+                         "the training functions are all equal (no "
                          "variance)");
         goto fail;
     }
@@ -1001,8 +1011,8 @@ affect_status affect_fda_coefficients(const affect_fda *f, const double *x, uint
     double *work = affect_malloc_array(2 * G * kb + G, sizeof *work);
     if (!work)
         return affect_nomem(err);
-    affect_status st = affect_bspline_fit(&f->b, f->rband, NULL, x, T, f->m, f->cfg.lambda, coef,
-                                          work, err);
+    affect_status st =
+        affect_bspline_fit(&f->b, f->rband, NULL, x, T, f->m, f->cfg.lambda, coef, work, err);
     affect_free(work);
     return st;
 }
@@ -1059,8 +1069,10 @@ affect_status affect_fda_embed(const affect_fda *f, const double *x, uint32_t T,
 done:
     for (uint32_t r = 0; st == AFFECT_OK && r < p; r++)
         if (!isfinite(z[r]))
-            st = affect_fail(err, AFFECT_ERR_RANGE, "the embedding overflows (coordinate %u is "
-                             "not finite)", r);
+            st = affect_fail(err, AFFECT_ERR_RANGE,
+                             "the embedding overflows (coordinate %u is "
+                             "not finite)",
+                             r);
     affect_free(d);
     affect_free(nb);
     return st;
@@ -1092,10 +1104,11 @@ affect_status affect_fda_prototype(const affect_fda *f, uint32_t label, affect_m
 {
     *out = NULL;
     if (label >= f->c)
-        return affect_fail(err, AFFECT_ERR_INVALID, "class %u is out of range (%u classes)",
-                           label, f->c);
+        return affect_fail(err, AFFECT_ERR_INVALID, "class %u is out of range (%u classes)", label,
+                           f->c);
     if (!f->feat)
-        return affect_fail(err, AFFECT_ERR_INVALID, "the model has no feature definition "
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "the model has no feature definition "
                            "(trained on plain data): no prototypes");
     double fr = floor(f->frames[label] + 0.5);
     uint32_t T = fr < 2 ? 2 : fr > 1e6 ? 1000000 : (uint32_t)fr;
@@ -1136,14 +1149,17 @@ affect_status affect_fda_perturbation(const affect_fda *f, uint32_t r, uint32_t 
                                       affect_error *err)
 {
     if (!is_linear(f->cfg.method))
-        return affect_fail(err, AFFECT_ERR_INVALID, "perturbation plots need a linear method "
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "perturbation plots need a linear method "
                            "(fpca, ffda, fspca), not fisomap");
     if (r >= f->p)
         return affect_fail(err, AFFECT_ERR_INVALID, "axis %u is out of range (%u dimensions)",
                            r + 1, f->p);
     if (j >= f->m)
-        return affect_fail(err, AFFECT_ERR_INVALID, "coordinate %u is out of range (%u "
-                           "coordinates)", j + 1, f->m);
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "coordinate %u is out of range (%u "
+                           "coordinates)",
+                           j + 1, f->m);
     if (!isfinite(alpha))
         return affect_fail(err, AFFECT_ERR_INVALID, "alpha must be a finite number");
     if (T < 2)
@@ -1199,24 +1215,78 @@ done:
 
 /* ---- accessors ---- */
 
-const affect_fda_config *affect_fda_get_config(const affect_fda *f) { return &f->cfg; }
-uint32_t affect_fda_dims(const affect_fda *f) { return f->p; }
-uint32_t affect_fda_coords(const affect_fda *f) { return f->m; }
-uint32_t affect_fda_train_size(const affect_fda *f) { return f->n; }
-uint32_t affect_fda_classes(const affect_fda *f) { return f->c; }
-const char *affect_fda_class_name(const affect_fda *f, uint32_t k) { return f->classes[k]; }
-const affect_features *affect_fda_features(const affect_fda *f) { return f->feat; }
-const double *affect_fda_eigenvalues(const affect_fda *f) { return f->eig; }
-const double *affect_fda_explained(const affect_fda *f) { return f->explained; }
-uint32_t affect_fda_fpca_rank(const affect_fda *f) { return f->R; }
-const double *affect_fda_fpca_eigenvalues(const affect_fda *f) { return f->fpca_eig; }
-double affect_fda_total_variance(const affect_fda *f) { return f->total_var; }
-const double *affect_fda_train_embedding(const affect_fda *f) { return f->train_z; }
-const uint32_t *affect_fda_train_labels(const affect_fda *f) { return f->y; }
-double affect_fda_class_frames(const affect_fda *f, uint32_t k) { return f->frames[k]; }
-const double *affect_fda_mean(const affect_fda *f) { return f->mean; }
-const double *affect_fda_eigenfunctions(const affect_fda *f) { return f->efun; }
-uint32_t affect_fda_proto_dims(const affect_fda *f) { return f->P; }
+const affect_fda_config *affect_fda_get_config(const affect_fda *f)
+{
+    return &f->cfg;
+}
+uint32_t affect_fda_dims(const affect_fda *f)
+{
+    return f->p;
+}
+uint32_t affect_fda_coords(const affect_fda *f)
+{
+    return f->m;
+}
+uint32_t affect_fda_train_size(const affect_fda *f)
+{
+    return f->n;
+}
+uint32_t affect_fda_classes(const affect_fda *f)
+{
+    return f->c;
+}
+const char *affect_fda_class_name(const affect_fda *f, uint32_t k)
+{
+    return f->classes[k];
+}
+const affect_features *affect_fda_features(const affect_fda *f)
+{
+    return f->feat;
+}
+const double *affect_fda_eigenvalues(const affect_fda *f)
+{
+    return f->eig;
+}
+const double *affect_fda_explained(const affect_fda *f)
+{
+    return f->explained;
+}
+uint32_t affect_fda_fpca_rank(const affect_fda *f)
+{
+    return f->R;
+}
+const double *affect_fda_fpca_eigenvalues(const affect_fda *f)
+{
+    return f->fpca_eig;
+}
+double affect_fda_total_variance(const affect_fda *f)
+{
+    return f->total_var;
+}
+const double *affect_fda_train_embedding(const affect_fda *f)
+{
+    return f->train_z;
+}
+const uint32_t *affect_fda_train_labels(const affect_fda *f)
+{
+    return f->y;
+}
+double affect_fda_class_frames(const affect_fda *f, uint32_t k)
+{
+    return f->frames[k];
+}
+const double *affect_fda_mean(const affect_fda *f)
+{
+    return f->mean;
+}
+const double *affect_fda_eigenfunctions(const affect_fda *f)
+{
+    return f->efun;
+}
+uint32_t affect_fda_proto_dims(const affect_fda *f)
+{
+    return f->P;
+}
 
 /* ---- BLOB ---- */
 
@@ -1292,8 +1362,10 @@ affect_status affect_fda_encode(const affect_fda *f, unsigned char **out, size_t
     if (w.failed) {
         size_t len = w.len;
         affect_bw_free(&w);
-        return affect_nomem_of(err, len, 1, "the functional model BLOB beyond its first %zu "
-                               "bytes", len);
+        return affect_nomem_of(err, len, 1,
+                               "the functional model BLOB beyond its first %zu "
+                               "bytes",
+                               len);
     }
     *out = w.data;
     *size = w.len;
@@ -1319,8 +1391,8 @@ static affect_status read_f64s(affect_br *r, size_t count, const char *what, dou
     affect_br_f64s(r, *out, count);
     for (size_t i = 0; i < count; i++)
         if (!isfinite((*out)[i]))
-            return affect_fail(err, AFFECT_ERR_FORMAT, "non-finite value in %s (offset %zu)",
-                               what, at + 8 * i);
+            return affect_fail(err, AFFECT_ERR_FORMAT, "non-finite value in %s (offset %zu)", what,
+                               at + 8 * i);
     return AFFECT_OK;
 }
 
@@ -1337,8 +1409,10 @@ static affect_status decode_head(affect_br *r, affect_fda *f, affect_error *err)
     affect_br_u32(r, &version);
     affect_br_u32(r, &version);
     if (version != AFFECT_FDA_VERSION)
-        return affect_fail(err, AFFECT_ERR_FORMAT, "unknown format version %u, this build reads "
-                           "%u (offset 4)", version, AFFECT_FDA_VERSION);
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "unknown format version %u, this build reads "
+                           "%u (offset 4)",
+                           version, AFFECT_FDA_VERSION);
     affect_br_u32(r, &flags);
     affect_br_u32(r, &method);
     affect_br_u32(r, &order);
@@ -1388,16 +1462,20 @@ static affect_status decode_head(affect_br *r, affect_fda *f, affect_error *err)
     if (gcv > 1)
         return out_of_range(err, "gcv flag", gcv, 60);
     if (!(cfg->lambda >= 0) || !isfinite(cfg->lambda))
-        return affect_fail(err, AFFECT_ERR_FORMAT, "lambda is not a finite number >= 0 (offset "
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "lambda is not a finite number >= 0 (offset "
                            "64)");
     if (!(cfg->sigma > 0) || !isfinite(cfg->sigma))
-        return affect_fail(err, AFFECT_ERR_FORMAT, "sigma is not a positive finite number "
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "sigma is not a positive finite number "
                            "(offset 72)");
     if (!(cfg->ffda_reg >= 0) || !isfinite(cfg->ffda_reg))
-        return affect_fail(err, AFFECT_ERR_FORMAT, "ffda_reg is not a finite number >= 0 "
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "ffda_reg is not a finite number >= 0 "
                            "(offset 80)");
     if (!(f->total_var > 0) || !isfinite(f->total_var))
-        return affect_fail(err, AFFECT_ERR_FORMAT, "the total variance is not a positive finite "
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "the total variance is not a positive finite "
                            "number (offset 88)");
     cfg->method = (affect_fda_method)method;
     cfg->order = order;
@@ -1433,7 +1511,8 @@ static affect_status decode_body(affect_br *r, affect_fda *f, affect_error *err)
         if (st)
             return affect_prefix(err, "feature definition (offset %zu)", at);
         if (affect_features_dim(f->feat) != f->m)
-            return affect_fail(err, AFFECT_ERR_FORMAT, "the feature definition gives %u "
+            return affect_fail(err, AFFECT_ERR_FORMAT,
+                               "the feature definition gives %u "
                                "coordinates, the model %u (offset %zu)",
                                affect_features_dim(f->feat), f->m, at);
     }
@@ -1448,12 +1527,16 @@ static affect_status decode_body(affect_br *r, affect_fda *f, affect_error *err)
         if (!affect_br_u32(r, &len) || !affect_br_bytes(r, &s, len))
             return truncated(err, r, "the class names");
         if (len == 0 || !affect_utf8_valid((const char *)s, len))
-            return affect_fail(err, AFFECT_ERR_FORMAT, "class %u's name is empty or not valid "
-                               "UTF-8 (offset %zu)", k, r->off - len);
+            return affect_fail(err, AFFECT_ERR_FORMAT,
+                               "class %u's name is empty or not valid "
+                               "UTF-8 (offset %zu)",
+                               k, r->off - len);
         for (uint32_t j = 0; j < k; j++)
             if (strlen(f->classes[j]) == len && memcmp(f->classes[j], s, len) == 0)
-                return affect_fail(err, AFFECT_ERR_FORMAT, "class %u repeats class %u's name "
-                                   "(offset %zu)", k, j, r->off - len);
+                return affect_fail(err, AFFECT_ERR_FORMAT,
+                                   "class %u repeats class %u's name "
+                                   "(offset %zu)",
+                                   k, j, r->off - len);
         if (!(f->classes[k] = affect_strndup((const char *)s, len)))
             return affect_nomem(err);
     }
@@ -1480,8 +1563,10 @@ static affect_status decode_body(affect_br *r, affect_fda *f, affect_error *err)
         return st;
     for (uint32_t k = 0; k < f->c; k++)
         if (!(f->frames[k] >= 1))
-            return affect_fail(err, AFFECT_ERR_FORMAT, "class %u's mean frame count is below "
-                               "1", k);
+            return affect_fail(err, AFFECT_ERR_FORMAT,
+                               "class %u's mean frame count is below "
+                               "1",
+                               k);
     for (uint32_t i = 0; i < p; i++)
         if (f->cfg.method != AFFECT_FDA_FFDA && f->cfg.method != AFFECT_FDA_FSPCA &&
             !(f->eig[i] > 0))
@@ -1501,16 +1586,20 @@ affect_status affect_fda_decode(const unsigned char *data, size_t size, affect_f
 {
     *out = NULL;
     if (size < AFFECT_FDA_HEADER_SIZE + 8)
-        return affect_fail(err, AFFECT_ERR_FORMAT, "truncated: %zu bytes is shorter than the "
-                           "functional model header", size);
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "truncated: %zu bytes is shorter than the "
+                           "functional model header",
+                           size);
     if (memcmp(data, AFFECT_FDA_MAGIC, 4) != 0)
-        return affect_fail(err, AFFECT_ERR_FORMAT, "not a functional model (bad magic bytes at "
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "not a functional model (bad magic bytes at "
                            "offset 0)");
     uint64_t sum = 0;
     for (int i = 0; i < 8; i++)
         sum |= (uint64_t)data[size - 8 + (size_t)i] << (8 * i);
     if (affect_fnv1a64(data, size - 8) != sum)
-        return affect_fail(err, AFFECT_ERR_FORMAT, "functional model checksum mismatch: the BLOB "
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "functional model checksum mismatch: the BLOB "
                            "is corrupt");
     affect_br r;
     affect_br_init(&r, data, size - 8);

@@ -97,9 +97,8 @@ static bool arm_resolves(const affect_roles *roles)
            roles->joint[AFFECT_ROLE_RIGHT_HAND] >= 0;
 }
 
-affect_status affect_features_create(const affect_features_options *opt,
-                                     const affect_motion *first, affect_features **out,
-                                     affect_error *err)
+affect_status affect_features_create(const affect_features_options *opt, const affect_motion *first,
+                                     affect_features **out, affect_error *err)
 {
     if (opt->up_axis < 0 || opt->up_axis > 2)
         return affect_fail(err, AFFECT_ERR_INVALID, "up axis must be x, y or z");
@@ -122,8 +121,8 @@ affect_status affect_features_create(const affect_features_options *opt,
             return affect_fail(err, AFFECT_ERR_INVALID,
                                "joint entry %u: a name must have 1 to %u bytes", j + 1,
                                AFFECT_MOTION_MAX_NAME);
-        affect_status ust = affect_utf8_check(err, AFFECT_ERR_INVALID, e, len,
-                                              "joint entry %u: the name", j + 1);
+        affect_status ust =
+            affect_utf8_check(err, AFFECT_ERR_INVALID, e, len, "joint entry %u: the name", j + 1);
         if (ust)
             return ust;
         for (uint32_t k = 0; k < j; k++)
@@ -157,8 +156,8 @@ affect_status affect_features_create(const affect_features_options *opt,
             affect_json_quote(q2, sizeof q2, name, strlen(name));
             char q3[80];
             affect_json_quote(q3, sizeof q3, first->names[j], strlen(first->names[j]));
-            st = affect_fail(err, AFFECT_ERR_INVALID, "joints %s and %s are the same joint %s",
-                             q, q2, q3);
+            st = affect_fail(err, AFFECT_ERR_INVALID, "joints %s and %s are the same joint %s", q,
+                             q2, q3);
             goto done;
         }
         entry_of[j] = (int32_t)e;
@@ -201,9 +200,9 @@ done:
 #define FEATURES_POLL_FRAMES 8192
 
 /* Positions in the body frame of frames t0 .. t1 − 1, and the root columns, into obs (T × dim). */
-static void body_positions(const affect_features *f, const affect_motion *m,
-                           const uint32_t *idx, uint32_t root, const double *ang, double scale,
-                           uint32_t t0, uint32_t t1, double *obs)
+static void body_positions(const affect_features *f, const affect_motion *m, const uint32_t *idx,
+                           uint32_t root, const double *ang, double scale, uint32_t t0, uint32_t t1,
+                           double *obs)
 {
     uint32_t J = f->n_joints, T = m->n_frames, dim = affect_features_dim(f);
     double inv = 1.0 / scale;
@@ -237,10 +236,11 @@ static void body_positions(const affect_features *f, const affect_motion *m,
     }
 }
 
-/* Positions of frames t0 .. t1 − 1 in the first frame's normalized frame (tf) into obs (T × dim). */
-static void first_positions(const affect_features *f, const affect_motion *m,
-                            const uint32_t *idx, const affect_normalize_transform *tf,
-                            uint32_t t0, uint32_t t1, double *obs)
+/* Positions of frames t0 .. t1 − 1 in the first frame's normalized frame (tf) into obs (T × dim).
+ */
+static void first_positions(const affect_features *f, const affect_motion *m, const uint32_t *idx,
+                            const affect_normalize_transform *tf, uint32_t t0, uint32_t t1,
+                            double *obs)
 {
     uint32_t J = f->n_joints, dim = affect_features_dim(f);
     const double *r = tf->rot;
@@ -260,8 +260,8 @@ static void first_positions(const affect_features *f, const affect_motion *m,
 
 /* Velocities of frames t0 .. t1 − 1: central differences × fps of the positions already in
  * obs (every frame's). */
-static void velocities(const affect_features *f, const affect_motion *m, uint32_t t0,
-                       uint32_t t1, double *obs)
+static void velocities(const affect_features *f, const affect_motion *m, uint32_t t0, uint32_t t1,
+                       double *obs)
 {
     uint32_t T = m->n_frames, dim = affect_features_dim(f);
     size_t np = (size_t)f->n_joints * 3;
@@ -279,9 +279,8 @@ static void velocities(const affect_features *f, const affect_motion *m, uint32_
     }
 }
 
-affect_status affect_features_extract(const affect_features *f, const affect_motion *m,
-                                      double **x, uint32_t *n_frames, affect_monitor *mon,
-                                      affect_error *err)
+affect_status affect_features_extract(const affect_features *f, const affect_motion *m, double **x,
+                                      uint32_t *n_frames, affect_monitor *mon, affect_error *err)
 {
     uint32_t J = f->n_joints, T = m->n_frames, dim = affect_features_dim(f);
     size_t n_vals;
@@ -386,8 +385,7 @@ fail:
 /* name with Left ↔ Right and the L ↔ R tokens swapped, into out (same length). */
 static void mirrored_name(const char *name, char *out)
 {
-    static const char *const words[][2] = {{"Left", "Right"}, {"left", "right"},
-                                           {"LEFT", "RIGHT"}};
+    static const char *const words[][2] = {{"Left", "Right"}, {"left", "right"}, {"LEFT", "RIGHT"}};
     size_t len = strlen(name), o = 0;
     for (size_t i = 0; i < len;) {
         bool done = false;
@@ -434,7 +432,8 @@ affect_status affect_features_mirror_map(const affect_features *f, uint32_t *par
             affect_json_quote(q2, sizeof q2, m, strlen(m));
             return affect_fail(err, AFFECT_ERR_INVALID,
                                "joint %s has no mirror partner (%s is not among the observed "
-                               "joints)", q, q2);
+                               "joints)",
+                               q, q2);
         }
     }
     return AFFECT_OK;
@@ -515,8 +514,7 @@ static uint16_t get_u16(const unsigned char *p)
 
 static uint32_t get_u32(const unsigned char *p)
 {
-    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) |
-           ((uint32_t)p[3] << 24);
+    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
 }
 
 static double get_f64(const unsigned char *p)
@@ -563,11 +561,11 @@ void affect_features_encode_into(const affect_features *f, unsigned char *buf)
 {
     size_t unit_len = strlen(f->unit);
     buf[0] = (unsigned char)f->up_axis;
-    buf[1] = (unsigned char)((f->normalize ? FLAG_NORMALIZE : 0) |
-                             (f->scale_arm ? FLAG_SCALE_ARM : 0) |
-                             (f->velocity ? FLAG_VELOCITY : 0) |
-                             (f->frame == AFFECT_FEATURES_FRAME_BODY ? FLAG_BODY : 0) |
-                             (f->root ? FLAG_ROOT : 0));
+    buf[1] =
+        (unsigned char)((f->normalize ? FLAG_NORMALIZE : 0) | (f->scale_arm ? FLAG_SCALE_ARM : 0) |
+                        (f->velocity ? FLAG_VELOCITY : 0) |
+                        (f->frame == AFFECT_FEATURES_FRAME_BODY ? FLAG_BODY : 0) |
+                        (f->root ? FLAG_ROOT : 0));
     buf[2] = (unsigned char)unit_len;
     buf[3] = 0;
     put_u32(buf + 4, f->n_joints);
@@ -584,8 +582,8 @@ void affect_features_encode_into(const affect_features *f, unsigned char *buf)
 }
 
 /* Reads one length-prefixed name at *off into a new string *out. */
-static affect_status get_name(const unsigned char *data, size_t size, size_t *off,
-                              const char *what, uint32_t j, char **out, affect_error *err)
+static affect_status get_name(const unsigned char *data, size_t size, size_t *off, const char *what,
+                              uint32_t j, char **out, affect_error *err)
 {
     if (size - *off < 2)
         return affect_fail(err, AFFECT_ERR_FORMAT, "truncated in %s %u (offset %zu)", what, j,
@@ -601,8 +599,8 @@ static affect_status get_name(const unsigned char *data, size_t size, size_t *of
     if (memchr(data + *off + 2, '\0', len))
         return affect_fail(err, AFFECT_ERR_FORMAT, "%s %u contains a NUL byte (offset %zu)", what,
                            j, *off);
-    affect_status st = affect_utf8_check(err, AFFECT_ERR_FORMAT, (const char *)data + *off + 2,
-                                         len, "%s %u", what, j);
+    affect_status st = affect_utf8_check(err, AFFECT_ERR_FORMAT, (const char *)data + *off + 2, len,
+                                         "%s %u", what, j);
     if (st)
         return st;
     *out = affect_strndup((const char *)data + *off + 2, len);
@@ -614,16 +612,18 @@ static affect_status get_name(const unsigned char *data, size_t size, size_t *of
 
 static bool unit_char_ok(unsigned char c)
 {
-    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-           c == '_' || c == '.' || c == '-';
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
+           c == '.' || c == '-';
 }
 
-affect_status affect_features_decode(const unsigned char *data, size_t size,
-                                     affect_features **out, affect_error *err)
+affect_status affect_features_decode(const unsigned char *data, size_t size, affect_features **out,
+                                     affect_error *err)
 {
     if (size < AFFECT_FEATURES_HEADER_SIZE)
-        return affect_fail(err, AFFECT_ERR_FORMAT, "truncated: %zu bytes is shorter than the "
-                           "%u-byte header", size, AFFECT_FEATURES_HEADER_SIZE);
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "truncated: %zu bytes is shorter than the "
+                           "%u-byte header",
+                           size, AFFECT_FEATURES_HEADER_SIZE);
     int up = data[0];
     unsigned flags = data[1];
     size_t unit_len = data[2];
@@ -631,13 +631,14 @@ affect_status affect_features_decode(const unsigned char *data, size_t size,
     double fps = get_f64(data + 8);
     if (up > 2)
         return affect_fail(err, AFFECT_ERR_FORMAT, "up axis %d out of range (0 .. 2)", up);
-    if (flags & ~(unsigned)(FLAG_NORMALIZE | FLAG_SCALE_ARM | FLAG_VELOCITY | FLAG_BODY |
-                            FLAG_ROOT))
+    if (flags &
+        ~(unsigned)(FLAG_NORMALIZE | FLAG_SCALE_ARM | FLAG_VELOCITY | FLAG_BODY | FLAG_ROOT))
         return affect_fail(err, AFFECT_ERR_FORMAT, "unknown flags 0x%02x (offset 1)", flags);
     if ((flags & FLAG_BODY) && (flags & FLAG_NORMALIZE))
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "flags 0x%02x: normalize and the body frame exclude each other "
-                           "(offset 1)", flags);
+                           "(offset 1)",
+                           flags);
     if ((flags & FLAG_ROOT) && !(flags & FLAG_BODY))
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "flags 0x%02x: root needs the body frame (offset 1)", flags);
@@ -651,12 +652,13 @@ affect_status affect_features_decode(const unsigned char *data, size_t size,
                            fps, AFFECT_MOTION_MAX_FPS);
     size_t off = AFFECT_FEATURES_HEADER_SIZE;
     if (unit_len > AFFECT_MOTION_UNIT_MAX || size - off < unit_len)
-        return affect_fail(err, AFFECT_ERR_FORMAT, "truncated or bad unit (length %zu at "
-                           "offset 2)", unit_len);
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "truncated or bad unit (length %zu at "
+                           "offset 2)",
+                           unit_len);
     for (size_t i = 0; i < unit_len; i++)
         if (!unit_char_ok(data[off + i]))
-            return affect_fail(err, AFFECT_ERR_FORMAT, "bad unit character at offset %zu",
-                               off + i);
+            return affect_fail(err, AFFECT_ERR_FORMAT, "bad unit character at offset %zu", off + i);
     affect_features *f = features_alloc(n);
     if (!f)
         return affect_nomem(err);
@@ -686,8 +688,8 @@ affect_status affect_features_decode(const unsigned char *data, size_t size,
     for (uint32_t j = 0; j < n; j++, off += 4) {
         int32_t p = (int32_t)get_u32(data + off);
         if (p < -1 || p >= (int32_t)n) {
-            st = affect_fail(err, AFFECT_ERR_FORMAT, "parent %d of joint %u out of range",
-                             (int)p, j);
+            st = affect_fail(err, AFFECT_ERR_FORMAT, "parent %d of joint %u out of range", (int)p,
+                             j);
             goto fail;
         }
         f->parents[j] = p;
@@ -706,8 +708,8 @@ affect_status affect_features_decode(const unsigned char *data, size_t size,
         for (uint32_t k = 0; k < j; k++)
             if (strcmp(f->skeleton[j], f->skeleton[k]) == 0 ||
                 strcmp(f->joints[j], f->joints[k]) == 0) {
-                st = affect_fail(err, AFFECT_ERR_FORMAT, "joints %u and %u have the same name",
-                                 k, j);
+                st = affect_fail(err, AFFECT_ERR_FORMAT, "joints %u and %u have the same name", k,
+                                 j);
                 goto fail;
             }
     *out = f;

@@ -6,7 +6,8 @@
  * Usage:
  *     size_t d = affect_fisher_dim(affect_hmm_get_config(h), AFFECT_FISHER_ALL);
  *     double *f = affect_malloc_array(d, sizeof *f);
- *     if (f && affect_fisher_score(h, x, n_frames, AFFECT_FISHER_ALL, f, &ll, NULL, &err) == AFFECT_OK)
+ *     if (f && affect_fisher_score(h, x, n_frames, AFFECT_FISHER_ALL, f, &ll, NULL, &err) ==
+ * AFFECT_OK)
  *         ... f[0 .. d) ...; affect_fisher_describe(cfg, AFFECT_FISHER_ALL, e, &entry, &err)
  *     says what entry e is.
  *
@@ -186,10 +187,10 @@ typedef struct fisher_ws {
     double *xi;    /* N × N */
     double *n;     /* N × M: Σ_t γ_t(i, j) */
     double *s;     /* m: Σγ(x − μ) */
-    double *S;     /* m × m (full) or m (diagonal): Σγ(x − μ)(x − μ)ᵀ, then D, then P D P */
-    double *P;     /* m × m: Σ⁻¹ (row-major lower triangle) */
-    double *Y;     /* m × m: P D */
-    double *rows;  /* block × m: √γ (x − μ) */
+    double *S; /* m × m (full) or m (diagonal): Σγ(x − μ)(x − μ)ᵀ, then D, then P D P */
+    double *P; /* m × m: Σ⁻¹ (row-major lower triangle) */
+    double *Y; /* m × m: P D */
+    double *rows;        /* block × m: √γ (x − μ) */
     affect_monitor *mon; /* the caller's (may be NULL) */
 } fisher_ws;
 
@@ -232,8 +233,8 @@ static void gather(const fisher_ws *w, size_t k, bool want_S)
                 row[d] = sq * v;
             }
             if (++nb == w->block) {
-                AFFECT_BLAS(cblas_dsyrk(CblasRowMajor, CblasUpper, CblasTrans, (int)m, (int)nb,
-                                        1.0, w->rows, (int)m, 1.0, S, (int)m));
+                AFFECT_BLAS(cblas_dsyrk(CblasRowMajor, CblasUpper, CblasTrans, (int)m, (int)nb, 1.0,
+                                        w->rows, (int)m, 1.0, S, (int)m));
                 nb = 0;
             }
         }
@@ -280,15 +281,15 @@ static affect_status component(const fisher_ws *w, size_t k, double *om, double 
     lapack_int info;
     AFFECT_BLAS(info = LAPACKE_dpotrf_work(LAPACK_COL_MAJOR, 'U', (lapack_int)m, P, (lapack_int)m));
     if (info == 0)
-        AFFECT_BLAS(info = LAPACKE_dpotri_work(LAPACK_COL_MAJOR, 'U', (lapack_int)m, P,
-                                               (lapack_int)m));
+        AFFECT_BLAS(
+            info = LAPACKE_dpotri_work(LAPACK_COL_MAJOR, 'U', (lapack_int)m, P, (lapack_int)m));
     if (info != 0)
         return affect_fail(err, AFFECT_ERR_RANGE,
                            "covariance of state %zu, mixture %zu is not positive definite", k / M,
                            k % M);
     if (om)
-        AFFECT_BLAS(cblas_dsymv(CblasRowMajor, CblasLower, (int)m, 1.0, P, (int)m, w->s, 1, 0.0,
-                                om, 1));
+        AFFECT_BLAS(
+            cblas_dsymv(CblasRowMajor, CblasLower, (int)m, 1.0, P, (int)m, w->s, 1, 0.0, om, 1));
     if (!oc)
         return AFFECT_OK;
     /* D = S − n Σ (S's upper triangle, Σ's lower one), made symmetric in place */
@@ -300,10 +301,10 @@ static affect_status component(const fisher_ws *w, size_t k, double *om, double 
             D[c * m + r] = v;
         }
     /* Y = P D, then P D P into D's place */
-    AFFECT_BLAS(cblas_dsymm(CblasRowMajor, CblasLeft, CblasLower, (int)m, (int)m, 1.0, P, (int)m,
-                            D, (int)m, 0.0, w->Y, (int)m));
-    AFFECT_BLAS(cblas_dsymm(CblasRowMajor, CblasRight, CblasLower, (int)m, (int)m, 1.0, P,
-                            (int)m, w->Y, (int)m, 0.0, D, (int)m));
+    AFFECT_BLAS(cblas_dsymm(CblasRowMajor, CblasLeft, CblasLower, (int)m, (int)m, 1.0, P, (int)m, D,
+                            (int)m, 0.0, w->Y, (int)m));
+    AFFECT_BLAS(cblas_dsymm(CblasRowMajor, CblasRight, CblasLower, (int)m, (int)m, 1.0, P, (int)m,
+                            w->Y, (int)m, 0.0, D, (int)m));
     /* G = ½ P D P: G_rr, and G_rs + G_sr = ½ (Z_rs + Z_sr) for r < s */
     size_t p = 0;
     for (size_t r = 0; r < m; r++) {
@@ -315,8 +316,8 @@ static affect_status component(const fisher_ws *w, size_t k, double *om, double 
 }
 
 affect_status affect_fisher_score(const affect_hmm *h, const double *x, uint32_t n_frames,
-                                  unsigned groups, double *out, double *loglik,
-                                  affect_monitor *mon, affect_error *err)
+                                  unsigned groups, double *out, double *loglik, affect_monitor *mon,
+                                  affect_error *err)
 {
     if (!h)
         return affect_fail(err, AFFECT_ERR_INVALID, "no model");

@@ -116,8 +116,7 @@ static uint32_t root_index(const affect_motion *desired)
 
 /* Subtracts, frame by frame, the root's two horizontal coordinates (the axes other than up)
  * from every joint's (x: T rows of 3 J); saves them in path (T × 2) when path is not NULL. */
-static void remove_root_path(double *x, uint32_t T, uint32_t J, uint32_t root, int up,
-                             double *path)
+static void remove_root_path(double *x, uint32_t T, uint32_t J, uint32_t root, int up, double *path)
 {
     int a0 = up == 0 ? 1 : 0, a1 = up == 2 ? 1 : 2;
     for (uint32_t t = 0; t < T; t++) {
@@ -340,8 +339,8 @@ affect_status affect_generate(const affect_motion *desired, const affect_motion 
     for (uint32_t i = 0, k = 0; i < n_neighbours; i++) {
         if (!same_joint_names(desired, neighbours[i]))
             continue;
-        if ((st = affect_features_extract(f, neighbours[i], &xs[k], &frames, opt->monitor,
-                                          err)) != AFFECT_OK) {
+        if ((st = affect_features_extract(f, neighbours[i], &xs[k], &frames, opt->monitor, err)) !=
+            AFFECT_OK) {
             st = prefixed(err, st, "neighbour", i);
             goto done;
         }
@@ -416,7 +415,8 @@ affect_status affect_generate(const affect_motion *desired, const affect_motion 
     }
     if ((st = affect_motion_clone(desired, &m, err)) != AFFECT_OK)
         goto done;
-    affect_motion_drop_skeleton(m); /* new positions: the desired motion's rotations no longer apply */
+    affect_motion_drop_skeleton(
+        m); /* new positions: the desired motion's rotations no longer apply */
     pts = affect_malloc_array((size_t)J * 3, sizeof *pts);
     if (!pts) {
         st = affect_nomem(err);

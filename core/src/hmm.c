@@ -17,8 +17,8 @@
  * Densities. Per (state i, mixture j) = component k the model keeps the Cholesky factor L_k of
  * Σ_k (Σ = L Lᵀ, row-major lower triangle), the constant c_k = log w_k − ½ m log 2π − Σ log L_rr,
  * and for full covariances the inverse factor W_k = L_k⁻¹, a centre c (the mean of all component
- * means) and ib_k = W_k (μ_k − c) (prepare_inverses). Then ‖L_k⁻¹(x − μ_k)‖² = ‖W_k (x − c) − ib_k‖²
- * for every component from one set of matrix products: the rows of all the W_k are cut into
+ * means) and ib_k = W_k (μ_k − c) (prepare_inverses). Then ‖L_k⁻¹(x − μ_k)‖² = ‖W_k (x − c) −
+ * ib_k‖² for every component from one set of matrix products: the rows of all the W_k are cut into
  * panels of TRI_ROWS rows; a panel needs only the columns up to its last row (W is lower
  * triangular), so per 128 frames each panel is one cblas_dgemm of the centred frames by an
  * (N·M·rows) × r1 matrix, about (1 + TRI_ROWS/m)/2 of the full product's flops. dgemm runs near
@@ -90,10 +90,11 @@
 #define LOG_2PI 1.83787706640934548356
 #define BLOCK_FRAMES 1024u    /* frames per density / scatter block, at most */
 #define BLOCK_DOUBLES 262144u /* ... and at most this many doubles per block buffer */
-#define SUB_FRAMES 128u /* frames per panel product (full covariances) */
-#define TRI_ROWS 8u /* rows of the inverse factors per product (full covariances); 8 was the \
-                       fastest of 4 .. 64 in bench_hmm at m = 15 and m = 63 */
-#define LINEAR_MIN 1e-100     /* a linear-space sum below this is redone in log space */
+#define SUB_FRAMES 128u       /* frames per panel product (full covariances) */
+#define TRI_ROWS                                                                                   \
+    8u                    /* rows of the inverse factors per product (full covariances); 8 was the \
+                             fastest of 4 .. 64 in bench_hmm at m = 15 and m = 63 */
+#define LINEAR_MIN 1e-100 /* a linear-space sum below this is redone in log space */
 /* scatter: rows below this share of the block's scale are left out, from PRUNE_MIN_DIM
  * dimensions on (below, the test costs more than the rows) */
 #define PRUNE_ROUNDOFF 0x1p-53
@@ -201,12 +202,13 @@ static uint32_t dbuf_width(const affect_hmm_config *cfg)
     uint32_t rows = cfg->dim < TRI_ROWS ? cfg->dim : TRI_ROWS;
     if (cfg->cov != AFFECT_HMM_FULL)
         return cfg->dim;
-    return cfg->dim + cfg->n_states * cfg->n_mix * rows; /* (the product needs min(n, SUB_FRAMES) rows) */
+    return cfg->dim +
+           cfg->n_states * cfg->n_mix * rows; /* (the product needs min(n, SUB_FRAMES) rows) */
 }
 
 /* Frames per block: at most BLOCK_FRAMES, and the block buffers (frames × N × M and
- * frames × dbuf_width doubles) at most BLOCK_DOUBLES each. Depends on the configuration only, so the
- * arithmetic (and its rounding) is the same in every call. */
+ * frames × dbuf_width doubles) at most BLOCK_DOUBLES each. Depends on the configuration only, so
+ * the arithmetic (and its rounding) is the same in every call. */
 static uint32_t block_frames(const affect_hmm_config *cfg)
 {
     uint32_t k = cfg->n_states * cfg->n_mix, d = dbuf_width(cfg);
@@ -219,7 +221,6 @@ static uint32_t block_frames(const affect_hmm_config *cfg)
 
 /* ------------------------------------------------------------------------------------------ */
 /* one-allocation workspaces                                                                  */
-
 
 /* ------------------------------------------------------------------------------------------ */
 /* the model object                                                                           */
@@ -300,8 +301,8 @@ static int factor_one(affect_hmm *h, size_t k)
         memcpy(f, cov, h->cs * sizeof *f);
         /* column-major 'U' on a symmetric row-major array = row-major 'L', without a copy */
         lapack_int info;
-        AFFECT_BLAS(info = LAPACKE_dpotrf_work(LAPACK_COL_MAJOR, 'U', (lapack_int)m, f,
-                                               (lapack_int)m));
+        AFFECT_BLAS(
+            info = LAPACKE_dpotrf_work(LAPACK_COL_MAJOR, 'U', (lapack_int)m, f, (lapack_int)m));
         if (info != 0)
             return info > 0 ? (int)info : 1;
         for (uint32_t d = 0; d < m; d++) {
@@ -1825,8 +1826,8 @@ affect_status affect_hmm_train(const affect_hmm_config *cfg, const affect_hmm_se
                 goto cleanup;
             double L;
             if (stats) {
-                forward_backward(h, seqs[s].x, seqs[s].n_frames, &w.fb, w.rho, w.xi, w.g0, &w.tr,
-                                 s, h->mon, &L);
+                forward_backward(h, seqs[s].x, seqs[s].n_frames, &w.fb, w.rho, w.xi, w.g0, &w.tr, s,
+                                 h->mon, &L);
                 if (isfinite(L))
                     accumulate(h, seqs[s].x, seqs[s].n_frames, &w);
             } else {

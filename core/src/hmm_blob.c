@@ -58,8 +58,7 @@ static uint16_t get_u16(const unsigned char *p)
 
 static uint32_t get_u32(const unsigned char *p)
 {
-    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) |
-           ((uint32_t)p[3] << 24);
+    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
 }
 
 static uint64_t get_u64(const unsigned char *p)
@@ -220,8 +219,8 @@ affect_status affect_hmm_blob_decode(const unsigned char *data, size_t size, aff
         return affect_fail(err, AFFECT_ERR_FORMAT, "mixture count %u out of range (1 .. %u)",
                            cfg.n_mix, AFFECT_HMM_MAX_MIX);
     if (cfg.dim < 1 || cfg.dim > AFFECT_HMM_MAX_DIM)
-        return affect_fail(err, AFFECT_ERR_FORMAT, "dimension %u out of range (1 .. %u)",
-                           cfg.dim, AFFECT_HMM_MAX_DIM);
+        return affect_fail(err, AFFECT_ERR_FORMAT, "dimension %u out of range (1 .. %u)", cfg.dim,
+                           AFFECT_HMM_MAX_DIM);
     for (int i = 20; i < 24; i++)
         if (data[i] > 1)
             return affect_fail(err, AFFECT_ERR_FORMAT, "byte %d must be 0 or 1, got %u", i,
@@ -253,8 +252,9 @@ affect_status affect_hmm_blob_decode(const unsigned char *data, size_t size, aff
     if (size != total)
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "%s: %zu bytes, expected %zu for %u states x %u mixtures x %u "
-                           "dimensions", size < total ? "truncated" : "trailing bytes", size,
-                           total, cfg.n_states, cfg.n_mix, cfg.dim);
+                           "dimensions",
+                           size < total ? "truncated" : "trailing bytes", size, total, cfg.n_states,
+                           cfg.n_mix, cfg.dim);
     if (get_u64(data + size - 8) != affect_fnv1a64(data, size - 8))
         return affect_fail(err, AFFECT_ERR_FORMAT, "model checksum mismatch: the BLOB is corrupt");
 

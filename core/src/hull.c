@@ -135,7 +135,6 @@
  * |g|_1 · max|P| (2^-24 and the dot product's rounding, widened), besides det_slack */
 #define HULL_BOUND_EPSG 1e-7
 
-
 /* Bounding box of n points of dimension dim (2 or 3): its centre c, its longest side len
  * (0 when all points are equal) and the axis of that side; false when a coordinate is not
  * finite or the box is too wide for a double. */
@@ -298,7 +297,7 @@ typedef struct hull_face {
     uint32_t mark;   /* round in which the face was found visible */
     uint32_t seen;   /* round in which the face was tested */
     uint8_t alive;
-    uint8_t queued;  /* on the stack of faces waiting with an outside set */
+    uint8_t queued; /* on the stack of faces waiting with an outside set */
 } hull_face;
 
 struct affect_hull3d {
@@ -323,19 +322,18 @@ struct affect_hull3d {
      * volume, and its number of points */
     uint32_t *ref_tri; /* 3 per face, as in hull_face.v */
     uint32_t ref_faces, ref_points;
-    double *ys;        /* 3·max: a bound's points about their centroid, x, y, z apart */
-    double *bf;        /* 6·cap: a bound's points and face normals as floats, per-face sums */
+    double *ys; /* 3·max: a bound's points about their centroid, x, y, z apart */
+    double *bf; /* 6·cap: a bound's points and face normals as floats, per-face sums */
 };
 
 affect_hull3d *affect_hull3d_new(uint32_t max_points)
 {
     size_t m = max_points, cap, n_coord, n_faces, n_idx, t, n_bnd;
     if (!affect_mul_size(m, 3, &n_coord) || !affect_add_size(n_coord, 8, &cap) ||
-        cap >= HULL_NONE || !affect_add_size(cap, 1, &n_faces) ||
-        !affect_mul_size(m, 7, &n_idx) || !affect_mul_size(cap, 3, &t) ||
-        !affect_add_size(n_idx, t, &n_idx) || !affect_add_size(n_idx, t, &n_idx) ||
-        !affect_mul_size(n_coord, 3, &t) || !affect_mul_size(cap, 6, &n_bnd) ||
-        !affect_add_size(t, n_bnd, &t))
+        cap >= HULL_NONE || !affect_add_size(cap, 1, &n_faces) || !affect_mul_size(m, 7, &n_idx) ||
+        !affect_mul_size(cap, 3, &t) || !affect_add_size(n_idx, t, &n_idx) ||
+        !affect_add_size(n_idx, t, &n_idx) || !affect_mul_size(n_coord, 3, &t) ||
+        !affect_mul_size(cap, 6, &n_bnd) || !affect_add_size(t, n_bnd, &t))
         return NULL;
     affect_hull3d *h = affect_malloc(sizeof *h);
     if (!h)
@@ -477,8 +475,7 @@ static inline void outside_add(affect_hull3d *h, uint32_t fi, uint32_t q, double
 
 /* Puts point q into the outside set of the first face among faces[0, n) that it is above;
  * a point above none of them is dropped for good. */
-static inline void outside_assign(affect_hull3d *h, const uint32_t *faces, uint32_t n,
-                                  uint32_t q)
+static inline void outside_assign(affect_hull3d *h, const uint32_t *faces, uint32_t n, uint32_t q)
 {
     for (uint32_t j = 0; j < n; j++) {
         double dist = face_dist(h, &h->f[faces[j]], q);
@@ -643,8 +640,8 @@ double affect_hull3d_volume(affect_hull3d *h, const double *xyz, uint32_t n)
     best = -1;
     for (uint32_t i = 0; i < n; i++) {
         const double *pi = X + 3 * (size_t)i;
-        double dist = fabs(nrm[0] * (pi[0] - pa[0]) + nrm[1] * (pi[1] - pa[1]) +
-                           nrm[2] * (pi[2] - pa[2]));
+        double dist =
+            fabs(nrm[0] * (pi[0] - pa[0]) + nrm[1] * (pi[1] - pa[1]) + nrm[2] * (pi[2] - pa[2]));
         id = dist > best ? i : id;
         best = dist > best ? dist : best;
     }
@@ -716,8 +713,8 @@ double affect_hull3d_volume(affect_hull3d *h, const double *xyz, uint32_t n)
 /* The winding number of the reference surface (its points X, Y, Z about r) around r: the
  * signed count of its faces that the ray from r along +x crosses; 0 also when a face's
  * projection along x passes within rounding of r (the count would not be certain). */
-static int bound_winding(const affect_hull3d *h, const double *X, const double *Y,
-                         const double *Z, double big)
+static int bound_winding(const affect_hull3d *h, const double *X, const double *Y, const double *Z,
+                         double big)
 {
     double eps = HULL_BOUND_EPS3 * big * big;
     int w = 0;
@@ -737,8 +734,8 @@ static int bound_winding(const affect_hull3d *h, const double *X, const double *
          * normal's x component, and counts with that sign */
         double u0 = X[b] - X[a], u1 = Y[b] - Y[a], u2 = Z[b] - Z[a];
         double w0 = X[c] - X[a], w1 = Y[c] - Y[a], w2 = Z[c] - Z[a];
-        double det = (u1 * w2 - u2 * w1) * X[a] + (u2 * w0 - u0 * w2) * Y[a] +
-                     (u0 * w1 - u1 * w0) * Z[a];
+        double det =
+            (u1 * w2 - u2 * w1) * X[a] + (u2 * w0 - u0 * w2) * Y[a] + (u0 * w1 - u1 * w0) * Z[a];
         if ((det > 0) == (oab > 0))
             w += det > 0 ? 1 : -1;
     }

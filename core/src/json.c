@@ -235,16 +235,34 @@ static affect_status parse_string(parser *p, const char **out, size_t *out_len)
             return fail_eof(p);
         char e = (char)t[i + 1], simple = 0;
         switch (e) {
-        case '"': simple = '"'; break;
-        case '\\': simple = '\\'; break;
-        case '/': simple = '/'; break;
-        case 'b': simple = '\b'; break;
-        case 'f': simple = '\f'; break;
-        case 'n': simple = '\n'; break;
-        case 'r': simple = '\r'; break;
-        case 't': simple = '\t'; break;
-        case 'u': break;
-        default: return fail_at(p, i, AFFECT_ERR_FORMAT, "invalid escape");
+        case '"':
+            simple = '"';
+            break;
+        case '\\':
+            simple = '\\';
+            break;
+        case '/':
+            simple = '/';
+            break;
+        case 'b':
+            simple = '\b';
+            break;
+        case 'f':
+            simple = '\f';
+            break;
+        case 'n':
+            simple = '\n';
+            break;
+        case 'r':
+            simple = '\r';
+            break;
+        case 't':
+            simple = '\t';
+            break;
+        case 'u':
+            break;
+        default:
+            return fail_at(p, i, AFFECT_ERR_FORMAT, "invalid escape");
         }
         if (simple) {
             *w++ = simple;
@@ -264,8 +282,7 @@ static affect_status parse_string(parser *p, const char **out, size_t *out_len)
                 lo = read_hex4(p, i + 2);
             if (lo < 0xDC00 || lo > 0xDFFF)
                 return affect_fail(p->err, AFFECT_ERR_FORMAT,
-                                   "at byte %zu: unpaired surrogate \\u%04X", esc,
-                                   (unsigned)cp);
+                                   "at byte %zu: unpaired surrogate \\u%04X", esc, (unsigned)cp);
             cp = 0x10000 + ((cp - 0xD800) << 10) + (lo - 0xDC00);
             i += 6;
         }
@@ -320,8 +337,8 @@ static affect_status parse_number(parser *p, affect_json_node *n)
 {
     const char *s = p->text + p->pos;
     size_t tok = 0, avail = p->len - p->pos;
-    while (tok < avail && (is_digit(s[tok]) || is_alpha(s[tok]) || s[tok] == '.' ||
-                           s[tok] == '+' || s[tok] == '-'))
+    while (tok < avail && (is_digit(s[tok]) || is_alpha(s[tok]) || s[tok] == '.' || s[tok] == '+' ||
+                           s[tok] == '-'))
         tok++;
     if (number_length(s, tok) != tok)
         return fail_at(p, p->pos, AFFECT_ERR_FORMAT, "invalid number");
@@ -359,8 +376,8 @@ static affect_status parse_literal(parser *p, affect_json_type *type)
 static affect_status check_depth(parser *p, int depth)
 {
     if (depth > AFFECT_JSON_MAX_DEPTH)
-        return affect_fail(p->err, AFFECT_ERR_RANGE, "at byte %zu: nesting deeper than %d",
-                           p->pos, AFFECT_JSON_MAX_DEPTH);
+        return affect_fail(p->err, AFFECT_ERR_RANGE, "at byte %zu: nesting deeper than %d", p->pos,
+                           AFFECT_JSON_MAX_DEPTH);
     return AFFECT_OK;
 }
 
@@ -632,9 +649,12 @@ static affect_status parse_value(parser *p, int depth, int32_t *out)
         return st;
     *out = self;
     switch (type) {
-    case AFFECT_JSON_OBJECT: return parse_object(p, depth + 1, self);
-    case AFFECT_JSON_ARRAY: return parse_array(p, depth + 1, self);
-    case AFFECT_JSON_NUMBER: return parse_number(p, &p->doc->nodes[self]);
+    case AFFECT_JSON_OBJECT:
+        return parse_object(p, depth + 1, self);
+    case AFFECT_JSON_ARRAY:
+        return parse_array(p, depth + 1, self);
+    case AFFECT_JSON_NUMBER:
+        return parse_number(p, &p->doc->nodes[self]);
     default: {
         const char *s;
         size_t len;
@@ -746,13 +766,19 @@ const affect_json_node *affect_json_get(const affect_json_doc *doc, const affect
 const char *affect_json_type_name(affect_json_type t)
 {
     switch (t) {
-    case AFFECT_JSON_NULL: return "null";
+    case AFFECT_JSON_NULL:
+        return "null";
     case AFFECT_JSON_FALSE:
-    case AFFECT_JSON_TRUE: return "boolean";
-    case AFFECT_JSON_NUMBER: return "number";
-    case AFFECT_JSON_STRING: return "string";
-    case AFFECT_JSON_ARRAY: return "array";
-    case AFFECT_JSON_OBJECT: return "object";
+    case AFFECT_JSON_TRUE:
+        return "boolean";
+    case AFFECT_JSON_NUMBER:
+        return "number";
+    case AFFECT_JSON_STRING:
+        return "string";
+    case AFFECT_JSON_ARRAY:
+        return "array";
+    case AFFECT_JSON_OBJECT:
+        return "object";
     }
     return "unknown";
 }

@@ -57,8 +57,7 @@ affect_status affect_keyframes_select(const double *Y, uint32_t T, uint32_t D, u
     size_t cells;
     if (!affect_mul_size(T, T, &cells) || cells > MAX_CELLS)
         return affect_fail(err, AFFECT_ERR_RANGE,
-                           "%u frames is too many for exact keyframe selection (at most 16384)",
-                           T);
+                           "%u frames is too many for exact keyframe selection (at most 16384)", T);
     double *sq = NULL, *sy = NULL, *sty = NULL, *cost = NULL, *E = NULL;
     uint32_t *back = NULL;
     affect_ws_part parts[] = {
@@ -71,8 +70,7 @@ affect_status affect_keyframes_select(const double *Y, uint32_t T, uint32_t D, u
     };
     void *block = affect_ws_alloc(parts, sizeof parts / sizeof parts[0]);
     if (!block)
-        return affect_nomem_of(err, cells, sizeof(double), "the %u x %u keyframe cost table", T,
-                               T);
+        return affect_nomem_of(err, cells, sizeof(double), "the %u x %u keyframe cost table", T, T);
     affect_status status = AFFECT_OK;
     /* prefix sums over frames 0 .. t − 1 at index t */
     sq[0] = 0;

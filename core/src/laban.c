@@ -33,22 +33,31 @@
 #include "internal.h"
 
 const char *const affect_laban_names[AFFECT_LABAN_N] = {
-    "WeightAll",   "WeightTorso", "WeightHead",      "WeightLHand",   "WeightRHand",
-    "WeightLFoot", "WeightRFoot", "TimeAll",         "TimeTorso",     "TimeHead",
-    "TimeLHand",   "TimeRHand",   "TimeLFoot",       "TimeRFoot",     "FlowAll",
-    "FlowTorso",   "FlowHead",    "FlowLHand",       "FlowRHand",     "FlowLFoot",
-    "FlowRFoot",   "ShapeVertical", "ShapeSagittal", "ShapeHorizontal", "ShapeFlow",
+    "WeightAll",     "WeightTorso",   "WeightHead",    "WeightLHand",     "WeightRHand",
+    "WeightLFoot",   "WeightRFoot",   "TimeAll",       "TimeTorso",       "TimeHead",
+    "TimeLHand",     "TimeRHand",     "TimeLFoot",     "TimeRFoot",       "FlowAll",
+    "FlowTorso",     "FlowHead",      "FlowLHand",     "FlowRHand",       "FlowLFoot",
+    "FlowRFoot",     "ShapeVertical", "ShapeSagittal", "ShapeHorizontal", "ShapeFlow",
     "ShapeDirLHand", "ShapeDirRHand"};
 
-enum { IDX_WEIGHT = 0, IDX_TIME = 7, IDX_FLOW = 14, IDX_VERTICAL = 21, IDX_SAGITTAL,
-       IDX_HORIZONTAL, IDX_SHAPE_FLOW, IDX_DIR_LHAND, IDX_DIR_RHAND };
+enum {
+    IDX_WEIGHT = 0,
+    IDX_TIME = 7,
+    IDX_FLOW = 14,
+    IDX_VERTICAL = 21,
+    IDX_SAGITTAL,
+    IDX_HORIZONTAL,
+    IDX_SHAPE_FLOW,
+    IDX_DIR_LHAND,
+    IDX_DIR_RHAND
+};
 
 /* The six parts of "all", in component order after "All". */
-static const char *const all_parts[6] = {"torso", "head", "left_hand", "right_hand",
-                                         "left_foot", "right_foot"};
+static const char *const all_parts[6] = {"torso",      "head",      "left_hand",
+                                         "right_hand", "left_foot", "right_foot"};
 
-#define MIN_FRAMES 4 /* Effort and Directional need differences of differences */
-#define PAD_MAX 9    /* odd-reflection padding of the filter */
+#define MIN_FRAMES 4                 /* Effort and Directional need differences of differences */
+#define PAD_MAX 9                    /* odd-reflection padding of the filter */
 #define HULL_GRID_STEPS 1073741824.0 /* hull.c's grid: 2^30 steps over the longest side */
 #define AREA_BOUND_SLACK 1e-6        /* relative widening of the hull area bound */
 
@@ -141,7 +150,6 @@ static butter_coef butterworth(double fps, double cutoff_hz)
     return c;
 }
 
-
 void affect_lowpass(const double *x, size_t n, size_t stride, double fps, double cutoff_hz,
                     double *scratch, double *out)
 {
@@ -177,9 +185,11 @@ static void gradient3(const double *x, uint32_t n, double fps, double *d)
             continue;
         }
         d[a] = (x[3 + a] - x[a]) * fps;
-        d[(size_t)(n - 1) * 3 + a] = (x[(size_t)(n - 1) * 3 + a] - x[(size_t)(n - 2) * 3 + a]) * fps;
+        d[(size_t)(n - 1) * 3 + a] =
+            (x[(size_t)(n - 1) * 3 + a] - x[(size_t)(n - 2) * 3 + a]) * fps;
         for (uint32_t t = 1; t + 1 < n; t++)
-            d[(size_t)t * 3 + a] = (x[(size_t)(t + 1) * 3 + a] - x[(size_t)(t - 1) * 3 + a]) * fps * 0.5;
+            d[(size_t)t * 3 + a] =
+                (x[(size_t)(t + 1) * 3 + a] - x[(size_t)(t - 1) * 3 + a]) * fps * 0.5;
     }
 }
 
@@ -218,8 +228,10 @@ affect_status affect_part_resolve(const affect_motion *m, const affect_roles *ro
     static const struct {
         const char *part;
         affect_role role;
-    } simple[] = {{"head", AFFECT_ROLE_HEAD},           {"left_hand", AFFECT_ROLE_LEFT_HAND},
-                  {"right_hand", AFFECT_ROLE_RIGHT_HAND}, {"left_foot", AFFECT_ROLE_LEFT_FOOT},
+    } simple[] = {{"head", AFFECT_ROLE_HEAD},
+                  {"left_hand", AFFECT_ROLE_LEFT_HAND},
+                  {"right_hand", AFFECT_ROLE_RIGHT_HAND},
+                  {"left_foot", AFFECT_ROLE_LEFT_FOOT},
                   {"right_foot", AFFECT_ROLE_RIGHT_FOOT}};
     for (size_t i = 0; i < sizeof simple / sizeof simple[0]; i++)
         if (strcmp(name, simple[i].part) == 0) {
@@ -426,8 +438,8 @@ static void lowpass_channels(double *x, size_t n, size_t c, double fps, double c
     for (int pass = 0; pass < 2; pass++) {
         bool backward = pass == 1;
         /* biquad_pass's start from the steady state of the line through the first two inputs */
-        const double *r0 = backward ? s + (len - 1) * c : s, *r1 = backward ? s + (len - 2) * c
-                                                                            : s + c;
+        const double *r0 = backward ? s + (len - 1) * c : s,
+                     *r1 = backward ? s + (len - 2) * c : s + c;
         for (size_t j = 0; j < c; j++) {
             double x0 = r0[j], x1 = r1[j];
             double d = x1 - x0;
@@ -632,29 +644,42 @@ static affect_status check_effort_input(const affect_motion *m, uint32_t n,
     if (n < 1 || n > 6)
         return affect_fail(err, AFFECT_ERR_INVALID, "%s needs 1 to 6 parts, got %u", what, n);
     if (m->n_frames < MIN_FRAMES)
-        return affect_fail(err, AFFECT_ERR_RANGE,
-                           "the motion has %u frames; %s needs at least %d", m->n_frames, what,
-                           MIN_FRAMES);
+        return affect_fail(err, AFFECT_ERR_RANGE, "the motion has %u frames; %s needs at least %d",
+                           m->n_frames, what, MIN_FRAMES);
     return AFFECT_OK;
 }
 
-typedef enum effort_kind { WEIGHT_Q1, WEIGHT_Q2, TIME_Q1, TIME_Q2, FLOW, SPACE_Q1, SPACE_Q2 } effort_kind;
+typedef enum effort_kind {
+    WEIGHT_Q1,
+    WEIGHT_Q2,
+    TIME_Q1,
+    TIME_Q2,
+    FLOW,
+    SPACE_Q1,
+    SPACE_Q2
+} effort_kind;
 
 static double effort_value(const affect_motion *m, const affect_kinematics *ks, uint32_t n,
                            effort_kind kind, const affect_laban_options *opt)
 {
     effort_series s = series_of(ks, n);
     switch (kind) {
-    case WEIGHT_Q1: return weight_q1(&s);
-    case WEIGHT_Q2: return weight_q2(&s);
-    case TIME_Q1: return time_q1(&s);
+    case WEIGHT_Q1:
+        return weight_q1(&s);
+    case WEIGHT_Q2:
+        return weight_q2(&s);
+    case TIME_Q1:
+        return time_q1(&s);
     case TIME_Q2: {
         double v = accumulated(&s, false);
         return opt->time_per_second ? v / affect_motion_duration(m) : v;
     }
-    case FLOW: return accumulated(&s, true);
-    case SPACE_Q1: return space_q1(&ks[0], &ks[1]);
-    default: return space_q2(ks, n, opt->max_ratio);
+    case FLOW:
+        return accumulated(&s, true);
+    case SPACE_Q1:
+        return space_q1(&ks[0], &ks[1]);
+    default:
+        return space_q2(ks, n, opt->max_ratio);
     }
 }
 
@@ -707,8 +732,8 @@ affect_status affect_laban_space(const affect_motion *m, const affect_part *part
     if (method == AFFECT_LABAN_Q1 && n != 2)
         return affect_fail(err, AFFECT_ERR_INVALID,
                            "Space (peaks) needs a hand and the torso, got %u parts", n);
-    return effort(m, parts, n, method == AFFECT_LABAN_Q1 ? SPACE_Q1 : SPACE_Q2, "Space", opt,
-                  out, err);
+    return effort(m, parts, n, method == AFFECT_LABAN_Q1 ? SPACE_Q1 : SPACE_Q2, "Space", opt, out,
+                  err);
 }
 
 /* ---- Shape ---- */
@@ -743,15 +768,16 @@ affect_status affect_laban_shape_directional(const affect_motion *m, const affec
     for (uint32_t t = 0; t < n; t++)
         for (int a = 0; a < 3; a++)
             for (int b = 0; b < 3; b++)
-                cov[a * 3 + b] += (pos[(size_t)t * 3 + a] - mean[a]) * (pos[(size_t)t * 3 + b] - mean[b]);
+                cov[a * 3 + b] +=
+                    (pos[(size_t)t * 3 + a] - mean[a]) * (pos[(size_t)t * 3 + b] - mean[b]);
     lapack_int info;
     AFFECT_BLAS(info = LAPACKE_dsyev(LAPACK_ROW_MAJOR, 'V', 'U', 3, cov, 3, w));
     if (info != 0) {
         affect_free(block);
         return info == LAPACK_WORK_MEMORY_ERROR || info == LAPACK_TRANSPOSE_MEMORY_ERROR
                    ? affect_nomem(err)
-                   : affect_fail(err, AFFECT_ERR_INVALID, "eigen-decomposition failed (LAPACK info %d)",
-                                 (int)info);
+                   : affect_fail(err, AFFECT_ERR_INVALID,
+                                 "eigen-decomposition failed (LAPACK info %d)", (int)info);
     }
     /* eigenvalues ascend: columns 2 and 1 are the two main axes; project onto them (x, y) and
      * leave z = 0 so the 3-D derivative helpers can be reused */
@@ -808,14 +834,13 @@ static uint32_t body_joints(const affect_motion *m, int32_t pelvis, int32_t *out
  * point moves by at most half a step, len / 2^30, per axis: the area grows by at most
  * step · (w_a + w_b) + step²; twice that is used) and for rounding (a relative 1e-6, far
  * beyond the few units of 2^-53 of either side). Positions are finite (validated). */
-static double area_bound_2d(const affect_motion *m, uint32_t t, const int32_t *joints,
-                            uint32_t nb, int a, int b)
+static double area_bound_2d(const affect_motion *m, uint32_t t, const int32_t *joints, uint32_t nb,
+                            int a, int b)
 {
     if (nb < 3)
         return 0;
     const float *p0 = affect_motion_at(m, t, (uint32_t)joints[0]);
-    double x0 = p0[a], x1 = x0, y0 = p0[b], y1 = y0, u0 = x0 + y0, u1 = u0, w0 = x0 - y0,
-           w1 = w0;
+    double x0 = p0[a], x1 = x0, y0 = p0[b], y1 = y0, u0 = x0 + y0, u1 = u0, w0 = x0 - y0, w1 = w0;
     for (uint32_t i = 1; i < nb; i++) {
         const float *p = affect_motion_at(m, t, (uint32_t)joints[i]);
         double x = p[a], y = p[b], u = x + y, w = x - y;
@@ -1100,8 +1125,10 @@ affect_status affect_laban_vector(const affect_motion *m, const affect_roles *ro
             affect_part hand;
             st = soft(affect_part_resolve(m, roles, all_parts[k], &hand, err), opt, dst, 1);
             if (!st && m->n_frames < MIN_FRAMES)
-                st = soft(affect_fail(err, AFFECT_ERR_RANGE, "the motion has %u frames; Shape "
-                                      "Directional needs at least %d", m->n_frames, MIN_FRAMES),
+                st = soft(affect_fail(err, AFFECT_ERR_RANGE,
+                                      "the motion has %u frames; Shape "
+                                      "Directional needs at least %d",
+                                      m->n_frames, MIN_FRAMES),
                           opt, dst, 1);
             if (st)
                 goto done;
@@ -1121,8 +1148,7 @@ done:
 affect_status affect_laban_kinematics_block(const affect_motion *m, const affect_part *parts,
                                             uint32_t n, const affect_laban_options *opt,
                                             double **block, const double *vel[6],
-                                            const double *acc[6], size_t *stride,
-                                            affect_error *err)
+                                            const double *acc[6], size_t *stride, affect_error *err)
 {
     *block = NULL;
     affect_status st = check_effort_input(m, n, opt, "the Laban series", err);

@@ -138,9 +138,9 @@ struct affect_laban_series {
     double *block; /* the kinematics */
     const double *vel[6], *acc[6];
     size_t stride;
-    void *ws;                 /* the queues' storage */
-    peak_queue qw[MAX_ROWS];  /* Weight's peak (Q1: point terms; Q2: step terms) */
-    peak_queue qt[MAX_ROWS];  /* Time Q1's peak */
+    void *ws;                /* the queues' storage */
+    peak_queue qw[MAX_ROWS]; /* Weight's peak (Q1: point terms; Q2: step terms) */
+    peak_queue qt[MAX_ROWS]; /* Time Q1's peak */
     dd_sum time_sum[MAX_ROWS], flow_sum[MAX_ROWS], path[6];
     double pos[6][3]; /* the parts' positions at the frame added last */
     double *ring;     /* overlapping windows: each frame's step terms (RING_SLOTS doubles) at
@@ -301,8 +301,8 @@ static void reset(affect_laban_series *s)
     memset(s->path, 0, sizeof s->path);
 }
 
-affect_status affect_laban_series_new(const affect_motion *m, const affect_part *parts,
-                                      uint32_t n, const affect_laban_options *opt,
+affect_status affect_laban_series_new(const affect_motion *m, const affect_part *parts, uint32_t n,
+                                      const affect_laban_options *opt,
                                       const affect_laban_series_options *so,
                                       affect_laban_series **out, affect_error *err)
 {
@@ -332,8 +332,8 @@ affect_status affect_laban_series_new(const affect_motion *m, const affect_part 
     s->n_parts = n;
     s->n_rows = n + (so->combined ? 1 : 0);
     s->fps = m->fps;
-    affect_status st = affect_laban_kinematics_block(m, parts, n, opt, &s->block, s->vel, s->acc,
-                                                     &s->stride, err);
+    affect_status st =
+        affect_laban_kinematics_block(m, parts, n, opt, &s->block, s->vel, s->acc, &s->stride, err);
     if (st)
         goto fail;
     uint32_t T = m->n_frames;

@@ -52,20 +52,23 @@ affect_status affect_laban_stats_check(const double mean[AFFECT_LABAN_N],
 {
     for (int j = 0; j < AFFECT_LABAN_N; j++) {
         if (isinf(mean[j]))
-            return affect_fail(err, AFFECT_ERR_FORMAT, "mean[%d] (%s) is %s, expected a finite "
-                               "number or null", j, affect_laban_names[j],
-                               mean[j] > 0 ? "inf" : "-inf");
+            return affect_fail(err, AFFECT_ERR_FORMAT,
+                               "mean[%d] (%s) is %s, expected a finite "
+                               "number or null",
+                               j, affect_laban_names[j], mean[j] > 0 ? "inf" : "-inf");
         if (!(isfinite(sd[j]) && sd[j] > 0))
-            return affect_fail(err, AFFECT_ERR_FORMAT, "sd[%d] (%s) is %.17g, expected a finite "
-                               "number > 0", j, affect_laban_names[j], sd[j]);
+            return affect_fail(err, AFFECT_ERR_FORMAT,
+                               "sd[%d] (%s) is %.17g, expected a finite "
+                               "number > 0",
+                               j, affect_laban_names[j], sd[j]);
     }
     return AFFECT_OK;
 }
 
 affect_status affect_laban_l2_vector(const float x[AFFECT_LABAN_N],
                                      const double mean[AFFECT_LABAN_N],
-                                     const double sd[AFFECT_LABAN_N], const int *comp,
-                                     int n_comp, float *out, affect_error *err)
+                                     const double sd[AFFECT_LABAN_N], const int *comp, int n_comp,
+                                     float *out, affect_error *err)
 {
     if (comp ? n_comp < 1 || n_comp > AFFECT_LABAN_N : n_comp != AFFECT_LABAN_N)
         return affect_fail(err, AFFECT_ERR_INVALID, "%d components, expected 1 to %d", n_comp,
@@ -73,21 +76,26 @@ affect_status affect_laban_l2_vector(const float x[AFFECT_LABAN_N],
     for (int t = 0; t < n_comp; t++) {
         int c = comp ? comp[t] : t;
         if (c < 0 || c >= AFFECT_LABAN_N)
-            return affect_fail(err, AFFECT_ERR_INVALID, "component index %d is out of range "
-                               "(0 to %d)", c, AFFECT_LABAN_N - 1);
+            return affect_fail(err, AFFECT_ERR_INVALID,
+                               "component index %d is out of range "
+                               "(0 to %d)",
+                               c, AFFECT_LABAN_N - 1);
         if (isnan(mean[c])) {
             out[t] = 0;
             continue;
         }
         if (isnan(x[c]))
-            return affect_fail(err, AFFECT_ERR_MISSING, "component %s is missing in this motion "
+            return affect_fail(err, AFFECT_ERR_MISSING,
+                               "component %s is missing in this motion "
                                "but present in the index, so no L2 vector gives the index's "
-                               "distances", affect_laban_names[c]);
+                               "distances",
+                               affect_laban_names[c]);
         float z = (float)(((double)x[c] - mean[c]) / sd[c]);
         if (!isfinite(z))
-            return affect_fail(err, AFFECT_ERR_RANGE, "the z-score of %s, (%.9g - %.17g) / "
-                               "%.17g, is beyond the float32 range", affect_laban_names[c],
-                               (double)x[c], mean[c], sd[c]);
+            return affect_fail(err, AFFECT_ERR_RANGE,
+                               "the z-score of %s, (%.9g - %.17g) / "
+                               "%.17g, is beyond the float32 range",
+                               affect_laban_names[c], (double)x[c], mean[c], sd[c]);
         out[t] = z;
     }
     return AFFECT_OK;

@@ -45,8 +45,8 @@ static void show(affect_monitor *mon, int64_t t)
         return;
     const char *stage = atomic_load(&mon->stage);
     uint64_t done = atomic_load(&mon->done), total = atomic_load(&mon->total);
-    if (!stage || (stage == mon->shown_stage && done == mon->shown_done &&
-                   total == mon->shown_total))
+    if (!stage ||
+        (stage == mon->shown_stage && done == mon->shown_done && total == mon->shown_total))
         return;
     bool edge = stage != mon->shown_stage || done == total;
     if (!edge && t < mon->next_show_ns)

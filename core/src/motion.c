@@ -66,8 +66,7 @@ static uint16_t get_u16(const unsigned char *p)
 
 static uint32_t get_u32(const unsigned char *p)
 {
-    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) |
-           ((uint32_t)p[3] << 24);
+    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
 }
 
 static uint64_t get_u64(const unsigned char *p)
@@ -106,11 +105,11 @@ static affect_status check_sizes(uint32_t n_frames, uint32_t n_joints, double fp
                                  affect_error *err)
 {
     if (n_frames < 1 || n_frames > AFFECT_MOTION_MAX_FRAMES)
-        return affect_fail(err, AFFECT_ERR_RANGE, "frame count %u out of range (1 .. %u)",
-                           n_frames, AFFECT_MOTION_MAX_FRAMES);
+        return affect_fail(err, AFFECT_ERR_RANGE, "frame count %u out of range (1 .. %u)", n_frames,
+                           AFFECT_MOTION_MAX_FRAMES);
     if (n_joints < 1 || n_joints > AFFECT_MOTION_MAX_JOINTS)
-        return affect_fail(err, AFFECT_ERR_RANGE, "joint count %u out of range (1 .. %u)",
-                           n_joints, AFFECT_MOTION_MAX_JOINTS);
+        return affect_fail(err, AFFECT_ERR_RANGE, "joint count %u out of range (1 .. %u)", n_joints,
+                           AFFECT_MOTION_MAX_JOINTS);
     if (!(fps > 0.0) || !(fps <= AFFECT_MOTION_MAX_FPS))
         return affect_fail(err, AFFECT_ERR_RANGE, "frames per second %g out of range (0 .. %g]",
                            fps, AFFECT_MOTION_MAX_FPS);
@@ -136,8 +135,8 @@ affect_status affect_motion_create_as(uint32_t n_frames, uint32_t n_joints, doub
     m->fps = fps;
     m->names = affect_calloc(n_joints, sizeof *m->names);
     m->parents = affect_malloc_array(n_joints, sizeof *m->parents);
-    m->pos = zero ? affect_calloc(n_pos, sizeof *m->pos)
-                  : affect_malloc_array(n_pos, sizeof *m->pos);
+    m->pos =
+        zero ? affect_calloc(n_pos, sizeof *m->pos) : affect_malloc_array(n_pos, sizeof *m->pos);
     if (!m->names || !m->parents)
         goto nomem;
     if (!m->pos) {
@@ -239,8 +238,9 @@ affect_status affect_motion_set_name(affect_motion *m, uint32_t j, const char *n
     if (j >= m->n_joints)
         return affect_fail(err, AFFECT_ERR_RANGE, "joint %u out of range", j);
     if (len == 0 || len > AFFECT_MOTION_MAX_NAME)
-        return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u: name length %zu out of range (1 .. %u)",
-                           j, len, AFFECT_MOTION_MAX_NAME);
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "joint %u: name length %zu out of range (1 .. %u)", j, len,
+                           AFFECT_MOTION_MAX_NAME);
     if (memchr(name, '\0', len))
         return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u: name contains a NUL byte", j);
     affect_status st = affect_utf8_check(err, AFFECT_ERR_FORMAT, name, len, "joint %u: name", j);
@@ -256,8 +256,8 @@ affect_status affect_motion_set_name(affect_motion *m, uint32_t j, const char *n
 
 static bool unit_char_ok(char c)
 {
-    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-           c == '_' || c == '.' || c == '-';
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
+           c == '.' || c == '-';
 }
 
 static affect_status check_unit(const char *unit, size_t len, affect_error *err)
@@ -286,7 +286,6 @@ affect_status affect_motion_set_unit(affect_motion *m, const char *unit, affect_
     return AFFECT_OK;
 }
 
-
 static affect_status check_names_unique(const affect_motion *m, affect_error *err)
 {
     uint32_t n = m->n_joints, cap = 16;
@@ -302,8 +301,9 @@ static affect_status check_names_unique(const affect_motion *m, affect_error *er
         uint32_t h = affect_hash_name(m->names[j]) & (cap - 1);
         while (slots[h] >= 0) {
             if (strcmp(m->names[slots[h]], m->names[j]) == 0) {
-                st = affect_fail(err, AFFECT_ERR_FORMAT, "joints %d and %u have the same name \"%.64s\"",
-                                 slots[h], j, m->names[j]);
+                st = affect_fail(err, AFFECT_ERR_FORMAT,
+                                 "joints %d and %u have the same name \"%.64s\"", slots[h], j,
+                                 m->names[j]);
                 break;
             }
             h = (h + 1) & (cap - 1);
@@ -321,8 +321,8 @@ static affect_status check_parents(const affect_motion *m, affect_error *err)
     for (uint32_t j = 0; j < n; j++) {
         int32_t p = m->parents[j];
         if (p < -1 || p >= (int32_t)n)
-            return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u: parent index %d out of range (-1 .. %u)",
-                               j, p, n - 1);
+            return affect_fail(err, AFFECT_ERR_FORMAT,
+                               "joint %u: parent index %d out of range (-1 .. %u)", j, p, n - 1);
         if (p == (int32_t)j)
             return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u: is its own parent", j);
     }
@@ -377,17 +377,16 @@ static affect_status check_finite(const affect_motion *m, affect_error *err)
         if (!isfinite(m->pos[i])) {
             size_t fj = i / 3;
             static const char axes[] = "xyz";
-            return affect_fail(err, AFFECT_ERR_FORMAT,
-                               "non-finite coordinate at frame %zu, joint %zu (%.64s), %c",
-                               fj / m->n_joints, fj % m->n_joints, m->names[fj % m->n_joints],
-                               axes[i % 3]);
+            return affect_fail(
+                err, AFFECT_ERR_FORMAT, "non-finite coordinate at frame %zu, joint %zu (%.64s), %c",
+                fj / m->n_joints, fj % m->n_joints, m->names[fj % m->n_joints], axes[i % 3]);
         }
     }
     return AFFECT_OK;
 }
 
-static const char *const channel_names[AFFECT_CH_COUNT] = {
-    "Xposition", "Yposition", "Zposition", "Xrotation", "Yrotation", "Zrotation"};
+static const char *const channel_names[AFFECT_CH_COUNT] = {"Xposition", "Yposition", "Zposition",
+                                                           "Xrotation", "Yrotation", "Zrotation"};
 
 /* One joint of check_skeleton. */
 static affect_status check_skeleton_joint(const affect_motion *m, uint32_t j, bool has_child,
@@ -395,8 +394,8 @@ static affect_status check_skeleton_joint(const affect_motion *m, uint32_t j, bo
 {
     const affect_skel_joint *s = &m->skel[j];
     if (s->n_channels > 6)
-        return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u (%.64s): %u channels (at most 6)",
-                           j, m->names[j], s->n_channels);
+        return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u (%.64s): %u channels (at most 6)", j,
+                           m->names[j], s->n_channels);
     unsigned seen = 0;
     for (int c = 0; c < s->n_channels; c++) {
         if (s->channel[c] >= AFFECT_CH_COUNT)
@@ -422,8 +421,8 @@ static affect_status check_skeleton_joint(const affect_motion *m, uint32_t j, bo
     }
     for (int a = 0; a < 3; a++)
         if (!isfinite(s->offset[a]))
-            return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u (%.64s): non-finite offset",
-                               j, m->names[j]);
+            return affect_fail(err, AFFECT_ERR_FORMAT, "joint %u (%.64s): non-finite offset", j,
+                               m->names[j]);
     return AFFECT_OK;
 }
 
@@ -495,8 +494,8 @@ static affect_status check_names(const affect_motion *m, affect_status status, a
     for (uint32_t j = 0; j < m->n_joints; j++) {
         size_t len = m->names[j] ? strlen(m->names[j]) : 0;
         if (len == 0 || len > AFFECT_MOTION_MAX_NAME)
-            return affect_fail(err, status, "joint %u: name length %zu out of range (1 .. %u)",
-                               j, len, AFFECT_MOTION_MAX_NAME);
+            return affect_fail(err, status, "joint %u: name length %zu out of range (1 .. %u)", j,
+                               len, AFFECT_MOTION_MAX_NAME);
         affect_status st = affect_utf8_check(err, status, m->names[j], len, "joint %u: name", j);
         if (st)
             return st;
@@ -690,7 +689,8 @@ void affect_motion_encode_into(const affect_motion *m, unsigned char *buf)
 {
     unsigned char *p = buf;
     size_t unit_len = strlen(m->unit);
-    unsigned flags = m->skel ? AFFECT_MOTION_FLAG_SKELETON | (m->rot ? AFFECT_MOTION_FLAG_ROTATIONS : 0) : 0;
+    unsigned flags =
+        m->skel ? AFFECT_MOTION_FLAG_SKELETON | (m->rot ? AFFECT_MOTION_FLAG_ROTATIONS : 0) : 0;
     memcpy(p, AFFECT_MOTION_MAGIC, 4);
     put_u16(p + 4, flags ? 2 : 1);
     put_u16(p + 6, (uint16_t)flags);
@@ -761,14 +761,16 @@ affect_status affect_motion_decode_monitored(const unsigned char *data, size_t s
                                              affect_error *err)
 {
     if (size < AFFECT_MOTION_HEADER_SIZE)
-        return affect_fail(err, AFFECT_ERR_FORMAT, "truncated: %zu bytes is shorter than the %u-byte header",
-                           size, AFFECT_MOTION_HEADER_SIZE);
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "truncated: %zu bytes is shorter than the %u-byte header", size,
+                           AFFECT_MOTION_HEADER_SIZE);
     if (memcmp(data, AFFECT_MOTION_MAGIC, 4) != 0)
         return affect_fail(err, AFFECT_ERR_FORMAT, "not a motion (bad magic bytes at offset 0)");
     uint16_t version = get_u16(data + 4);
     if (version < 1 || version > AFFECT_MOTION_VERSION)
-        return affect_fail(err, AFFECT_ERR_FORMAT, "unknown format version %u (this build reads 1 .. %u)",
-                           version, AFFECT_MOTION_VERSION);
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "unknown format version %u (this build reads 1 .. %u)", version,
+                           AFFECT_MOTION_VERSION);
     uint16_t flags = get_u16(data + 6);
     /* version 2 exists for the skeleton: without it the encoder writes version 1 */
     if (version == 1 ? flags != 0
@@ -787,8 +789,8 @@ affect_status affect_motion_decode_monitored(const unsigned char *data, size_t s
             return affect_fail(err, AFFECT_ERR_FORMAT, "reserved header byte %d is not zero", i);
     size_t off = AFFECT_MOTION_HEADER_SIZE;
     if (unit_len > AFFECT_MOTION_UNIT_MAX || size - off < unit_len)
-        return affect_fail(err, AFFECT_ERR_FORMAT, "truncated or bad unit (length %zu at offset 24)",
-                           unit_len);
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "truncated or bad unit (length %zu at offset 24)", unit_len);
     st = check_unit((const char *)data + off, unit_len, err);
     if (st)
         return st;
@@ -799,16 +801,16 @@ affect_status affect_motion_decode_monitored(const unsigned char *data, size_t s
     size_t names_off = off;
     for (uint32_t j = 0; j < n_joints; j++) {
         if (size - off < 2)
-            return affect_fail(err, AFFECT_ERR_FORMAT, "truncated in the name of joint %u (offset %zu)",
-                               j, off);
+            return affect_fail(err, AFFECT_ERR_FORMAT,
+                               "truncated in the name of joint %u (offset %zu)", j, off);
         size_t len = get_u16(data + off);
         if (len == 0 || len > AFFECT_MOTION_MAX_NAME)
             return affect_fail(err, AFFECT_ERR_FORMAT,
                                "joint %u: name length %zu out of range (1 .. %u) at offset %zu", j,
                                len, AFFECT_MOTION_MAX_NAME, off);
         if (size - off - 2 < len)
-            return affect_fail(err, AFFECT_ERR_FORMAT, "truncated in the name of joint %u (offset %zu)",
-                               j, off);
+            return affect_fail(err, AFFECT_ERR_FORMAT,
+                               "truncated in the name of joint %u (offset %zu)", j, off);
         off += 2 + len;
     }
     size_t n_vals = (size_t)n_frames * n_joints * 3; /* ≤ 2^24 · 2^12 · 3: no overflow */
@@ -831,10 +833,9 @@ affect_status affect_motion_decode_monitored(const unsigned char *data, size_t s
             expect += (size_t)n_frames * ((size_t)n_joints * 16 + n_translated * 12);
     }
     if (size != expect)
-        return affect_fail(err, AFFECT_ERR_FORMAT,
-                           "%s: %zu bytes, expected %zu for %u frames x %u joints",
-                           size < expect ? "truncated" : "trailing bytes", size, expect, n_frames,
-                           n_joints);
+        return affect_fail(
+            err, AFFECT_ERR_FORMAT, "%s: %zu bytes, expected %zu for %u frames x %u joints",
+            size < expect ? "truncated" : "trailing bytes", size, expect, n_frames, n_joints);
 
     /* positions, rotations and translations are all read below: not cleared first, so that the
      * memory is first touched between polls */
@@ -871,8 +872,8 @@ affect_status affect_motion_decode_monitored(const unsigned char *data, size_t s
                 s->channel[c] = data[off + 25 + c];
                 if (c >= s->n_channels && s->channel[c] != 0) {
                     st = affect_fail(err, AFFECT_ERR_FORMAT,
-                                     "joint %u: unused channel byte %d is not zero (offset %zu)",
-                                     j, c, off + 25 + c);
+                                     "joint %u: unused channel byte %d is not zero (offset %zu)", j,
+                                     c, off + 25 + c);
                     goto fail;
                 }
             }
@@ -971,10 +972,12 @@ affect_status affect_motion_slice(const affect_motion *m, int64_t first, int64_t
     int64_t f = first < 0 ? n + first : first;
     int64_t l = last < 0 ? n + last : last;
     if (f < 0 || f >= n)
-        return affect_fail(err, AFFECT_ERR_RANGE, "first frame %lld out of range (the motion has %lld frames)",
+        return affect_fail(err, AFFECT_ERR_RANGE,
+                           "first frame %lld out of range (the motion has %lld frames)",
                            (long long)first, (long long)n);
     if (l < 0 || l >= n)
-        return affect_fail(err, AFFECT_ERR_RANGE, "last frame %lld out of range (the motion has %lld frames)",
+        return affect_fail(err, AFFECT_ERR_RANGE,
+                           "last frame %lld out of range (the motion has %lld frames)",
                            (long long)last, (long long)n);
     if (l < f)
         return affect_fail(err, AFFECT_ERR_RANGE, "last frame %lld is before first frame %lld",
@@ -996,8 +999,7 @@ affect_status affect_motion_slice(const affect_motion *m, int64_t first, int64_t
 
 /* Rotations and translations of c (c->n_frames frames at c->fps) interpolated from m's, then
  * the positions by forward kinematics. */
-static affect_status resample_rotations(const affect_motion *m, affect_motion *c,
-                                        affect_error *err)
+static affect_status resample_rotations(const affect_motion *m, affect_motion *c, affect_error *err)
 {
     affect_status st = affect_motion_add_skeleton(c, true, err);
     if (st)
@@ -1009,13 +1011,15 @@ static affect_status resample_rotations(const affect_motion *m, affect_motion *c
         uint32_t i0, i1;
         resample_source(m->n_frames, src, &i0, &i1, &w);
         for (uint32_t j = 0; j < nj; j++) {
-            const float *qa = m->rot + ((size_t)i0 * nj + j) * 4, *qb = m->rot + ((size_t)i1 * nj + j) * 4;
+            const float *qa = m->rot + ((size_t)i0 * nj + j) * 4,
+                        *qb = m->rot + ((size_t)i1 * nj + j) * 4;
             double a[4] = {qa[0], qa[1], qa[2], qa[3]}, b[4] = {qb[0], qb[1], qb[2], qb[3]}, r[4];
             affect_quat_slerp(a, b, w, r);
             float *qo = c->rot + ((size_t)k * nj + j) * 4;
             for (int i = 0; i < 4; i++)
                 qo[i] = (float)r[i];
-            const float *ta = m->trans + ((size_t)i0 * nj + j) * 3, *tb = m->trans + ((size_t)i1 * nj + j) * 3;
+            const float *ta = m->trans + ((size_t)i0 * nj + j) * 3,
+                        *tb = m->trans + ((size_t)i1 * nj + j) * 3;
             float *to = c->trans + ((size_t)k * nj + j) * 3;
             for (int i = 0; i < 3; i++)
                 to[i] = (float)((1.0 - w) * ta[i] + w * tb[i]);
@@ -1028,13 +1032,14 @@ affect_status affect_motion_resample(const affect_motion *m, double fps, affect_
                                      affect_error *err)
 {
     if (!(fps > 0.0) || !(fps <= AFFECT_MOTION_MAX_FPS))
-        return affect_fail(err, AFFECT_ERR_RANGE, "frames per second %g out of range (0 .. %g]", fps,
-                           AFFECT_MOTION_MAX_FPS);
+        return affect_fail(err, AFFECT_ERR_RANGE, "frames per second %g out of range (0 .. %g]",
+                           fps, AFFECT_MOTION_MAX_FPS);
     double span = (double)(m->n_frames - 1) / m->fps; /* seconds from first to last frame */
     double frames = floor(span * fps + 1e-9) + 1.0;
     if (frames > AFFECT_MOTION_MAX_FRAMES)
-        return affect_fail(err, AFFECT_ERR_RANGE, "resampling to %g fps gives %.0f frames (at most %u)",
-                           fps, frames, AFFECT_MOTION_MAX_FRAMES);
+        return affect_fail(err, AFFECT_ERR_RANGE,
+                           "resampling to %g fps gives %.0f frames (at most %u)", fps, frames,
+                           AFFECT_MOTION_MAX_FRAMES);
     /* a rate is no size: the result may not exceed the importers' limit, or the input's size */
     double samples = frames * m->n_joints, input = (double)m->n_frames * m->n_joints;
     double limit = input > AFFECT_MOTION_MAX_SAMPLES ? input : AFFECT_MOTION_MAX_SAMPLES;
@@ -1088,13 +1093,14 @@ affect_status affect_motion_select(const affect_motion *m, const char *const *na
     for (uint32_t i = 0; i < n_names; i++) {
         src[i] = affect_motion_find_joint(m, names[i]);
         if (src[i] < 0) {
-            st = affect_fail(err, AFFECT_ERR_MISSING, "no joint named \"%.64s\" (selection item %u)",
-                             names[i], i);
+            st = affect_fail(err, AFFECT_ERR_MISSING,
+                             "no joint named \"%.64s\" (selection item %u)", names[i], i);
             goto done;
         }
         if (map[src[i]] >= 0) {
-            st = affect_fail(err, AFFECT_ERR_INVALID, "joint \"%.64s\" selected twice (items %d and %u)",
-                             names[i], map[src[i]], i);
+            st = affect_fail(err, AFFECT_ERR_INVALID,
+                             "joint \"%.64s\" selected twice (items %d and %u)", names[i],
+                             map[src[i]], i);
             goto done;
         }
         map[src[i]] = (int32_t)i;

@@ -58,7 +58,6 @@ static void format_number(char *buf, size_t size, double v)
     }
 }
 
-
 /* "array", "number", … for messages. */
 static const char *type_name(const affect_json_node *n)
 {
@@ -90,10 +89,7 @@ static affect_status read_members(const affect_json_doc *doc, const affect_json_
         }
         *slots[k] = c; /* the JSON reader has rejected duplicate keys */
     }
-    const char *missing = !mb->fps      ? "fps"
-                          : !mb->joints ? "joints"
-                          : !mb->frames ? "frames"
-                                        : NULL;
+    const char *missing = !mb->fps ? "fps" : !mb->joints ? "joints" : !mb->frames ? "frames" : NULL;
     if (missing)
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "\"%s\": missing key (required: " KEYS_REQUIRED ")", missing);
@@ -170,11 +166,10 @@ static affect_status read_names(const affect_json_doc *doc, affect_motion *m,
             return affect_fail(err, AFFECT_ERR_FORMAT, "joints[%u]: expected a non-empty string",
                                j);
         if (memchr(c->str, '\0', c->str_len))
-            return affect_fail(err, AFFECT_ERR_FORMAT, "joints[%u]: contains a NUL character",
-                               j);
+            return affect_fail(err, AFFECT_ERR_FORMAT, "joints[%u]: contains a NUL character", j);
         if (c->str_len > AFFECT_MOTION_MAX_NAME)
-            return affect_fail(err, AFFECT_ERR_RANGE, "joints[%u]: %zu bytes long (at most %u)",
-                               j, c->str_len, AFFECT_MOTION_MAX_NAME);
+            return affect_fail(err, AFFECT_ERR_RANGE, "joints[%u]: %zu bytes long (at most %u)", j,
+                               c->str_len, AFFECT_MOTION_MAX_NAME);
         affect_status st = affect_motion_set_name(m, j, c->str, c->str_len, err);
         if (st)
             return st;
@@ -237,8 +232,8 @@ static affect_status read_frames(const affect_json_doc *doc, affect_motion *m,
                     char num[40];
                     format_number(num, sizeof num, c->num);
                     return affect_fail(err, AFFECT_ERR_RANGE,
-                                       "frames[%u][%u][%d]: %s does not fit a 32-bit float", t,
-                                       j, a, num);
+                                       "frames[%u][%u][%d]: %s does not fit a 32-bit float", t, j,
+                                       a, num);
                 }
                 dst[a] = v;
             }

@@ -77,8 +77,7 @@ bool affect_normalize_headings(const affect_motion *m, const affect_roles *roles
 
 affect_status affect_normalize_transform_compute(const affect_motion *m, const affect_roles *roles,
                                                  const affect_normalize_options *opt,
-                                                 affect_normalize_transform *tf,
-                                                 affect_error *err)
+                                                 affect_normalize_transform *tf, affect_error *err)
 {
     int u = opt->up_axis;
     if (u < 0 || u > 2)
@@ -111,13 +110,15 @@ affect_status affect_normalize_transform_compute(const affect_motion *m, const a
     }
 
     if (opt->scale_arm) {
-        int32_t s = roles->joint[AFFECT_ROLE_RIGHT_SHOULDER], el = roles->joint[AFFECT_ROLE_RIGHT_ELBOW],
+        int32_t s = roles->joint[AFFECT_ROLE_RIGHT_SHOULDER],
+                el = roles->joint[AFFECT_ROLE_RIGHT_ELBOW],
                 h = roles->joint[AFFECT_ROLE_RIGHT_HAND];
         if (s < 0 || h < 0)
             return affect_fail(err, AFFECT_ERR_MISSING,
                                "cannot scale by the arm: the right_shoulder and right_hand roles "
                                "are not both resolved");
-        const float *ps = affect_motion_at(m, 0, (uint32_t)s), *ph = affect_motion_at(m, 0, (uint32_t)h);
+        const float *ps = affect_motion_at(m, 0, (uint32_t)s),
+                    *ph = affect_motion_at(m, 0, (uint32_t)h);
         double len = el >= 0 ? dist3(ps, affect_motion_at(m, 0, (uint32_t)el)) +
                                    dist3(affect_motion_at(m, 0, (uint32_t)el), ph)
                              : dist3(ps, ph);

@@ -14,14 +14,14 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-static const double exact_pow10[23] = {
-    1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
-    1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+static const double exact_pow10[23] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
+                                       1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
+                                       1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
 
 static long double scale_pow10(long double v, int e)
 {
-    static const long double squares[9] = {1e1L, 1e2L, 1e4L, 1e8L, 1e16L,
-                                            1e32L, 1e64L, 1e128L, 1e256L};
+    static const long double squares[9] = {1e1L,  1e2L,  1e4L,   1e8L,  1e16L,
+                                           1e32L, 1e64L, 1e128L, 1e256L};
     bool neg = e < 0;
     unsigned u = (unsigned)(neg ? -e : e);
     long double f = 1.0L;

@@ -13,7 +13,7 @@ typedef struct pool {
     mtx_t lock;
     bool stop;
     uint32_t finished; /* workers that returned */
-    uint32_t failed; /* lowest failing index, or n */
+    uint32_t failed;   /* lowest failing index, or n */
     affect_status status;
     affect_error err;
 } pool;

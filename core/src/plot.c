@@ -1122,8 +1122,7 @@ static void write_lines(affect_strbuf *sb, const layout *L, const series *ser, s
         const series *s = &ser[i];
         affect_strbuf_puts(sb, "<g class=\"series\" data-label=\"");
         put_text(sb, s->name, SIZE_MAX);
-        affect_strbuf_printf(sb, "\" data-count=\"%zu\" stroke=\"%s\">", s->count,
-                             palette[i % 8]);
+        affect_strbuf_printf(sb, "\" data-count=\"%zu\" stroke=\"%s\">", s->count, palette[i % 8]);
         if (s->count == 1) {
             const point *p = &pts[s->start];
             affect_strbuf_printf(sb, "<g fill=\"%s\" stroke=\"none\">", palette[i % 8]);
@@ -1238,8 +1237,9 @@ static void write_legend(affect_strbuf *sb, const layout *L, const affect_plot_o
     for (size_t i = 0; i < L->legend_rows; i++, y += row) {
         const series *s = &ser[i];
         if (opt->lines) { /* a short stretch of the line */
-            affect_strbuf_printf(sb, "<g class=\"legend-item\"><path fill=\"none\" "
-                                     "stroke=\"%s\" stroke-width=\"",
+            affect_strbuf_printf(sb,
+                                 "<g class=\"legend-item\"><path fill=\"none\" "
+                                 "stroke=\"%s\" stroke-width=\"",
                                  palette[i % 8]);
             affect_strbuf_fixed(sb, 2 * k, 2);
             affect_strbuf_puts(sb, "\" d=\"");

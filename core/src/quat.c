@@ -235,7 +235,10 @@ bool affect_euler_order_parse(const char *text, int order[3])
     unsigned seen = 0;
     for (int k = 0; k < 3; k++) {
         char ch = text[k];
-        int axis = ch == 'x' || ch == 'X' ? 0 : ch == 'y' || ch == 'Y' ? 1 : ch == 'z' || ch == 'Z' ? 2 : -1;
+        int axis = ch == 'x' || ch == 'X'   ? 0
+                   : ch == 'y' || ch == 'Y' ? 1
+                   : ch == 'z' || ch == 'Z' ? 2
+                                            : -1;
         if (axis < 0 || (seen & (1u << axis)))
             return false;
         seen |= 1u << axis;

@@ -79,11 +79,12 @@ double affect_rank_objective(const double *X, uint32_t d, const affect_rank_pair
 }
 
 /* f in coordinates Y (n × r) for u, with the scores s = Y u written. */
-static double coord_objective(const double *Y, uint32_t n, uint32_t r, const affect_rank_pair *pairs,
-                              size_t n_pairs, double C, const double *u, double *s)
+static double coord_objective(const double *Y, uint32_t n, uint32_t r,
+                              const affect_rank_pair *pairs, size_t n_pairs, double C,
+                              const double *u, double *s)
 {
-    AFFECT_BLAS(cblas_dgemv(CblasRowMajor, CblasNoTrans, (int)n, (int)r, 1.0, Y, (int)r, u, 1,
-                            0.0, s, 1));
+    AFFECT_BLAS(
+        cblas_dgemv(CblasRowMajor, CblasNoTrans, (int)n, (int)r, 1.0, Y, (int)r, u, 1, 0.0, s, 1));
     double f = 0;
     for (uint32_t k = 0; k < r; k++)
         f += 0.5 * u[k] * u[k];
@@ -103,16 +104,16 @@ static affect_status check_pairs(uint32_t n, const affect_rank_pair *pairs, size
             return affect_fail(err, AFFECT_ERR_RANGE, "pair %zu refers to sample %u of %u", p,
                                pairs[p].i >= n ? pairs[p].i : pairs[p].j, n);
         if (pairs[p].i == pairs[p].j)
-            return affect_fail(err, AFFECT_ERR_INVALID, "pair %zu pairs sample %u with itself",
-                               p, pairs[p].i);
+            return affect_fail(err, AFFECT_ERR_INVALID, "pair %zu pairs sample %u with itself", p,
+                               pairs[p].i);
     }
     return AFFECT_OK;
 }
 
 affect_status affect_rank_fit(const double *X, uint32_t n, uint32_t d,
                               const affect_rank_pair *pairs, size_t n_pairs,
-                              const affect_rank_options *opt, double *w,
-                              affect_rank_stats *stats, affect_error *err)
+                              const affect_rank_options *opt, double *w, affect_rank_stats *stats,
+                              affect_error *err)
 {
     affect_rank_options def;
     if (!opt) {
@@ -127,8 +128,8 @@ affect_status affect_rank_fit(const double *X, uint32_t n, uint32_t d,
                            opt->max_iter);
     if (n < 2 || d < 1 || d > AFFECT_RANK_MAX_DIM || n > (uint32_t)INT_MAX / 2)
         return affect_fail(err, AFFECT_ERR_RANGE,
-                           "need at least 2 samples of 1 to 1048576 dimensions (got %u of %u)",
-                           n, d);
+                           "need at least 2 samples of 1 to 1048576 dimensions (got %u of %u)", n,
+                           d);
     if (n_pairs == 0)
         return affect_fail(err, AFFECT_ERR_INVALID, "no pairs");
     affect_status st_chk = check_pairs(n, pairs, n_pairs, err);
@@ -136,12 +137,10 @@ affect_status affect_rank_fit(const double *X, uint32_t n, uint32_t d,
         return st_chk;
     size_t nd;
     if (!affect_mul_size(n, d, &nd) || nd > BLAS_MAX)
-        return affect_fail(err, AFFECT_ERR_RANGE, "%u samples of %u dimensions is too large", n,
-                           d);
+        return affect_fail(err, AFFECT_ERR_RANGE, "%u samples of %u dimensions is too large", n, d);
     for (size_t k = 0; k < nd; k++)
         if (!isfinite(X[k]))
-            return affect_fail(err, AFFECT_ERR_FORMAT, "non-finite value in sample %zu",
-                               k / d);
+            return affect_fail(err, AFFECT_ERR_FORMAT, "non-finite value in sample %zu", k / d);
     affect_status status = AFFECT_OK;
     bool reduce = d > n;
     uint32_t r = reduce ? n : d;
@@ -231,23 +230,22 @@ affect_status affect_rank_fit(const double *X, uint32_t n, uint32_t d,
             }
         }
         double c2 = 2 * opt->C;
-        AFFECT_BLAS(cblas_dgemm(CblasRowMajor, CblasTrans, CblasNoTrans, (int)r, (int)r, (int)n,
-                                c2, coords, (int)r, T, (int)r, 0.0, H, (int)r));
+        AFFECT_BLAS(cblas_dgemm(CblasRowMajor, CblasTrans, CblasNoTrans, (int)r, (int)r, (int)n, c2,
+                                coords, (int)r, T, (int)r, 0.0, H, (int)r));
         for (uint32_t a = 0; a < r; a++) {
             H[(size_t)a * r + a] += 1.0;
             for (uint32_t b = 0; b < a; b++)
                 H[(size_t)a * r + b] = H[(size_t)b * r + a] =
                     0.5 * (H[(size_t)a * r + b] + H[(size_t)b * r + a]);
         }
-        AFFECT_BLAS(cblas_dgemv(CblasRowMajor, CblasTrans, (int)n, (int)r, c2, coords, (int)r,
-                                gvec, 1, 0.0, rhs, 1));
+        AFFECT_BLAS(cblas_dgemv(CblasRowMajor, CblasTrans, (int)n, (int)r, c2, coords, (int)r, gvec,
+                                1, 0.0, rhs, 1));
         lapack_int info;
-        AFFECT_BLAS(info = LAPACKE_dposv(LAPACK_COL_MAJOR, 'U', (lapack_int)r, 1, H,
-                                         (lapack_int)r, rhs, (lapack_int)r));
+        AFFECT_BLAS(info = LAPACKE_dposv(LAPACK_COL_MAJOR, 'U', (lapack_int)r, 1, H, (lapack_int)r,
+                                         rhs, (lapack_int)r));
         if (info != 0) {
             status = affect_fail(err, AFFECT_ERR_RANGE,
-                                 "the Newton system is not positive definite (info %d)",
-                                 (int)info);
+                                 "the Newton system is not positive definite (info %d)", (int)info);
             goto cleanup;
         }
         /* rhs holds the Newton point; take it, or halve the step until f does not increase */
@@ -280,8 +278,8 @@ affect_status affect_rank_fit(const double *X, uint32_t n, uint32_t d,
             for (uint32_t i = 0; i < n; i++)
                 gvec[i] += scale * G[(size_t)k * n + i];
         }
-        AFFECT_BLAS(cblas_dgemv(CblasRowMajor, CblasTrans, (int)n, (int)d, 1.0, X, (int)d, gvec,
-                                1, 0.0, w, 1));
+        AFFECT_BLAS(cblas_dgemv(CblasRowMajor, CblasTrans, (int)n, (int)d, 1.0, X, (int)d, gvec, 1,
+                                0.0, w, 1));
     } else {
         memcpy(w, u, sizeof(double) * d);
     }
@@ -732,17 +730,15 @@ affect_status affect_ranker_decode(const unsigned char *data, size_t size, affec
                            AFFECT_RANKER_VERSION);
     if (flags != 0 || conv > 1 || reserved != 0)
         return affect_fail(err, AFFECT_ERR_FORMAT, "reserved ranker fields are not zero");
-    if (dim < 1 || dim > AFFECT_RANK_MAX_DIM || clusters < 1 ||
-        clusters > AFFECT_RANK_MAX_CLUSTERS)
+    if (dim < 1 || dim > AFFECT_RANK_MAX_DIM || clusters < 1 || clusters > AFFECT_RANK_MAX_CLUSTERS)
         return affect_fail(err, AFFECT_ERR_FORMAT,
-                           "ranker sizes out of range (dimension %u, clusters %u)", dim,
-                           clusters);
+                           "ranker sizes out of range (dimension %u, clusters %u)", dim, clusters);
     size_t cd = (size_t)dim * clusters, expect;
     if (!affect_mul_size(cd, 16, &expect) || !affect_add_size(expect, HEADER_SIZE + 8, &expect) ||
         expect != size)
         return affect_fail(err, AFFECT_ERR_FORMAT,
-                           "ranker BLOB length %zu does not match its sizes (expected %zu)",
-                           size, expect);
+                           "ranker BLOB length %zu does not match its sizes (expected %zu)", size,
+                           expect);
     uint64_t sum = 0;
     for (int b = 0; b < 8; b++)
         sum |= (uint64_t)data[size - 8 + (size_t)b] << (8 * b);

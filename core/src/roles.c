@@ -17,10 +17,10 @@
 #include <string.h>
 
 static const char *const role_names[AFFECT_ROLE_COUNT] = {
-    "pelvis",     "spine",       "chest",     "neck",           "head",
-    "left_shoulder", "left_elbow", "left_hand", "right_shoulder", "right_elbow",
-    "right_hand", "left_hip",    "left_knee", "left_foot",      "left_toe",
-    "right_hip",  "right_knee",  "right_foot", "right_toe"};
+    "pelvis",        "spine",      "chest",      "neck",           "head",
+    "left_shoulder", "left_elbow", "left_hand",  "right_shoulder", "right_elbow",
+    "right_hand",    "left_hip",   "left_knee",  "left_foot",      "left_toe",
+    "right_hip",     "right_knee", "right_foot", "right_toe"};
 
 const char *affect_role_name(affect_role role)
 {
@@ -72,9 +72,9 @@ static bool is_sep(char c)
 
 /* Body words that may carry a glued l/r prefix ("lhand"). */
 static const char *const glued_words[] = {
-    "shoulder", "clavicle", "collar", "arm",   "upperarm", "forearm", "lowerarm", "elbow",
-    "hand",     "wrist",    "hip",    "upleg", "upperleg", "thigh",   "leg",      "lowerleg",
-    "knee",     "shin",     "calf",   "foot",  "ankle",    "toe",     "toes",     "toebase",
+    "shoulder", "clavicle", "collar", "arm",    "upperarm", "forearm", "lowerarm", "elbow",
+    "hand",     "wrist",    "hip",    "upleg",  "upperleg", "thigh",   "leg",      "lowerleg",
+    "knee",     "shin",     "calf",   "foot",   "ankle",    "toe",     "toes",     "toebase",
     "humerus",  "femur",    "tibia",  "radius", NULL};
 
 static bool is_glued_word(const char *w)
@@ -198,11 +198,13 @@ static const role_rule rules[AFFECT_ROLE_COUNT] = {
     [AFFECT_ROLE_RIGHT_ELBOW] = {SIDE_RIGHT, {"forearm", "lowerarm", "elbow", "radius", NULL}},
     [AFFECT_ROLE_RIGHT_HAND] = {SIDE_RIGHT, {"hand", "wrist", NULL}},
     [AFFECT_ROLE_LEFT_HIP] = {SIDE_LEFT, {"upleg", "upperleg", "thigh", "hip", "femur", NULL}},
-    [AFFECT_ROLE_LEFT_KNEE] = {SIDE_LEFT, {"leg", "lowerleg", "knee", "shin", "calf", "tibia", NULL}},
+    [AFFECT_ROLE_LEFT_KNEE] = {SIDE_LEFT,
+                               {"leg", "lowerleg", "knee", "shin", "calf", "tibia", NULL}},
     [AFFECT_ROLE_LEFT_FOOT] = {SIDE_LEFT, {"foot", "ankle", NULL}},
     [AFFECT_ROLE_LEFT_TOE] = {SIDE_LEFT, {"toebase", "toes", "toe", "ball", NULL}},
     [AFFECT_ROLE_RIGHT_HIP] = {SIDE_RIGHT, {"upleg", "upperleg", "thigh", "hip", "femur", NULL}},
-    [AFFECT_ROLE_RIGHT_KNEE] = {SIDE_RIGHT, {"leg", "lowerleg", "knee", "shin", "calf", "tibia", NULL}},
+    [AFFECT_ROLE_RIGHT_KNEE] = {SIDE_RIGHT,
+                                {"leg", "lowerleg", "knee", "shin", "calf", "tibia", NULL}},
     [AFFECT_ROLE_RIGHT_FOOT] = {SIDE_RIGHT, {"foot", "ankle", NULL}},
     [AFFECT_ROLE_RIGHT_TOE] = {SIDE_RIGHT, {"toebase", "toes", "toe", "ball", NULL}},
 };
@@ -239,7 +241,8 @@ void affect_roles_resolve(const affect_motion *m, affect_roles *roles)
         int32_t best = -1;
         for (uint32_t j = 0; j < n; j++)
             if (!names[j].end_site && names[j].side == SIDE_NONE &&
-                strcmp(names[j].word, "spine") == 0 && (int32_t)j != roles->joint[AFFECT_ROLE_SPINE])
+                strcmp(names[j].word, "spine") == 0 &&
+                (int32_t)j != roles->joint[AFFECT_ROLE_SPINE])
                 best = (int32_t)j;
         roles->joint[AFFECT_ROLE_CHEST] = best;
     }
@@ -265,9 +268,11 @@ affect_status affect_roles_set(const affect_motion *m, affect_roles *roles, cons
 {
     int r = affect_role_from_name(role_name);
     if (r < 0)
-        return affect_fail(err, AFFECT_ERR_INVALID, "unknown role \"%.64s\" (expected pelvis, spine, "
-                           "chest, neck, head, left_/right_ shoulder, elbow, hand, hip, knee, foot, toe)",
-                           role_name);
+        return affect_fail(
+            err, AFFECT_ERR_INVALID,
+            "unknown role \"%.64s\" (expected pelvis, spine, "
+            "chest, neck, head, left_/right_ shoulder, elbow, hand, hip, knee, foot, toe)",
+            role_name);
     if (!joint_name) {
         roles->joint[r] = -1;
         return AFFECT_OK;

@@ -282,8 +282,7 @@ double affect_motion_body_size(const affect_motion *m)
     return size > 0 ? size : 1.0;
 }
 
-affect_status affect_motion_free_links(const affect_motion *m, bool *free_link,
-                                       affect_error *err)
+affect_status affect_motion_free_links(const affect_motion *m, bool *free_link, affect_error *err)
 {
     uint32_t nj = m->n_joints;
     uint32_t *n_children = affect_calloc(nj, sizeof *n_children);
@@ -299,7 +298,8 @@ affect_status affect_motion_free_links(const affect_motion *m, bool *free_link,
         int32_t p = m->parents[j];
         if (p < 0)
             continue;
-        if (m->parents[p] < 0 && n_children[p] == 1 && (int32_t)j == roles.joint[AFFECT_ROLE_PELVIS]) {
+        if (m->parents[p] < 0 && n_children[p] == 1 &&
+            (int32_t)j == roles.joint[AFFECT_ROLE_PELVIS]) {
             free_link[j] = true; /* a reference root above the pelvis */
             continue;
         }
@@ -394,8 +394,8 @@ typedef struct subtrees {
     uint32_t *start, *list;
 } subtrees;
 
-static affect_status subtrees_build(const affect_motion *m, const children *ch, const bool *free_link,
-                                    subtrees *s, affect_error *err)
+static affect_status subtrees_build(const affect_motion *m, const children *ch,
+                                    const bool *free_link, subtrees *s, affect_error *err)
 {
     uint32_t n = m->n_joints;
     s->start = affect_malloc_array((size_t)n + 1, sizeof *s->start);
@@ -465,8 +465,9 @@ static void rigid_plan_free(rigid_plan *p)
 static affect_status same_joints(const affect_motion *a, const affect_motion *b, affect_error *err)
 {
     if (a->n_joints != b->n_joints)
-        return affect_fail(err, AFFECT_ERR_INVALID, "the reference motion has %u joints, the motion %u",
-                           b->n_joints, a->n_joints);
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "the reference motion has %u joints, the motion %u", b->n_joints,
+                           a->n_joints);
     for (uint32_t j = 0; j < a->n_joints; j++)
         if (strcmp(a->names[j], b->names[j]) != 0 || a->parents[j] != b->parents[j])
             return affect_fail(err, AFFECT_ERR_INVALID,
@@ -489,7 +490,8 @@ static affect_status rigid_plan_make(const affect_motion *m, const affect_rigid_
                            "the motion has no skeleton: no joint has a parent (set parents when "
                            "importing, e.g. \"parents\" in JSON)");
     if (opt->lengths == AFFECT_RIGID_REFERENCE && !opt->reference)
-        return affect_fail(err, AFFECT_ERR_INVALID, "bone lengths from a reference need a reference motion");
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "bone lengths from a reference need a reference motion");
     p->order = affect_malloc_array(n, sizeof *p->order);
     p->free_link = affect_malloc_array(n, sizeof *p->free_link);
     p->len = affect_malloc_array(n, sizeof *p->len);
@@ -529,8 +531,9 @@ static void shift_part(const subtrees *s, uint32_t j, const double d[3], double 
 
 /* One frame: q the input positions, p the output (J × 3 doubles). prev is the previous
  * frame's output or NULL (directions for bones whose input has none). */
-static void rigid_frame(const affect_motion *m, const rigid_plan *pl, const affect_rigid_options *opt,
-                        double size, const double *q, const double *prev, double *p)
+static void rigid_frame(const affect_motion *m, const rigid_plan *pl,
+                        const affect_rigid_options *opt, double size, const double *q,
+                        const double *prev, double *p)
 {
     uint32_t nj = m->n_joints;
     double min_len = BONE_MIN_REL * size;
@@ -622,9 +625,9 @@ static affect_status rigid_positions(const affect_motion *m, const affect_rigid_
 
 /* Rounds one frame of rigid positions (doubles) to float32, parents first, choosing for every
  * bone's lower joint among the float neighbours of its exact position (the nearest float and
- * up to ROUND_STEPS steps either way on each axis) the one whose distance to the already rounded parent is
- * closest to the bone's length: rounding alone would leave length errors of a few float steps
- * (2e-6 relative on a 10 cm bone 1.7 m from the origin); the chosen joint moves at most
+ * up to ROUND_STEPS steps either way on each axis) the one whose distance to the already rounded
+ * parent is closest to the bone's length: rounding alone would leave length errors of a few float
+ * steps (2e-6 relative on a 10 cm bone 1.7 m from the origin); the chosen joint moves at most
  * ROUND_STEPS float steps further than nearest rounding. */
 static void round_rigid_frame(const affect_motion *m, const rigid_plan *pl, const double *p,
                               float *o)
@@ -774,10 +777,10 @@ static bool horn(const double *r, const double *b, uint32_t n, double q[4])
     }
     double sxx = S[0], sxy = S[1], sxz = S[2], syx = S[3], syy = S[4], syz = S[5], szx = S[6],
            szy = S[7], szz = S[8];
-    double N[16] = {sxx + syy + szz, syz - szy,        szx - sxz,         sxy - syx,
-                    syz - szy,       sxx - syy - szz,  sxy + syx,         szx + sxz,
-                    szx - sxz,       sxy + syx,        -sxx + syy - szz,  syz + szy,
-                    sxy - syx,       szx + sxz,        syz + szy,         -sxx - syy + szz};
+    double N[16] = {sxx + syy + szz, syz - szy,       szx - sxz,        sxy - syx,
+                    syz - szy,       sxx - syy - szz, sxy + syx,        szx + sxz,
+                    szx - sxz,       sxy + syx,       -sxx + syy - szz, syz + szy,
+                    sxy - syx,       szx + sxz,       syz + szy,        -sxx - syy + szz};
     double lambda[4];
     sym4_top(N, lambda, q);
     affect_quat_normalize(q);
@@ -796,8 +799,8 @@ typedef struct ik_work {
 } ik_work;
 
 /* Local rotation of joint j at one frame from its bone children (see affect_motion_ik). */
-static void ik_joint(const affect_motion *out, const rigid_plan *pl, const double *g,
-                     uint32_t j, const double *wpar_inv, ik_work *w, double min_len, double q[4])
+static void ik_joint(const affect_motion *out, const rigid_plan *pl, const double *g, uint32_t j,
+                     const double *wpar_inv, ik_work *w, double min_len, double q[4])
 {
     uint32_t n = 0;
     for (uint32_t k = pl->ch.start[j]; k < pl->ch.start[j + 1]; k++) {
@@ -883,7 +886,8 @@ static void ik_mean_shapes(const affect_motion *m, const rigid_plan *pl, const d
             if (!used)
                 break;
             for (uint32_t i = 0; i < n; i++) {
-                double len = norm3(out->skel[w->kids[i]].offset), na = norm3(w->acc + (size_t)i * 3);
+                double len = norm3(out->skel[w->kids[i]].offset),
+                       na = norm3(w->acc + (size_t)i * 3);
                 if (na > 0)
                     for (int a = 0; a < 3; a++)
                         w->shape[i * 3 + a] = w->acc[i * 3 + a] * len / na;
@@ -959,8 +963,9 @@ static double group_residual(const affect_motion *m, const double *g, uint32_t j
  * with several when asked (AFFECT_IK_SIBLINGS_TRANSLATE), or when rotations alone would miss
  * their positions by more than IK_SIBLING_TOL_REL of the body size (AFFECT_IK_SIBLINGS_AUTO).
  * End Sites never (they have no channels). */
-static void ik_mark_moved(const affect_motion *m, const rigid_plan *pl, const affect_ik_options *opt,
-                          const double *g, double min_len, ik_work *w, const affect_motion *out)
+static void ik_mark_moved(const affect_motion *m, const rigid_plan *pl,
+                          const affect_ik_options *opt, const double *g, double min_len, ik_work *w,
+                          const affect_motion *out)
 {
     double tol = IK_SIBLING_TOL_REL * affect_motion_body_size(m);
     for (uint32_t j = 0; j < m->n_joints; j++)
@@ -1011,8 +1016,9 @@ affect_status affect_motion_ik(const affect_motion *m, const affect_ik_options *
         opt = &def;
     }
     if (opt->rest_frame >= m->n_frames)
-        return affect_fail(err, AFFECT_ERR_RANGE, "rest frame %u out of range (the motion has %u frames)",
-                           opt->rest_frame, m->n_frames);
+        return affect_fail(err, AFFECT_ERR_RANGE,
+                           "rest frame %u out of range (the motion has %u frames)", opt->rest_frame,
+                           m->n_frames);
     uint32_t nj = m->n_joints;
     size_t nv = (size_t)nj * 3;
     ik_work w = {0};
@@ -1116,10 +1122,11 @@ affect_status affect_motion_skeletal(const affect_motion *m, affect_rotation_sou
             return st;
         if (dist <= AFFECT_STORED_FK_TOL_REL * affect_motion_body_size(m))
             return AFFECT_OK;
-        return affect_fail(err, AFFECT_ERR_INVALID,
-                           "the stored rotations do not reproduce the positions (joint %u \"%.64s\", "
-                           "frame %u: %g apart); use {\"rotations\":\"ik\"} to rebuild them",
-                           joint, m->names[joint], frame, dist);
+        return affect_fail(
+            err, AFFECT_ERR_INVALID,
+            "the stored rotations do not reproduce the positions (joint %u \"%.64s\", "
+            "frame %u: %g apart); use {\"rotations\":\"ik\"} to rebuild them",
+            joint, m->names[joint], frame, dist);
     }
     if (source == AFFECT_ROTATIONS_STORED)
         return affect_fail(err, AFFECT_ERR_INVALID,
@@ -1130,9 +1137,8 @@ affect_status affect_motion_skeletal(const affect_motion *m, affect_rotation_sou
 
 /* ---- angles ---- */
 
-void affect_motion_joint_angles(const affect_motion *m, uint32_t t, uint32_t j,
-                                const int order[3], const double *prev, double q[4],
-                                double deg[3], double *speed)
+void affect_motion_joint_angles(const affect_motion *m, uint32_t t, uint32_t j, const int order[3],
+                                const double *prev, double q[4], double deg[3], double *speed)
 {
     uint32_t nj = m->n_joints;
     qload(m->rot + ((size_t)t * nj + j) * 4, q);

@@ -58,8 +58,8 @@
 #include "affect/quant.h"
 #include "internal.h"
 
-#define FLAG_F32 1u /* record flag: the axes are float32 */
-#define FLAG_Q4 2u  /* record flag: the axes are in 4-bit blocks (affect/quant.h) */
+#define FLAG_F32 1u           /* record flag: the axes are float32 */
+#define FLAG_Q4 2u            /* record flag: the axes are in 4-bit blocks (affect/quant.h) */
 #define BLOCK_DOUBLES 262144u /* doubles in one centred column block of X */
 #define GRAM_MATCH_TOL 1e-6   /* relative trace mismatch tolerated by affect_spca_fit_gram */
 #define BLAS_MAX ((size_t)INT_MAX)
@@ -329,9 +329,9 @@ static affect_status label_factor(work *w, const uint32_t *y, size_t n, uint32_t
             }
         /* column-major 'U' on the symmetric row-major array: eigenvector r is row r */
         lapack_int info;
-        AFFECT_BLAS(info = LAPACKE_dsyev_work(LAPACK_COL_MAJOR, 'V', 'U', (lapack_int)c, g,
-                                              (lapack_int)c, w->mu, w->lwork,
-                                              (lapack_int)w->nlwork));
+        AFFECT_BLAS(info =
+                        LAPACKE_dsyev_work(LAPACK_COL_MAJOR, 'V', 'U', (lapack_int)c, g,
+                                           (lapack_int)c, w->mu, w->lwork, (lapack_int)w->nlwork));
         if (info != 0)
             return eig_failed((int)info, err);
         for (uint32_t r = 0; r < c; r++)
@@ -492,8 +492,8 @@ static affect_status fit(const double *x, const double *k, size_t n, size_t d, c
         goto cleanup;
     s = model_alloc(p, d);
     if (!s) {
-        st = affect_nomem_of(err, (size_t)p + 1, d * sizeof(double), "the sPCA's %u x %zu axes",
-                             p, d);
+        st = affect_nomem_of(err, (size_t)p + 1, d * sizeof(double), "the sPCA's %u x %zu axes", p,
+                             d);
         goto cleanup;
     }
     double sums[2] = {0.0, 0.0};
@@ -545,8 +545,8 @@ affect_status affect_spca_fit_dual(const double *k, size_t n, size_t d, const ui
         goto cleanup;
     s = model_alloc(p, d);
     if (!s) {
-        st = affect_nomem_of(err, (size_t)p + 1, d * sizeof(double), "the sPCA's %u x %zu axes",
-                             p, d);
+        st = affect_nomem_of(err, (size_t)p + 1, d * sizeof(double), "the sPCA's %u x %zu axes", p,
+                             d);
         goto cleanup;
     }
     if (!(s->coef = affect_malloc_array(n * p, sizeof *s->coef))) {
@@ -793,9 +793,9 @@ affect_status affect_spca_decode(affect_br *r, affect_spca **out, affect_error *
                            "sPCA: truncated in the eigenvalues (offset %zu)", eig_off);
     size_t ax_off = r->off, pd, ax_bytes, q4_bytes = 0;
     if (!affect_mul_size(p, (size_t)d, &pd) ||
-        ((flags & FLAG_Q4) ? !affect_q4_size((size_t)d, &q4_bytes) ||
-                                 !affect_mul_size(p, q4_bytes, &ax_bytes)
-                           : !affect_mul_size(pd, width, &ax_bytes)) ||
+        ((flags & FLAG_Q4)
+             ? !affect_q4_size((size_t)d, &q4_bytes) || !affect_mul_size(p, q4_bytes, &ax_bytes)
+             : !affect_mul_size(pd, width, &ax_bytes)) ||
         !affect_br_has(r, ax_bytes, 1))
         return affect_fail(err, AFFECT_ERR_FORMAT, "sPCA: truncated in the axes (offset %zu)",
                            ax_off);

@@ -212,11 +212,21 @@ void affect_strbuf_json_string(affect_strbuf *sb, const char *s)
         affect_strbuf_append(sb, run, (size_t)(p - run));
         run = p + 1;
         switch (c) {
-        case '"': affect_strbuf_puts(sb, "\\\""); break;
-        case '\\': affect_strbuf_puts(sb, "\\\\"); break;
-        case '\n': affect_strbuf_puts(sb, "\\n"); break;
-        case '\r': affect_strbuf_puts(sb, "\\r"); break;
-        case '\t': affect_strbuf_puts(sb, "\\t"); break;
+        case '"':
+            affect_strbuf_puts(sb, "\\\"");
+            break;
+        case '\\':
+            affect_strbuf_puts(sb, "\\\\");
+            break;
+        case '\n':
+            affect_strbuf_puts(sb, "\\n");
+            break;
+        case '\r':
+            affect_strbuf_puts(sb, "\\r");
+            break;
+        case '\t':
+            affect_strbuf_puts(sb, "\\t");
+            break;
         default: {
             char e[6] = {'\\', 'u', '0', '0', hex[c >> 4], hex[c & 15]};
             affect_strbuf_append(sb, e, 6);
@@ -233,11 +243,21 @@ void affect_strbuf_xml(affect_strbuf *sb, const char *s)
     for (const char *p = s; *p; p++) {
         const char *rep = NULL;
         switch (*p) {
-        case '&': rep = "&amp;"; break;
-        case '<': rep = "&lt;"; break;
-        case '>': rep = "&gt;"; break;
-        case '"': rep = "&quot;"; break;
-        case '\'': rep = "&#39;"; break;
+        case '&':
+            rep = "&amp;";
+            break;
+        case '<':
+            rep = "&lt;";
+            break;
+        case '>':
+            rep = "&gt;";
+            break;
+        case '"':
+            rep = "&quot;";
+            break;
+        case '\'':
+            rep = "&#39;";
+            break;
         default:
             if ((unsigned char)*p < 0x20 && *p != '\t' && *p != '\n')
                 rep = "?";

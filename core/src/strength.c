@@ -40,7 +40,7 @@
 #define FLAG_PCA 1u
 #define FLAG_RELATIVE 2u
 #define FLAG_STANDARDIZE 4u
-#define DT_CLAMP 10.0        /* durations kept within [mean / 10, mean × 10] */
+#define DT_CLAMP 10.0 /* durations kept within [mean / 10, mean × 10] */
 #define MAX_OUT_FRAMES 1000000u
 #define HEADER_SIZE 44u
 #define FIXED_SIZE (HEADER_SIZE + 8 * 8 + 4 * 4 + 8 * 4 + AFFECT_MOTION_UNIT_MAX + 1)
@@ -104,8 +104,8 @@ static bool alloc_arrays(affect_strength *s)
     s->train_r = affect_calloc(s->n_train, sizeof(double));
     s->train_z = affect_calloc(nz, sizeof(double));
     s->zbar = affect_calloc(s->pdim, sizeof(double));
-    if (!s->names || !s->parents || !s->seg_dt || !s->w || !s->level_names ||
-        !s->level_strength || !s->level_count || !s->train_r || !s->train_z || !s->zbar)
+    if (!s->names || !s->parents || !s->seg_dt || !s->w || !s->level_names || !s->level_strength ||
+        !s->level_count || !s->train_r || !s->train_z || !s->zbar)
         return false;
     if (s->pca) {
         s->mean = affect_calloc(s->dim, sizeof(double));
@@ -127,13 +127,11 @@ static affect_status check_skeleton(uint32_t J, char *const *names, const affect
                                     affect_error *err)
 {
     if (m->n_joints != J)
-        return affect_fail(err, AFFECT_ERR_INVALID, "%u joints, the model has %u", m->n_joints,
-                           J);
+        return affect_fail(err, AFFECT_ERR_INVALID, "%u joints, the model has %u", m->n_joints, J);
     for (uint32_t j = 0; j < J; j++)
         if (strcmp(m->names[j], names[j]) != 0)
-            return affect_fail(err, AFFECT_ERR_INVALID,
-                               "joint %u is \"%s\", the model's is \"%s\"", j, m->names[j],
-                               names[j]);
+            return affect_fail(err, AFFECT_ERR_INVALID, "joint %u is \"%s\", the model's is \"%s\"",
+                               j, m->names[j], names[j]);
     return AFFECT_OK;
 }
 
@@ -247,17 +245,17 @@ static void unproject(const affect_strength *s, const double *z, double *x)
         memcpy(x, z, sizeof(double) * s->dim);
     } else {
         memcpy(x, s->mean, sizeof(double) * s->dim);
-        AFFECT_BLAS(cblas_dgemv(CblasRowMajor, CblasTrans, (int)s->pdim, (int)s->dim, 1.0,
-                                s->comps, (int)s->dim, z, 1, 1.0, x, 1));
+        AFFECT_BLAS(cblas_dgemv(CblasRowMajor, CblasTrans, (int)s->pdim, (int)s->dim, 1.0, s->comps,
+                                (int)s->dim, z, 1, 1.0, x, 1));
     }
     if (s->scale)
         for (uint32_t c = 0; c < s->dim; c++)
             x[c] *= s->scale[c];
 }
 
-affect_status affect_strength_features(const affect_strength *s, const affect_motion *m,
-                                       double *x, double *z, uint32_t *keyframes,
-                                       affect_monitor *mon, affect_error *err)
+affect_status affect_strength_features(const affect_strength *s, const affect_motion *m, double *x,
+                                       double *z, uint32_t *keyframes, affect_monitor *mon,
+                                       affect_error *err)
 {
     affect_status st = check_skeleton(s->n_joints, s->names, m, err);
     if (st != AFFECT_OK)
@@ -461,8 +459,7 @@ static affect_status krr_fit(const double *r, const double *Z, uint32_t m, uint3
                                      (lapack_int)m, alpha_t, (lapack_int)m));
     if (info != 0)
         return affect_fail(err, AFFECT_ERR_RANGE,
-                           "kernel ridge regression: the system is singular (info %d)",
-                           (int)info);
+                           "kernel ridge regression: the system is singular (info %d)", (int)info);
     return AFFECT_OK;
 }
 
@@ -525,10 +522,14 @@ affect_status affect_strength_fit_regression(affect_strength *s, affect_strength
     uint32_t *fold = NULL, *order = NULL;
     double *rr = NULL, *ZZ = NULL, *K = NULL, *at = NULL, *zb = NULL, *pred = NULL, *wt = NULL;
     affect_ws_part parts[] = {
-        {(void **)&fold, n, sizeof(uint32_t)},     {(void **)&order, n, sizeof(uint32_t)},
-        {(void **)&rr, n, sizeof(double)},         {(void **)&ZZ, (size_t)n * p, sizeof(double)},
-        {(void **)&K, (size_t)n * n, sizeof(double)}, {(void **)&at, (size_t)n * p, sizeof(double)},
-        {(void **)&zb, p, sizeof(double)},         {(void **)&pred, p, sizeof(double)},
+        {(void **)&fold, n, sizeof(uint32_t)},
+        {(void **)&order, n, sizeof(uint32_t)},
+        {(void **)&rr, n, sizeof(double)},
+        {(void **)&ZZ, (size_t)n * p, sizeof(double)},
+        {(void **)&K, (size_t)n * n, sizeof(double)},
+        {(void **)&at, (size_t)n * p, sizeof(double)},
+        {(void **)&zb, p, sizeof(double)},
+        {(void **)&pred, p, sizeof(double)},
         {(void **)&wt, n, sizeof(double)},
     };
     void *block = affect_ws_alloc(parts, sizeof parts / sizeof parts[0]);
@@ -607,8 +608,8 @@ affect_status affect_strength_fit_regression(affect_strength *s, affect_strength
     s->cv_constant = base;
     affect_strength_regression use = want;
     if (use == AFFECT_STRENGTH_REG_AUTO)
-        use = best_kr < best_ll ? AFFECT_STRENGTH_REG_KERNEL_RIDGE
-                                : AFFECT_STRENGTH_REG_LOCAL_LINEAR;
+        use =
+            best_kr < best_ll ? AFFECT_STRENGTH_REG_KERNEL_RIDGE : AFFECT_STRENGTH_REG_LOCAL_LINEAR;
     s->regression = use;
     memset(s->zbar, 0, sizeof(double) * p);
     for (uint32_t i = 0; i < n; i++)
@@ -666,8 +667,8 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
     uint32_t used = 0, first = UINT32_MAX;
     for (uint32_t i = 0; i < n; i++) {
         if (level[i] >= (int32_t)n_levels)
-            return affect_fail(err, AFFECT_ERR_RANGE, "motion %u: level %d of %u", i,
-                               (int)level[i], n_levels);
+            return affect_fail(err, AFFECT_ERR_RANGE, "motion %u: level %d of %u", i, (int)level[i],
+                               n_levels);
         if (level[i] >= 0) {
             used++;
             if (first == UINT32_MAX)
@@ -730,8 +731,8 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
     grp = group ? affect_malloc_array(used, sizeof *grp) : NULL;
     work = affect_malloc_array(D, sizeof(double));
     if (!X || !kf || !idx || !lv || (group && !grp) || !work) {
-        st = affect_nomem_of(err, (size_t)used, D * sizeof(double), "the %u x %zu features",
-                             used, D);
+        st = affect_nomem_of(err, (size_t)used, D * sizeof(double), "the %u x %zu features", used,
+                             D);
         goto cleanup;
     }
     uint32_t k = 0;
@@ -745,7 +746,7 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
         st = check_skeleton(J, s->names, motions[i], err);
         if (st == AFFECT_OK)
             st = motion_features(motions[i], q, s->relative, s->root, X + (size_t)k * D, kf, NULL,
-                                     NULL, opt->monitor, err);
+                                 NULL, opt->monitor, err);
         if (st != AFFECT_OK) {
             affect_prefix(err, "motion %u", i);
             goto cleanup;
@@ -815,8 +816,8 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
     for (uint32_t i = 0; i < used; i++)
         project(s, X + (size_t)i * D, s->train_z + (size_t)i * s->pdim, work);
     /* pairs and the ranker */
-    st = affect_rank_pairs(lv, grp, used, opt->similar, opt->fraction, opt->seed, &pairs,
-                           &n_pairs, err);
+    st = affect_rank_pairs(lv, grp, used, opt->similar, opt->fraction, opt->seed, &pairs, &n_pairs,
+                           err);
     if (st != AFFECT_OK)
         goto cleanup;
     size_t n_ordered = 0;
@@ -1047,8 +1048,8 @@ static affect_status edit_once(const affect_strength *s, const affect_motion *m,
     for (uint32_t c = 0; c < s->pdim; c++)
         dz[c] = ww > 0 ? (strength - r) * s->w[c] / ww : 0;
     if (s->pca)
-        AFFECT_BLAS(cblas_dgemv(CblasRowMajor, CblasTrans, (int)s->pdim, (int)s->dim, 1.0,
-                                s->comps, (int)s->dim, dz, 1, 0.0, work, 1));
+        AFFECT_BLAS(cblas_dgemv(CblasRowMajor, CblasTrans, (int)s->pdim, (int)s->dim, 1.0, s->comps,
+                                (int)s->dim, dz, 1, 0.0, work, 1));
     else
         memcpy(work, dz, sizeof(double) * s->dim);
     for (uint32_t c = 0; c < s->dim; c++)
@@ -1117,9 +1118,9 @@ cleanup:
     return st;
 }
 
-typedef affect_status (*make_fn)(const affect_strength *s, const affect_motion *m,
-                                 double strength, bool rigid, affect_motion **out,
-                                 affect_monitor *mon, affect_error *err);
+typedef affect_status (*make_fn)(const affect_strength *s, const affect_motion *m, double strength,
+                                 bool rigid, affect_motion **out, affect_monitor *mon,
+                                 affect_error *err);
 
 /* Runs make at the target, measures the result's strength, and corrects the target by the
  * miss (t ← t + (s − r)) up to AFFECT_STRENGTH_CORRECTIONS times while the miss shrinks and is
@@ -1270,8 +1271,7 @@ static bool read_name(affect_br *r, char **out, affect_error *err, const char *w
         return false;
     }
     if (len == 0 || !affect_utf8_valid((const char *)p, len)) {
-        *st = affect_fail(err, AFFECT_ERR_FORMAT, "%s %u: the name is empty or not UTF-8", what,
-                          k);
+        *st = affect_fail(err, AFFECT_ERR_FORMAT, "%s %u: the name is empty or not UTF-8", what, k);
         return false;
     }
     *out = affect_strndup((const char *)p, len);
@@ -1290,8 +1290,8 @@ static bool finite_all(const double *v, size_t n)
     return true;
 }
 
-affect_status affect_strength_decode(const unsigned char *data, size_t size,
-                                     affect_strength **out, affect_error *err)
+affect_status affect_strength_decode(const unsigned char *data, size_t size, affect_strength **out,
+                                     affect_error *err)
 {
     *out = NULL;
     if (size < FIXED_SIZE + 8)
@@ -1393,8 +1393,8 @@ affect_status affect_strength_decode(const unsigned char *data, size_t size,
     s->stats.converged = conv != 0;
     if (conv > 1 || pad != 0 || s->unit[AFFECT_MOTION_UNIT_MAX] != '\0' ||
         !(s->fps > 0 && s->fps <= AFFECT_MOTION_MAX_FPS) || !(s->C > 0 && isfinite(s->C)) ||
-        !(s->reg_h > 0 && isfinite(s->reg_h)) || !isfinite(s->reg_lambda) ||
-        s->reg_lambda < 0 || !isfinite(s->pca_variance) || s->stats.correct > s->stats.ordered ||
+        !(s->reg_h > 0 && isfinite(s->reg_h)) || !isfinite(s->reg_lambda) || s->reg_lambda < 0 ||
+        !isfinite(s->pca_variance) || s->stats.correct > s->stats.ordered ||
         !isfinite(s->stats.objective)) {
         st = affect_fail(err, AFFECT_ERR_FORMAT, "strength model header values out of range");
         goto cleanup;
@@ -1417,8 +1417,7 @@ affect_status affect_strength_decode(const unsigned char *data, size_t size,
     for (uint32_t l = 0; l < L; l++) {
         if (!read_name(&r, &s->level_names[l], err, "level", l, &st))
             goto cleanup;
-        if (!affect_br_f64(&r, &s->level_strength[l]) ||
-            !affect_br_u32(&r, &s->level_count[l])) {
+        if (!affect_br_f64(&r, &s->level_strength[l]) || !affect_br_u32(&r, &s->level_count[l])) {
             st = affect_fail(err, AFFECT_ERR_FORMAT, "strength model truncated in level %u", l);
             goto cleanup;
         }

@@ -16,13 +16,27 @@
 #include "affect/laban.h"
 #include "affect/normalize.h"
 
-const char *const affect_summary_names[AFFECT_SUMMARY_N] = {
-    "duration",       "root_speed",       "root_speed_p90",   "root_bounce",
-    "turn_rate",      "net_turn",         "head_speed",       "left_hand_speed",
-    "right_hand_speed", "left_foot_speed", "right_foot_speed", "head_speed_p90",
-    "left_hand_speed_p90", "right_hand_speed_p90", "left_foot_speed_p90",
-    "right_foot_speed_p90", "head_height", "head_forward", "hand_height", "hand_spread",
-    "foot_spread"};
+const char *const affect_summary_names[AFFECT_SUMMARY_N] = {"duration",
+                                                            "root_speed",
+                                                            "root_speed_p90",
+                                                            "root_bounce",
+                                                            "turn_rate",
+                                                            "net_turn",
+                                                            "head_speed",
+                                                            "left_hand_speed",
+                                                            "right_hand_speed",
+                                                            "left_foot_speed",
+                                                            "right_foot_speed",
+                                                            "head_speed_p90",
+                                                            "left_hand_speed_p90",
+                                                            "right_hand_speed_p90",
+                                                            "left_foot_speed_p90",
+                                                            "right_foot_speed_p90",
+                                                            "head_height",
+                                                            "head_forward",
+                                                            "hand_height",
+                                                            "hand_spread",
+                                                            "foot_spread"};
 
 enum { N_EFF = 5 }; /* head, left hand, right hand, left foot, right foot */
 
@@ -182,9 +196,9 @@ affect_status affect_motion_summary(const affect_motion *m, int up, double out[A
         }
         if (hands) {
             out[18] += 0.5 * (row[3 + up] + row[6 + up]);
-            out[19] += sqrt((row[3] - row[6]) * (row[3] - row[6]) +
-                            (row[4] - row[7]) * (row[4] - row[7]) +
-                            (row[5] - row[8]) * (row[5] - row[8]));
+            out[19] +=
+                sqrt((row[3] - row[6]) * (row[3] - row[6]) + (row[4] - row[7]) * (row[4] - row[7]) +
+                     (row[5] - row[8]) * (row[5] - row[8]));
         }
         if (feet)
             out[20] += sqrt((row[9] - row[12]) * (row[9] - row[12]) +

@@ -163,8 +163,8 @@ affect_status affect_svm_gram(const double *X, size_t n, size_t d, double *G, af
     affect_status st = check_sizes(n, d, err);
     if (st != AFFECT_OK || n == 0)
         return st;
-    AFFECT_BLAS(cblas_dsyrk(CblasRowMajor, CblasUpper, CblasNoTrans, (int)n, (int)d, 1.0, X,
-                            (int)d, 0.0, G, (int)n));
+    AFFECT_BLAS(cblas_dsyrk(CblasRowMajor, CblasUpper, CblasNoTrans, (int)n, (int)d, 1.0, X, (int)d,
+                            0.0, G, (int)n));
     for (size_t i = 1; i < n; i++)
         for (size_t j = 0; j < i; j++)
             G[i * n + j] = G[j * n + i];
@@ -375,8 +375,8 @@ static uint32_t winner(const uint32_t *votes, uint32_t c)
 /* ---- training and prediction ---- */
 
 /* The dual part of training: libsvm on the Gram matrix G, a model without weights. */
-static affect_status train_dual(const double *G, size_t n, size_t d, const uint32_t *y,
-                                uint32_t c, double C, affect_svm **out, affect_error *err)
+static affect_status train_dual(const double *G, size_t n, size_t d, const uint32_t *y, uint32_t c,
+                                double C, affect_svm **out, affect_error *err)
 {
     affect_status st;
     problem p;
@@ -475,12 +475,10 @@ affect_status affect_svm_add_rows(affect_svm *m, const double *B, size_t b, size
                            col0 + b, d);
     if (!m->w) {
         if (!affect_mul_size(P, d, &total))
-            return affect_fail(err, AFFECT_ERR_RANGE, "weights of %zu pairs x %zu too large", P,
-                               d);
+            return affect_fail(err, AFFECT_ERR_RANGE, "weights of %zu pairs x %zu too large", P, d);
         m->w = affect_calloc(total, sizeof *m->w);
         if (!m->w)
-            return affect_nomem_of(err, total, sizeof *m->w, "the SVM's %zu x %zu weights", P,
-                                   d);
+            return affect_nomem_of(err, total, sizeof *m->w, "the SVM's %zu x %zu weights", P, d);
     }
     uint32_t start[AFFECT_SVM_MAX_CLASSES];
     sv_starts(m, start);
@@ -705,8 +703,8 @@ static affect_status check_select(size_t n, size_t d, const uint32_t *y, uint32_
 
 static affect_status select_c(const double *G, size_t n, const uint32_t *y, uint32_t c,
                               const double *candidates, size_t n_cand, uint32_t folds,
-                              uint64_t seed, double *best_c, double *best_acc,
-                              affect_monitor *mon, affect_error *err);
+                              uint64_t seed, double *best_c, double *best_acc, affect_monitor *mon,
+                              affect_error *err);
 
 affect_status affect_svm_select_c(const double *X, size_t n, size_t d, const uint32_t *y,
                                   uint32_t c, const double *candidates, size_t n_cand,
@@ -742,8 +740,8 @@ affect_status affect_svm_select_c_gram(const double *G, size_t n, size_t d, cons
  * fit (a libsvm fit itself cannot be stopped). */
 static affect_status select_c(const double *G, size_t n, const uint32_t *y, uint32_t c,
                               const double *candidates, size_t n_cand, uint32_t folds,
-                              uint64_t seed, double *best_c, double *best_acc,
-                              affect_monitor *mon, affect_error *err)
+                              uint64_t seed, double *best_c, double *best_acc, affect_monitor *mon,
+                              affect_error *err)
 {
     affect_status st;
     uint32_t *fold_of = NULL;
@@ -955,8 +953,8 @@ static affect_status get_f32s(affect_br *r, size_t n, double **out, const char *
     for (size_t i = 0; i < n; i++) {
         if (!isfinite(tmp[i])) {
             affect_free(tmp);
-            return affect_fail(err, AFFECT_ERR_FORMAT,
-                               "SVM: non-finite value in %s (offset %zu)", field, off + 4 * i);
+            return affect_fail(err, AFFECT_ERR_FORMAT, "SVM: non-finite value in %s (offset %zu)",
+                               field, off + 4 * i);
         }
         (*out)[i] = tmp[i];
     }

@@ -45,7 +45,8 @@ const char *affect_transfer_options_check(const affect_transfer_options *opt)
         return "band edges must satisfy 0 < low < high (Hz)";
     if (!(opt->max_ratio >= 1 && isfinite(opt->max_ratio)))
         return "max_ratio must be a finite number of at least 1";
-    if (opt->amplitude != AFFECT_TRANSFER_VELOCITY && opt->amplitude != AFFECT_TRANSFER_DISPLACEMENT)
+    if (opt->amplitude != AFFECT_TRANSFER_VELOCITY &&
+        opt->amplitude != AFFECT_TRANSFER_DISPLACEMENT)
         return "amplitude must be \"velocity\" or \"displacement\"";
     return NULL;
 }
@@ -86,9 +87,8 @@ static void mean_rotation(const double *q, uint32_t T, double mean[4])
         double sum[4] = {0, 0, 0, 0};
         for (uint32_t t = 0; t < T; t++) {
             const double *o = q + 4 * (size_t)t;
-            double s = o[0] * mean[0] + o[1] * mean[1] + o[2] * mean[2] + o[3] * mean[3] < 0
-                           ? -1.0
-                           : 1.0;
+            double s =
+                o[0] * mean[0] + o[1] * mean[1] + o[2] * mean[2] + o[3] * mean[3] < 0 ? -1.0 : 1.0;
             for (int i = 0; i < 4; i++)
                 sum[i] += s * o[i];
         }
@@ -221,8 +221,7 @@ static bool below(const affect_motion *m, uint32_t j, uint32_t top)
 }
 
 /* Leg joints take back the desired motion's rotations (src) where its foot rests. */
-static void hold_legs(const affect_motion *src, affect_motion *out, double *w,
-                      uint32_t contacts[2])
+static void hold_legs(const affect_motion *src, affect_motion *out, double *w, uint32_t contacts[2])
 {
     affect_roles roles;
     affect_roles_resolve(src, &roles);
@@ -267,14 +266,13 @@ typedef struct change {
 } change;
 
 static affect_status skeletal(const affect_motion *m, const char *what, uint32_t pair,
-                              const affect_ik_options *io, affect_motion **made,
-                              affect_error *err)
+                              const affect_ik_options *io, affect_motion **made, affect_error *err)
 {
     if (!m) {
         if (pair == 0)
             return affect_fail(err, AFFECT_ERR_INVALID, "no %s", what);
-        return affect_fail(err, AFFECT_ERR_INVALID, "donor pair %u: its %s is missing",
-                           pair - 1, what);
+        return affect_fail(err, AFFECT_ERR_INVALID, "donor pair %u: its %s is missing", pair - 1,
+                           what);
     }
     affect_status st = affect_motion_skeletal(m, AFFECT_ROTATIONS_AUTO, io, made, err);
     if (st && pair == 0)
@@ -291,8 +289,7 @@ static uint32_t learn(const affect_motion *d, const affect_motion *const *a,
 {
     uint32_t changed = 0, total = 0;
     double ta[AFFECT_TRANSFER_BANDS] = {0}, tb[AFFECT_TRANSFER_BANDS] = {0};
-    double floor = opt->amplitude == AFFECT_TRANSFER_VELOCITY ? VELOCITY_FLOOR
-                                                              : DISPLACEMENT_FLOOR;
+    double floor = opt->amplitude == AFFECT_TRANSFER_VELOCITY ? VELOCITY_FLOOR : DISPLACEMENT_FLOOR;
     for (uint32_t j = 0; j < d->n_joints; j++) {
         memset(&ch[j], 0, sizeof ch[j]);
         if (!rotational[j])
@@ -406,9 +403,10 @@ affect_status affect_transfer(const affect_motion *desired, const affect_motion 
     }
     const char *bad = affect_transfer_options_check(opt);
     if (bad)
-        return affect_fail(err, AFFECT_ERR_INVALID, "%s (strength %g, bands %g and %g Hz, "
-                           "max_ratio %g)", bad, opt->strength, opt->band_hz[0],
-                           opt->band_hz[1], opt->max_ratio);
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "%s (strength %g, bands %g and %g Hz, "
+                           "max_ratio %g)",
+                           bad, opt->strength, opt->band_hz[0], opt->band_hz[1], opt->max_ratio);
     if (n_pairs == 0 || !from || !to)
         return affect_fail(err, AFFECT_ERR_INVALID, "no donor pairs");
     affect_ik_options io;
@@ -438,9 +436,9 @@ affect_status affect_transfer(const affect_motion *desired, const affect_motion 
     for (uint32_t i = 0; i < 2 * n_pairs; i++) {
         const affect_motion *m = i < n_pairs ? from[i] : to[i - n_pairs];
         uint32_t pair = (i < n_pairs ? i : i - n_pairs) + 1;
-        if ((st = skeletal(m, i < n_pairs ? "motion in the source emotion"
-                                          : "motion in the target emotion",
-                           pair, &io, &made[i], err)))
+        if ((st = skeletal(
+                 m, i < n_pairs ? "motion in the source emotion" : "motion in the target emotion",
+                 pair, &io, &made[i], err)))
             goto done;
         sk[i] = made[i] ? made[i] : m;
         if (sk[i]->n_frames > longest)
@@ -467,8 +465,9 @@ affect_status affect_transfer(const affect_motion *desired, const affect_motion 
     for (uint32_t j = 0; j < d->n_joints; j++)
         has_child[j] = has_child[j] && d->parents[j] >= 0 && !free_link[j];
     if (learn(d, sk, sk + n_pairs, n_pairs, has_child, opt, &s, ch) == 0) {
-        st = affect_fail(err, AFFECT_ERR_INVALID, "no donor pair has a joint of the desired "
-                                                  "motion's skeleton (joint names)");
+        st = affect_fail(err, AFFECT_ERR_INVALID,
+                         "no donor pair has a joint of the desired "
+                         "motion's skeleton (joint names)");
         goto done;
     }
     if ((st = affect_monitor_check(opt->monitor, err)))
@@ -545,9 +544,8 @@ static double row_distance(const double *z, uint32_t p, uint32_t a, uint32_t b, 
 affect_status affect_transfer_pairs(const double *x, uint32_t n, uint32_t p, const int32_t *label,
                                     const int64_t *group, const bool *use, const double *dq,
                                     int32_t source, int32_t target, uint32_t n_pairs,
-                                    uint32_t n_cand, uint32_t *from,
-                                    uint32_t *to, double *dist, uint32_t *got,
-                                    affect_error *err)
+                                    uint32_t n_cand, uint32_t *from, uint32_t *to, double *dist,
+                                    uint32_t *got, affect_error *err)
 {
     *got = 0;
     double *z = affect_malloc_array((size_t)n * p + 1, sizeof *z);

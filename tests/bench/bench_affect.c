@@ -75,11 +75,11 @@
  *     pieces' sum undercounts the library's second pass of Fisher scores.
  *     The pieces are checked against the library: affect_classifier_train and
  *     affect_classifier_eval on the same fold must give the same C, the same sPCA eigenvalues
- *     (to 1e-9 of the largest: the Gram matrix is summed in another order) and the same labels (else exit status 1: the breakdown would not be the fold's work); the
- *     time of that (the whole fold) is reported next to the sum of the pieces.
- * Output: tables for people, then one line per metric for scripts:
- *     BENCH <metric> <value> <unit>
- * e.g. "BENCH affect_crossval_10fold 21.3 s". Exit status 1 if a computation fails.
+ *     (to 1e-9 of the largest: the Gram matrix is summed in another order) and the same labels
+ * (else exit status 1: the breakdown would not be the fold's work); the time of that (the whole
+ * fold) is reported next to the sum of the pieces. Output: tables for people, then one line per
+ * metric for scripts: BENCH <metric> <value> <unit> e.g. "BENCH affect_crossval_10fold 21.3 s".
+ * Exit status 1 if a computation fails.
  */
 #define _DEFAULT_SOURCE /* getloadavg */
 #define _POSIX_C_SOURCE 200809L
@@ -426,8 +426,8 @@ static int eval_pass(thr_ctx *t, bool ml_only)
         affect_classifier_out o = {
             .loglik = t->loglik, .decision = t->dec, .embed = t->embed, .votes = t->votes};
         affect_error err;
-        if (affect_classifier_eval(t->c, t->d->seqs[i].x, t->d->seqs[i].n_frames, NULL, ml_only, &o, NULL,
-                                   &err)) {
+        if (affect_classifier_eval(t->c, t->d->seqs[i].x, t->d->seqs[i].n_frames, NULL, ml_only, &o,
+                                   NULL, &err)) {
             fprintf(stderr, "bench_affect: eval of %s: %s\n", t->d->it[i].stem, err.msg);
             return 1;
         }
@@ -924,7 +924,8 @@ static int fold_library(const dataset *d, const uint32_t *fold_of, uint32_t fold
         if (fold_of[i] != fold)
             continue;
         affect_classifier_out out = {0};
-        if (affect_classifier_eval(c, d->seqs[i].x, d->seqs[i].n_frames, NULL, false, &out, NULL, &err)) {
+        if (affect_classifier_eval(c, d->seqs[i].x, d->seqs[i].n_frames, NULL, false, &out, NULL,
+                                   &err)) {
             fprintf(stderr, "bench_affect: affect_classifier_eval: %s\n", err.msg);
             goto done;
         }
@@ -1097,7 +1098,8 @@ int main(int argc, char **argv)
     print_load("at start");
     printf("openblas: %s; %d thread%s%s\n", openblas_get_config(), blas_threads,
            blas_threads == 1 ? "" : "s",
-           blas_threads == 1 ? "" : " (WARNING: set OPENBLAS_NUM_THREADS=1 for single-core numbers)");
+           blas_threads == 1 ? ""
+                             : " (WARNING: set OPENBLAS_NUM_THREADS=1 for single-core numbers)");
     size_t part = affect_fisher_dim(&d.cfg.hmm, d.cfg.groups);
     printf("data set: %s\n  %u motions (angry, happy, normal, sad: 11 each), %llu frames at %g "
            "fps, %u joints -> %u dimensions (unit %s, no velocity)\n",

@@ -34,8 +34,8 @@
 #endif
 
 static const char *const emotions[4] = {"angry", "happy", "normal", "sad"};
-static const char *const contents[10] = {"walk", "run", "dash", "walk-back", "walk-left",
-                                         "walk-right", "bow", "bye", "byebye", "guide"};
+static const char *const contents[10] = {"walk",       "run", "dash", "walk-back", "walk-left",
+                                         "walk-right", "bow", "bye",  "byebye",    "guide"};
 
 typedef struct bench {
     affect_fda_config cfg;
@@ -130,8 +130,8 @@ int main(int argc, char **argv)
     affect_features_options fo;
     affect_features_options_default(&fo);
     fo.frame = AFFECT_FEATURES_FRAME_BODY;
-    static const char *const seven[] = {"pelvis", "chest", "head", "left_hand", "right_hand",
-                                        "left_foot", "right_foot"};
+    static const char *const seven[] = {"pelvis",     "chest",     "head",      "left_hand",
+                                        "right_hand", "left_foot", "right_foot"};
     if (thesis) {
         fo.joints = seven;
         fo.n_joints = 7;

@@ -119,7 +119,7 @@
 #define COPIES_MORE 2u
 /* The split below reproduces HMM_NN as the core's defaults run it: the thesis's step
  * rendering, the ε-ball alone (the SQL defaults add at least 3 neighbours ranked by DTW). */
-#define HMM_NN_OPTIONS                                                                         \
+#define HMM_NN_OPTIONS                                                                             \
     "\"method\":\"hmm_nn\",\"render\":\"steps\",\"min_neighbours\":1,\"prefer_action\":false"
 /* The default method's goal (issue 13): a median 300-frame, 22-joint generation in 30 ms. */
 #define TRANSFER_GOAL_MS 30.0
@@ -152,14 +152,20 @@ enum {
     S_REST,
     S_COUNT
 };
-static const char *const stage_names[S_COUNT] = {
-    "(a) neighbour search (SQL)", "(b) read + decode neighbours", "(c) affect_generate (core)",
-    "      features",              "      HMM training",            "      Viterbi",
-    "      render",                "      other (in the core)",     "(a) + (b) + (c)",
-    "SQL affect_generate(...)",    "  rest: SQL - (a+b+c)"};
-static const char *const stage_keys[S_COUNT] = {
-    "search", "read", "core", "features", "train", "viterbi", "render", "core_other",
-    "split_sum", "sql", "sql_rest"};
+static const char *const stage_names[S_COUNT] = {"(a) neighbour search (SQL)",
+                                                 "(b) read + decode neighbours",
+                                                 "(c) affect_generate (core)",
+                                                 "      features",
+                                                 "      HMM training",
+                                                 "      Viterbi",
+                                                 "      render",
+                                                 "      other (in the core)",
+                                                 "(a) + (b) + (c)",
+                                                 "SQL affect_generate(...)",
+                                                 "  rest: SQL - (a+b+c)"};
+static const char *const stage_keys[S_COUNT] = {"search",    "read",    "core",    "features",
+                                                "train",     "viterbi", "render",  "core_other",
+                                                "split_sum", "sql",     "sql_rest"};
 
 /* A desired path: a recording (or its first PATH_FRAMES frames) of one content table. */
 typedef struct path {
@@ -219,8 +225,7 @@ static int exec(sqlite3 *db, const char *sql)
 {
     char *err = NULL;
     if (sqlite3_exec(db, sql, NULL, NULL, &err) != SQLITE_OK) {
-        fprintf(stderr, "bench_generate: %s\n  in: %.300s\n", err ? err : sqlite3_errmsg(db),
-                sql);
+        fprintf(stderr, "bench_generate: %s\n  in: %.300s\n", err ? err : sqlite3_errmsg(db), sql);
         sqlite3_free(err);
         return 1;
     }
@@ -289,14 +294,14 @@ done:
 }
 
 /* The selection, parsed as sql/import_bvh.sql parses file names. */
-#define SELECTED                                                                                  \
-    "WITH parts AS (SELECT stem, CASE WHEN stem LIKE 'dataset-%\\_%\\_%\\_%' ESCAPE '\\' "        \
-    "THEN substr(stem, instr(stem, '_') + 1) END AS rest1 FROM files), "                          \
-    "labels AS (SELECT stem, substr(rest1, 1, instr(rest1, '_') - 1) AS content, "                \
-    "substr(rest1, instr(rest1, '_') + 1) AS rest2 FROM parts WHERE rest1 IS NOT NULL), "         \
-    "parsed AS (SELECT stem, content, substr(rest2, 1, instr(rest2, '_') - 1) AS emotion "        \
-    "FROM labels WHERE emotion IN ('angry', 'happy', 'normal', 'sad')) "                          \
-    "SELECT stem, content, emotion FROM parsed WHERE content IN (SELECT content FROM parsed "     \
+#define SELECTED                                                                                   \
+    "WITH parts AS (SELECT stem, CASE WHEN stem LIKE 'dataset-%\\_%\\_%\\_%' ESCAPE '\\' "         \
+    "THEN substr(stem, instr(stem, '_') + 1) END AS rest1 FROM files), "                           \
+    "labels AS (SELECT stem, substr(rest1, 1, instr(rest1, '_') - 1) AS content, "                 \
+    "substr(rest1, instr(rest1, '_') + 1) AS rest2 FROM parts WHERE rest1 IS NOT NULL), "          \
+    "parsed AS (SELECT stem, content, substr(rest2, 1, instr(rest2, '_') - 1) AS emotion "         \
+    "FROM labels WHERE emotion IN ('angry', 'happy', 'normal', 'sad')) "                           \
+    "SELECT stem, content, emotion FROM parsed WHERE content IN (SELECT content FROM parsed "      \
     "GROUP BY content HAVING count(DISTINCT emotion) = 4) ORDER BY stem"
 
 /* corpus27 from the selected files of dir; *secs: the time of motion_from_bvh and the
@@ -313,9 +318,10 @@ static int import_corpus(sqlite3 *db, const char *dir, double *secs, sqlite3_int
     if (exec(db, "CREATE TABLE corpus27(id INTEGER PRIMARY KEY, name TEXT, content TEXT, "
                  "emotion TEXT, frames INTEGER, motion BLOB)") ||
         prepare(db, SELECTED, &sel) ||
-        prepare(db, "INSERT INTO corpus27(name, content, emotion, motion) "
-                    "VALUES (?1, ?2, ?3, motion_from_bvh(?4, '{\"unit\":\"cm\"}'))",
-                    &ins))
+        prepare(db,
+                "INSERT INTO corpus27(name, content, emotion, motion) "
+                "VALUES (?1, ?2, ?3, motion_from_bvh(?4, '{\"unit\":\"cm\"}'))",
+                &ins))
         goto done;
     int step;
     while ((step = sqlite3_step(sel)) == SQLITE_ROW) {
@@ -362,11 +368,15 @@ static int check_corpus(sqlite3 *db)
     sqlite3_int64 n = 0, contents = 0, skeletons = 0, joints = 0, bad = 0;
     if (query_int(db, "SELECT count(*) FROM corpus27", &n) ||
         query_int(db, "SELECT count(DISTINCT content) FROM corpus27", &contents) ||
-        query_int(db, "SELECT count(DISTINCT json_extract(motion_info(motion), '$.names')) "
-                      "FROM corpus27", &skeletons) ||
+        query_int(db,
+                  "SELECT count(DISTINCT json_extract(motion_info(motion), '$.names')) "
+                  "FROM corpus27",
+                  &skeletons) ||
         query_int(db, "SELECT min(motion_joints(motion)) FROM corpus27", &joints) ||
-        query_int(db, "SELECT count(*) FROM (SELECT emotion FROM corpus27 GROUP BY emotion "
-                      "HAVING count(*) <> 11)", &bad))
+        query_int(db,
+                  "SELECT count(*) FROM (SELECT emotion FROM corpus27 GROUP BY emotion "
+                  "HAVING count(*) <> 11)",
+                  &bad))
         return 1;
     if (n != EXPECTED_MOTIONS || contents != EXPECTED_CONTENTS || bad || skeletons != 1 ||
         joints != 27) {
@@ -396,8 +406,7 @@ static int make_corpus22(sqlite3 *db)
     if (exec(db, sql) || query_int(db, "SELECT json_array_length(names) FROM keep22", &n))
         return 1;
     if (n != 22) {
-        fprintf(stderr, "bench_generate: the 22-joint selection has %lld joints\n",
-                (long long)n);
+        fprintf(stderr, "bench_generate: the 22-joint selection has %lld joints\n", (long long)n);
         return 1;
     }
     if (exec(db, "CREATE TABLE corpus22(id INTEGER PRIMARY KEY, name TEXT, content TEXT, "
@@ -413,8 +422,7 @@ static int make_corpus22(sqlite3 *db)
 
 /* Runs a laban_salient call; *secs its time, *json a copy of its result (if json). A failure
  * is printed unless quiet; its message is returned in *msg (if msg; free()). */
-static int salient(sqlite3 *db, const char *sql, double *secs, char **json, bool quiet,
-                   char **msg)
+static int salient(sqlite3 *db, const char *sql, double *secs, char **json, bool quiet, char **msg)
 {
     sqlite3_stmt *st = NULL;
     double t0 = now();
@@ -557,8 +565,8 @@ static int fit_summary(sqlite3 *db, const char *json, char **out)
 
 static int bench_rmlr(sqlite3 *db, uint32_t runs, bool quick, bool with27, rmlr_result *res)
 {
-    const char *call = quick ? "SELECT laban_salient('ix22', '{\"folds\":3}')"
-                             : "SELECT laban_salient('ix22')";
+    const char *call =
+        quick ? "SELECT laban_salient('ix22', '{\"folds\":3}')" : "SELECT laban_salient('ix22')";
     printf("== 1. RMLR fit: %s, %u run%s (the first call, then refits forced by "
            "deleting the stored fit and reloading the extension)\n",
            call + 7, runs, runs == 1 ? "" : "s");
@@ -661,8 +669,8 @@ static int load_paths(sqlite3 *db, const char *content, bool sliced, path **out,
                  "WHERE frames >= %d ORDER BY name",
                  PATH_FRAMES - 1, content, PATH_FRAMES);
     else
-        snprintf(sql, sizeof sql,
-                 "SELECT name, emotion, frames, motion FROM \"%s\" ORDER BY name", content);
+        snprintf(sql, sizeof sql, "SELECT name, emotion, frames, motion FROM \"%s\" ORDER BY name",
+                 content);
     sqlite3_stmt *st = NULL;
     path *p = NULL;
     uint32_t k = 0;
@@ -823,13 +831,11 @@ static int read_neighbours(sqlite3 *db, const workload *w, const sqlite3_int64 *
         sqlite3_bind_int64(st, 1, ids[i]);
         affect_error err;
         if (sqlite3_step(st) != SQLITE_ROW || sqlite3_column_type(st, 0) != SQLITE_BLOB) {
-            fprintf(stderr, "bench_generate: content row %lld has no motion\n",
-                    (long long)ids[i]);
+            fprintf(stderr, "bench_generate: content row %lld has no motion\n", (long long)ids[i]);
             rc = 1;
         } else if (affect_motion_decode(sqlite3_column_blob(st, 0),
                                         (size_t)sqlite3_column_bytes(st, 0), &out[i], &err)) {
-            fprintf(stderr, "bench_generate: content row %lld: %s\n", (long long)ids[i],
-                    err.msg);
+            fprintf(stderr, "bench_generate: content row %lld: %s\n", (long long)ids[i], err.msg);
             rc = 1;
         }
     }
@@ -883,8 +889,9 @@ static int run_split(sqlite3 *db, const workload *w, job *j, double *t, bool che
         for (uint32_t i = 0; same && i < n; i++)
             same = ids[i] == j->nb_id[i] && dist[i] == j->nb_dist[i];
         if (!same) {
-            fprintf(stderr, "bench_generate: %s -> %s: the neighbour search gave %u rows, not "
-                            "the %u of affect_generate_explain (or other ones)\n",
+            fprintf(stderr,
+                    "bench_generate: %s -> %s: the neighbour search gave %u rows, not "
+                    "the %u of affect_generate_explain (or other ones)\n",
                     j->p->name, emotions[j->target], n, j->n_nb);
             goto done;
         }
@@ -955,8 +962,9 @@ static int bench_workload(sqlite3 *db, workload *w, uint32_t reps)
                 goto done;
             j->t[r][S_REST] = j->t[r][S_SQL] - j->t[r][S_SUM];
             if (check && (!a || !b || na != nb || memcmp(a, b, na) != 0)) {
-                fprintf(stderr, "bench_generate: %s -> %s: the core's motion (%zu bytes) is "
-                                "not the SQL call's (%zu bytes)\n",
+                fprintf(stderr,
+                        "bench_generate: %s -> %s: the core's motion (%zu bytes) is "
+                        "not the SQL call's (%zu bytes)\n",
                         j->p->name, emotions[j->target], na, nb);
                 goto done;
             }
@@ -984,8 +992,8 @@ static int bench_workload(sqlite3 *db, workload *w, uint32_t reps)
         w->s[s] = bench_summarize(v, w->n_jobs);
     }
     free(v);
-    printf("  %-42s %3u generations x %u repetitions in %.1f s (CPU %.1f s)\n", w->title,
-           w->n_jobs, reps, now() - t0, cpu_now() - c0);
+    printf("  %-42s %3u generations x %u repetitions in %.1f s (CPU %.1f s)\n", w->title, w->n_jobs,
+           reps, now() - t0, cpu_now() - c0);
     fflush(stdout);
     rc = 0;
 done:
@@ -1097,8 +1105,7 @@ static void print_workload(const workload *w, uint32_t reps)
     printf("%-30s %9s %9s %9s %9s\n", "stage", "median", "mean", "worst", "% of SQL");
     for (int s = 0; s < S_COUNT; s++)
         printf("%-30s %9.3f %9.3f %9.3f %8.1f%%\n", stage_names[s], w->s[s].median * 1e3,
-               w->s[s].mean * 1e3, w->s[s].max * 1e3,
-               100.0 * w->s[s].median / w->s[S_SQL].median);
+               w->s[s].mean * 1e3, w->s[s].max * 1e3, 100.0 * w->s[s].median / w->s[S_SQL].median);
     minmax_mean(w, 4, &lo, &hi, &mean);
     printf("components searched: mean %.1f (%.0f-%.0f) of 27; ", mean, lo, hi);
     minmax_mean(w, 0, &lo, &hi, &mean);
@@ -1106,12 +1113,11 @@ static void print_workload(const workload *w, uint32_t reps)
     minmax_mean(w, 1, &lo, &hi, &mean);
     printf("Baum-Welch iterations: mean %.1f (%.0f-%.0f); ", mean, lo, hi);
     minmax_mean(w, 2, &lo, &hi, &mean);
-    printf("training frames (neighbours + copies x path): mean %.0f (%.0f-%.0f)\n", mean, lo,
-           hi);
+    printf("training frames (neighbours + copies x path): mean %.0f (%.0f-%.0f)\n", mean, lo, hi);
     if (w->worst)
         printf("slowest SQL call: %s -> %s, %.3f ms (%u neighbours, %u iterations)\n",
-               w->worst->p->name, emotions[w->worst->target], w->s[S_SQL].max * 1e3,
-               w->worst->n_nb, w->worst->iterations);
+               w->worst->p->name, emotions[w->worst->target], w->s[S_SQL].max * 1e3, w->worst->n_nb,
+               w->worst->iterations);
     printf("\n");
 }
 
@@ -1146,8 +1152,7 @@ static int rmlr_only(sqlite3 *db, uint32_t threads, uint32_t runs)
         if (threads_option(db, &accepted, &msg))
             return 1;
         if (!accepted) {
-            printf("laban_salient has no threads option (it said \"%s\"): nothing measured\n",
-                   msg);
+            printf("laban_salient has no threads option (it said \"%s\"): nothing measured\n", msg);
             free(msg);
             return 0;
         }
@@ -1225,8 +1230,9 @@ int main(int argc, char **argv)
         goto done;
     }
     sqlite3_int64 have = 0;
-    if (query_int(db, "SELECT count(*) FROM pragma_function_list WHERE name IN "
-                      "('affect_generate', 'affect_generate_explain', 'laban_salient')",
+    if (query_int(db,
+                  "SELECT count(*) FROM pragma_function_list WHERE name IN "
+                  "('affect_generate', 'affect_generate_explain', 'laban_salient')",
                   &have))
         goto done;
     if (have < 3) {
@@ -1245,8 +1251,7 @@ int main(int argc, char **argv)
     sqlite3_int64 frames = 0;
     int lc = import_corpus(db, dir, &import_s, &frames);
     if (lc == 1) {
-        printf("bench_generate: corpus directory %s not found: skipped (nothing measured)\n",
-               dir);
+        printf("bench_generate: corpus directory %s not found: skipped (nothing measured)\n", dir);
         rc = 0;
         goto done;
     }
@@ -1323,8 +1328,7 @@ int main(int argc, char **argv)
         int paths; /* 0: p22, 1: p27, 2: pnat */
     } spec[N_WORKLOADS] = {
         {"gen22_300_c0", "(i) 22 joints, 300 frames, copies 0", "ix22", "corpus22", 0, 0},
-        {"gen22_300_c2", "(i) 22 joints, 300 frames, copies 2", "ix22", "corpus22", COPIES_MORE,
-         0},
+        {"gen22_300_c2", "(i) 22 joints, 300 frames, copies 2", "ix22", "corpus22", COPIES_MORE, 0},
         {"gen27_300_c0", "(ii) 27 joints, 300 frames, copies 0", "ix27", "corpus27", 0, 1},
         {"gen27_300_c2", "(ii) 27 joints, 300 frames, copies 2", "ix27", "corpus27", COPIES_MORE,
          1},
@@ -1363,8 +1367,8 @@ int main(int argc, char **argv)
     printf("%-42s %5s %9s %9s %9s  %s\n", "workload", "gens", "median", "mean", "worst",
            "largest stage (share of the SQL median)");
     for (int k = 0; k < n_work; k++) {
-        static const int parts[] = {S_SEARCH, S_READ, S_FEATURES, S_TRAIN, S_VITERBI, S_RENDER,
-                                    S_REST};
+        static const int parts[] = {S_SEARCH,  S_READ,   S_FEATURES, S_TRAIN,
+                                    S_VITERBI, S_RENDER, S_REST};
         int big = parts[0];
         for (size_t i = 1; i < sizeof parts / sizeof parts[0]; i++)
             if (w[k].s[parts[i]].median > w[k].s[big].median)
@@ -1373,8 +1377,8 @@ int main(int argc, char **argv)
         while (*name == ' ')
             name++;
         printf("%-42s %5u %9.3f %9.3f %9.3f  %s (%.1f%%)\n", w[k].title, w[k].n_jobs,
-               w[k].s[S_SQL].median * 1e3, w[k].s[S_SQL].mean * 1e3, w[k].s[S_SQL].max * 1e3,
-               name, 100.0 * w[k].s[big].median / w[k].s[S_SQL].median);
+               w[k].s[S_SQL].median * 1e3, w[k].s[S_SQL].mean * 1e3, w[k].s[S_SQL].max * 1e3, name,
+               100.0 * w[k].s[big].median / w[k].s[S_SQL].median);
     }
     double goal_ratio = w[0].s[S_SQL].median * 1e3 / GOAL_MS;
     printf("\ngoal (issue 6): median latency <= %.0f ms per generated motion, %d frames, 22 "

@@ -90,7 +90,6 @@
 
 #include "benchutil.h"
 
-
 #define N_STATES 7u
 #define N_MIX 4u
 #define SEQ_FRAMES 500u
@@ -101,9 +100,9 @@
 #define SELF_TRANSITION 0.95
 #define MODEL_SEED 20261121u
 #define DATA_SEED 7u
-#define PANEL_ROWS 8u    /* as TRI_ROWS in hmm.c */
+#define PANEL_ROWS 8u     /* as TRI_ROWS in hmm.c */
 #define PANEL_FRAMES 128u /* as SUB_FRAMES in hmm.c */
-#define BOUND_GOAL 0.5 /* scoring at ≥ 50 % of the trsm bound */
+#define BOUND_GOAL 0.5    /* scoring at ≥ 50 % of the trsm bound */
 #define MEMORY_GOAL_MB 1000.0
 
 /* A GMM-HMM's parameters (row-major, the shapes of affect/hmm.h) and Cholesky factors. */
@@ -117,7 +116,6 @@ typedef struct dataset {
     double *x; /* n_seqs × T × m */
     affect_hmm_seq *seqs;
 } dataset;
-
 
 /* What the kernels need. */
 typedef struct bench_ctx {
@@ -136,8 +134,6 @@ typedef struct bench_ctx {
 
 /* Values the timed loops write so the compiler cannot drop their work. */
 static volatile double g_sink;
-
-
 
 /* ---- the random GMM-HMM and its data ---- */
 
@@ -474,7 +470,8 @@ static int k_score(bench_ctx *c)
     double acc = 0.0;
     for (uint32_t s = 0; s < c->d->n_seqs; s++) {
         affect_error err;
-        if (affect_hmm_loglik(c->h, c->d->seqs[s].x, c->d->seqs[s].n_frames, &c->ll[s], NULL, &err)) {
+        if (affect_hmm_loglik(c->h, c->d->seqs[s].x, c->d->seqs[s].n_frames, &c->ll[s], NULL,
+                              &err)) {
             fprintf(stderr, "sequence %u: %s\n", s, err.msg);
             return 1;
         }

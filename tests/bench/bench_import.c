@@ -43,7 +43,6 @@
 #define AFFECT_BENCH_CORPUS "../shared/corpora/bandai-namco-1/data"
 #endif
 
-
 typedef struct item {
     char *name;
     char *text; /* the BVH file */
@@ -61,11 +60,8 @@ typedef struct corpus {
     uint64_t frames;
 } corpus;
 
-
 /* Values the timed loops write so the compiler cannot drop their work. */
 static volatile uint64_t g_sink;
-
-
 
 static void free_corpus(corpus *c)
 {

@@ -102,8 +102,6 @@ typedef struct sbuf {
 
 static volatile double g_sink;
 
-
-
 static void sb_add(sbuf *b, const char *fmt, ...)
 {
     if (b->failed)
@@ -228,8 +226,7 @@ static int measure(sqlite3 *db, sqlite3_stmt *st, const inputs *in, bool blob, u
                 rows += n;
         }
         qsort(lat, per_run, sizeof *lat, cmp_double);
-        med[run] = per_run % 2 ? lat[per_run / 2]
-                               : (lat[per_run / 2 - 1] + lat[per_run / 2]) / 2;
+        med[run] = per_run % 2 ? lat[per_run / 2] : (lat[per_run / 2 - 1] + lat[per_run / 2]) / 2;
         p95[run] = lat[(size_t)ceil(0.95 * (double)per_run) - 1];
     }
     free(lat);
@@ -273,8 +270,9 @@ static int verify(sqlite3 *db, sqlite3_stmt *vt, sqlite3_stmt *bf, const inputs 
         for (long j = 0; j < na && j < MAX_HITS; j++) {
             double rel = fabs(a[j].d - b[j].d) / fmax(fabs(b[j].d), 1e-300);
             if (a[j].id != b[j].id || (tolerant ? rel > 1e-5 : a[j].d != b[j].d)) {
-                fprintf(stderr, "%s, query %d, row %ld: the table gave %lld at %.17g, the SQL "
-                                "%lld at %.17g\n",
+                fprintf(stderr,
+                        "%s, query %d, row %ld: the table gave %lld at %.17g, the SQL "
+                        "%lld at %.17g\n",
                         what, i, j, (long long)a[j].id, a[j].d, (long long)b[j].id, b[j].d);
                 return 1;
             }
@@ -289,8 +287,8 @@ static int verify(sqlite3 *db, sqlite3_stmt *vt, sqlite3_stmt *bf, const inputs 
 
 /* The brute-force peer. query: "rowid" (the vtab's cached row, left out of the results) or
  * "blob" (laban(?1) of a motion); comps: component indices; radius 0 means k nearest. */
-static char *brute_sql(char names[N_COMP][32], const char *query, const int *comps, int nc,
-                       int k, double radius)
+static char *brute_sql(char names[N_COMP][32], const char *query, const int *comps, int nc, int k,
+                       double radius)
 {
     sbuf b = {0};
     sb_add(&b, "WITH st AS MATERIALIZED (SELECT ");
@@ -304,8 +302,8 @@ static char *brute_sql(char names[N_COMP][32], const char *query, const int *com
         if (strcmp(query, "rowid") == 0)
             sb_add(&b, "%s(%s - m%d) / s%d AS z%d", t ? ", " : "", names[c], c, c, c);
         else
-            sb_add(&b, "%s(json_extract(j, '$.%s') - m%d) / s%d AS z%d", t ? ", " : "", names[c],
-                   c, c, c);
+            sb_add(&b, "%s(json_extract(j, '$.%s') - m%d) / s%d AS z%d", t ? ", " : "", names[c], c,
+                   c, c);
     }
     if (strcmp(query, "rowid") == 0)
         sb_add(&b, " FROM motion_laban, st WHERE rowid = ?1)");
@@ -320,9 +318,10 @@ static char *brute_sql(char names[N_COMP][32], const char *query, const int *com
     sb_add(&b, ") AS distance FROM motion_laban d, st, q WHERE d.label = 'angry'%s) ",
            strcmp(query, "rowid") == 0 ? " AND d.rowid <> ?1" : "");
     if (radius > 0)
-        sb_add(&b, "SELECT id, distance FROM dist WHERE distance <= %.17g * (SELECT max(distance) "
-                   "FROM dist) OR id = (SELECT id FROM dist ORDER BY distance, id LIMIT 1) "
-                   "ORDER BY distance, id",
+        sb_add(&b,
+               "SELECT id, distance FROM dist WHERE distance <= %.17g * (SELECT max(distance) "
+               "FROM dist) OR id = (SELECT id FROM dist ORDER BY distance, id LIMIT 1) "
+               "ORDER BY distance, id",
                radius);
     else
         sb_add(&b, "SELECT id, distance FROM dist ORDER BY distance, id LIMIT %d", k);
@@ -347,15 +346,19 @@ static int setup(sqlite3 *db, char names[N_COMP][32], inputs *in, double *gen_s,
                  sqlite3_int64 *frames)
 {
     double t0 = now();
-    if (exec(db, "CREATE TABLE motions(id INTEGER PRIMARY KEY, action TEXT, emotion TEXT, "
-                 "seed INTEGER, motion BLOB);"
-                 "WITH RECURSIVE seeds(seed) AS (SELECT 1 UNION ALL SELECT seed + 1 FROM seeds "
-                 "WHERE seed < " XSTR(N_SEEDS) "), "
-                 "actions(action) AS (VALUES ('knock'), ('wave'), ('walk'), ('bow')), "
-                 "emotions(emotion) AS (VALUES ('neutral'), ('happy'), ('sad'), ('angry')) "
-                 "INSERT INTO motions(action, emotion, seed, motion) "
-                 "SELECT action, emotion, seed, motion_synth(action, emotion, seed, "
-                 "'{\"fps\":10}') FROM seeds, actions, emotions ORDER BY seed, action, emotion;"))
+    if (exec(
+            db,
+            "CREATE TABLE motions(id INTEGER PRIMARY KEY, action TEXT, emotion TEXT, "
+            "seed INTEGER, motion BLOB);"
+            "WITH RECURSIVE seeds(seed) AS (SELECT 1 UNION ALL SELECT seed + 1 FROM seeds "
+            "WHERE seed < " XSTR(
+                N_SEEDS) "), "
+                         "actions(action) AS (VALUES ('knock'), ('wave'), ('walk'), ('bow')), "
+                         "emotions(emotion) AS (VALUES ('neutral'), ('happy'), ('sad'), ('angry')) "
+                         "INSERT INTO motions(action, emotion, seed, motion) "
+                         "SELECT action, emotion, seed, motion_synth(action, emotion, seed, "
+                         "'{\"fps\":10}') FROM seeds, actions, emotions ORDER BY seed, action, "
+                         "emotion;"))
         return 1;
     *gen_s = now() - t0;
     if (exec(db, "CREATE TABLE queries(id INTEGER PRIMARY KEY, motion BLOB);"
@@ -407,10 +410,10 @@ static int setup(sqlite3 *db, char names[N_COMP][32], inputs *in, double *gen_s,
     return 0;
 }
 
-#define CREATE_INDEX \
+#define CREATE_INDEX                                                                               \
     "CREATE VIRTUAL TABLE motion_laban USING laban(content=motions, motion=motion, label=emotion)"
 
-#define VECTOR_SCAN \
+#define VECTOR_SCAN                                                                                \
     "SELECT sum(length(laban_vector(motion, '{\"missing\":\"null\"}'))) FROM motions"
 
 /* Warm-up build, then RUNS timed builds (each dropped untimed); leaves the index in place.
@@ -475,8 +478,7 @@ int main(int argc, char **argv)
     }
     sqlite3_enable_load_extension(db, 1);
     if (sqlite3_load_extension(db, module, "sqlite3_affect_init", &err) != SQLITE_OK) {
-        printf("bench_knn: cannot load %s (%s): nothing to measure\n", module,
-               err ? err : "?");
+        printf("bench_knn: cannot load %s (%s): nothing to measure\n", module, err ? err : "?");
         sqlite3_free(err);
         rc = 0;
         goto done;
@@ -555,10 +557,9 @@ int main(int argc, char **argv)
     }
 
     double build_s = build[RUNS / 2];
-    printf("\nindex build (CREATE VIRTUAL TABLE over the %d motions), %d runs:\n", N_MOTIONS,
-           RUNS);
-    printf("  median %.3f s (fastest %.3f, slowest %.3f): %.0f motions/s, %.0f frames/s\n",
-           build_s, build[0], build[RUNS - 1], N_MOTIONS / build_s, (double)frames / build_s);
+    printf("\nindex build (CREATE VIRTUAL TABLE over the %d motions), %d runs:\n", N_MOTIONS, RUNS);
+    printf("  median %.3f s (fastest %.3f, slowest %.3f): %.0f motions/s, %.0f frames/s\n", build_s,
+           build[0], build[RUNS - 1], N_MOTIONS / build_s, (double)frames / build_s);
     double vscan_s = vscan[RUNS / 2];
     printf("  of which Laban descriptors (laban_vector over the same motions): median %.3f s "
            "(fastest %.3f, slowest %.3f), %.1f%% of the build\n\n",
@@ -569,9 +570,9 @@ int main(int argc, char **argv)
            RUNS);
     printf("%-26s %8s %10s %10s %10s %10s %8s %10s\n", "query", "per run", "median", "p95",
            "fastest", "slowest", "rows", "vs table");
-    static const char *const label[Q_COUNT] = {"(a) rowid k=5", "(b) blob k=5",
+    static const char *const label[Q_COUNT] = {"(a) rowid k=5",           "(b) blob k=5",
                                                "(b0) laban_vector(blob)", "(c) radius 0.1",
-                                               "(d) 2 comps k=5", "(e) 1 candidate"};
+                                               "(d) 2 comps k=5",         "(e) 1 candidate"};
     for (int q = 0; q < Q_COUNT; q++) {
         char name[64];
         snprintf(name, sizeof name, "%s table", label[q]);
@@ -593,9 +594,9 @@ int main(int argc, char **argv)
     printf("target: KNN query <= %.0f ms over %d motions (median of each table query): %s\n\n",
            TARGET_MS, N_MOTIONS, met ? "met" : "NOT met");
 
-    static const char *const key[Q_COUNT] = {"knn_rowid_k5", "knn_blob_k5", "laban_vector_blob",
-                                             "knn_radius", "knn_components_k5",
-                                             "knn_one_candidate"};
+    static const char *const key[Q_COUNT] = {"knn_rowid_k5",      "knn_blob_k5",
+                                             "laban_vector_blob", "knn_radius",
+                                             "knn_components_k5", "knn_one_candidate"};
     printf("BENCH knn_index_build %.1f motions/s\n", N_MOTIONS / build_s);
     printf("BENCH knn_index_build_descriptor_share %.4f ratio\n", vscan_s / build_s);
     printf("BENCH knn_index_build_frames %.0f frames/s\n", (double)frames / build_s);

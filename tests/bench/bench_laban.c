@@ -95,11 +95,8 @@ typedef struct dataset {
     uint32_t max_joints;
 } dataset;
 
-
 /* Values the timed loops write so the compiler cannot drop their work. */
 static volatile double g_sink;
-
-
 
 static int cmp_str(const void *a, const void *b)
 {
@@ -464,15 +461,25 @@ static int measure(const dataset *d, kernel_fn fn, void *ctx, unsigned repeat, r
     return bench_measure(one_pass, &a, repeat, r);
 }
 
-enum { K_READ, K_VECTOR, K_BOX, K_SHAPING, K_FLOW, K_FLOWBOX, K_DIR, K_SERIES, K_SERIES10,
-       K_COUNT };
+enum {
+    K_READ,
+    K_VECTOR,
+    K_BOX,
+    K_SHAPING,
+    K_FLOW,
+    K_FLOWBOX,
+    K_DIR,
+    K_SERIES,
+    K_SERIES10,
+    K_COUNT
+};
 
 static const char *const kernel_names[K_COUNT] = {
-    "read bound",   "laban vector", "vector (box)",   "  shaping",
-    "  flow (hull)", "  flow (box)", "  directional x2", "series 1 s", "series 10 s"};
+    "read bound",   "laban vector",     "vector (box)", "  shaping",  "  flow (hull)",
+    "  flow (box)", "  directional x2", "series 1 s",   "series 10 s"};
 static const char *const kernel_keys[K_COUNT] = {
-    "read_bound",  "laban_vector",   "laban_vector_box", "shape_shaping",
-    "shape_flow", "shape_flow_box", "directional2", "laban_series_1s", "laban_series_10s"};
+    "read_bound",     "laban_vector", "laban_vector_box", "shape_shaping",   "shape_flow",
+    "shape_flow_box", "directional2", "laban_series_1s",  "laban_series_10s"};
 
 /* Seconds per pass over the data set: wall clock (the median run) and that run's process CPU
  * time (which leaves out the time the process waited for its core on a shared machine). */
@@ -505,9 +512,9 @@ static int run_dataset(const dataset *d, const char *key, unsigned repeat)
     struct {
         kernel_fn fn;
         void *ctx;
-    } k[K_COUNT] = {{k_read, NULL},     {k_vector, &def}, {k_vector, &box}, {k_shaping, &def},
-                    {k_flow, &def},     {k_flow, &box},   {k_directional, &def},
-                    {k_series, &one_second}, {k_series, &ten_seconds}};
+    } k[K_COUNT] = {{k_read, NULL},        {k_vector, &def},        {k_vector, &box},
+                    {k_shaping, &def},     {k_flow, &def},          {k_flow, &box},
+                    {k_directional, &def}, {k_series, &one_second}, {k_series, &ten_seconds}};
     result r[K_COUNT];
     for (int i = 0; i < K_COUNT; i++)
         if (measure(d, k[i].fn, k[i].ctx, repeat, &r[i]))
@@ -525,10 +532,10 @@ static int run_dataset(const dataset *d, const char *key, unsigned repeat)
            "fastest", "slowest", "frames/s", "ns/frame", "% vector", "cpu ns/fr", "busy");
     for (int i = 0; i < K_COUNT; i++)
         row(kernel_names[i], &r[i], frames, vec_s);
-    printf("%-17s %7s %9s %9s %9s %13s %10s %9s %10.1f\n", "  effort+rest", "", "", "", "", "",
-           "", "", other_s / frames * 1e9);
-    printf("%-17s %7s %9s %9s %9s %13s %10s %9s %10.1f\n", "  effort+rest box", "", "", "", "",
-           "", "", "", other_box_s / frames * 1e9);
+    printf("%-17s %7s %9s %9s %9s %13s %10s %9s %10.1f\n", "  effort+rest", "", "", "", "", "", "",
+           "", other_s / frames * 1e9);
+    printf("%-17s %7s %9s %9s %9s %13s %10s %9s %10.1f\n", "  effort+rest box", "", "", "", "", "",
+           "", "", other_box_s / frames * 1e9);
     printf("\nread bound: %.1f MB/s; laban vector runs at %.2f%% of its speed (%.0fx slower), "
            "vector (box) at %.2f%% (%.0fx slower)\n",
            (double)d->pos_bytes / read_s / 1e6, 100.0 * read_s / vec_s, vec_s / read_s,

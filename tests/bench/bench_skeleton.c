@@ -88,8 +88,8 @@ typedef struct item {
     size_t text_len;
     char *out; /* its export */
     size_t out_len;
-    affect_motion *m;    /* skeletal, as imported */
-    affect_motion *pos;  /* position-only copy */
+    affect_motion *m;   /* skeletal, as imported */
+    affect_motion *pos; /* position-only copy */
 } item;
 
 typedef struct corpus {
@@ -175,8 +175,8 @@ static int load_corpus(const char *dir, corpus *c)
 }
 
 /* Largest joint distance between a's and b's positions (joints matched by name). */
-static int max_distance(const affect_motion *a, const affect_motion *b, double *dist,
-                        double *coord, uint32_t *frame, uint32_t *joint, const char *what)
+static int max_distance(const affect_motion *a, const affect_motion *b, double *dist, double *coord,
+                        uint32_t *frame, uint32_t *joint, const char *what)
 {
     *dist = *coord = 0;
     *frame = *joint = 0;
@@ -540,8 +540,8 @@ static int run_corpus(const char *dir, unsigned repeat, int only, verdict *v)
     printf("corpus %s: %s\n", c.tag, dir);
     printf("  %zu BVH files, %.2f MB of text, %llu frames, %u to %u joints, %.0f joint-frames; "
            "exported text %.2f MB (%.3f x the files)\n",
-           c.n, text / 1e6, (unsigned long long)c.frames, c.min_joints, c.max_joints, jf,
-           out / 1e6, out / text);
+           c.n, text / 1e6, (unsigned long long)c.frames, c.min_joints, c.max_joints, jf, out / 1e6,
+           out / text);
     printf("  (checks before timing: %.1f s)\n", prep_s);
     printf("  %d runs per kernel, each of 'passes' passes over the whole corpus; times in "
            "seconds per run (wall clock);\n  cpu/wall: the runs' CPU time over their wall time "
@@ -570,15 +570,14 @@ static int run_corpus(const char *dir, unsigned repeat, int only, verdict *v)
     printf("round trip (export with the stored rotations, 6 decimals, re-import): largest "
            "position error %.3g %s (largest coordinate error %.3g), %s frame %u joint %s; "
            "%.2g of that motion's body size\n",
-           c.rt_max, rt->m->unit[0] ? rt->m->unit : "units", c.rt_max_coord, rt->name,
-           c.rt_frame, rt->m->names[c.rt_joint], c.rt_max / c.rt_body);
+           c.rt_max, rt->m->unit[0] ? rt->m->unit : "units", c.rt_max_coord, rt->name, c.rt_frame,
+           rt->m->names[c.rt_joint], c.rt_max / c.rt_body);
     printf("IK (by-products, default options): the input's bones vary in length by up to "
            "%.3g%% (%s);\n  largest distance rigid projection - input %.3g (%s), IK - rigid "
            "projection %.3g (%s frame %u joint %s), IK - input %.3g (%s)\n",
-           100 * c.bone_var, c.items[c.bone_var_item].name, c.rigid_max,
-           c.items[c.rigid_item].name, c.ik_rigid_max, c.items[c.ik_rigid_item].name,
-           c.ik_rigid_frame, c.items[c.ik_rigid_item].m->names[c.ik_rigid_joint], c.ik_max,
-           c.items[c.ik_item].name);
+           100 * c.bone_var, c.items[c.bone_var_item].name, c.rigid_max, c.items[c.rigid_item].name,
+           c.ik_rigid_max, c.items[c.ik_rigid_item].name, c.ik_rigid_frame,
+           c.items[c.ik_rigid_item].m->names[c.ik_rigid_joint], c.ik_max, c.items[c.ik_item].name);
 
     double exp_mbs = 0, imp_mbs = 0, ik_jfs = 0;
     if (done[K_EXPORT]) {

@@ -47,8 +47,8 @@
 
 #define N_RUNS 5
 
-static const char *const TEN[] = {"walk", "run", "dash", "walk-back", "walk-left", "walk-right",
-                                  "bow", "bye", "byebye", "guide", NULL};
+static const char *const TEN[] = {"walk", "run", "dash",   "walk-back", "walk-left", "walk-right",
+                                  "bow",  "bye", "byebye", "guide",     NULL};
 
 typedef struct dataset {
     const char *name;
@@ -145,8 +145,8 @@ static int bench_set(dataset *d)
             affect_strength_free(model[v]);
             model[v] = NULL;
             double c0 = cpu_now();
-            if (affect_strength_train((const affect_motion *const *)tm, tl, NULL, nt, names, 2,
-                                      &so, &model[v], &err)) {
+            if (affect_strength_train((const affect_motion *const *)tm, tl, NULL, nt, names, 2, &so,
+                                      &model[v], &err)) {
                 fprintf(stderr, "bench_strength: %s: %s\n", d->name, err.msg);
                 return 1;
             }
@@ -228,8 +228,9 @@ int main(int argc, char **argv)
         else if (strcmp(argv[i], "--corpus2") == 0)
             c2 = argv[i + 1];
     }
-    printf("| data set | train | scored | dims (PCA-40, none) | train PCA-40 (s) | train no PCA (s) "
-           "| ranker PCA-40 (s) | ranker no PCA (s) | regression (s) | affect_strength (s) |\n");
+    printf(
+        "| data set | train | scored | dims (PCA-40, none) | train PCA-40 (s) | train no PCA (s) "
+        "| ranker PCA-40 (s) | ranker no PCA (s) | regression (s) | affect_strength (s) |\n");
     printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     dataset d1 = {.name = "bn1-anger"}, d2 = {.name = "bn2-exhausted"};
     int rc = load(c1, "normal", "angry", TEN, &d1);

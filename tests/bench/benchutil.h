@@ -195,8 +195,8 @@ typedef struct bench_text {
 /* Reads every file of dir ending with suffix, sorted by name, into *out (*n of them; free each
  * name and text, then the array); *bytes receives the total size. Returns 0, 1 when dir cannot
  * be opened, 2 on any other error (a file that cannot be read is named on stderr). */
-static inline int bench_load_texts(const char *dir, const char *suffix, bench_text **out,
-                                   size_t *n, size_t *bytes)
+static inline int bench_load_texts(const char *dir, const char *suffix, bench_text **out, size_t *n,
+                                   size_t *bytes)
 {
     char **names;
     size_t count;

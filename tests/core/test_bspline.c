@@ -73,8 +73,8 @@ static void test_derivatives(void **state)
         for (int s = 1; s < 200; s++) {
             double t = (s + 0.37) / 200.0; /* avoid the knots, where B″ jumps */
             for (uint32_t d = 1; d <= 2; d++) {
-                double fd = (basis_at(&b, idx, t + h, d - 1) - basis_at(&b, idx, t - h, d - 1)) /
-                            (2 * h);
+                double fd =
+                    (basis_at(&b, idx, t + h, d - 1) - basis_at(&b, idx, t - h, d - 1)) / (2 * h);
                 double an = basis_at(&b, idx, t, d);
                 if (!(fabs(fd - an) <= 1e-4 * (1.0 + fabs(an))))
                     fail_msg("basis %u at %g, derivative %u: %g, differences give %g", idx, t, d,
@@ -312,10 +312,14 @@ static void test_check(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_gauss_legendre),    cmocka_unit_test(test_partition_of_unity),
-        cmocka_unit_test(test_derivatives),       cmocka_unit_test(test_exact_penalty_and_gram),
-        cmocka_unit_test(test_lines_survive_penalty), cmocka_unit_test(test_band_cholesky),
-        cmocka_unit_test(test_gcv_minimum),       cmocka_unit_test(test_gcv_df),
+        cmocka_unit_test(test_gauss_legendre),
+        cmocka_unit_test(test_partition_of_unity),
+        cmocka_unit_test(test_derivatives),
+        cmocka_unit_test(test_exact_penalty_and_gram),
+        cmocka_unit_test(test_lines_survive_penalty),
+        cmocka_unit_test(test_band_cholesky),
+        cmocka_unit_test(test_gcv_minimum),
+        cmocka_unit_test(test_gcv_df),
         cmocka_unit_test(test_check),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

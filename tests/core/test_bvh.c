@@ -91,21 +91,23 @@ static void test_fk_by_hand(void **state)
 static void test_bone_lengths_constant(void **state)
 {
     /* a chain with rotations on every joint: all bone lengths stay those of the OFFSETs */
-    static const char text[] = "HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\n"
-                               "CHANNELS 6 Xposition Yposition Zposition Yrotation Xrotation Zrotation\n"
-                               "JOINT b\n{\nOFFSET 1 2 2\nCHANNELS 3 Zrotation Yrotation Xrotation\n"
-                               "JOINT c\n{\nOFFSET 0 4 3\nCHANNELS 3 Xrotation Zrotation Yrotation\n"
-                               "End Site\n{\nOFFSET 2 0 0\n}\n}\n}\n}\n"
-                               "MOTION\nFrames: 4\nFrame Time: 0.01\n"
-                               "0 0 0 0 0 0 0 0 0 0 0 0\n"
-                               "5 -3 2 10 20 30 40 50 60 70 80 90\n"
-                               "1 1 1 -170 33.5 12 1e1 -2.5e1 7 0.5 0.25 -180\n"
-                               "0 0 0 359 -359 180 90 90 90 -90 -90 -90\n";
+    static const char text[] =
+        "HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\n"
+        "CHANNELS 6 Xposition Yposition Zposition Yrotation Xrotation Zrotation\n"
+        "JOINT b\n{\nOFFSET 1 2 2\nCHANNELS 3 Zrotation Yrotation Xrotation\n"
+        "JOINT c\n{\nOFFSET 0 4 3\nCHANNELS 3 Xrotation Zrotation Yrotation\n"
+        "End Site\n{\nOFFSET 2 0 0\n}\n}\n}\n}\n"
+        "MOTION\nFrames: 4\nFrame Time: 0.01\n"
+        "0 0 0 0 0 0 0 0 0 0 0 0\n"
+        "5 -3 2 10 20 30 40 50 60 70 80 90\n"
+        "1 1 1 -170 33.5 12 1e1 -2.5e1 7 0.5 0.25 -180\n"
+        "0 0 0 359 -359 180 90 90 90 -90 -90 -90\n";
     affect_motion *m = parse_ok(text);
     const double lengths[4] = {0, 3, 5, 2};
     for (uint32_t t = 0; t < m->n_frames; t++)
         for (uint32_t j = 1; j < 4; j++) {
-            const float *p = affect_motion_at(m, t, j), *q = affect_motion_at(m, t, (uint32_t)m->parents[j]);
+            const float *p = affect_motion_at(m, t, j),
+                        *q = affect_motion_at(m, t, (uint32_t)m->parents[j]);
             double d = sqrt(pow(p[0] - q[0], 2) + pow(p[1] - q[1], 2) + pow(p[2] - q[2], 2));
             tu_assert_near(d, lengths[j], 1e-5);
         }
@@ -142,10 +144,11 @@ static void test_options_and_header_forms(void **state)
 
 static void test_duplicate_names_get_suffixes(void **state)
 {
-    static const char text[] = "HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\nCHANNELS 0\n"
-                               "JOINT a\n{\nOFFSET 1 0 0\nCHANNELS 0\nEnd Site\n{\nOFFSET 1 0 0\n}\n}\n"
-                               "JOINT a_end\n{\nOFFSET 0 1 0\nCHANNELS 0\n}\n}\n"
-                               "MOTION\nFrames: 1\nFrame Time: 1\n\n";
+    static const char text[] =
+        "HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\nCHANNELS 0\n"
+        "JOINT a\n{\nOFFSET 1 0 0\nCHANNELS 0\nEnd Site\n{\nOFFSET 1 0 0\n}\n}\n"
+        "JOINT a_end\n{\nOFFSET 0 1 0\nCHANNELS 0\n}\n}\n"
+        "MOTION\nFrames: 1\nFrame Time: 1\n\n";
     affect_motion *m = parse_ok(text);
     assert_int_equal(m->n_joints, 4);
     assert_string_equal(m->names[0], "a");
@@ -208,7 +211,8 @@ static void test_errors(void **state)
         {"HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\nCHANNELS 1 Xposition\n}\nMOTION\n"
          "Frames: 1\nFrame Time: 0.1\n1e400\n",
          "line 10: value 1 of frame 0 is not a number: 1e400"},
-        {"HIERARCHY\nROOT a\xFF" "b\n{\n", /* names are UTF-8 (Latin-1 here) */
+        {"HIERARCHY\nROOT a\xFF"
+         "b\n{\n", /* names are UTF-8 (Latin-1 here) */
          "line 2: joint name is not valid UTF-8 (byte 0xff at offset 1)"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
@@ -244,8 +248,8 @@ static char *no_channels_bvh(unsigned n, const char *frames, const char *tail)
     return buf;
 }
 
-static void expect_bvh_error(const char *text, const affect_bvh_options *opt,
-                             affect_status status, const char *message)
+static void expect_bvh_error(const char *text, const affect_bvh_options *opt, affect_status status,
+                             const char *message)
 {
     affect_motion *m = NULL;
     affect_error err;
@@ -313,8 +317,8 @@ static void test_max_samples(void **state)
     assert_non_null(big);
     len += (size_t)snprintf(big + len, cap - len, "HIERARCHY\n");
     for (unsigned j = 0; j < 4096; j++)
-        len += (size_t)snprintf(big + len, cap - len,
-                                "ROOT r%u\n{\nOFFSET 0 0 0\nCHANNELS 0\n}\n", j);
+        len +=
+            (size_t)snprintf(big + len, cap - len, "ROOT r%u\n{\nOFFSET 0 0 0\nCHANNELS 0\n}\n", j);
     len += (size_t)snprintf(big + len, cap - len, "MOTION\nFrames: 4097\nFrame Time: 0.01\n");
     memset(big + len, '\n', 4097);
     big[len + 4097] = '\0';

@@ -39,8 +39,9 @@ static void test_layout(void **state)
     write_all(&w);
     assert_false(w.failed);
     assert_int_equal(w.len, TOTAL);
-    static const unsigned char head[] = {0xab, 0x04, 0x03, 0x02, 0x01, 0x88, 0x77, 0x66, 0x55,
-                                         0x44, 0x33, 0x22, 0x11, 0, 0, 0, 0, 0, 0, 0xf0, 0x3f};
+    static const unsigned char head[] = {0xab, 0x04, 0x03, 0x02, 0x01, 0x88, 0x77,
+                                         0x66, 0x55, 0x44, 0x33, 0x22, 0x11, 0,
+                                         0,    0,    0,    0,    0,    0xf0, 0x3f};
     assert_memory_equal(w.data, head, sizeof head);
     assert_memory_equal(w.data + TOTAL - 3, "xyz", 3);
     affect_bw_free(&w);
@@ -82,7 +83,8 @@ static void test_round_trip_and_truncation(void **state)
     assert_true(read_all(&r));
     assert_int_equal(r.off, w.len);
     assert_false(affect_br_has(&r, 1, 1));
-    for (size_t cut = 0; cut < w.len; cut++) { /* a copy of exactly cut bytes: ASan sees overreads */
+    for (size_t cut = 0; cut < w.len;
+         cut++) { /* a copy of exactly cut bytes: ASan sees overreads */
         unsigned char *copy = cut ? affect_malloc(cut) : NULL;
         if (cut)
             memcpy(copy, w.data, cut);

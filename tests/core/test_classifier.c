@@ -564,8 +564,8 @@ static void test_slabs(void **state)
     affect_classifier_config cfg;
     small_config(&cfg, fx->small_d.feat);
     cfg.slab_bytes = 1; /* a row per slab, a column per band */
-    affect_classifier *c = train_ok(&cfg, fx->small_d.feat, fx->small_seqs, fx->small_y,
-                                    fx->small_n, SMALL_LABELS, 2);
+    affect_classifier *c =
+        train_ok(&cfg, fx->small_d.feat, fx->small_seqs, fx->small_y, fx->small_n, SMALL_LABELS, 2);
     const affect_classifier *one = fx->small;
     size_t D = affect_classifier_dim(c);
     assert_int_equal(D, affect_classifier_dim(one));
@@ -576,8 +576,8 @@ static void test_slabs(void **state)
     uint32_t n = affect_classifier_n_train(c), p = affect_spca_dims(affect_classifier_spca(c));
     assert_int_equal(n, fx->small_n);
     for (size_t e = 0; e < (size_t)n * p; e++)
-        tu_assert_near(affect_classifier_train_embed(c)[e],
-                       affect_classifier_train_embed(one)[e], 1e-9);
+        tu_assert_near(affect_classifier_train_embed(c)[e], affect_classifier_train_embed(one)[e],
+                       1e-9);
     for (uint32_t i = 0; i < fx->small_n; i++) {
         eval_res a, b;
         eval_ok(c, &fx->small_seqs[i], &a);
@@ -695,14 +695,15 @@ static void test_bad_fields(void **state)
         {8, 1, "unknown classifier flags 1 (offset 8)"},
         {12, 1, "invalid class count 1 (offset 12)"},
         {12, 65, "invalid class count 65 (offset 12)"},
-        {16, 0, "invalid label (offset 20)"},                    /* label length 0 */
-        {21, 0, "invalid label (offset 25)"},                    /* a NUL inside "angry" */
+        {16, 0, "invalid label (offset 20)"},                     /* label length 0 */
+        {21, 0, "invalid label (offset 25)"},                     /* a NUL inside "angry" */
         {36, 2, "invalid configuration (offset 151)"},            /* zscore 2 */
         {61, 7, "invalid configuration (offset 151)"},            /* kernel 7 */
         {86, 2, "invalid configuration (offset 151)"},            /* mirror 2 */
         {87, 200, "truncated in the configuration (offset 103)"}, /* 200 grid dims > 128 */
-        {74, 4, "invalid configuration: descriptors must be a combination of kinematics and "
-                "laban"},
+        {74, 4,
+         "invalid configuration: descriptors must be a combination of kinematics and "
+         "laban"},
         {85, 0xff, "invalid configuration: descriptor_weight must be a positive finite number"},
         {70, 0, "invalid configuration: knn_k must be at least 1"},
         {53, 1, "invalid configuration: svm_folds must be at least 2"},
@@ -910,19 +911,19 @@ static void test_descriptors(void **state)
     cfg.descriptor_weight = 0.5;
     affect_classifier *c = NULL;
     affect_error err;
-    assert_int_equal(affect_classifier_train(&cfg, f, same, NULL, fx->small_y, n, SMALL_LABELS, 2,
-                                             &c, &err),
-                     AFFECT_ERR_INVALID);
+    assert_int_equal(
+        affect_classifier_train(&cfg, f, same, NULL, fx->small_y, n, SMALL_LABELS, 2, &c, &err),
+        AFFECT_ERR_INVALID);
     assert_string_equal(err.msg, "the configuration appends descriptors but none were given");
     desc[3] = NAN;
-    assert_int_equal(affect_classifier_train(&cfg, f, same, desc, fx->small_y, n, SMALL_LABELS, 2,
-                                             &c, &err),
-                     AFFECT_ERR_INVALID);
+    assert_int_equal(
+        affect_classifier_train(&cfg, f, same, desc, fx->small_y, n, SMALL_LABELS, 2, &c, &err),
+        AFFECT_ERR_INVALID);
     assert_string_equal(err.msg, "motion 0: descriptor 3 is not finite");
     desc[3] = 0.003;
-    assert_int_equal(affect_classifier_train(&cfg, f, same, desc, fx->small_y, n, SMALL_LABELS, 2,
-                                             &c, &err),
-                     AFFECT_OK);
+    assert_int_equal(
+        affect_classifier_train(&cfg, f, same, desc, fx->small_y, n, SMALL_LABELS, 2, &c, &err),
+        AFFECT_OK);
     assert_int_equal(affect_classifier_dim(c), 2 * affect_classifier_part_dim(c) + dd);
     unsigned char *blob;
     size_t size;
@@ -939,8 +940,9 @@ static void test_descriptors(void **state)
         assert_int_equal(o.svm, fx->small_y[i]);
     }
     affect_classifier_out o = {0};
-    assert_int_equal(affect_classifier_eval(d, same[0].x, same[0].n_frames, NULL, false, &o, NULL, &err),
-                     AFFECT_ERR_INVALID);
+    assert_int_equal(
+        affect_classifier_eval(d, same[0].x, same[0].n_frames, NULL, false, &o, NULL, &err),
+        AFFECT_ERR_INVALID);
     assert_string_equal(err.msg, "the classifier appends descriptors but none were given");
     free(blob);
     affect_classifier_free(c);
@@ -954,9 +956,9 @@ static void test_descriptors(void **state)
     assert_non_null(strstr(err.msg, "has no mirror partner"));
     /* without descriptors the identical sequences carry no label information */
     small_config(&cfg, f);
-    assert_int_equal(affect_classifier_train(&cfg, f, same, NULL, fx->small_y, n, SMALL_LABELS, 2,
-                                             &c, &err),
-                     AFFECT_ERR_INVALID);
+    assert_int_equal(
+        affect_classifier_train(&cfg, f, same, NULL, fx->small_y, n, SMALL_LABELS, 2, &c, &err),
+        AFFECT_ERR_INVALID);
     assert_non_null(strstr(err.msg, "no label information"));
 }
 
@@ -1170,7 +1172,8 @@ static void test_compact(void **state)
         free(c.fisher);
     }
     printf("compact storage: decision values move by %.3g of the largest (%.3g), coordinates by "
-           "%.3g (%.3g)\n", max_ddec / max_dec, max_dec, max_demb / max_emb, max_emb);
+           "%.3g (%.3g)\n",
+           max_ddec / max_dec, max_dec, max_demb / max_emb, max_emb);
     assert_true(max_ddec <= COMPACT_DECISION_TOL * max_dec);
     assert_true(max_demb <= COMPACT_EMBED_TOL * max_emb);
     encode_ok(d, &again, &size2);
@@ -1613,24 +1616,15 @@ static void test_out_of_memory(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_recognition),
-        cmocka_unit_test(test_normalization_and_clipping),
-        cmocka_unit_test(test_no_normalization),
-        cmocka_unit_test(test_round_trip),
-        cmocka_unit_test(test_determinism),
-        cmocka_unit_test(test_corrupted_bytes),
-        cmocka_unit_test(test_truncations),
-        cmocka_unit_test(test_descriptors),
-        cmocka_unit_test(test_fixture_v1),
-        cmocka_unit_test(test_fixture_v2),
-        cmocka_unit_test(test_compact),
-        cmocka_unit_test(test_fixture_v3),
-        cmocka_unit_test(test_bad_fields),
-        cmocka_unit_test(test_config_check),
-        cmocka_unit_test(test_train_errors),
-        cmocka_unit_test(test_grid),
-        cmocka_unit_test(test_salience),
-        cmocka_unit_test(test_slabs),
+        cmocka_unit_test(test_recognition),      cmocka_unit_test(test_normalization_and_clipping),
+        cmocka_unit_test(test_no_normalization), cmocka_unit_test(test_round_trip),
+        cmocka_unit_test(test_determinism),      cmocka_unit_test(test_corrupted_bytes),
+        cmocka_unit_test(test_truncations),      cmocka_unit_test(test_descriptors),
+        cmocka_unit_test(test_fixture_v1),       cmocka_unit_test(test_fixture_v2),
+        cmocka_unit_test(test_compact),          cmocka_unit_test(test_fixture_v3),
+        cmocka_unit_test(test_bad_fields),       cmocka_unit_test(test_config_check),
+        cmocka_unit_test(test_train_errors),     cmocka_unit_test(test_grid),
+        cmocka_unit_test(test_salience),         cmocka_unit_test(test_slabs),
         cmocka_unit_test(test_out_of_memory),
     };
     return cmocka_run_group_tests(tests, setup, teardown);

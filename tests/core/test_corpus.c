@@ -106,7 +106,8 @@ static void test_corpus(void **state)
         free(text);
         free(files[i]);
     }
-    printf("corpus: 174 files, %zu frames, worst bone-length deviation %.2g\n", total_frames, worst);
+    printf("corpus: 174 files, %zu frames, worst bone-length deviation %.2g\n", total_frames,
+           worst);
 }
 
 int main(void)

@@ -20,8 +20,8 @@
 #include "affect/io.h"
 #include "affect/skeleton.h"
 
-#define STORED_TOL 1e-4     /* cm */
-#define IK_TOL_REL 0.005    /* of the body height */
+#define STORED_TOL 1e-4  /* cm */
+#define IK_TOL_REL 0.005 /* of the body height */
 
 /* Vertical extent (y up) of the first frame. */
 static double height(const affect_motion *m)
@@ -106,8 +106,8 @@ static void check_file(const char *path, const char *name, totals *tot)
     tot->rigid_var = fmax(tot->rigid_var, var);
     tot->rigid_excess = fmax(tot->rigid_excess, var / float_bound(m));
     if (var > float_bound(m))
-        fail_msg("%s: rigid bone %s varies by %g (float32 bound %g)", name, rigid->names[worst], var,
-                 float_bound(m));
+        fail_msg("%s: rigid bone %s varies by %g (float32 bound %g)", name, rigid->names[worst],
+                 var, float_bound(m));
     tot->files++;
     affect_free(out);
     affect_free(out2);

@@ -276,13 +276,13 @@ static void test_threads(void **state)
     lines progress = {0};
     cfg.progress = collect;
     cfg.progress_ctx = &progress;
-    affect_cv_result *one = run_ok(&cfg, d->feat, d->seqs, d->y, d->n, EMOTIONS, N_EMOTIONS,
-                                   NULL, 0);
+    affect_cv_result *one =
+        run_ok(&cfg, d->feat, d->seqs, d->y, d->n, EMOTIONS, N_EMOTIONS, NULL, 0);
     for (uint32_t t = 2; t <= 5; t += 3) { /* 2 threads, and more threads than folds */
         cfg.threads = t;
         progress.n = 0;
-        affect_cv_result *many = run_ok(&cfg, d->feat, d->seqs, d->y, d->n, EMOTIONS,
-                                        N_EMOTIONS, NULL, 0);
+        affect_cv_result *many =
+            run_ok(&cfg, d->feat, d->seqs, d->y, d->n, EMOTIONS, N_EMOTIONS, NULL, 0);
         assert_true(same_results(one, many));
         assert_int_equal(progress.n, 4); /* one line per fold, in completion order */
         affect_cv_result_free(many);

@@ -712,8 +712,8 @@ typedef struct csv_oom {
     const char *text;
     size_t len;
     affect_csv_options opts;
-    affect_motion *m;   /* parse output, or the motion to write */
-    char *out;          /* write output */
+    affect_motion *m; /* parse output, or the motion to write */
+    char *out;        /* write output */
     size_t out_len;
 } csv_oom;
 

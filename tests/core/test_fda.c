@@ -46,10 +46,10 @@ static data make_data(uint32_t n, uint32_t c, double sep, uint64_t seed)
         double amp = 1.0 + 0.3 * affect_rng_normal(&r);
         for (uint32_t s = 0; s < T; s++) {
             double t = s / (double)(T - 1), k = d.y[i];
-            d.x[i][2 * s] = amp * sin(6.283185307179586 * t) + sep * k * t * t +
-                            0.05 * affect_rng_normal(&r);
-            d.x[i][2 * s + 1] = amp * cos(6.283185307179586 * t) - sep * k * t +
-                                0.05 * affect_rng_normal(&r);
+            d.x[i][2 * s] =
+                amp * sin(6.283185307179586 * t) + sep * k * t * t + 0.05 * affect_rng_normal(&r);
+            d.x[i][2 * s + 1] =
+                amp * cos(6.283185307179586 * t) - sep * k * t + 0.05 * affect_rng_normal(&r);
         }
         d.seqs[i].x = d.x[i];
         d.seqs[i].n_frames = T;
@@ -72,8 +72,8 @@ static affect_fda *train_ok(const affect_fda_config *cfg, const data *d)
 {
     affect_fda *f = NULL;
     affect_error err;
-    affect_status st = affect_fda_train(cfg, NULL, d->seqs, d->n, d->m, d->y, NAMES, d->c, &f,
-                                        &err);
+    affect_status st =
+        affect_fda_train(cfg, NULL, d->seqs, d->n, d->m, d->y, NAMES, d->c, &f, &err);
     if (st != AFFECT_OK)
         fail_msg("train: %s", err.msg);
     return f;
@@ -248,9 +248,9 @@ static void test_fspca_is_spca_of_weighted(void **state)
         double *z = weighted(f, &d, &h);
         affect_spca *s = NULL;
         affect_error err;
-        assert_int_equal(affect_spca_fit(z, d.n, h, d.y, 4, (affect_spca_kernel)kernel, 0.7, 3,
-                                         &s, &err),
-                         AFFECT_OK);
+        assert_int_equal(
+            affect_spca_fit(z, d.n, h, d.y, 4, (affect_spca_kernel)kernel, 0.7, 3, &s, &err),
+            AFFECT_OK);
         uint32_t p = affect_spca_dims(s);
         assert_int_equal(p, affect_fda_dims(f));
         double *sz = malloc(d.n * p * sizeof *sz);
@@ -258,9 +258,8 @@ static void test_fspca_is_spca_of_weighted(void **state)
         const double *tz = affect_fda_train_embedding(f);
         for (uint32_t r = 0; r < p; r++) {
             /* equal up to a shift (sPCA does not centre) and a sign */
-            double sign = (sz[1 * p + r] - sz[0 * p + r]) * (tz[1 * p + r] - tz[0 * p + r]) >= 0
-                              ? 1
-                              : -1;
+            double sign =
+                (sz[1 * p + r] - sz[0 * p + r]) * (tz[1 * p + r] - tz[0 * p + r]) >= 0 ? 1 : -1;
             for (uint32_t i = 1; i < d.n; i++)
                 tu_assert_near(sign * (sz[i * p + r] - sz[r]), tz[i * p + r] - tz[r], 1e-7);
             tu_assert_near(affect_fda_eigenvalues(f)[r], affect_spca_eigenvalues(s)[r],
@@ -292,8 +291,7 @@ static void test_out_of_sample_training(void **state)
         for (uint32_t i = 0; i < d.n; i++) {
             double z[3];
             affect_error err;
-            assert_int_equal(affect_fda_embed(f, d.x[i], d.seqs[i].n_frames, z, &err),
-                             AFFECT_OK);
+            assert_int_equal(affect_fda_embed(f, d.x[i], d.seqs[i].n_frames, z, &err), AFFECT_OK);
             for (uint32_t r = 0; r < p; r++)
                 if (!(fabs(z[r] - tz[i * p + r]) <= 1e-6 * scale))
                     fail_msg("method %d, motion %u, axis %u: %.12g, trained %.12g", method, i, r,
@@ -318,9 +316,9 @@ static void test_classify_separated(void **state)
         for (uint32_t i = 0; i < q.n; i++) {
             uint32_t label, votes[4];
             affect_error err;
-            assert_int_equal(affect_fda_classify(f, q.x[i], q.seqs[i].n_frames, 1, &label, votes,
-                                                 &err),
-                             AFFECT_OK);
+            assert_int_equal(
+                affect_fda_classify(f, q.x[i], q.seqs[i].n_frames, 1, &label, votes, &err),
+                AFFECT_OK);
             right += label == q.y[i];
         }
         if (right < 19)
@@ -336,7 +334,11 @@ static void test_swiss_roll(void **state)
     (void)state;
     /* constant "motions": each a point of a swiss roll, so L² distances are Euclidean ones */
     uint32_t n = 300;
-    data d = {n, 3, 2, calloc(n, sizeof(affect_hmm_seq)), calloc(n, sizeof(double *)),
+    data d = {n,
+              3,
+              2,
+              calloc(n, sizeof(affect_hmm_seq)),
+              calloc(n, sizeof(double *)),
               calloc(n, sizeof(uint32_t))};
     double *arc = malloc(n * sizeof *arc);
     affect_rng r;
@@ -492,14 +494,16 @@ static void test_errors(void **state)
     d.x[2][3] = 0;
     cfg.lambda = 0;
     cfg.n_basis = 100; /* more coefficients than frames */
-    train_fails(&cfg, &d, d.n, 3, d.y, "motion 0: the fit is singular: 68 samples cannot "
-                                       "determine 100 coefficients with lambda = 0 (give a "
-                                       "positive lambda or a smaller basis)");
+    train_fails(&cfg, &d, d.n, 3, d.y,
+                "motion 0: the fit is singular: 68 samples cannot "
+                "determine 100 coefficients with lambda = 0 (give a "
+                "positive lambda or a smaller basis)");
     small_cfg(&cfg, AFFECT_FDA_FISOMAP);
     cfg.isomap_k = 1;
     data e = make_data(12, 2, 30.0, 2); /* two far clusters: a 1-NN graph splits */
-    train_fails(&cfg, &e, e.n, 2, e.y, "the 1-nearest-neighbour graph is not connected (motion 1 "
-                                       "cannot reach motion 0): raise isomap_k");
+    train_fails(&cfg, &e, e.n, 2, e.y,
+                "the 1-nearest-neighbour graph is not connected (motion 1 "
+                "cannot reach motion 0): raise isomap_k");
     /* all equal: no variance */
     for (uint32_t i = 1; i < d.n; i++) {
         d.seqs[i].x = d.x[0];

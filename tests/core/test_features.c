@@ -19,7 +19,7 @@ static affect_motion *make_motion(int quarter_turns, float dx, float dz)
     static const char *const names[7] = {"Hips",   "Chest",      "UpperArm_R", "LowerArm_R",
                                          "Hand_R", "UpperLeg_L", "UpperLeg_R"};
     static const int32_t parents[7] = {-1, 0, 1, 2, 3, 0, 0};
-    static const float base[7][3] = {{0, 1, 0},      {0, 1.5f, 0},   {-0.2f, 1.4f, 0},
+    static const float base[7][3] = {{0, 1, 0},        {0, 1.5f, 0},     {-0.2f, 1.4f, 0},
                                      {-0.5f, 1.4f, 0}, {-0.5f, 1.2f, 0}, {0.1f, 0.9f, 0},
                                      {-0.1f, 0.9f, 0}};
     static const float shift[4] = {0, 1, 3, 6};
@@ -28,8 +28,7 @@ static affect_motion *make_motion(int quarter_turns, float dx, float dz)
     assert_int_equal(affect_motion_create(4, 7, 10.0, &m, &err), AFFECT_OK);
     assert_int_equal(affect_motion_set_unit(m, "m", &err), AFFECT_OK);
     for (uint32_t j = 0; j < 7; j++) {
-        assert_int_equal(affect_motion_set_name(m, j, names[j], strlen(names[j]), &err),
-                         AFFECT_OK);
+        assert_int_equal(affect_motion_set_name(m, j, names[j], strlen(names[j]), &err), AFFECT_OK);
         m->parents[j] = parents[j];
     }
     for (uint32_t t = 0; t < 4; t++)
@@ -141,8 +140,7 @@ static void test_defaults_and_raw_values(void **state)
  * a motion gives the same observations. */
 static void test_normalization_invariance(void **state)
 {
-    affect_motion *a = make_motion(0, 0, 0), *b = make_motion(1, 5, -3),
-                  *c = make_motion(3, -2, 7);
+    affect_motion *a = make_motion(0, 0, 0), *b = make_motion(1, 5, -3), *c = make_motion(3, -2, 7);
     affect_features_options opt;
     affect_features_options_default(&opt);
     opt.velocity = true;
@@ -208,7 +206,7 @@ static void test_body_frame(void **state)
     const double shift[4] = {0, 1, 3, 6}, vx[4] = {20, 30, 50, 60}; /* arms, arms/s */
     for (uint32_t t = 0; t < 4; t++) {
         const double *r = xa + t * D;
-        tu_assert_near(r[0], 0, 1e-12); /* the pelvis is the origin */
+        tu_assert_near(r[0], 0, 1e-12);                              /* the pelvis is the origin */
         tu_assert_near(r[4 * 3 + 0], (-0.5 - shift[t]) / 0.5, 1e-5); /* the right hand */
         tu_assert_near(r[4 * 3 + 1], 0.2 / 0.5, 1e-5);
         tu_assert_near(r[D - 4], vx[t], 1e-4); /* forward … sideways: the pelvis moves on x */
@@ -362,8 +360,7 @@ static void expect_create_error(const affect_features_options *opt, const affect
     assert_string_equal(err.msg, msg);
 }
 
-static void expect_extract_error(const affect_features *f, const affect_motion *m,
-                                 const char *msg)
+static void expect_extract_error(const affect_features *f, const affect_motion *m, const char *msg)
 {
     double *x = NULL;
     uint32_t T = 0;
@@ -516,11 +513,11 @@ static void test_binary_form(void **state)
     memcpy(c, buf, size);
     c[size] = 0;
     expect_decode_error(c, size + 1, "trailing bytes: 80 bytes, expected 79 for 3 joints");
-#define CORRUPT(stmt, msg)                                                                     \
-    do {                                                                                       \
-        memcpy(c, buf, size);                                                                  \
-        stmt;                                                                                  \
-        expect_decode_error(c, size, msg);                                                     \
+#define CORRUPT(stmt, msg)                                                                         \
+    do {                                                                                           \
+        memcpy(c, buf, size);                                                                      \
+        stmt;                                                                                      \
+        expect_decode_error(c, size, msg);                                                         \
     } while (0)
     CORRUPT(c[0] = 3, "up axis 3 out of range (0 .. 2)");
     CORRUPT(c[1] = 0x27, "unknown flags 0x27 (offset 1)");

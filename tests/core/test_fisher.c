@@ -297,7 +297,8 @@ static size_t check_model(params *p, const double *x, uint32_t T)
     size_t d = affect_fisher_dim(&p->cfg, AFFECT_FISHER_ALL);
     assert_true(d > 0 && d <= 512);
     double f[512], g[512], ll, ref;
-    assert_int_equal(affect_fisher_score(h, x, T, AFFECT_FISHER_ALL, f, &ll, NULL, &err), AFFECT_OK);
+    assert_int_equal(affect_fisher_score(h, x, T, AFFECT_FISHER_ALL, f, &ll, NULL, &err),
+                     AFFECT_OK);
     assert_int_equal(affect_hmm_loglik(h, x, T, &ref, NULL, &err), AFFECT_OK);
     tu_assert_near(ll, ref, 1e-10 * fabs(ref));
     size_t zeros = 0;
@@ -548,8 +549,8 @@ static void test_realistic(void **state)
     size_t d = affect_fisher_dim(&p.cfg, AFFECT_FISHER_ALL);
     assert_int_equal(d, 30317);
     double ll, ll2;
-    assert_int_equal(affect_fisher_score(h, big_x, BIG_T, AFFECT_FISHER_ALL, big_f, &ll, NULL, &err),
-                     AFFECT_OK);
+    assert_int_equal(
+        affect_fisher_score(h, big_x, BIG_T, AFFECT_FISHER_ALL, big_f, &ll, NULL, &err), AFFECT_OK);
     assert_true(isfinite(ll));
     size_t nonzero = 0;
     for (size_t i = 0; i < d; i++) {
@@ -558,15 +559,17 @@ static void test_realistic(void **state)
     }
     assert_true(nonzero > d / 2);
     /* bit-identical a second time */
-    assert_int_equal(affect_fisher_score(h, big_x, BIG_T, AFFECT_FISHER_ALL, big_g, &ll2, NULL, &err),
-                     AFFECT_OK);
+    assert_int_equal(
+        affect_fisher_score(h, big_x, BIG_T, AFFECT_FISHER_ALL, big_g, &ll2, NULL, &err),
+        AFFECT_OK);
     assert_memory_equal(big_f, big_g, d * sizeof(double));
     assert_memory_equal(&ll, &ll2, sizeof ll);
     /* entries of the most visited component: a mean, a variance, a covariance, its weight, and
      * a transition */
     double *wts = big_g;
-    assert_int_equal(affect_fisher_score(h, big_x, BIG_T, AFFECT_FISHER_WEIGHTS, wts, NULL, NULL, &err),
-                     AFFECT_OK);
+    assert_int_equal(
+        affect_fisher_score(h, big_x, BIG_T, AFFECT_FISHER_WEIGHTS, wts, NULL, NULL, &err),
+        AFFECT_OK);
     size_t best = 0;
     for (size_t k = 1; k < BIG_N * BIG_M; k++)
         if (wts[k] * big_w[k] > wts[best] * big_w[best])
@@ -606,8 +609,10 @@ static void test_deterministic(void **state)
     memset(a, 0, sizeof a);
     for (size_t i = 0; i < 200; i++)
         b[i] = NAN;
-    assert_int_equal(affect_fisher_score(h, x, 40, AFFECT_FISHER_ALL, a, NULL, NULL, &err), AFFECT_OK);
-    assert_int_equal(affect_fisher_score(h, x, 40, AFFECT_FISHER_ALL, b, NULL, NULL, &err), AFFECT_OK);
+    assert_int_equal(affect_fisher_score(h, x, 40, AFFECT_FISHER_ALL, a, NULL, NULL, &err),
+                     AFFECT_OK);
+    assert_int_equal(affect_fisher_score(h, x, 40, AFFECT_FISHER_ALL, b, NULL, NULL, &err),
+                     AFFECT_OK);
     assert_memory_equal(a, b, d * sizeof(double));
     assert_true(isnan(b[d])); /* nothing written past the end */
     affect_hmm_free(h);
@@ -628,7 +633,8 @@ static void test_errors(void **state)
     affect_error err;
     double x[6] = {0.1, 0.2, 0.3, 0.4, 0.5, 0.6}, f[64], ll = 7.0;
 
-    expect_msg(affect_fisher_score(h, x, 3, 0, f, &ll, NULL, &err), &err, AFFECT_ERR_INVALID, GROUPS_MSG);
+    expect_msg(affect_fisher_score(h, x, 3, 0, f, &ll, NULL, &err), &err, AFFECT_ERR_INVALID,
+               GROUPS_MSG);
     expect_msg(affect_fisher_score(h, x, 3, 32, f, &ll, NULL, &err), &err, AFFECT_ERR_INVALID,
                GROUPS_MSG);
     expect_msg(affect_fisher_score(h, x, 3, AFFECT_FISHER_ALL | 128, f, &ll, NULL, &err), &err,
@@ -654,7 +660,8 @@ static void test_errors(void **state)
     /* with a fixed start the start bit alongside others selects nothing more */
     x[5] = 0.6;
     double g[64];
-    assert_int_equal(affect_fisher_score(h, x, 3, AFFECT_FISHER_ALL, f, NULL, NULL, &err), AFFECT_OK);
+    assert_int_equal(affect_fisher_score(h, x, 3, AFFECT_FISHER_ALL, f, NULL, NULL, &err),
+                     AFFECT_OK);
     assert_int_equal(
         affect_fisher_score(h, x, 3, AFFECT_FISHER_ALL & ~AFFECT_FISHER_START, g, &ll, NULL, &err),
         AFFECT_OK);
@@ -727,12 +734,9 @@ static void test_out_of_memory(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_finite_differences),
-        cmocka_unit_test(test_dim),
-        cmocka_unit_test(test_describe),
-        cmocka_unit_test(test_realistic),
-        cmocka_unit_test(test_deterministic),
-        cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_finite_differences), cmocka_unit_test(test_dim),
+        cmocka_unit_test(test_describe),           cmocka_unit_test(test_realistic),
+        cmocka_unit_test(test_deterministic),      cmocka_unit_test(test_errors),
         cmocka_unit_test(test_out_of_memory),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

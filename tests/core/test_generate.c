@@ -200,16 +200,14 @@ static void test_single_neighbour_and_no_filter(void **state)
     affect_motion *g = generate(d, &nb, 1, &opt, &rep);
     assert_int_equal(rep.neighbours_used, 1);
     /* no clock: no stage times */
-    assert_true(rep.t_features == 0 && rep.t_train == 0 && rep.t_viterbi == 0 &&
-                rep.t_render == 0);
+    assert_true(rep.t_features == 0 && rep.t_train == 0 && rep.t_viterbi == 0 && rep.t_render == 0);
     affect_free(rep.path);
     /* with a clock: five readings, one per stage boundary, and the same motion */
     opt.clock = tick_clock;
     ticks = 0;
     affect_motion *g2 = generate(d, &nb, 1, &opt, &rep);
     assert_true(ticks == 5);
-    assert_true(rep.t_features == 1 && rep.t_train == 1 && rep.t_viterbi == 1 &&
-                rep.t_render == 1);
+    assert_true(rep.t_features == 1 && rep.t_train == 1 && rep.t_viterbi == 1 && rep.t_render == 1);
     assert_memory_equal(g->pos, g2->pos, (size_t)d->n_frames * d->n_joints * 3 * sizeof(float));
     affect_motion_free(g2);
     /* linear rendering, unfiltered: the same path; at each run's centre frame (odd-length
@@ -306,7 +304,7 @@ static void test_keep_path(void **state)
         travel = fmax(travel, hypot(a[0] - a0[0], a[2] - a0[2]));
     }
     assert_true(travel > 1.0); /* the walk travels more than a metre */
-    assert_true(worst < 1e-4);  /* and the output's root follows it (float32 rounding) */
+    assert_true(worst < 1e-4); /* and the output's root follows it (float32 rounding) */
     /* the posture is not the walk's: the hands are the knocks' (no copies of the walk) */
     double dk = dtw(g, d);
     assert_true(dk > 0.05);

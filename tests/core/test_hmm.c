@@ -362,7 +362,8 @@ static void test_brute_force(void **state)
             tu_assert_near(lp, b.vit_logprob, 1e-10 * fabs(b.vit_logprob) + 1e-12);
             for (uint32_t t = 0; t < T; t++)
                 assert_int_equal(path[t], b.vit_path[t]);
-            assert_int_equal(affect_hmm_posteriors(h, x, T, gamma, xi, &ll2, NULL, &err), AFFECT_OK);
+            assert_int_equal(affect_hmm_posteriors(h, x, T, gamma, xi, &ll2, NULL, &err),
+                             AFFECT_OK);
             tu_assert_near(ll2, b.loglik, 1e-10 * fabs(b.loglik) + 1e-12);
             for (uint32_t e = 0; e < T * N * M; e++)
                 tu_assert_near(gamma[e], b.gamma[e], 1e-10);
@@ -612,7 +613,8 @@ static void test_wide_full(void **state)
             if (t > 0) {
                 double mm = -INFINITY, s = 0.0;
                 for (uint32_t i = 0; i < N; i++)
-                    mm = alpha[i] + log(trans[i * N + l]) > mm ? alpha[i] + log(trans[i * N + l]) : mm;
+                    mm = alpha[i] + log(trans[i * N + l]) > mm ? alpha[i] + log(trans[i * N + l])
+                                                               : mm;
                 for (uint32_t i = 0; i < N; i++)
                     s += exp(alpha[i] + log(trans[i * N + l]) - mm);
                 v = mm + log(s);
@@ -792,8 +794,8 @@ static void test_mstep_sharp(void **state)
     static long double n[K], s1[K * m], sc[K * m * m];
     for (uint32_t s = 0; s < S; s++)
         for (uint32_t t = 0; t < T; t++) { /* state = half of the sequence, mixture at random:
-                                                * states far apart (posteriors 0 or 1 to 1e-50),
-                                                * mixtures overlapping (posteriors in between) */
+                                            * states far apart (posteriors 0 or 1 to 1e-50),
+                                            * mixtures overlapping (posteriors in between) */
             uint32_t i = t < T / 2 ? 0 : 1, j = affect_rng_uniform(&rng) < 0.5 ? 1 : 0;
             double shared = affect_rng_normal(&rng);
             for (uint32_t d = 0; d < m; d++)
@@ -836,8 +838,8 @@ static void test_mstep_sharp(void **state)
                     }
                     for (uint32_t d = 0; d < m; d++)
                         for (uint32_t e = 0; e < m; e++)
-                            sc[(k * m + d) * m + e] += g * (xt[d] - s1[k * m + d] / n[k]) *
-                                                       (xt[e] - s1[k * m + e] / n[k]);
+                            sc[(k * m + d) * m + e] +=
+                                g * (xt[d] - s1[k * m + d] / n[k]) * (xt[e] - s1[k * m + e] / n[k]);
                 }
         }
     const double *mu = affect_hmm_means(h1), *cov = affect_hmm_covariances(h1);

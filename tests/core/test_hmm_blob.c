@@ -101,8 +101,7 @@ static unsigned char *encode(const affect_hmm *h, const affect_features *f, size
 
 static uint32_t get32(const unsigned char *p)
 {
-    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) |
-           ((uint32_t)p[3] << 24);
+    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
 }
 
 static void put32(unsigned char *p, uint32_t v)
@@ -151,8 +150,7 @@ static void assert_same_model(const affect_hmm *a, const affect_hmm *b)
                         n * n * sizeof(double));
     assert_memory_equal(affect_hmm_weights(a), affect_hmm_weights(b), n * m * sizeof(double));
     assert_memory_equal(affect_hmm_means(a), affect_hmm_means(b), n * m * d * sizeof(double));
-    assert_memory_equal(affect_hmm_covariances(a), affect_hmm_covariances(b),
-                        nc * sizeof(double));
+    assert_memory_equal(affect_hmm_covariances(a), affect_hmm_covariances(b), nc * sizeof(double));
     affect_hmm_report ra, rb;
     affect_hmm_get_report(a, &ra);
     affect_hmm_get_report(b, &rb);
@@ -205,12 +203,14 @@ static void test_layout_and_round_trip(void **state)
         size_t n_cov = cov == AFFECT_HMM_FULL ? N * M * D * D : N * M * D;
         size_t n_params = N + N * N + N * M + N * M * D + n_cov;
         assert_int_equal(size, 80 + f_len + 8 * 3 + 8 * n_params + 8);
-        assert_memory_equal(blob, "AFHM\x01\x00\x00\x00\x03\x00\x00\x00\x02\x00\x00\x00"
-                                  "\x06\x00\x00\x00", 20);
-        assert_int_equal(blob[20], c);    /* covariance */
-        assert_int_equal(blob[21], 0);    /* ergodic */
-        assert_int_equal(blob[22], 0);    /* start: first state */
-        assert_int_equal(blob[23], 1);    /* converged */
+        assert_memory_equal(blob,
+                            "AFHM\x01\x00\x00\x00\x03\x00\x00\x00\x02\x00\x00\x00"
+                            "\x06\x00\x00\x00",
+                            20);
+        assert_int_equal(blob[20], c);          /* covariance */
+        assert_int_equal(blob[21], 0);          /* ergodic */
+        assert_int_equal(blob[22], 0);          /* start: first state */
+        assert_int_equal(blob[23], 1);          /* converged */
         assert_int_equal(get32(blob + 28), 5);  /* max_iter */
         assert_int_equal(get32(blob + 48), 42); /* seed */
         assert_int_equal(get32(blob + 56), 2);  /* iterations */
@@ -289,7 +289,8 @@ static void test_trained_round_trip(void **state)
         decode_ok(blob, size, &back, &fb);
         double a, b;
         assert_int_equal(affect_hmm_loglik(h, xs[0], seqs[0].n_frames, &a, NULL, &err), AFFECT_OK);
-        assert_int_equal(affect_hmm_loglik(back, xs[0], seqs[0].n_frames, &b, NULL, &err), AFFECT_OK);
+        assert_int_equal(affect_hmm_loglik(back, xs[0], seqs[0].n_frames, &b, NULL, &err),
+                         AFFECT_OK);
         assert_memory_equal(&a, &b, sizeof a);
         affect_free(blob);
         affect_hmm_free(back);
@@ -329,8 +330,7 @@ static void test_corruptions(void **state)
     /* every truncation */
     for (size_t n = 0; n < size; n++) {
         if (n < 80)
-            snprintf(msg, sizeof msg, "truncated: %zu bytes is shorter than the 80-byte header",
-                     n);
+            snprintf(msg, sizeof msg, "truncated: %zu bytes is shorter than the 80-byte header", n);
         else
             snprintf(msg, sizeof msg,
                      "truncated: %zu bytes, expected %zu for 3 states x 2 mixtures x 6 dimensions",
@@ -344,11 +344,11 @@ static void test_corruptions(void **state)
              size + 1, size);
     expect_error(c, size + 1, msg);
 
-#define CORRUPT(stmt, msg)                                                                     \
-    do {                                                                                       \
-        memcpy(c, blob, size);                                                                 \
-        stmt;                                                                                  \
-        expect_error(c, size, msg);                                                            \
+#define CORRUPT(stmt, msg)                                                                         \
+    do {                                                                                           \
+        memcpy(c, blob, size);                                                                     \
+        stmt;                                                                                      \
+        expect_error(c, size, msg);                                                                \
     } while (0)
     /* the header, checked in order */
     CORRUPT(c[0] = 'X', "not a model (bad magic bytes at offset 0)");
@@ -368,8 +368,8 @@ static void test_corruptions(void **state)
     CORRUPT(put32(c + 8, 4), msg);
     CORRUPT(put32(c + 68, 0xffffffffu), NULL);
     if (sizeof(size_t) == 4) /* 256 × 64 × 4096² doubles do not fit 32 bits */
-        CORRUPT(put32(c + 8, 256); put32(c + 12, 64); put32(c + 16, 4096),
-                "sizes in the header overflow");
+        CORRUPT(put32(c + 8, 256); put32(c + 12, 64);
+                put32(c + 16, 4096), "sizes in the header overflow");
     else
         CORRUPT(put32(c + 8, 256); put32(c + 12, 64); put32(c + 16, 4096), NULL);
 
@@ -377,10 +377,23 @@ static void test_corruptions(void **state)
     const size_t ll = 80 + f_len, start = ll + 3 * 8, trans = start + N * 8,
                  weights = trans + N * N * 8, means = weights + N * M * 8,
                  covs = means + N * M * D * 8;
-    const size_t at[] = {32 /* tol */,  40 /* reg */,   48 /* seed */, 60 /* reseeded */,
-                         72 /* frames */, 80 /* features */, 80 + f_len - 1, ll,   start,
-                         trans + 17,    weights + 3,    means + 100,  covs,   covs + 1000,
-                         size - 9,      size - 8 /* the checksum itself */, size - 1};
+    const size_t at[] = {32 /* tol */,
+                         40 /* reg */,
+                         48 /* seed */,
+                         60 /* reseeded */,
+                         72 /* frames */,
+                         80 /* features */,
+                         80 + f_len - 1,
+                         ll,
+                         start,
+                         trans + 17,
+                         weights + 3,
+                         means + 100,
+                         covs,
+                         covs + 1000,
+                         size - 9,
+                         size - 8 /* the checksum itself */,
+                         size - 1};
     for (size_t i = 0; i < sizeof at / sizeof at[0]; i++)
         CORRUPT(c[at[i]] ^= 0x10, "model checksum mismatch: the BLOB is corrupt");
     CORRUPT(c[23] ^= 1, "model checksum mismatch: the BLOB is corrupt"); /* converged */
@@ -407,10 +420,10 @@ static void test_corruptions(void **state)
              covs + 8 * (N * M * D * D - 1));
     expect_error(c, size, msg);
     /* the feature definition: its flags (velocity doubles the dimension), a bad up axis */
-    CORRUPT(c[81] |= 4; reseal(c, size),
-            "the feature definition gives 12 dimensions, the header 6");
-    CORRUPT(c[80] = 5; reseal(c, size),
-            "feature definition at offset 80: up axis 5 out of range (0 .. 2)");
+    CORRUPT(c[81] |= 4;
+            reseal(c, size), "the feature definition gives 12 dimensions, the header 6");
+    CORRUPT(c[80] = 5;
+            reseal(c, size), "feature definition at offset 80: up axis 5 out of range (0 .. 2)");
     /* the configuration and the parameters, as the HMM engine checks them */
     memcpy(c, blob, size);
     put_f64(c + 32, -1.0);
@@ -535,10 +548,8 @@ static void test_out_of_memory(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_layout_and_round_trip),
-        cmocka_unit_test(test_trained_round_trip),
-        cmocka_unit_test(test_corruptions),
-        cmocka_unit_test(test_fixture),
+        cmocka_unit_test(test_layout_and_round_trip), cmocka_unit_test(test_trained_round_trip),
+        cmocka_unit_test(test_corruptions),           cmocka_unit_test(test_fixture),
         cmocka_unit_test(test_out_of_memory),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

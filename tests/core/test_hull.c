@@ -231,8 +231,8 @@ static double brute_volume(const double *in, uint32_t n_in, double *surface)
                 }
                 double area = fabs(brute_area_2d(q2, m2, tol, NULL));
                 area_sum += area;
-                double height = fabs(nv[0] * (c[0] - a[0]) + nv[1] * (c[1] - a[1]) +
-                                     nv[2] * (c[2] - a[2]));
+                double height =
+                    fabs(nv[0] * (c[0] - a[0]) + nv[1] * (c[1] - a[1]) + nv[2] * (c[2] - a[2]));
                 vol += area * height / 3;
             }
         }
@@ -248,8 +248,8 @@ static void assert_volume_brute(double v, const double *p, uint32_t n, const cha
     double surface, ref = brute_volume(p, n, &surface);
     double tol = 1.01 * DELTA_3D * extent(p, n, 3) * surface + 1e-12 * ref;
     if (!(fabs(v - ref) <= tol))
-        fail_msg("%s %d (%u points): volume %.17g, brute force %.17g (tolerance %.3g)", what, i,
-                 n, v, ref, tol);
+        fail_msg("%s %d (%u points): volume %.17g, brute force %.17g (tolerance %.3g)", what, i, n,
+                 v, ref, tol);
 }
 
 /* ---- 2-D ---- */
@@ -258,8 +258,8 @@ static void test_area_square(void **state)
 {
     (void)state;
     /* corners, interior points, duplicates of corners, points on every edge */
-    double p[] = {0, 0,    1, 0,   1, 1,    0, 1,    0.5, 0.5, 0.25, 0.75, 1, 1,
-                  0, 0,    0.5, 0, 1, 0.25, 0.3, 1,  0, 0.9,   0.5,  0,    1, 0.5};
+    double p[] = {0, 0, 1,   0, 1, 1,    0,   1, 0.5, 0.5, 0.25, 0.75, 1, 1,
+                  0, 0, 0.5, 0, 1, 0.25, 0.3, 1, 0,   0.9, 0.5,  0,    1, 0.5};
     uint32_t n = (uint32_t)(sizeof p / sizeof p[0] / 2);
     tu_assert_near(hull_area(p, n), 1.0, 1e-15);
     tu_assert_near(hull_area(p, 4), 1.0, 1e-15);
@@ -287,8 +287,9 @@ static void test_area_triangle_and_polygon(void **state)
     (void)state;
     double t[] = {0, 0, 4, 0, 0, 3};
     assert_true(hull_area(t, 3) == 6.0);
-    double t2[] = {0, 3, 4, 0, 0, 0, 1, 1, 2, 1.5}; /* clockwise, plus an interior and an
-                                                       edge point */
+    double t2[] = {0, 3, 4, 0,  0, 0,
+                   1, 1, 2, 1.5}; /* clockwise, plus an interior and an
+                                     edge point */
     tu_assert_near(hull_area(t2, 5), 6.0, 1e-14);
 
     affect_rng rng;
@@ -404,7 +405,8 @@ static void test_near_duplicates(void **state)
         double tol = 1.01 * (DELTA_3D * extent(p, m, 3) + moved) * surface + 1e-12 * ref;
         if (!(fabs(v - ref) <= tol))
             fail_msg("set %d (%u points, spread %g): volume %.17g, expected %.17g (tolerance "
-                     "%.3g)", set, m, spread, v, ref, tol);
+                     "%.3g)",
+                     set, m, spread, v, ref, tol);
         /* the same in 2-D: the (x, z) projection */
         for (uint32_t i = 0; i < m; i++) {
             xy[2 * i] = p[3 * i];
@@ -419,7 +421,8 @@ static void test_near_duplicates(void **state)
         double atol = 1.01 * (DELTA_2D * extent(xy, m, 2) + moved) * per + 1e-12 * aref;
         if (!(fabs(a - aref) <= atol))
             fail_msg("set %d (%u points, spread %g): area %.17g, expected %.17g (tolerance "
-                     "%.3g)", set, m, spread, a, aref, atol);
+                     "%.3g)",
+                     set, m, spread, a, aref, atol);
     }
     affect_hull3d_free(h);
 }
@@ -453,8 +456,8 @@ static void test_volume_cube(void **state)
     for (int i = 0; i < 12; i++, n++) { /* on edges, including midpoints */
         int axis = i % 3;
         for (int k = 0; k < 3; k++)
-            p[3 * n + k] = k == axis ? (i < 6 ? 0.5 : affect_rng_uniform(&rng))
-                                     : (double)((i / 3 + k) % 2);
+            p[3 * n + k] =
+                k == axis ? (i < 6 ? 0.5 : affect_rng_uniform(&rng)) : (double)((i / 3 + k) % 2);
     }
     for (int i = 0; i < 16; i++, n++) /* duplicates of earlier points */
         memcpy(p + 3 * n, p + 3 * (i * 5 % n), 3 * sizeof(double));
@@ -494,8 +497,8 @@ static void test_volume_polyhedra(void **state)
     double tet[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
     tu_assert_near(hull_volume(tet, 4), 1.0 / 6, 1e-16);
     /* plus points on its faces, its edges and inside */
-    double tet2[] = {0,   0,   0,   1,   0, 0, 0,    1,    0,    0, 0, 1, 0.25, 0.25, 0.5,
-                     0.5, 0.5, 0,   0,   0, 0.5, 0.1, 0.1, 0.1, 0, 0.3, 0.3, 0.2, 0,    0.7};
+    double tet2[] = {0,   0,   0, 1, 0, 0,   0,   1,   0,   0, 0,   1,   0.25, 0.25, 0.5,
+                     0.5, 0.5, 0, 0, 0, 0.5, 0.1, 0.1, 0.1, 0, 0.3, 0.3, 0.2,  0,    0.7};
     tu_assert_near(hull_volume(tet2, 10), 1.0 / 6, 1e-16);
 
     double r = 2.0;
@@ -604,17 +607,19 @@ static void test_volume_degenerate(void **state)
 /* ---- 3-D: against the brute force ---- */
 
 /* 27 joints of a standing figure in metres (y up, facing +z), arms out, legs apart. */
-static const double skeleton[27 * 3] = {
-    0,     1.00, 0,    0,     1.10, 0,     0,     1.22, 0,    0,     1.35, 0,
-    0,     1.52, 0,    0,     1.62, 0.02,  0,     1.75, 0,    /* hips .. head end */
-    0.05,  1.47, 0,    0.18,  1.45, 0,     0.45,  1.45, 0,    0.70,  1.45, 0,
-    0.88,  1.45, 0,    /* left arm */
-    -0.05, 1.47, 0,    -0.18, 1.45, 0,     -0.45, 1.45, 0,    -0.70, 1.45, 0,
-    -0.88, 1.45, 0,    /* right arm */
-    0.10,  0.95, 0,    0.12,  0.52, 0.02,  0.12,  0.08, 0,    0.12,  0.02, 0.12,
-    0.12,  0.00, 0.20, /* left leg */
-    -0.10, 0.95, 0,    -0.12, 0.52, 0.02,  -0.12, 0.08, 0,    -0.12, 0.02, 0.12,
-    -0.12, 0.00, 0.20, /* right leg */
+static const double
+    skeleton[27 * 3] =
+        {
+            0,     1.00,  0,    0,     1.10, 0,    0,     1.22, 0,    0,     1.35,
+            0,     0,     1.52, 0,     0,    1.62, 0.02,  0,    1.75, 0, /* hips .. head end */
+            0.05,  1.47,  0,    0.18,  1.45, 0,    0.45,  1.45, 0,    0.70,  1.45,
+            0,     0.88,  1.45, 0, /* left arm */
+            -0.05, 1.47,  0,    -0.18, 1.45, 0,    -0.45, 1.45, 0,    -0.70, 1.45,
+            0,     -0.88, 1.45, 0, /* right arm */
+            0.10,  0.95,  0,    0.12,  0.52, 0.02, 0.12,  0.08, 0,    0.12,  0.02,
+            0.12,  0.12,  0.00, 0.20, /* left leg */
+            -0.10, 0.95,  0,    -0.12, 0.52, 0.02, -0.12, 0.08, 0,    -0.12, 0.02,
+            0.12,  -0.12, 0.00, 0.20, /* right leg */
 };
 
 /* A posed skeleton in cm: joints moved by up to ±12 cm, turned about y, moved on the floor. */
@@ -839,7 +844,8 @@ static void test_out_of_memory(void **state)
  * frame about their rest pose, the body turns and walks, end sites now and then coincide with
  * their parent, as in the corpus): the bound from the last hull built (every 1 to 8 frames, as
  * shape_flow would) is never below the volume a fresh Quickhull gives, and it is the volume
- * itself, to 1e-4 (the slack of its float arithmetic), on the reference's own frame (the certificate: no point above a face). */
+ * itself, to 1e-4 (the slack of its float arithmetic), on the reference's own frame (the
+ * certificate: no point above a face). */
 static void test_bound_random_walk(void **state)
 {
     (void)state;

@@ -32,8 +32,7 @@ static affect_json_doc *parse_ok(const char *text, size_t len)
     return doc;
 }
 
-static void expect_json_error(const char *text, size_t len, affect_status status,
-                              const char *msg)
+static void expect_json_error(const char *text, size_t len, affect_status status, const char *msg)
 {
     affect_json_doc *doc = (affect_json_doc *)&doc; /* must be reset to NULL */
     affect_error err;
@@ -86,10 +85,10 @@ static void test_accept_table(void **state)
         {"\"\\ud83d\\ude00\"", AFFECT_JSON_STRING, 0},
         {"\"\\\"\\\\\\/\\b\\f\\n\\r\\t\"", AFFECT_JSON_STRING, 0},
         {"\"caf\xc3\xa9 \xe2\x82\xac \xf0\x9f\x98\x80\"", AFFECT_JSON_STRING, 0},
-        {"\"\xef\xbf\xbf\"", AFFECT_JSON_STRING, 0},         /* U+FFFF */
-        {"\"\xf4\x8f\xbf\xbf\"", AFFECT_JSON_STRING, 0},     /* U+10FFFF */
-        {"\"\xed\x9f\xbf\"", AFFECT_JSON_STRING, 0},         /* U+D7FF */
-        {"\"\x7f\"", AFFECT_JSON_STRING, 0},                 /* DEL is not a control char */
+        {"\"\xef\xbf\xbf\"", AFFECT_JSON_STRING, 0},     /* U+FFFF */
+        {"\"\xf4\x8f\xbf\xbf\"", AFFECT_JSON_STRING, 0}, /* U+10FFFF */
+        {"\"\xed\x9f\xbf\"", AFFECT_JSON_STRING, 0},     /* U+D7FF */
+        {"\"\x7f\"", AFFECT_JSON_STRING, 0},             /* DEL is not a control char */
         {"\"\\u0000\"", AFFECT_JSON_STRING, 0},
         {"[]", AFFECT_JSON_ARRAY, 0},
         {"{}", AFFECT_JSON_OBJECT, 0},
@@ -224,16 +223,16 @@ static void test_reject_table(void **state)
         {"\"\\ude00\\ud83d\"", 0, F, "at byte 1: unpaired surrogate \\uDE00"},
         {"\"\\ud83dx\"", 0, F, "at byte 1: unpaired surrogate \\uD83D"},
         /* UTF-8 */
-        {"\"ab\xc0\x80\"", 0, F, "at byte 3: invalid UTF-8"},         /* overlong NUL */
-        {"\"\xc1\xbf\"", 0, F, "at byte 1: invalid UTF-8"},           /* overlong 2-byte */
-        {"\"\xe0\x80\xaf\"", 0, F, "at byte 1: invalid UTF-8"},       /* overlong 3-byte */
-        {"\"\xf0\x8f\xbf\xbf\"", 0, F, "at byte 1: invalid UTF-8"},   /* overlong 4-byte */
-        {"\"\xed\xa0\x80\"", 0, F, "at byte 1: invalid UTF-8"},       /* U+D800 encoded */
-        {"\"\xed\xbf\xbf\"", 0, F, "at byte 1: invalid UTF-8"},       /* U+DFFF encoded */
-        {"\"\xf4\x90\x80\x80\"", 0, F, "at byte 1: invalid UTF-8"},   /* U+110000 */
+        {"\"ab\xc0\x80\"", 0, F, "at byte 3: invalid UTF-8"},       /* overlong NUL */
+        {"\"\xc1\xbf\"", 0, F, "at byte 1: invalid UTF-8"},         /* overlong 2-byte */
+        {"\"\xe0\x80\xaf\"", 0, F, "at byte 1: invalid UTF-8"},     /* overlong 3-byte */
+        {"\"\xf0\x8f\xbf\xbf\"", 0, F, "at byte 1: invalid UTF-8"}, /* overlong 4-byte */
+        {"\"\xed\xa0\x80\"", 0, F, "at byte 1: invalid UTF-8"},     /* U+D800 encoded */
+        {"\"\xed\xbf\xbf\"", 0, F, "at byte 1: invalid UTF-8"},     /* U+DFFF encoded */
+        {"\"\xf4\x90\x80\x80\"", 0, F, "at byte 1: invalid UTF-8"}, /* U+110000 */
         {"\"\xf5\x80\x80\x80\"", 0, F, "at byte 1: invalid UTF-8"},
-        {"\"x\x80\"", 0, F, "at byte 2: invalid UTF-8"},              /* lone continuation */
-        {"\"\xc3\"", 0, F, "at byte 1: invalid UTF-8"},               /* truncated */
+        {"\"x\x80\"", 0, F, "at byte 2: invalid UTF-8"}, /* lone continuation */
+        {"\"\xc3\"", 0, F, "at byte 1: invalid UTF-8"},  /* truncated */
         {"\"\xe2\x82\"", 0, F, "at byte 1: invalid UTF-8"},
         {"\"\xe2\x28\xa1\"", 0, F, "at byte 1: invalid UTF-8"},
         {"\"\xff\"", 0, F, "at byte 1: invalid UTF-8"},
@@ -495,8 +494,7 @@ static affect_motion *make_motion(uint32_t frames, uint32_t joints, double fps, 
     assert_int_equal(affect_motion_create(frames, joints, fps, &m, NULL), AFFECT_OK);
     assert_int_equal(affect_motion_set_unit(m, unit, NULL), AFFECT_OK);
     for (uint32_t j = 0; j < joints; j++) {
-        assert_int_equal(affect_motion_set_name(m, j, names[j], strlen(names[j]), NULL),
-                         AFFECT_OK);
+        assert_int_equal(affect_motion_set_name(m, j, names[j], strlen(names[j]), NULL), AFFECT_OK);
         m->parents[j] = parents[j];
     }
     return m;
@@ -532,11 +530,30 @@ static void test_motion_round_trip(void **state)
     (void)state;
     static const char *const names[] = {"Hips", "Spine", "Le\"ft\\Arm", "\xc3\xa9paule"};
     static const int32_t parents[] = {-1, 0, 1, 1};
-    static const float values[] = {
-        0.1f, 1e-7f, -0.0f, 0.0f, FLT_MAX, -FLT_MAX, FLT_MIN, FLT_TRUE_MIN, 0x1p-140f,
-        -1.17549421e-38f /* largest denormal */, 1.0f / 3.0f, 123456.789f, 16777216.0f,
-        -2.5f, 3.14159274f, 1e10f, 9.99999944e-11f, 0.3f, 100.0f, -7e-45f, 33554436.0f,
-        1.00000012f, 0.99999994f, 6.02214076e23f};
+    static const float values[] = {0.1f,
+                                   1e-7f,
+                                   -0.0f,
+                                   0.0f,
+                                   FLT_MAX,
+                                   -FLT_MAX,
+                                   FLT_MIN,
+                                   FLT_TRUE_MIN,
+                                   0x1p-140f,
+                                   -1.17549421e-38f /* largest denormal */,
+                                   1.0f / 3.0f,
+                                   123456.789f,
+                                   16777216.0f,
+                                   -2.5f,
+                                   3.14159274f,
+                                   1e10f,
+                                   9.99999944e-11f,
+                                   0.3f,
+                                   100.0f,
+                                   -7e-45f,
+                                   33554436.0f,
+                                   1.00000012f,
+                                   0.99999994f,
+                                   6.02214076e23f};
     size_t nv = sizeof values / sizeof values[0];
     affect_motion *m = make_motion(3, 4, 1000.0 / 33.0, "cm", names, parents);
     size_t n = (size_t)m->n_frames * m->n_joints * 3;
@@ -579,8 +596,8 @@ static void test_motion_exact_output(void **state)
     static const char *const names[] = {"Hips", "Left\"Foot"};
     static const int32_t parents[] = {-1, 0};
     affect_motion *m = make_motion(2, 2, 30, "cm", names, parents);
-    static const float pos[] = {0, 1.5f, -2, 0.1f, 100, 1e-7f, -0.0f, 3.25f, 1e20f,
-                                -1, 16777216, 0.3f};
+    static const float pos[] = {0,     1.5f,  -2,    0.1f, 100,      1e-7f,
+                                -0.0f, 3.25f, 1e20f, -1,   16777216, 0.3f};
     memcpy(m->pos, pos, sizeof pos);
     char *text = NULL;
     size_t len = 0;

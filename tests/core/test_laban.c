@@ -18,7 +18,7 @@
 #define PI 3.14159265358979323846
 
 /* The six parts' joints plus two hips for the heading: every role that "all" needs. */
-static const char *const body_names[] = {"Hips",   "Spine",  "Chest",  "Head",      "Hand_L",
+static const char *const body_names[] = {"Hips",   "Spine",  "Chest",  "Head",       "Hand_L",
                                          "Hand_R", "Foot_L", "Foot_R", "UpperLeg_L", "UpperLeg_R"};
 enum { N_BODY = 10 };
 
@@ -27,10 +27,9 @@ typedef void (*path_fn)(double t, double out[3], void *ctx);
 
 static affect_motion *rigid_body(uint32_t frames, double fps, path_fn f, void *ctx)
 {
-    static const double base[N_BODY][3] = {{0, 1, 0},      {0, 1.2, 0},    {0, 1.4, 0},
-                                           {0, 1.7, 0},    {0.3, 1.0, 0},  {-0.3, 1.0, 0},
-                                           {0.1, 0.05, 0}, {-0.1, 0.05, 0}, {0.1, 0.95, 0},
-                                           {-0.1, 0.95, 0}};
+    static const double base[N_BODY][3] = {
+        {0, 1, 0},      {0, 1.2, 0},    {0, 1.4, 0},     {0, 1.7, 0},    {0.3, 1.0, 0},
+        {-0.3, 1.0, 0}, {0.1, 0.05, 0}, {-0.1, 0.05, 0}, {0.1, 0.95, 0}, {-0.1, 0.95, 0}};
     affect_motion *m = NULL;
     affect_error err;
     assert_int_equal(affect_motion_create(frames, N_BODY, fps, &m, &err), AFFECT_OK);
@@ -128,7 +127,8 @@ static void test_constant_velocity(void **state)
     affect_part part;
     assert_int_equal(affect_part_resolve(m, &roles, "right_hand", &part, &err), AFFECT_OK);
     double space;
-    assert_int_equal(affect_laban_space(m, &part, 1, AFFECT_LABAN_Q2, NULL, &space, &err), AFFECT_OK);
+    assert_int_equal(affect_laban_space(m, &part, 1, AFFECT_LABAN_Q2, NULL, &space, &err),
+                     AFFECT_OK);
     tu_assert_near(space, 1.0, 1e-9);
     /* the torso moved 0.5·4 = 2 sideways-ish, 1.2·4 = 4.8 forward over 4 s (forward is +z:
      * the left hip is at +x) */
@@ -162,7 +162,8 @@ static void test_circle_curvature(void **state)
     double space;
     affect_laban_options opt;
     affect_laban_options_default(&opt);
-    assert_int_equal(affect_laban_space(m, &hand, 1, AFFECT_LABAN_Q2, &opt, &space, &err), AFFECT_OK);
+    assert_int_equal(affect_laban_space(m, &hand, 1, AFFECT_LABAN_Q2, &opt, &space, &err),
+                     AFFECT_OK);
     tu_assert_near(space, opt.max_ratio, 1e-9);
     affect_motion_free(m);
 }
@@ -260,9 +261,9 @@ static void test_synth_ordering(void **state)
             for (int e = 0; e < 3; e++) {
                 affect_motion *m = NULL;
                 affect_error err;
-                assert_int_equal(affect_motion_synth(affect_synth_actions[a], emotions[e], seed,
-                                                     NULL, &m, &err),
-                                 AFFECT_OK);
+                assert_int_equal(
+                    affect_motion_synth(affect_synth_actions[a], emotions[e], seed, NULL, &m, &err),
+                    AFFECT_OK);
                 affect_roles roles;
                 affect_roles_resolve(m, &roles);
                 double out[AFFECT_LABAN_N];
@@ -347,10 +348,8 @@ static void reference_vector(const affect_motion *m, const affect_roles *roles,
     affect_hull3d_free(hull);
     ref[23] = horizontal;
     ref[24] = flow;
-    assert_int_equal(affect_laban_shape_directional(m, &parts[2], opt, &ref[25], &err),
-                     AFFECT_OK);
-    assert_int_equal(affect_laban_shape_directional(m, &parts[3], opt, &ref[26], &err),
-                     AFFECT_OK);
+    assert_int_equal(affect_laban_shape_directional(m, &parts[2], opt, &ref[25], &err), AFFECT_OK);
+    assert_int_equal(affect_laban_shape_directional(m, &parts[3], opt, &ref[26], &err), AFFECT_OK);
 }
 
 static void test_vector_matches_reference(void **state)

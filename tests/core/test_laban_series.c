@@ -14,8 +14,8 @@
 #include "affect/laban.h"
 #include "affect/synth.h"
 
-static const char *const part_names[6] = {"torso", "head", "left_hand", "right_hand",
-                                          "left_foot", "right_foot"};
+static const char *const part_names[6] = {"torso",      "head",      "left_hand",
+                                          "right_hand", "left_foot", "right_foot"};
 
 static affect_motion *synth(const char *action, const char *emotion)
 {
@@ -74,16 +74,14 @@ static void check_whole(const affect_motion *m, affect_laban_method wm, affect_l
         double w, t, sp, f;
         assert_int_equal(affect_laban_weight(m, p, n, wm, &opt, &w, &err), AFFECT_OK);
         assert_int_equal(affect_laban_time(m, p, n, tm, &opt, &t, &err), AFFECT_OK);
-        assert_int_equal(affect_laban_space(m, p, n, AFFECT_LABAN_Q2, &opt, &sp, &err),
-                         AFFECT_OK);
+        assert_int_equal(affect_laban_space(m, p, n, AFFECT_LABAN_Q2, &opt, &sp, &err), AFFECT_OK);
         assert_int_equal(affect_laban_flow(m, p, n, &opt, &f, &err), AFFECT_OK);
         const double *row = v + r * AFFECT_SERIES_N;
         const char *name = r == 0 ? "all" : part_names[r - 1];
         if (!(row[AFFECT_SERIES_WEIGHT] == w)) /* a peak: the same bits */
             fail_msg("%s Weight %.17g, per clip %.17g", name, row[AFFECT_SERIES_WEIGHT], w);
         if (tm == AFFECT_LABAN_Q1 ? !(row[AFFECT_SERIES_TIME] == t)
-                                  : !near_rel(row[AFFECT_SERIES_TIME], t,
-                                              AFFECT_LABAN_SERIES_RTOL))
+                                  : !near_rel(row[AFFECT_SERIES_TIME], t, AFFECT_LABAN_SERIES_RTOL))
             fail_msg("%s Time %.17g, per clip %.17g", name, row[AFFECT_SERIES_TIME], t);
         if (!near_rel(row[AFFECT_SERIES_SPACE], sp, AFFECT_LABAN_SERIES_RTOL))
             fail_msg("%s Space %.17g, per clip %.17g", name, row[AFFECT_SERIES_SPACE], sp);
@@ -124,13 +122,16 @@ static void brute_window(const affect_motion *m, const affect_part *parts,
             if (i > f) {
                 const double *v0 = v - 3, *a0 = a - 3;
                 double d = (sqrt(v0[0] * v0[0] + v0[1] * v0[1] + v0[2] * v0[2]) -
-                            sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])) * fps;
+                            sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])) *
+                           fps;
                 if (d > 0)
                     dec += d;
                 dv += sqrt((v[0] - v0[0]) * (v[0] - v0[0]) + (v[1] - v0[1]) * (v[1] - v0[1]) +
-                           (v[2] - v0[2]) * (v[2] - v0[2])) * fps;
+                           (v[2] - v0[2]) * (v[2] - v0[2])) *
+                      fps;
                 flow += sqrt((a[0] - a0[0]) * (a[0] - a0[0]) + (a[1] - a0[1]) * (a[1] - a0[1]) +
-                             (a[2] - a0[2]) * (a[2] - a0[2])) * fps;
+                             (a[2] - a0[2]) * (a[2] - a0[2])) *
+                        fps;
             }
         }
         if (so->weight == AFFECT_LABAN_Q1 ? ke > w : (i > f && dec > w))
@@ -192,8 +193,8 @@ static void check_sliding(const affect_motion *m, uint32_t window, uint32_t hop,
             uint32_t lo = r == 0 ? 0 : r - 1, hi = r == 0 ? 6 : r;
             brute_window(m, parts, ks, lo, hi, first, last, &so, opt.max_ratio, ref);
             for (int q = 0; q < AFFECT_SERIES_N; q++) {
-                bool peak = q == AFFECT_SERIES_WEIGHT ||
-                            (q == AFFECT_SERIES_TIME && tm == AFFECT_LABAN_Q1);
+                bool peak =
+                    q == AFFECT_SERIES_WEIGHT || (q == AFFECT_SERIES_TIME && tm == AFFECT_LABAN_Q1);
                 double got = v[r * AFFECT_SERIES_N + (uint32_t)q];
                 /* brute force sums in another order: a few ulps per term */
                 if (peak ? !(got == ref[q]) : !near_rel(got, ref[q], 1e-11))
@@ -214,8 +215,8 @@ static void check_sliding(const affect_motion *m, uint32_t window, uint32_t hop,
 static void test_sliding_matches_brute_force(void **state)
 {
     affect_motion *m = synth("wave", "happy");
-    static const uint32_t cases[][2] = {{2, 1}, {17, 1}, {17, 3}, {30, 29}, {30, 30},
-                                        {12, 40}, {64, 7}};
+    static const uint32_t cases[][2] = {{2, 1},   {17, 1},  {17, 3}, {30, 29},
+                                        {30, 30}, {12, 40}, {64, 7}};
     for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
         check_sliding(m, cases[c][0], cases[c][1], AFFECT_LABAN_Q1, AFFECT_LABAN_Q1);
         check_sliding(m, cases[c][0], cases[c][1], AFFECT_LABAN_Q2, AFFECT_LABAN_Q2);
@@ -229,16 +230,15 @@ static void test_sliding_matches_brute_force(void **state)
  * sum's residue) and free of jerk (Flow below 1e-6: the filter's ringing has died out). */
 static void test_weight_rises_in_second_half(void **state)
 {
-    static const char *const names[] = {"Hips", "Spine", "Chest", "Head", "Hand_L", "Hand_R",
-                                        "Foot_L", "Foot_R"};
+    static const char *const names[] = {"Hips",   "Spine",  "Chest",  "Head",
+                                        "Hand_L", "Hand_R", "Foot_L", "Foot_R"};
     const uint32_t T = 400, J = 8;
     const double fps = 50;
     affect_motion *m = NULL;
     affect_error err;
     assert_int_equal(affect_motion_create(T, J, fps, &m, &err), AFFECT_OK);
     for (uint32_t j = 0; j < J; j++)
-        assert_int_equal(affect_motion_set_name(m, j, names[j], strlen(names[j]), &err),
-                         AFFECT_OK);
+        assert_int_equal(affect_motion_set_name(m, j, names[j], strlen(names[j]), &err), AFFECT_OK);
     for (uint32_t t = 0; t < T; t++)
         for (uint32_t j = 0; j < J; j++) {
             float *p = affect_motion_at(m, t, j);
@@ -267,8 +267,7 @@ static void test_weight_rises_in_second_half(void **state)
         if (last < 180)
             first_half = fmax(first_half, v[AFFECT_SERIES_WEIGHT]);
         else if (first >= 210 && last < 290)
-            second_half = fmin(second_half == 0 ? INFINITY : second_half,
-                               v[AFFECT_SERIES_WEIGHT]);
+            second_half = fmin(second_half == 0 ? INFINITY : second_half, v[AFFECT_SERIES_WEIGHT]);
         if (first >= 370) { /* still again, 70 frames past the filter's ringing */
             n_still++;
             if (!(v[AFFECT_SERIES_SPACE] == 1.0 && v[AFFECT_SERIES_FLOW] < 1e-6))
@@ -279,8 +278,7 @@ static void test_weight_rises_in_second_half(void **state)
     affect_laban_series_free(s);
     /* 3 Hz × 0.2 m: peak speed 2π·3·0.2 ≈ 3.77 m/s, kinetic energy ≈ 14 m²/s² (filtered: less) */
     if (!(first_half < 1e-9 && second_half > 5.0))
-        fail_msg("Weight %g in the first half, at least %g in the second", first_half,
-                 second_half);
+        fail_msg("Weight %g in the first half, at least %g in the second", first_half, second_half);
     assert_true(n_still > 0);
     affect_motion_free(m);
 }
@@ -340,27 +338,21 @@ static void test_bad_options(void **state)
     assert_null(s);
     assert_string_equal(err.msg, "the window must be at least 2 frames, got 0");
     so.window = 1;
-    assert_int_equal(affect_laban_series_new(m, parts, 6, NULL, &so, &s, &err),
-                     AFFECT_ERR_INVALID);
+    assert_int_equal(affect_laban_series_new(m, parts, 6, NULL, &so, &s, &err), AFFECT_ERR_INVALID);
     so.window = 10;
     so.hop = 0;
-    assert_int_equal(affect_laban_series_new(m, parts, 6, NULL, &so, &s, &err),
-                     AFFECT_ERR_INVALID);
+    assert_int_equal(affect_laban_series_new(m, parts, 6, NULL, &so, &s, &err), AFFECT_ERR_INVALID);
     assert_string_equal(err.msg, "the hop must be at least 1 frame, got 0");
     so.hop = 1;
-    assert_int_equal(affect_laban_series_new(m, parts, 0, NULL, &so, &s, &err),
-                     AFFECT_ERR_INVALID);
-    assert_int_equal(affect_laban_series_new(m, parts, 7, NULL, &so, &s, &err),
-                     AFFECT_ERR_INVALID);
+    assert_int_equal(affect_laban_series_new(m, parts, 0, NULL, &so, &s, &err), AFFECT_ERR_INVALID);
+    assert_int_equal(affect_laban_series_new(m, parts, 7, NULL, &so, &s, &err), AFFECT_ERR_INVALID);
     so.weight = (affect_laban_method)3;
-    assert_int_equal(affect_laban_series_new(m, parts, 6, NULL, &so, &s, &err),
-                     AFFECT_ERR_INVALID);
+    assert_int_equal(affect_laban_series_new(m, parts, 6, NULL, &so, &s, &err), AFFECT_ERR_INVALID);
     so.weight = AFFECT_LABAN_Q1;
     affect_laban_options opt;
     affect_laban_options_default(&opt);
     opt.cutoff_hz = -1;
-    assert_int_equal(affect_laban_series_new(m, parts, 6, &opt, &so, &s, &err),
-                     AFFECT_ERR_INVALID);
+    assert_int_equal(affect_laban_series_new(m, parts, 6, &opt, &so, &s, &err), AFFECT_ERR_INVALID);
     assert_null(s);
     affect_motion_free(m);
 
@@ -411,8 +403,7 @@ static void test_monitor(void **state)
     opt.monitor = &mon;
     double v[AFFECT_SERIES_N];
     uint32_t first, last;
-    assert_int_equal(affect_laban_series_next(s, &first, &last, v, &err),
-                     AFFECT_ERR_INTERRUPTED);
+    assert_int_equal(affect_laban_series_next(s, &first, &last, v, &err), AFFECT_ERR_INTERRUPTED);
     assert_string_equal(err.msg, "interrupted");
     affect_laban_series_free(s);
     affect_motion_free(m);

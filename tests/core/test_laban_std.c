@@ -43,9 +43,9 @@ static void test_stats(void **state)
     assert_true(fabs(sd[0] - sqrt(5.0 / 3.0)) < 1e-15);
     /* component 1 without row 0: 4, 6, 8 → mean 6, sd 2 */
     assert_true(fabs(mean[1] - 6) < 1e-15 && fabs(sd[1] - 2) < 1e-15);
-    assert_true(isnan(mean[2]) && sd[2] == 1);   /* missing everywhere */
-    assert_true(mean[3] == 5 && sd[3] == 1);     /* constant: sd 0 → 1 */
-    assert_true(mean[4] == 20 && sd[4] == 1);    /* one value: undefined → 1 */
+    assert_true(isnan(mean[2]) && sd[2] == 1); /* missing everywhere */
+    assert_true(mean[3] == 5 && sd[3] == 1);   /* constant: sd 0 → 1 */
+    assert_true(mean[4] == 20 && sd[4] == 1);  /* one value: undefined → 1 */
     assert_int_equal(affect_laban_stats_check(mean, sd, NULL), AFFECT_OK);
     affect_laban_stats(x, 0, mean, sd); /* no rows */
     for (int j = 0; j < N; j++)
@@ -90,8 +90,8 @@ static void test_f32(void **state)
 }
 
 /* The index's distance: Euclidean over the z-scores of the components present in both. */
-static double index_distance(const float *a, const float *b, const double *mean,
-                             const double *sd, const int *comp, int nc)
+static double index_distance(const float *a, const float *b, const double *mean, const double *sd,
+                             const int *comp, int nc)
 {
     double s = 0;
     for (int t = 0; t < nc; t++) {
@@ -112,8 +112,7 @@ static void test_l2_vector(void **state)
     make_rows(x);
     affect_laban_stats(x, 4, mean, sd);
     /* row 1 has every component but 2 (missing everywhere) and 4 (present in row 3 only) */
-    assert_int_equal(affect_laban_l2_vector(x + N, mean, sd, NULL, N, z, &err),
-                     AFFECT_ERR_MISSING);
+    assert_int_equal(affect_laban_l2_vector(x + N, mean, sd, NULL, N, z, &err), AFFECT_ERR_MISSING);
     assert_string_equal(err.msg, "component WeightRHand is missing in this motion but present in "
                                  "the index, so no L2 vector gives the index's distances");
     int comp[N], nc = 0;
@@ -142,13 +141,10 @@ static void test_l2_vector(void **state)
     assert_int_equal(affect_laban_l2_vector(x + N, mean, sd, two, 2, z, &err), AFFECT_OK);
     assert_true(z[0] == (float)((16 - mean[7]) / sd[7]) && z[1] == (float)((2 - 2.5) / sd[0]));
     /* bad arguments */
-    assert_int_equal(affect_laban_l2_vector(x + N, mean, sd, two, 0, z, &err),
-                     AFFECT_ERR_INVALID);
-    assert_int_equal(affect_laban_l2_vector(x + N, mean, sd, NULL, 2, z, &err),
-                     AFFECT_ERR_INVALID);
+    assert_int_equal(affect_laban_l2_vector(x + N, mean, sd, two, 0, z, &err), AFFECT_ERR_INVALID);
+    assert_int_equal(affect_laban_l2_vector(x + N, mean, sd, NULL, 2, z, &err), AFFECT_ERR_INVALID);
     two[1] = N;
-    assert_int_equal(affect_laban_l2_vector(x + N, mean, sd, two, 2, z, &err),
-                     AFFECT_ERR_INVALID);
+    assert_int_equal(affect_laban_l2_vector(x + N, mean, sd, two, 2, z, &err), AFFECT_ERR_INVALID);
     /* a tiny sd sends a z-score beyond float32 */
     sd[0] = 1e-300;
     two[1] = 0;

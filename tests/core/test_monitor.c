@@ -468,18 +468,30 @@ static void test_dtw_stops(void **state)
  * the frames, so it stops soon after the stop comes due, here at the second poll (10-20 ms in,
  * the calls run for 0.1 s to minutes uninterrupted). */
 typedef enum one_call {
-    ONE_LOGLIK, ONE_VITERBI, ONE_FISHER, ONE_LABAN, ONE_RIGID, ONE_IK, ONE_BVH_WRITE,
-    ONE_BVH_PARSE, ONE_JSON_WRITE, ONE_JSON_PARSE, ONE_CSV_WRITE, ONE_CSV_PARSE, ONE_N
+    ONE_LOGLIK,
+    ONE_VITERBI,
+    ONE_FISHER,
+    ONE_LABAN,
+    ONE_RIGID,
+    ONE_IK,
+    ONE_BVH_WRITE,
+    ONE_BVH_PARSE,
+    ONE_JSON_WRITE,
+    ONE_JSON_PARSE,
+    ONE_CSV_WRITE,
+    ONE_CSV_PARSE,
+    ONE_N
 } one_call;
 
 static const char *const ONE_NAMES[ONE_N] = {
-    "affect_hmm_loglik", "affect_hmm_viterbi", "affect_fisher_score", "affect_laban_vector",
-    "affect_motion_rigid", "affect_motion_ik", "affect_bvh_write", "affect_bvh_parse",
-    "affect_motion_to_json", "affect_motion_from_json", "affect_csv_write", "affect_csv_parse"};
+    "affect_hmm_loglik",       "affect_hmm_viterbi",  "affect_fisher_score",
+    "affect_laban_vector",     "affect_motion_rigid", "affect_motion_ik",
+    "affect_bvh_write",        "affect_bvh_parse",    "affect_motion_to_json",
+    "affect_motion_from_json", "affect_csv_write",    "affect_csv_parse"};
 
 static affect_status one_run(one_call k, const affect_motion *m, const affect_hmm *h,
-                             const double *x, const affect_motion *sk, const char *text,
-                             size_t len, affect_monitor *mon, affect_error *err)
+                             const double *x, const affect_motion *sk, const char *text, size_t len,
+                             affect_monitor *mon, affect_error *err)
 {
     affect_status st = AFFECT_OK;
     double ll;
@@ -487,7 +499,8 @@ static affect_status one_run(one_call k, const affect_motion *m, const affect_hm
     size_t n = 0;
     affect_motion *r = NULL;
     switch (k) {
-    case ONE_LOGLIK: return affect_hmm_loglik(h, x, m->n_frames, &ll, mon, err);
+    case ONE_LOGLIK:
+        return affect_hmm_loglik(h, x, m->n_frames, &ll, mon, err);
     case ONE_VITERBI: {
         int32_t *path = malloc(sizeof *path * m->n_frames);
         assert_non_null(path);
@@ -533,9 +546,15 @@ static affect_status one_run(one_call k, const affect_motion *m, const affect_hm
         st = affect_bvh_parse(text, len, &bo, &r, err);
         break;
     }
-    case ONE_JSON_WRITE: st = affect_motion_to_json(m, &out, &n, mon, err); break;
-    case ONE_JSON_PARSE: st = affect_motion_from_json(text, len, &r, mon, err); break;
-    case ONE_CSV_WRITE: st = affect_csv_write(m, &out, &n, mon, err); break;
+    case ONE_JSON_WRITE:
+        st = affect_motion_to_json(m, &out, &n, mon, err);
+        break;
+    case ONE_JSON_PARSE:
+        st = affect_motion_from_json(text, len, &r, mon, err);
+        break;
+    case ONE_CSV_WRITE:
+        st = affect_csv_write(m, &out, &n, mon, err);
+        break;
     default: {
         affect_csv_options co;
         affect_csv_options_default(&co);

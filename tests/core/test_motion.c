@@ -95,7 +95,8 @@ static void test_corruptions(void **state)
         const char *message;
     } cases[] = {
         {"empty", 0, SIZE_MAX, 0, 0, "truncated: 0 bytes is shorter than the 32-byte header"},
-        {"short header", 31, SIZE_MAX, 0, 0, "truncated: 31 bytes is shorter than the 32-byte header"},
+        {"short header", 31, SIZE_MAX, 0, 0,
+         "truncated: 31 bytes is shorter than the 32-byte header"},
         {"magic", size, 0, 'X', 1, "not a motion (bad magic bytes at offset 0)"},
         {"version 0", size, 4, 0, 1, "unknown format version 0 (this build reads 1 .. 2)"},
         {"version 3", size, 4, 3, 1, "unknown format version 3 (this build reads 1 .. 2)"},
@@ -106,7 +107,8 @@ static void test_corruptions(void **state)
         {"zero joints", size, 12, 0, 0, "joint count 0 out of range (1 .. 4096) (header)"},
         {"more frames than bytes", size, 8, 1000, 0,
          "truncated: 163 bytes, expected 36055 for 1000 frames x 3 joints"},
-        {"fps NaN", size, 20, 0x7FF80000u, 0, "frames per second nan out of range (0 .. 100000] (header)"},
+        {"fps NaN", size, 20, 0x7FF80000u, 0,
+         "frames per second nan out of range (0 .. 100000] (header)"},
         {"fps negative", size, 20, 0xBFF00000u, 0,
          "frames per second -1 out of range (0 .. 100000] (header)"},
         {"reserved byte", size, 27, 1, 1, "reserved header byte 27 is not zero"},
@@ -331,8 +333,7 @@ static void test_large_requests(void **state)
                      AFFECT_ERR_NOMEM);
     assert_string_equal(err.msg, "cannot allocate the 560 x 667331 Fisher score matrix (2.8 GiB)");
     assert_true(affect_nomem_named(&err));
-    assert_int_equal(affect_nomem_of(&err, AFFECT_NOMEM_NAMED_MIN, 1, "a block"),
-                     AFFECT_ERR_NOMEM);
+    assert_int_equal(affect_nomem_of(&err, AFFECT_NOMEM_NAMED_MIN, 1, "a block"), AFFECT_ERR_NOMEM);
     assert_string_equal(err.msg, "cannot allocate a block (16.0 MiB)");
     assert_int_equal(affect_nomem_of(&err, SIZE_MAX, 16, "too much"), AFFECT_ERR_NOMEM);
     assert_string_equal(err.msg, "cannot allocate too much (256.0 EiB)"); /* overflows size_t */
@@ -364,10 +365,10 @@ static void test_large_requests(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_round_trip),   cmocka_unit_test(test_corruptions),
-        cmocka_unit_test(test_validate),     cmocka_unit_test(test_slice),
-        cmocka_unit_test(test_resample),     cmocka_unit_test(test_select),
-        cmocka_unit_test(test_bbox_duration), cmocka_unit_test(test_fixture_v1),
+        cmocka_unit_test(test_round_trip),     cmocka_unit_test(test_corruptions),
+        cmocka_unit_test(test_validate),       cmocka_unit_test(test_slice),
+        cmocka_unit_test(test_resample),       cmocka_unit_test(test_select),
+        cmocka_unit_test(test_bbox_duration),  cmocka_unit_test(test_fixture_v1),
         cmocka_unit_test(test_resample_limit), cmocka_unit_test(test_large_requests),
     };
     return cmocka_run_group_tests_name("motion", tests, NULL, NULL);

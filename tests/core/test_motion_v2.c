@@ -56,13 +56,13 @@ static const char fixture_bvh[] =
 #define V2_SIZE 740u
 /* byte offsets in motion-v2.bin: 32 header + 2 unit + names (6 + 7 + 6 + 10 + 5) */
 #define V2_PARENTS 68u
-#define V2_POS (V2_PARENTS + 5 * 4)      /* 88 */
-#define V2_SKEL (V2_POS + 3 * 5 * 12)    /* 268 */
-#define V2_ROT (V2_SKEL + 5 * 32)        /* 428 */
-#define V2_TRANS (V2_ROT + 3 * 5 * 16)   /* 668 */
+#define V2_POS (V2_PARENTS + 5 * 4)    /* 88 */
+#define V2_SKEL (V2_POS + 3 * 5 * 12)  /* 268 */
+#define V2_ROT (V2_SKEL + 5 * 32)      /* 428 */
+#define V2_TRANS (V2_ROT + 3 * 5 * 16) /* 668 */
 #define SKEL_AT(j) (V2_SKEL + 32u * (j))
-#define ROT_AT(t, j) (V2_ROT + 16u * ((t) * 5u + (j)))
-#define TRANS_AT(t, k) (V2_TRANS + 12u * ((t) * 2u + (k))) /* k-th joint with a position channel */
+#define ROT_AT(t, j) (V2_ROT + 16u * ((t)*5u + (j)))
+#define TRANS_AT(t, k) (V2_TRANS + 12u * ((t)*2u + (k))) /* k-th joint with a position channel */
 
 #define R2 0.70710678118654752 /* cos 45° */
 #define S60 0.86602540378443865
@@ -226,10 +226,12 @@ static void test_fixture_v2(void **state)
 
     /* skeleton: offsets, channels (the rest of the six bytes zero), End Site flag */
     assert_non_null(m->skel);
-    static const double offsets[5][3] = {{1, 2, 3}, {0, 10, 0}, {0, 5, 0.5}, {0, 2, 0}, {-3, 0, 0.25}};
+    static const double offsets[5][3] = {
+        {1, 2, 3}, {0, 10, 0}, {0, 5, 0.5}, {0, 2, 0}, {-3, 0, 0.25}};
     static const uint8_t n_channels[5] = {6, 3, 4, 0, 1};
     static const uint8_t channels[5][6] = {
-        {AFFECT_CH_XPOS, AFFECT_CH_YPOS, AFFECT_CH_ZPOS, AFFECT_CH_ZROT, AFFECT_CH_XROT, AFFECT_CH_YROT},
+        {AFFECT_CH_XPOS, AFFECT_CH_YPOS, AFFECT_CH_ZPOS, AFFECT_CH_ZROT, AFFECT_CH_XROT,
+         AFFECT_CH_YROT},
         {AFFECT_CH_XROT, AFFECT_CH_YROT, AFFECT_CH_ZROT, 0, 0, 0},
         {AFFECT_CH_YROT, AFFECT_CH_YPOS, AFFECT_CH_ZROT, AFFECT_CH_XROT, 0, 0},
         {0, 0, 0, 0, 0, 0},
@@ -255,17 +257,17 @@ static void test_fixture_v2(void **state)
     for (uint32_t j = 0; j < 5; j++)
         assert_quat(q + 4 * j, 1, 0, 0, 0);
     q = m->rot + 4 * 5;
-    assert_quat(q + 0, R2, 0, 0, R2);         /* Hips Zrotation 90 */
-    assert_quat(q + 4, R2, R2, 0, 0);         /* Spine Xrotation 90 */
-    assert_quat(q + 8, R2, 0, 0, R2);         /* Head Zrotation 90 */
-    assert_quat(q + 12, 1, 0, 0, 0);          /* End Site */
-    assert_quat(q + 16, S60, 0, 0, 0.5);      /* Arm Zrotation 60 */
+    assert_quat(q + 0, R2, 0, 0, R2);    /* Hips Zrotation 90 */
+    assert_quat(q + 4, R2, R2, 0, 0);    /* Spine Xrotation 90 */
+    assert_quat(q + 8, R2, 0, 0, R2);    /* Head Zrotation 90 */
+    assert_quat(q + 12, 1, 0, 0, 0);     /* End Site */
+    assert_quat(q + 16, S60, 0, 0, 0.5); /* Arm Zrotation 60 */
     q = m->rot + 4 * 10;
-    assert_quat(q + 0, S60, 0, -0.5, 0);      /* Hips Yrotation -60 */
-    assert_quat(q + 4, 0.5, 0.5, 0.5, 0.5);   /* Spine Rx(90)·Ry(90) */
-    assert_quat(q + 8, R2, 0, R2, 0);         /* Head Yrotation 90 */
+    assert_quat(q + 0, S60, 0, -0.5, 0);    /* Hips Yrotation -60 */
+    assert_quat(q + 4, 0.5, 0.5, 0.5, 0.5); /* Spine Rx(90)·Ry(90) */
+    assert_quat(q + 8, R2, 0, R2, 0);       /* Head Yrotation 90 */
     assert_quat(q + 12, 1, 0, 0, 0);
-    assert_quat(q + 16, R2, 0, 0, -R2);       /* Arm Zrotation -90 */
+    assert_quat(q + 16, R2, 0, 0, -R2); /* Arm Zrotation -90 */
 
     /* translations: stored for Hips (X, Y, Z positions) and Head (Y position, OFFSET x and z);
      * the others are their offsets */
@@ -431,9 +433,11 @@ static void test_corruptions(void **state)
          "unknown format version 3 (this build reads 1 .. 2)"},
         {"flags 2 without 1", V2_SIZE, EDIT_BYTE, 6, 2, NULL, "unknown flags 0x0002 (offset 6)"},
         /* version 2 exists for the skeleton (fuzz_blob found it re-encoding as version 1) */
-        {"version 2 without a skeleton", V2_SIZE, EDIT_BYTE, 6, 0, NULL, "unknown flags 0x0000 (offset 6)"},
+        {"version 2 without a skeleton", V2_SIZE, EDIT_BYTE, 6, 0, NULL,
+         "unknown flags 0x0000 (offset 6)"},
         {"unknown flag bit 2", V2_SIZE, EDIT_BYTE, 6, 7, NULL, "unknown flags 0x0007 (offset 6)"},
-        {"unknown flag bit 15", V2_SIZE, EDIT_BYTE, 7, 0x80, NULL, "unknown flags 0x8003 (offset 6)"},
+        {"unknown flag bit 15", V2_SIZE, EDIT_BYTE, 7, 0x80, NULL,
+         "unknown flags 0x8003 (offset 6)"},
         {"version 1 with flags", V2_SIZE, EDIT_BYTE, 4, 1, NULL, "unknown flags 0x0003 (offset 6)"},
         {"truncated skeleton part", V2_SKEL + 100, EDIT_NONE, 0, 0, NULL,
          "truncated: 368 bytes, the skeleton part needs 160 from offset 268"},
@@ -628,8 +632,8 @@ static void test_resample(void **state)
     assert_memory_equal(r->skel, m->skel, 5 * sizeof *m->skel);
     assert_int_equal(affect_motion_fk_error(r, &fk, &ft, &fj, &err), AFFECT_OK);
     if (fk > 1e-4)
-        fail_msg("resampled positions leave the FK of the rotations by %g (frame %u, joint %u)",
-                 fk, ft, fj);
+        fail_msg("resampled positions leave the FK of the rotations by %g (frame %u, joint %u)", fk,
+                 ft, fj);
     assert_rigid(r, 1e-4);
     assert_int_equal(affect_motion_bone_variation(r, &var, &worst, &err), AFFECT_OK);
     assert_true(var <= 1e-5);
@@ -805,10 +809,10 @@ static void test_out_of_memory(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_fixture_v1),   cmocka_unit_test(test_fixture_v2),
+        cmocka_unit_test(test_fixture_v1),      cmocka_unit_test(test_fixture_v2),
         cmocka_unit_test(test_version_written), cmocka_unit_test(test_corruptions),
-        cmocka_unit_test(test_slice),        cmocka_unit_test(test_resample),
-        cmocka_unit_test(test_select),       cmocka_unit_test(test_clone),
+        cmocka_unit_test(test_slice),           cmocka_unit_test(test_resample),
+        cmocka_unit_test(test_select),          cmocka_unit_test(test_clone),
         cmocka_unit_test(test_out_of_memory),
     };
     return cmocka_run_group_tests_name("motion_v2", tests, NULL, NULL);

@@ -48,8 +48,8 @@ static void test_f24(void **state)
     assert_true(affect_f24_round(nextafter(2.0, 0.0)) == 2.0);
     assert_true(affect_f24_round(-3.0) == -3.0);
     /* relative error ≤ 2^-13 over the whole range, and the bytes read back */
-    const double values[] = {1e-300, -2.5e-310, 0.1, -0.333, 7.0, 1e10, 3.14159e200, -1e300,
-                             0.0, 1234.5678};
+    const double values[] = {1e-300, -2.5e-310,   0.1,    -0.333, 7.0,
+                             1e10,   3.14159e200, -1e300, 0.0,    1234.5678};
     for (size_t i = 0; i < sizeof values / sizeof values[0]; i++) {
         double v = values[i], r = affect_f24_round(v);
         assert_true(isfinite(r));

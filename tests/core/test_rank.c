@@ -34,8 +34,8 @@ static void levels_from(const double *X, uint32_t n, uint32_t d, const double *w
     }
 }
 
-static double grad_norm(const double *X, uint32_t d, const affect_rank_pair *p, size_t np,
-                        double C, const double *w)
+static double grad_norm(const double *X, uint32_t d, const affect_rank_pair *p, size_t np, double C,
+                        const double *w)
 {
     double *g = malloc(sizeof(double) * d);
     affect_rank_objective(X, d, p, np, C, w, g);
@@ -57,8 +57,7 @@ static void check_kkt(uint32_t n, uint32_t d, double C, uint64_t seed)
     affect_rank_pair *pairs;
     size_t np;
     affect_error err;
-    assert_int_equal(affect_rank_pairs(level, NULL, n, true, 1.0, 1, &pairs, &np, &err),
-                     AFFECT_OK);
+    assert_int_equal(affect_rank_pairs(level, NULL, n, true, 1.0, 1, &pairs, &np, &err), AFFECT_OK);
     assert_true(np > 0);
     affect_rank_options opt;
     affect_rank_options_default(&opt);
@@ -188,8 +187,7 @@ static void test_pairs(void **state)
     }
     assert_int_equal(sim, 3);
     affect_free(p);
-    assert_int_equal(affect_rank_pairs(level, group, 7, false, 1.0, 0, &p, &np, &err),
-                     AFFECT_OK);
+    assert_int_equal(affect_rank_pairs(level, group, 7, false, 1.0, 0, &p, &np, &err), AFFECT_OK);
     /* group 0: (0,1) (0,2) (1,2); group 1: 3,5,6 → (3,5) (3,6) (5,6) */
     assert_int_equal(np, 6);
     affect_free(p);
@@ -296,8 +294,7 @@ static void test_errors(void **state)
     affect_rank_options_default(&opt);
     assert_int_equal(affect_rank_fit(X, 2, 2, bad, 1, &opt, w, NULL, &err), AFFECT_ERR_RANGE);
     assert_string_equal(err.msg, "pair 0 refers to sample 5 of 2");
-    assert_int_equal(affect_rank_fit(X, 2, 2, self, 1, &opt, w, NULL, &err),
-                     AFFECT_ERR_INVALID);
+    assert_int_equal(affect_rank_fit(X, 2, 2, self, 1, &opt, w, NULL, &err), AFFECT_ERR_INVALID);
     assert_string_equal(err.msg, "pair 0 pairs sample 1 with itself");
     assert_int_equal(affect_rank_fit(X, 2, 2, bad, 0, &opt, w, NULL, &err), AFFECT_ERR_INVALID);
     assert_string_equal(err.msg, "no pairs");

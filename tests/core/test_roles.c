@@ -37,17 +37,18 @@ static void expect_role(const affect_motion *m, const affect_roles *r, affect_ro
 static void test_corpus_names(void **state)
 {
     static const char *const names[] = {
-        "joint_Root", "Hips", "Spine", "Chest", "Neck", "Head", "Head_end", "Shoulder_L",
-        "UpperArm_L", "LowerArm_L", "Hand_L", "Hand_L_end", "Shoulder_R", "UpperArm_R",
-        "LowerArm_R", "Hand_R", "Hand_R_end", "UpperLeg_L", "LowerLeg_L", "Foot_L", "Toes_L",
-        "Toes_L_end", "UpperLeg_R", "LowerLeg_R", "Foot_R", "Toes_R", "Toes_R_end"};
+        "joint_Root", "Hips",       "Spine",      "Chest",      "Neck",       "Head",
+        "Head_end",   "Shoulder_L", "UpperArm_L", "LowerArm_L", "Hand_L",     "Hand_L_end",
+        "Shoulder_R", "UpperArm_R", "LowerArm_R", "Hand_R",     "Hand_R_end", "UpperLeg_L",
+        "LowerLeg_L", "Foot_L",     "Toes_L",     "Toes_L_end", "UpperLeg_R", "LowerLeg_R",
+        "Foot_R",     "Toes_R",     "Toes_R_end"};
     affect_motion *m = skeleton(names, sizeof names / sizeof names[0]);
     affect_roles r;
     affect_roles_resolve(m, &r);
     const char *want[AFFECT_ROLE_COUNT] = {
-        "Hips", "Spine", "Chest", "Neck", "Head", "UpperArm_L", "LowerArm_L", "Hand_L",
-        "UpperArm_R", "LowerArm_R", "Hand_R", "UpperLeg_L", "LowerLeg_L", "Foot_L", "Toes_L",
-        "UpperLeg_R", "LowerLeg_R", "Foot_R", "Toes_R"};
+        "Hips",   "Spine",      "Chest",      "Neck",   "Head",       "UpperArm_L", "LowerArm_L",
+        "Hand_L", "UpperArm_R", "LowerArm_R", "Hand_R", "UpperLeg_L", "LowerLeg_L", "Foot_L",
+        "Toes_L", "UpperLeg_R", "LowerLeg_R", "Foot_R", "Toes_R"};
     for (int k = 0; k < AFFECT_ROLE_COUNT; k++)
         expect_role(m, &r, (affect_role)k, want[k]);
     affect_motion_free(m);
@@ -56,13 +57,14 @@ static void test_corpus_names(void **state)
 static void test_mixamo_cmu_names(void **state)
 {
     static const char *const names[] = {
-        "mixamorig:Hips", "mixamorig:Spine", "mixamorig:Spine1", "mixamorig:Spine2",
-        "mixamorig:Neck", "mixamorig:Head", "mixamorig:HeadTop_End", "mixamorig:LeftShoulder",
-        "mixamorig:LeftArm", "mixamorig:LeftForeArm", "mixamorig:LeftHand",
-        "mixamorig:LeftHandIndex1", "mixamorig:RightShoulder", "mixamorig:RightArm",
-        "mixamorig:RightForeArm", "mixamorig:RightHand", "mixamorig:LeftUpLeg",
-        "mixamorig:LeftLeg", "mixamorig:LeftFoot", "mixamorig:LeftToeBase", "mixamorig:RightUpLeg",
-        "mixamorig:RightLeg", "mixamorig:RightFoot", "mixamorig:RightToeBase"};
+        "mixamorig:Hips",          "mixamorig:Spine",        "mixamorig:Spine1",
+        "mixamorig:Spine2",        "mixamorig:Neck",         "mixamorig:Head",
+        "mixamorig:HeadTop_End",   "mixamorig:LeftShoulder", "mixamorig:LeftArm",
+        "mixamorig:LeftForeArm",   "mixamorig:LeftHand",     "mixamorig:LeftHandIndex1",
+        "mixamorig:RightShoulder", "mixamorig:RightArm",     "mixamorig:RightForeArm",
+        "mixamorig:RightHand",     "mixamorig:LeftUpLeg",    "mixamorig:LeftLeg",
+        "mixamorig:LeftFoot",      "mixamorig:LeftToeBase",  "mixamorig:RightUpLeg",
+        "mixamorig:RightLeg",      "mixamorig:RightFoot",    "mixamorig:RightToeBase"};
     affect_motion *m = skeleton(names, sizeof names / sizeof names[0]);
     affect_roles r;
     affect_roles_resolve(m, &r);
@@ -82,9 +84,9 @@ static void test_mixamo_cmu_names(void **state)
 
 static void test_short_names(void **state)
 {
-    static const char *const names[] = {"pelvis", "l_wrist", "RWrist", "lhand_unused",
-                                        "lknee",  "R.Ankle", "left_toe", "neck1", "LShoulder",
-                                        "r_elbow", "RightHip"};
+    static const char *const names[] = {"pelvis",    "l_wrist", "RWrist",   "lhand_unused",
+                                        "lknee",     "R.Ankle", "left_toe", "neck1",
+                                        "LShoulder", "r_elbow", "RightHip"};
     affect_motion *m = skeleton(names, sizeof names / sizeof names[0]);
     affect_roles r;
     affect_roles_resolve(m, &r);
@@ -128,10 +130,10 @@ static void test_override_and_names(void **state)
  * right arm of bones 0.3 + 0.25. */
 static affect_motion *turned_body(void)
 {
-    static const char *const names[] = {"Hips", "UpperLeg_L", "UpperLeg_R", "UpperArm_R",
-                                        "LowerArm_R", "Hand_R"};
+    static const char *const names[] = {"Hips",       "UpperLeg_L", "UpperLeg_R",
+                                        "UpperArm_R", "LowerArm_R", "Hand_R"};
     affect_motion *m = skeleton(names, 6);
-    const float p[6][3] = {{5, 1, 7},     {5, 1, 6.9f}, {5, 1, 7.1f},
+    const float p[6][3] = {{5, 1, 7},       {5, 1, 6.9f},    {5, 1, 7.1f},
                            {5, 1.5f, 7.2f}, {5, 1.2f, 7.2f}, {5, 0.95f, 7.2f}};
     memcpy(m->pos, p, sizeof p);
     return m;
@@ -203,9 +205,9 @@ static void test_normalize_z_up(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_corpus_names),       cmocka_unit_test(test_mixamo_cmu_names),
-        cmocka_unit_test(test_short_names),        cmocka_unit_test(test_override_and_names),
-        cmocka_unit_test(test_normalize),          cmocka_unit_test(test_normalize_z_up),
+        cmocka_unit_test(test_corpus_names), cmocka_unit_test(test_mixamo_cmu_names),
+        cmocka_unit_test(test_short_names),  cmocka_unit_test(test_override_and_names),
+        cmocka_unit_test(test_normalize),    cmocka_unit_test(test_normalize_z_up),
     };
     return cmocka_run_group_tests_name("roles", tests, NULL, NULL);
 }

@@ -55,8 +55,8 @@ static void test_euler_round_trip_every_order(void **state)
             affect_quat_to_euler_deg(q, orders[o], NULL, back);
             affect_euler_deg_to_matrix(orders[o], back, r3);
             if (mat_diff(r1, r3) > 1e-9)
-                fail_msg("order %d angles %g %g %g -> %g %g %g", o, deg[0], deg[1], deg[2],
-                         back[0], back[1], back[2]);
+                fail_msg("order %d angles %g %g %g -> %g %g %g", o, deg[0], deg[1], deg[2], back[0],
+                         back[1], back[2]);
             if (fabs(deg[1]) < 89) /* away from the lock the angles themselves come back */
                 for (int k = 0; k < 3; k++)
                     tu_assert_near(back[k], deg[k], 1e-9);
@@ -84,7 +84,7 @@ static void test_euler_continuity(void **state)
         affect_euler_deg_to_matrix(zxy, in, r1);
         affect_euler_deg_to_matrix(zxy, deg, r2);
         assert_true(mat_diff(r1, r2) < 1e-12); /* the same rotation, at the lock too */
-        for (int a = 0; a < 3; a++) /* and, through the lock (k = 30), the same angles */
+        for (int a = 0; a < 3; a++)            /* and, through the lock (k = 30), the same angles */
             tu_assert_near(deg[a], in[a], 1e-6);
         memcpy(prev, deg, sizeof prev);
     }
@@ -191,9 +191,12 @@ static void test_rigid_against_brute_force(void **state)
             double l1 = t == 2 ? uni(0.3, 0.8) : 0.5, l2 = t == 2 ? uni(0.1, 0.6) : 0.3;
             double a1 = uni(0, 2 * M_PI), a2 = uni(0, 2 * M_PI), h = t == 2 ? uni(-0.2, 0.2) : 0;
             float *p = affect_motion_at(m, t, 0);
-            p[0] = (float)uni(-0.1, 0.1), p[1] = (float)uni(-0.1, 0.1), p[2] = (float)uni(-0.1, 0.1);
-            p[3] = p[0] + (float)(l1 * cos(a1)), p[4] = p[1] + (float)(l1 * sin(a1)), p[5] = p[2] + (float)h;
-            p[6] = p[3] + (float)(l2 * cos(a2)), p[7] = p[4] + (float)(l2 * sin(a2)), p[8] = p[5] - (float)h;
+            p[0] = (float)uni(-0.1, 0.1), p[1] = (float)uni(-0.1, 0.1),
+            p[2] = (float)uni(-0.1, 0.1);
+            p[3] = p[0] + (float)(l1 * cos(a1)), p[4] = p[1] + (float)(l1 * sin(a1)),
+            p[5] = p[2] + (float)h;
+            p[6] = p[3] + (float)(l2 * cos(a2)), p[7] = p[4] + (float)(l2 * sin(a2)),
+            p[8] = p[5] - (float)h;
         }
         assert_int_equal(affect_motion_rigid(m, NULL, &r, NULL), AFFECT_OK);
         double var;
@@ -219,13 +222,15 @@ static void test_rigid_tree_and_options(void **state)
     assert_int_equal(affect_motion_create(20, 5, 30, &m, NULL), AFFECT_OK);
     int32_t parents[5] = {-1, 0, 1, 2, 1};
     memcpy(m->parents, parents, sizeof parents);
-    static const char *const names[5] = {"joint_Root", "Hips", "UpperLeg_L", "LowerLeg_L", "UpperLeg_R"};
+    static const char *const names[5] = {"joint_Root", "Hips", "UpperLeg_L", "LowerLeg_L",
+                                         "UpperLeg_R"};
     for (uint32_t j = 0; j < 5; j++)
         assert_int_equal(affect_motion_set_name(m, j, names[j], strlen(names[j]), NULL), AFFECT_OK);
     for (uint32_t t = 0; t < 20; t++) {
         float *p = affect_motion_at(m, t, 0);
         float x = 0.05f * (float)t, s = 1.0f + 0.1f * (float)sin(t);
-        float v[15] = {0, 0, 0, x, 1, 0, x + 0.1f, 0.5f * s, 0, x + 0.1f, 0, 0.1f, x - 0.1f, 0.5f, 0};
+        float v[15] = {0, 0,        0, x,    1,        0,    x + 0.1f, 0.5f * s,
+                       0, x + 0.1f, 0, 0.1f, x - 0.1f, 0.5f, 0};
         memcpy(p, v, sizeof v);
     }
     bool free_link[5];
@@ -234,8 +239,10 @@ static void test_rigid_tree_and_options(void **state)
     assert_false(free_link[2] || free_link[3] || free_link[4] || free_link[0]);
     /* a root that is itself the pelvis keeps its bones, moving or not */
     affect_motion *upper = NULL;
-    assert_int_equal(affect_motion_select(m, (const char *const[]){"Hips", "UpperLeg_L", "LowerLeg_L"}, 3,
-                                          &upper, NULL), AFFECT_OK);
+    assert_int_equal(affect_motion_select(m,
+                                          (const char *const[]){"Hips", "UpperLeg_L", "LowerLeg_L"},
+                                          3, &upper, NULL),
+                     AFFECT_OK);
     assert_int_equal(affect_motion_free_links(upper, free_link, NULL), AFFECT_OK);
     assert_false(free_link[0] || free_link[1] || free_link[2]);
     affect_motion_free(upper);
@@ -288,11 +295,11 @@ static affect_motion *random_skeletal(uint32_t frames)
 {
     affect_motion *m = NULL;
     static const int32_t parents[9] = {-1, 0, 1, 2, 2, 2, 0, 6, 0};
-    static const double offsets[9][3] = {{0, 1, 0},    {0, 0.2, 0}, {0, 0.25, 0},
-                                         {0, 0.2, 0.02}, {0.2, 0.05, 0}, {-0.2, 0.05, 0},
+    static const double offsets[9][3] = {{0, 1, 0},       {0, 0.2, 0},      {0, 0.25, 0},
+                                         {0, 0.2, 0.02},  {0.2, 0.05, 0},   {-0.2, 0.05, 0},
                                          {0.1, -0.05, 0}, {0, -0.45, 0.01}, {-0.1, -0.05, 0}};
-    static const char *const names[9] = {"Hips", "Spine", "Chest", "Head", "ArmL", "ArmR",
-                                         "LegL", "LegL_end", "LegR"};
+    static const char *const names[9] = {"Hips", "Spine", "Chest",    "Head", "ArmL",
+                                         "ArmR", "LegL",  "LegL_end", "LegR"};
     assert_int_equal(affect_motion_create(frames, 9, 30, &m, NULL), AFFECT_OK);
     assert_int_equal(affect_motion_add_skeleton(m, true, NULL), AFFECT_OK);
     double phase[9][3];
@@ -358,7 +365,8 @@ static void test_ik_recovers_rigid_motion(void **state)
     for (uint32_t t = 1; t < ik->n_frames; t++)
         for (uint32_t k = 0; k < ik->n_joints; k++) {
             double a[4], b[4], inv[4], d[4];
-            const float *qa = ik->rot + ((size_t)(t - 1) * 9 + k) * 4, *qb = ik->rot + ((size_t)t * 9 + k) * 4;
+            const float *qa = ik->rot + ((size_t)(t - 1) * 9 + k) * 4,
+                        *qb = ik->rot + ((size_t)t * 9 + k) * 4;
             for (int i = 0; i < 4; i++)
                 a[i] = qa[i], b[i] = qb[i];
             inv[0] = a[0], inv[1] = -a[1], inv[2] = -a[2], inv[3] = -a[3];
@@ -439,21 +447,24 @@ static void test_gimbal_lock_and_small_motions(void **state)
 
 static void test_writer_text_and_options(void **state)
 {
-    static const char bvh[] = "HIERARCHY\nROOT My Hips\n{\n  OFFSET 0 0 0\n"
-                              "  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n"
-                              "  JOINT Chest\n  {\n    OFFSET 0 10 0\n    CHANNELS 3 Xrotation Yrotation Zrotation\n"
-                              "    End Site\n    {\n      OFFSET 0 5.25 0\n    }\n  }\n}\nMOTION\n"
-                              "Frames: 2\nFrame Time: 0.04\n1 2 3 0 0 0 0 0 0\n1 2.5 3 90 0 0 -30 0 0\n";
+    static const char bvh[] =
+        "HIERARCHY\nROOT My Hips\n{\n  OFFSET 0 0 0\n"
+        "  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n"
+        "  JOINT Chest\n  {\n    OFFSET 0 10 0\n    CHANNELS 3 Xrotation Yrotation Zrotation\n"
+        "    End Site\n    {\n      OFFSET 0 5.25 0\n    }\n  }\n}\nMOTION\n"
+        "Frames: 2\nFrame Time: 0.04\n1 2 3 0 0 0 0 0 0\n1 2.5 3 90 0 0 -30 0 0\n";
     affect_motion *m = NULL, *back = NULL;
     assert_int_equal(affect_bvh_parse(bvh, strlen(bvh), NULL, &m, NULL), AFFECT_OK);
     char *text = NULL;
     size_t len;
     assert_int_equal(affect_bvh_write(m, NULL, &text, &len, NULL), AFFECT_OK);
-    assert_string_equal(text, "HIERARCHY\nROOT My_Hips\n{\n\tOFFSET 0 0 0\n"
-                              "\tCHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n"
-                              "\tJOINT Chest\n\t{\n\t\tOFFSET 0 10 0\n\t\tCHANNELS 3 Xrotation Yrotation Zrotation\n"
-                              "\t\tEnd Site\n\t\t{\n\t\t\tOFFSET 0 5.25 0\n\t\t}\n\t}\n}\nMOTION\n"
-                              "Frames: 2\nFrame Time: 0.04\n1 2 3 0 0 0 0 0 0\n1 2.5 3 90 0 0 -30 0 0\n");
+    assert_string_equal(
+        text,
+        "HIERARCHY\nROOT My_Hips\n{\n\tOFFSET 0 0 0\n"
+        "\tCHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n"
+        "\tJOINT Chest\n\t{\n\t\tOFFSET 0 10 0\n\t\tCHANNELS 3 Xrotation Yrotation Zrotation\n"
+        "\t\tEnd Site\n\t\t{\n\t\t\tOFFSET 0 5.25 0\n\t\t}\n\t}\n}\nMOTION\n"
+        "Frames: 2\nFrame Time: 0.04\n1 2 3 0 0 0 0 0 0\n1 2.5 3 90 0 0 -30 0 0\n");
     assert_int_equal(strlen(text), len);
     affect_free(text);
     affect_bvh_write_options wo;
@@ -465,7 +476,8 @@ static void test_writer_text_and_options(void **state)
     assert_int_equal(affect_bvh_write(m, &wo, &text, &len, NULL), AFFECT_OK);
     assert_non_null(strstr(text, "ROOT root\n"));
     assert_non_null(strstr(text, "Frame Time: 0.02\n"));
-    assert_non_null(strstr(text, "\tCHANNELS 6 Xposition Yposition Zposition Xrotation Yrotation Zrotation\n"));
+    assert_non_null(
+        strstr(text, "\tCHANNELS 6 Xposition Yposition Zposition Xrotation Yrotation Zrotation\n"));
     assert_int_equal(affect_bvh_parse(text, len, NULL, &back, NULL), AFFECT_OK);
     tu_assert_near(back->fps, 50, 1e-9);
     assert_true(tu_max_dist(back, m) < 1e-2);
@@ -502,7 +514,8 @@ static void test_fewer_rotation_channels(void **state)
         assert_int_equal(affect_bvh_write(m, NULL, &text, &len, NULL), AFFECT_OK);
         assert_int_equal(affect_bvh_parse(text, len, NULL, &back, NULL), AFFECT_OK);
         if (tu_max_dist(back, m) > 1e-4)
-            fail_msg("case %zu: re-imported positions differ by %g:\n%s", i, tu_max_dist(back, m), text);
+            fail_msg("case %zu: re-imported positions differ by %g:\n%s", i, tu_max_dist(back, m),
+                     text);
         affect_free(text);
         affect_motion_free(back);
         affect_motion_free(m);
@@ -516,7 +529,8 @@ static void test_rotation_source(void **state)
 {
     affect_motion *m = random_skeletal(10), *made = NULL, *pos = NULL;
     affect_error err;
-    assert_int_equal(affect_motion_skeletal(m, AFFECT_ROTATIONS_AUTO, NULL, &made, &err), AFFECT_OK);
+    assert_int_equal(affect_motion_skeletal(m, AFFECT_ROTATIONS_AUTO, NULL, &made, &err),
+                     AFFECT_OK);
     assert_null(made);
     assert_int_equal(affect_motion_skeletal(m, AFFECT_ROTATIONS_IK, NULL, &made, &err), AFFECT_OK);
     assert_non_null(made);

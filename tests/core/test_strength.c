@@ -55,8 +55,7 @@ static void test_keyframes_optimal(void **state)
         uint32_t fr[12], best[12], n;
         double sse;
         affect_error err;
-        assert_int_equal(affect_keyframes_select(Y, T, D, q, fr, &n, &sse, NULL, &err),
-                         AFFECT_OK);
+        assert_int_equal(affect_keyframes_select(Y, T, D, q, fr, &n, &sse, NULL, &err), AFFECT_OK);
         assert_int_equal(n, q);
         assert_int_equal(fr[0], 0);
         assert_int_equal(fr[q - 1], T - 1);
@@ -84,8 +83,7 @@ static void test_keyframes_exact(void **state)
     assert_int_equal(n, 5);
     /* a straight line needs 2 keyframes and has no error */
     double line[6] = {0, 1, 2, 3, 4, 5};
-    assert_int_equal(affect_keyframes_select(line, 6, 1, 2, fr, &n, &sse, NULL, &err),
-                     AFFECT_OK);
+    assert_int_equal(affect_keyframes_select(line, 6, 1, 2, fr, &n, &sse, NULL, &err), AFFECT_OK);
     assert_true(sse < 1e-20);
     /* errors */
     assert_int_equal(affect_keyframes_select(Y, 5, 2, 1, fr, &n, &sse, NULL, &err),
@@ -165,9 +163,9 @@ static void make_corpus(corpus *c, uint64_t seed0, uint32_t seeds)
                 affect_synth_options_default(&so);
                 so.intensity = INTENSITY[l];
                 affect_error err;
-                assert_int_equal(affect_motion_synth(actions[a], "angry", seed0 + k, &so,
-                                                     &c->m[c->n], &err),
-                                 AFFECT_OK);
+                assert_int_equal(
+                    affect_motion_synth(actions[a], "angry", seed0 + k, &so, &c->m[c->n], &err),
+                    AFFECT_OK);
                 c->level[c->n] = (int32_t)l;
                 c->group[c->n] = a;
                 c->n++;
@@ -313,8 +311,8 @@ static void test_no_pca_and_options(void **state)
     opt.relative = true;
     affect_strength *s;
     affect_error err;
-    assert_int_equal(affect_strength_train((const affect_motion *const *)tr.m, tr.level, NULL,
-                                           tr.n, LEVELS, N_INT, &opt, &s, &err),
+    assert_int_equal(affect_strength_train((const affect_motion *const *)tr.m, tr.level, NULL, tr.n,
+                                           LEVELS, N_INT, &opt, &s, &err),
                      AFFECT_OK);
     assert_false(s->pca);
     assert_int_equal(s->pdim, s->dim);
@@ -512,14 +510,10 @@ static void test_fixture_v1(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_keyframes_optimal),
-        cmocka_unit_test(test_keyframes_exact),
-        cmocka_unit_test(test_regression_smooth_map),
-        cmocka_unit_test(test_model),
-        cmocka_unit_test(test_no_pca_and_options),
-        cmocka_unit_test(test_errors),
-        cmocka_unit_test(test_out_of_memory),
-        cmocka_unit_test(test_fixture_v1),
+        cmocka_unit_test(test_keyframes_optimal),     cmocka_unit_test(test_keyframes_exact),
+        cmocka_unit_test(test_regression_smooth_map), cmocka_unit_test(test_model),
+        cmocka_unit_test(test_no_pca_and_options),    cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_out_of_memory),         cmocka_unit_test(test_fixture_v1),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

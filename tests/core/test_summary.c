@@ -27,16 +27,14 @@ static affect_motion *make_body(double speed, double rate)
                                          "Hand_R", "Hand_L", "UpperLeg_L", "UpperLeg_R",
                                          "Foot_L", "Foot_R"};
     static const int32_t parents[J] = {-1, 0, 0, 2, 3, 0, 0, 0, 6, 7};
-    static const double pose[J][3] = {{0, 1, 0},        {0, 1.6, 0.1},   {-0.2, 1.4, 0},
-                                      {-0.5, 1.4, 0},   {-0.5, 1.2, 0},  {0.5, 1.2, 0},
-                                      {0.1, 0.9, 0},    {-0.1, 0.9, 0},  {0.15, 0.05, 0},
-                                      {-0.15, 0.05, 0}};
+    static const double pose[J][3] = {
+        {0, 1, 0},     {0, 1.6, 0.1}, {-0.2, 1.4, 0}, {-0.5, 1.4, 0},  {-0.5, 1.2, 0},
+        {0.5, 1.2, 0}, {0.1, 0.9, 0}, {-0.1, 0.9, 0}, {0.15, 0.05, 0}, {-0.15, 0.05, 0}};
     affect_motion *m = NULL;
     affect_error err;
     assert_int_equal(affect_motion_create(T, J, 10.0, &m, &err), AFFECT_OK);
     for (uint32_t j = 0; j < J; j++) {
-        assert_int_equal(affect_motion_set_name(m, j, names[j], strlen(names[j]), &err),
-                         AFFECT_OK);
+        assert_int_equal(affect_motion_set_name(m, j, names[j], strlen(names[j]), &err), AFFECT_OK);
         m->parents[j] = parents[j];
     }
     for (uint32_t t = 0; t < T; t++) {
@@ -74,9 +72,9 @@ static void test_walking_straight(void **state)
     tu_assert_near(get(v, "root_bounce"), 0.0, 1e-9);
     tu_assert_near(get(v, "turn_rate"), 0.0, 1e-6);
     tu_assert_near(get(v, "net_turn"), 0.0, 1e-6);
-    static const char *const still[] = {"head_speed", "left_hand_speed", "right_hand_speed",
-                                        "left_foot_speed", "right_foot_speed",
-                                        "right_hand_speed_p90"};
+    static const char *const still[] = {"head_speed",       "left_hand_speed",
+                                        "right_hand_speed", "left_foot_speed",
+                                        "right_foot_speed", "right_hand_speed_p90"};
     for (size_t i = 0; i < sizeof still / sizeof still[0]; i++) /* rigid: still in the body */
         tu_assert_near(get(v, still[i]), 0.0, 1e-4);
     tu_assert_near(get(v, "head_height"), 0.6 / 0.5, 1e-5);

@@ -642,7 +642,6 @@ static void test_deterministic(void **state)
     affect_motion_free(m);
 }
 
-
 /* ---- animations, groups, the top view's turn, state labels ---- */
 
 /* The text of the values="…" attribute following the n-th occurrence of key, malloc'd. */

@@ -734,8 +734,8 @@ static void test_gram_blocks(void **state)
     double c1, a1, c2, a2;
     assert_int_equal(affect_svm_select_c(X, N, DD, y, C3, cands, 3, 5, 3, &c1, &a1, &err),
                      AFFECT_OK);
-    assert_int_equal(affect_svm_select_c_gram(G, N, DD, y, C3, cands, 3, 5, 3, &c2, &a2, NULL, &err),
-                     AFFECT_OK);
+    assert_int_equal(
+        affect_svm_select_c_gram(G, N, DD, y, C3, cands, 3, 5, 3, &c2, &a2, NULL, &err), AFFECT_OK);
     assert_true(c1 == c2 && a1 == a2);
     /* float32 weights: version 2, 4 bytes a weight, the same weights after a round trip */
     affect_bw w64, w32;
@@ -1214,12 +1214,12 @@ static void test_out_of_memory(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_separable), cmocka_unit_test(test_matches_libsvm),
-        cmocka_unit_test(test_vote),      cmocka_unit_test(test_vote_trained),
-        cmocka_unit_test(test_folds),     cmocka_unit_test(test_select_c),
-        cmocka_unit_test(test_gram_blocks),
-        cmocka_unit_test(test_errors),    cmocka_unit_test(test_round_trip),
-        cmocka_unit_test(test_corrupt),   cmocka_unit_test(test_out_of_memory),
+        cmocka_unit_test(test_separable),     cmocka_unit_test(test_matches_libsvm),
+        cmocka_unit_test(test_vote),          cmocka_unit_test(test_vote_trained),
+        cmocka_unit_test(test_folds),         cmocka_unit_test(test_select_c),
+        cmocka_unit_test(test_gram_blocks),   cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_round_trip),    cmocka_unit_test(test_corrupt),
+        cmocka_unit_test(test_out_of_memory),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

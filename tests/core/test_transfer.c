@@ -29,8 +29,7 @@ static affect_motion *chain(uint32_t frames, int axis, double amp, double f, dou
     assert_int_equal(affect_motion_add_skeleton(m, true, NULL), AFFECT_OK);
     for (uint32_t j = 0; j < 4; j++) {
         m->parents[j] = parents[j];
-        assert_int_equal(affect_motion_set_name(m, j, names[j], strlen(names[j]), NULL),
-                         AFFECT_OK);
+        assert_int_equal(affect_motion_set_name(m, j, names[j], strlen(names[j]), NULL), AFFECT_OK);
         memcpy(m->skel[j].offset, offsets[j], sizeof offsets[j]);
     }
     for (int a = 0; a < 3; a++)
@@ -186,8 +185,7 @@ static void test_synthetic_corpus(void **state)
         assert_int_equal(out[k]->n_joints, src->n_joints);
         double variation;
         int32_t worst;
-        assert_int_equal(affect_motion_bone_variation(out[k], &variation, &worst, &err),
-                         AFFECT_OK);
+        assert_int_equal(affect_motion_bone_variation(out[k], &variation, &worst, &err), AFFECT_OK);
         assert_true(variation <= 1e-4);
         double w = weight_of(out[k]);
         assert_true(w > last); /* toward angry: WeightAll rises with the strength */
@@ -202,9 +200,9 @@ static void test_synthetic_corpus(void **state)
     assert_true(pelvis >= 0);
     for (uint32_t t = 0; t < src->n_frames; t += 7)
         for (int ax = 0; ax < 3; ax++)
-            tu_assert_near(out[4]->pos[((size_t)t * src->n_joints + (size_t)pelvis) * 3 + (size_t)ax],
-                           out[0]->pos[((size_t)t * src->n_joints + (size_t)pelvis) * 3 + (size_t)ax],
-                           1e-5);
+            tu_assert_near(
+                out[4]->pos[((size_t)t * src->n_joints + (size_t)pelvis) * 3 + (size_t)ax],
+                out[0]->pos[((size_t)t * src->n_joints + (size_t)pelvis) * 3 + (size_t)ax], 1e-5);
     for (int side = 0; side < 2; side++) {
         int32_t foot = roles.joint[side ? AFFECT_ROLE_RIGHT_FOOT : AFFECT_ROLE_LEFT_FOOT];
         assert_true(foot >= 0);
@@ -233,7 +231,7 @@ static void test_pairs(void **state)
 {
     (void)state;
     /* 6 rows of 2 components: classes 0 (source) and 1 (target); contents 0, 1, 2 */
-    const double x[12] = {0, 0, 5, 5, 10, 0, /* rows 0..2: class 0, contents 0, 1, 2 */
+    const double x[12] = {0, 0, 5, 5, 10, 0,  /* rows 0..2: class 0, contents 0, 1, 2 */
                           0, 1, 5, 6, 10, 1}; /* rows 3..5: class 1, the same contents */
     const int32_t label[6] = {0, 0, 0, 1, 1, 1};
     const bool use[2] = {true, true};
@@ -241,8 +239,8 @@ static void test_pairs(void **state)
     uint32_t from[3], to[3], got;
     double dist[3];
     affect_error err;
-    assert_int_equal(affect_transfer_pairs(x, 6, 2, label, NULL, use, dq, 0, 1, 3, 1, from, to, dist, &got,
-                                           &err),
+    assert_int_equal(affect_transfer_pairs(x, 6, 2, label, NULL, use, dq, 0, 1, 3, 1, from, to,
+                                           dist, &got, &err),
                      AFFECT_OK);
     assert_int_equal(got, 3);
     assert_int_equal(from[0], 1);
@@ -254,9 +252,9 @@ static void test_pairs(void **state)
     /* two candidates each: the nearest and the next */
     uint32_t to2[6];
     double d2[6];
-    assert_int_equal(affect_transfer_pairs(x, 6, 2, label, NULL, use, dq, 0, 1, 3, 2, from, to2,
-                                           d2, &got, &err),
-                     AFFECT_OK);
+    assert_int_equal(
+        affect_transfer_pairs(x, 6, 2, label, NULL, use, dq, 0, 1, 3, 2, from, to2, d2, &got, &err),
+        AFFECT_OK);
     assert_int_equal(got, 3);
     assert_int_equal(to2[0], 4);
     assert_int_equal(to2[1], 3); /* from row 1 (5, 5): rows 3 (0, 1) and 5 (10, 1) tie */
@@ -265,8 +263,8 @@ static void test_pairs(void **state)
     assert_int_equal(to2[3], 3);
     /* no row of the target: no pair */
     const int32_t only0[6] = {0, 0, 0, 0, 0, 0};
-    assert_int_equal(affect_transfer_pairs(x, 6, 2, only0, NULL, use, dq, 0, 1, 3, 1, from, to, NULL, &got,
-                                           &err),
+    assert_int_equal(affect_transfer_pairs(x, 6, 2, only0, NULL, use, dq, 0, 1, 3, 1, from, to,
+                                           NULL, &got, &err),
                      AFFECT_OK);
     assert_int_equal(got, 0);
     /* with content keys: row 1 (content 8) pairs with row 4; row 2 has no key */
@@ -369,10 +367,8 @@ static void test_out_of_memory(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_known_change),
-        cmocka_unit_test(test_synthetic_corpus),
-        cmocka_unit_test(test_pairs),
-        cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_known_change),  cmocka_unit_test(test_synthetic_corpus),
+        cmocka_unit_test(test_pairs),         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_out_of_memory),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -63,27 +63,27 @@ static void test_validator(void **state)
     } cases[] = {
         {"Hips", 4, 4},
         {"", 0, 0},
-        {"h\xC3\xA9", 3, 3},                  /* é */
-        {"\xE2\x82\xAC", 3, 3},               /* € */
-        {"\xF0\x9F\x98\x80", 4, 4},           /* U+1F600 */
-        {"\xF4\x8F\xBF\xBF", 4, 4},           /* U+10FFFF, the last code point */
-        {"\xEF\xBF\xBF", 3, 3},               /* U+FFFF: a noncharacter, but valid UTF-8 */
-        {"ab\xFF", 3, 2},                     /* never in UTF-8 */
-        {"\x80", 1, 0},                       /* stray continuation byte */
-        {"\xC0\xAF", 2, 0},                   /* overlong '/' */
-        {"\xC1\xBF", 2, 0},                   /* overlong */
-        {"\xE0\x80\xAF", 3, 0},               /* overlong '/' in 3 bytes */
-        {"\xE0\x9F\xBF", 3, 0},               /* overlong U+07FF */
-        {"\xF0\x8F\xBF\xBF", 4, 0},           /* overlong U+FFFF */
-        {"x\xED\xA0\x80", 4, 1},              /* U+D800, a surrogate */
-        {"\xED\xBF\xBF", 3, 0},               /* U+DFFF */
-        {"\xED\x9F\xBF", 3, 3},               /* U+D7FF, just below */
-        {"\xF4\x90\x80\x80", 4, 0},           /* U+110000 */
-        {"\xF5\x80\x80\x80", 4, 0},           /* lead byte past U+10FFFF */
-        {"a\xC3", 2, 1},                      /* cut short */
-        {"\xE2\x82", 2, 0},                   /* cut short */
-        {"\xE2\x82x", 3, 0},                  /* continuation missing */
-        {"a\0b", 3, 1},                       /* NUL inside */
+        {"h\xC3\xA9", 3, 3},        /* é */
+        {"\xE2\x82\xAC", 3, 3},     /* € */
+        {"\xF0\x9F\x98\x80", 4, 4}, /* U+1F600 */
+        {"\xF4\x8F\xBF\xBF", 4, 4}, /* U+10FFFF, the last code point */
+        {"\xEF\xBF\xBF", 3, 3},     /* U+FFFF: a noncharacter, but valid UTF-8 */
+        {"ab\xFF", 3, 2},           /* never in UTF-8 */
+        {"\x80", 1, 0},             /* stray continuation byte */
+        {"\xC0\xAF", 2, 0},         /* overlong '/' */
+        {"\xC1\xBF", 2, 0},         /* overlong */
+        {"\xE0\x80\xAF", 3, 0},     /* overlong '/' in 3 bytes */
+        {"\xE0\x9F\xBF", 3, 0},     /* overlong U+07FF */
+        {"\xF0\x8F\xBF\xBF", 4, 0}, /* overlong U+FFFF */
+        {"x\xED\xA0\x80", 4, 1},    /* U+D800, a surrogate */
+        {"\xED\xBF\xBF", 3, 0},     /* U+DFFF */
+        {"\xED\x9F\xBF", 3, 3},     /* U+D7FF, just below */
+        {"\xF4\x90\x80\x80", 4, 0}, /* U+110000 */
+        {"\xF5\x80\x80\x80", 4, 0}, /* lead byte past U+10FFFF */
+        {"a\xC3", 2, 1},            /* cut short */
+        {"\xE2\x82", 2, 0},         /* cut short */
+        {"\xE2\x82x", 3, 0},        /* continuation missing */
+        {"a\0b", 3, 1},             /* NUL inside */
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         size_t got = affect_utf8_invalid_at(cases[i].s, cases[i].n);
@@ -277,7 +277,9 @@ static void test_bvh(void **state)
     assert_string_equal(m->names[1], "T\xC3\xAAte");
     affect_motion_free(m);
     m = NULL;
-    snprintf(text, sizeof text, fmt, "Ch\xFF" "est");
+    snprintf(text, sizeof text, fmt,
+             "Ch\xFF"
+             "est");
     assert_int_equal(affect_bvh_parse(text, strlen(text), NULL, &m, &err), AFFECT_ERR_FORMAT);
     assert_string_equal(err.msg, "line 6: joint name is not valid UTF-8 (byte 0xff at offset 2)");
     assert_null(m);
@@ -335,7 +337,8 @@ static void test_csv_json(void **state)
     assert_non_null(strstr(err.msg, "\\xff"));
     /* JSON refuses such text already (the parser checks UTF-8) */
     const char json[] = "{\"fps\":30,\"joints\":[\"a\xFF\"],\"frames\":[[[1,2,3]]]}";
-    assert_int_equal(affect_motion_from_json(json, sizeof json - 1, &m, NULL, &err), AFFECT_ERR_FORMAT);
+    assert_int_equal(affect_motion_from_json(json, sizeof json - 1, &m, NULL, &err),
+                     AFFECT_ERR_FORMAT);
     assert_string_equal(err.msg, "at byte 22: invalid UTF-8");
 }
 
@@ -385,10 +388,10 @@ static void test_model_blobs(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_validator),     cmocka_unit_test(test_escape),
-        cmocka_unit_test(test_fail_escapes),  cmocka_unit_test(test_motion_decode),
-        cmocka_unit_test(test_motion_api),    cmocka_unit_test(test_bvh),
-        cmocka_unit_test(test_csv_json),      cmocka_unit_test(test_model_blobs),
+        cmocka_unit_test(test_validator),    cmocka_unit_test(test_escape),
+        cmocka_unit_test(test_fail_escapes), cmocka_unit_test(test_motion_decode),
+        cmocka_unit_test(test_motion_api),   cmocka_unit_test(test_bvh),
+        cmocka_unit_test(test_csv_json),     cmocka_unit_test(test_model_blobs),
     };
     return cmocka_run_group_tests_name("utf8", tests, NULL, NULL);
 }

@@ -241,7 +241,8 @@ long tu_oom_sweep(tu_oom_op op, void *ctx, tu_oom_finish finish, long *absorbed)
             fail_msg("allocation %ld failing gave status %d: %s", n, (int)st, err.msg);
         if (calls < n)
             fail_msg("allocation %ld never happened (%ld calls) but the operation reported "
-                     "out of memory", n, calls);
+                     "out of memory",
+                     n, calls);
     }
     fail_msg("still allocating with allocation %d failing", TU_OOM_MAX_RUNS);
     return -1;

@@ -25,11 +25,11 @@ char *tu_read_file(const char *path, size_t *len);
 const char *tu_corpus_dir(void);
 
 /* Asserts that two floats agree within an absolute tolerance, printing both on failure. */
-#define tu_assert_near(a, b, tol)                                                              \
-    do {                                                                                       \
-        double tu_a_ = (double)(a), tu_b_ = (double)(b);                                       \
-        if (!(fabs(tu_a_ - tu_b_) <= (tol)))                                                   \
-            fail_msg("%s = %.9g, expected %.9g (tolerance %g)", #a, tu_a_, tu_b_, (double)(tol)); \
+#define tu_assert_near(a, b, tol)                                                                  \
+    do {                                                                                           \
+        double tu_a_ = (double)(a), tu_b_ = (double)(b);                                           \
+        if (!(fabs(tu_a_ - tu_b_) <= (tol)))                                                       \
+            fail_msg("%s = %.9g, expected %.9g (tolerance %g)", #a, tu_a_, tu_b_, (double)(tol));  \
     } while (0)
 
 /* Largest Euclidean distance between the positions of two motions of the same size, over every

@@ -169,14 +169,16 @@ int main(int argc, char **argv)
      * Yposition between Y, Z, X rotations) → Head_end (End Site), Arm (Zrotation) under Hips */
     static const char *const sk_names[5] = {"Hips", "Spine", "Head", "Head_end", "Arm"};
     static const int32_t sk_parents[5] = {-1, 0, 1, 2, 0};
-    static const double sk_offsets[5][3] = {{1, 2, 3}, {0, 10, 0}, {0, 5, 0.5}, {0, 2, 0}, {-3, -0.0, 0.25}};
+    static const double sk_offsets[5][3] = {
+        {1, 2, 3}, {0, 10, 0}, {0, 5, 0.5}, {0, 2, 0}, {-3, -0.0, 0.25}};
     static const uint8_t sk_n[5] = {6, 3, 4, 0, 1};
-    static const uint8_t sk_ch[5][6] = {{AFFECT_CH_XPOS, AFFECT_CH_YPOS, AFFECT_CH_ZPOS, AFFECT_CH_ZROT,
-                                         AFFECT_CH_XROT, AFFECT_CH_YROT},
-                                        {AFFECT_CH_XROT, AFFECT_CH_YROT, AFFECT_CH_ZROT},
-                                        {AFFECT_CH_YROT, AFFECT_CH_YPOS, AFFECT_CH_ZROT, AFFECT_CH_XROT},
-                                        {0},
-                                        {AFFECT_CH_ZROT}};
+    static const uint8_t sk_ch[5][6] = {
+        {AFFECT_CH_XPOS, AFFECT_CH_YPOS, AFFECT_CH_ZPOS, AFFECT_CH_ZROT, AFFECT_CH_XROT,
+         AFFECT_CH_YROT},
+        {AFFECT_CH_XROT, AFFECT_CH_YROT, AFFECT_CH_ZROT},
+        {AFFECT_CH_YROT, AFFECT_CH_YPOS, AFFECT_CH_ZROT, AFFECT_CH_XROT},
+        {0},
+        {AFFECT_CH_ZROT}};
     for (int variant = 0; variant < 3; variant++) {
         /* 0: skeleton only (flags 1); 1: rotations (flags 3); 2: rotations, but no joint has
          * a position channel, so no translation is stored (K = 0) */
@@ -206,7 +208,8 @@ int main(int argc, char **argv)
                     double q[4] = {1, 0, 0, 0};
                     if (s->n_channels && j != 4)
                         affect_quat_from_euler_deg(zxy, deg, q);
-                    float *qo = m->rot + ((size_t)t * 5 + j) * 4, *to = m->trans + ((size_t)t * 5 + j) * 3;
+                    float *qo = m->rot + ((size_t)t * 5 + j) * 4,
+                          *to = m->trans + ((size_t)t * 5 + j) * 3;
                     for (int k = 0; k < 4; k++)
                         qo[k] = (float)q[k];
                     for (int a = 0; a < 3; a++)
@@ -247,7 +250,7 @@ int main(int argc, char **argv)
             m->trans[j * 3 + a] = (float)m->skel[j].offset[a];
     m->trans[1 * 3 + 2] = -4.25f;
     m->rot[0] = 0.6f, m->rot[1] = 0.8f; /* Hand: Xrotation 106.26° */
-    m->rot[4 * 2 + 0] = -1.0f;            /* Prop: −identity */
+    m->rot[4 * 2 + 0] = -1.0f;          /* Prop: −identity */
     if (affect_motion_fk(m, &err))
         goto fail;
     rc |= write_seed(dir, "v2_two_roots.blob", m);

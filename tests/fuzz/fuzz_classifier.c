@@ -4,7 +4,8 @@
  * decoders and the embedded model BLOBs.
  *
  * Usage (see tests/fuzz/run.sh, or build with -DAFFECT_FUZZ=ON and clang):
- *     build-fuzz/tests/fuzz/fuzz_classifier -max_total_time=60 <a copy of tests/fuzz/corpus/fuzz_classifier>
+ *     build-fuzz/tests/fuzz/fuzz_classifier -max_total_time=60 <a copy of
+ * tests/fuzz/corpus/fuzz_classifier>
  *
  * The BLOB's trailing checksum would stop nearly every mutation at the first check, so the
  * target decodes a copy whose last 8 bytes are rewritten to the FNV-1a 64 of the rest: the

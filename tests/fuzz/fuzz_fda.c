@@ -79,8 +79,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             abort();
         if (fixed == AFFECT_OK &&
             strcmp(err.msg, "functional model checksum mismatch: the BLOB is corrupt") != 0) {
-            fprintf(stderr, "the checksum-fixed copy decodes, the input fails with: %s\n",
-                    err.msg);
+            fprintf(stderr, "the checksum-fixed copy decodes, the input fails with: %s\n", err.msg);
             abort();
         }
     }

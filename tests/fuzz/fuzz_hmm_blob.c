@@ -3,7 +3,8 @@
  * affect/hmm_blob.h).
  *
  * Usage (see tests/fuzz/run.sh, or build with -DAFFECT_FUZZ=ON and clang):
- *     build-fuzz/tests/fuzz/fuzz_hmm_blob -max_total_time=60 <a copy of tests/fuzz/corpus/fuzz_hmm_blob>
+ *     build-fuzz/tests/fuzz/fuzz_hmm_blob -max_total_time=60 <a copy of
+ * tests/fuzz/corpus/fuzz_hmm_blob>
  *
  * Each input is decoded twice: as is, and as a copy whose last 8 bytes are rewritten to the
  * FNV-1a 64 of the rest (the checksum's place and algorithm, core/src/hmm_blob.c). Raw

@@ -3,7 +3,8 @@
  * and import; affect/motion.h, affect/io.h, affect/skeleton.h).
  *
  * Usage (see tests/fuzz/run.sh, or build with -DAFFECT_FUZZ=ON and clang):
- *     build-fuzz/tests/fuzz/fuzz_motion_v2 -max_total_time=60 <a copy of tests/fuzz/corpus/fuzz_motion_v2>
+ *     build-fuzz/tests/fuzz/fuzz_motion_v2 -max_total_time=60 <a copy of
+ * tests/fuzz/corpus/fuzz_motion_v2>
  *
  * Unlike fuzz_blob, which feeds raw bytes to the decoder (and so rarely gets past its checks
  * into a valid skeleton), this target reads the input as a recipe for a valid skeletal motion
@@ -70,12 +71,12 @@ static double rdfix(reader *r)
     return (int16_t)(uint16_t)(lo | (hi << 8)) / 64.0;
 }
 
-#define CHECK(cond)                                                                            \
-    do {                                                                                       \
-        if (!(cond)) {                                                                         \
-            fprintf(stderr, "fuzz_motion_v2: check failed at line %d: %s\n", __LINE__, #cond); \
-            abort();                                                                           \
-        }                                                                                      \
+#define CHECK(cond)                                                                                \
+    do {                                                                                           \
+        if (!(cond)) {                                                                             \
+            fprintf(stderr, "fuzz_motion_v2: check failed at line %d: %s\n", __LINE__, #cond);     \
+            abort();                                                                               \
+        }                                                                                          \
     } while (0)
 
 /* Builds the motion the recipe describes; NULL only when memory runs out. */
@@ -150,7 +151,8 @@ static affect_motion *build(reader *r)
                 }
             }
             affect_quat_normalize(q);
-            float *qo = m->rot + ((size_t)t * nj + j) * 4, *to = m->trans + ((size_t)t * nj + j) * 3;
+            float *qo = m->rot + ((size_t)t * nj + j) * 4,
+                  *to = m->trans + ((size_t)t * nj + j) * 3;
             for (int i = 0; i < 4; i++)
                 qo[i] = (float)((negate >> j) & 1 ? -q[i] : q[i]);
             for (int a = 0; a < 3; a++)
@@ -183,8 +185,9 @@ static double reach(const affect_motion *m, uint32_t j)
             const float *tr = m->trans + ((size_t)t * m->n_joints + (uint32_t)k) * 3;
             const double *o = m->skel[k].offset;
             bool pos = affect_skel_has_position(&m->skel[k]);
-            double len = pos ? sqrt((double)tr[0] * tr[0] + (double)tr[1] * tr[1] + (double)tr[2] * tr[2])
-                             : sqrt(o[0] * o[0] + o[1] * o[1] + o[2] * o[2]);
+            double len =
+                pos ? sqrt((double)tr[0] * tr[0] + (double)tr[1] * tr[1] + (double)tr[2] * tr[2])
+                    : sqrt(o[0] * o[0] + o[1] * o[1] + o[2] * o[2]);
             most = len > most ? len : most;
         }
         total += most;
@@ -320,13 +323,15 @@ static void check_bvh(const affect_motion *m)
             CHECK(fabs(a->offset[i] - b->offset[i]) <= 1e-9);
         double tol = 1e-4 + 1e-4 * reach(m, j);
         for (uint32_t t = 0; t < m->n_frames; t++) {
-            const float *qa = m->rot + ((size_t)t * nj + j) * 4, *qb = p->rot + ((size_t)t * nj + k) * 4;
+            const float *qa = m->rot + ((size_t)t * nj + j) * 4,
+                        *qb = p->rot + ((size_t)t * nj + k) * 4;
             double dp = 0, dm = 0;
             for (int i = 0; i < 4; i++) {
                 dp = fmax(dp, fabs((double)qa[i] - qb[i]));
                 dm = fmax(dm, fabs((double)qa[i] + qb[i]));
             }
-            const float *ta = m->trans + ((size_t)t * nj + j) * 3, *tb = p->trans + ((size_t)t * nj + k) * 3;
+            const float *ta = m->trans + ((size_t)t * nj + j) * 3,
+                        *tb = p->trans + ((size_t)t * nj + k) * 3;
             const float *xa = affect_motion_at(m, t, j), *xb = affect_motion_at(p, t, k);
             double dt = 0, dx = 0;
             for (int i = 0; i < 3; i++) {

@@ -4,7 +4,8 @@
  * decoded and used to recognize the desired motion's emotion before generating.
  *
  * Usage (see tests/fuzz/run.sh, or build with -DAFFECT_FUZZ=ON and clang):
- *     build-fuzz/tests/fuzz/fuzz_sql_classifier -max_total_time=60 <a copy of tests/fuzz/corpus/fuzz_sql_classifier>
+ *     build-fuzz/tests/fuzz/fuzz_sql_classifier -max_total_time=60 <a copy of
+ * tests/fuzz/corpus/fuzz_sql_classifier>
  *
  * Input: the classifier BLOB. As in fuzz_classifier, its last 8 bytes are rewritten to the
  * FNV-1a 64 of the rest, so mutations get past the checksum; the result is hex-encoded and

@@ -5,7 +5,8 @@
  * its commands, and DROP.
  *
  * Usage (see tests/fuzz/run.sh, or build with -DAFFECT_FUZZ=ON and clang):
- *     build-fuzz/tests/fuzz/fuzz_sql_laban -max_total_time=60 -dict=tests/fuzz/fuzz_sql_laban.dict <a copy of tests/fuzz/corpus/fuzz_sql_laban>
+ *     build-fuzz/tests/fuzz/fuzz_sql_laban -max_total_time=60 -dict=tests/fuzz/fuzz_sql_laban.dict
+ * <a copy of tests/fuzz/corpus/fuzz_sql_laban>
  *
  * Input, line by line (on a fresh copy of fuzz_sql.h's fixtures):
  *   1  the constructor arguments:  CREATE VIRTUAL TABLE t USING laban(<line 1>)

@@ -9,7 +9,8 @@
  * affect_generate(_explain) (its classifier option as hex text included).
  *
  * Usage (see tests/fuzz/run.sh, or build with -DAFFECT_FUZZ=ON and clang):
- *     build-fuzz/tests/fuzz/fuzz_sql_options -max_total_time=60 <a copy of tests/fuzz/corpus/fuzz_sql_options>
+ *     build-fuzz/tests/fuzz/fuzz_sql_options -max_total_time=60 <a copy of
+ * tests/fuzz/corpus/fuzz_sql_options>
  *
  * Input: the call's name (a row of calls[] below), a line break, then the options text, bound
  * as the statement's ?1 as is (not NUL-terminated; any bytes). For motion_from_bvh and

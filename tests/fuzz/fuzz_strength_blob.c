@@ -4,7 +4,8 @@
  * of affect/strength.h and affect/rank.h.
  *
  * Usage (see tests/fuzz/run.sh, or build with -DAFFECT_FUZZ=ON and clang):
- *     build-fuzz/tests/fuzz/fuzz_strength_blob -max_total_time=60 <a copy of tests/fuzz/corpus/fuzz_strength_blob>
+ *     build-fuzz/tests/fuzz/fuzz_strength_blob -max_total_time=60 <a copy of
+ * tests/fuzz/corpus/fuzz_strength_blob>
  *
  * Each input goes to both decoders twice: as is, and as a copy whose last 8 bytes are
  * rewritten to the FNV-1a 64 of the rest (both formats end with that checksum), so mutations

@@ -100,8 +100,8 @@ static const ir_case IR_CASES[] = {
      "SELECT affect_strength(r, motion) FROM strength, long WHERE long.id = 1", "affect_strength",
      NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
     {"strength_edit, 6158 frames",
-     "SELECT strength_edit(r, motion, 0.5) FROM strength, long WHERE long.id = 1",
-     "strength_edit", NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
+     "SELECT strength_edit(r, motion, 0.5) FROM strength, long WHERE long.id = 1", "strength_edit",
+     NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
     {"affect_generate hmm_nn (HMM training)",
      "SELECT affect_generate('motion_laban', motion, 'angry', '{\"method\":\"hmm_nn\","
      "\"components\":[\"WeightAll\",\"TimeAll\"],\"k\":20,\"min_neighbours\":20,"
@@ -110,14 +110,14 @@ static const ir_case IR_CASES[] = {
     /* single calls on one motion at the size limit (`big`: 615,701 frames x 26 joints,
      * 16,008,226 samples, positions only; `bigsk`: the same with joint rotations; `bigbvh`:
      * its BVH text), each seconds to minutes of work uninterrupted */
-    {"laban_vector, " IR_BIG, "SELECT laban_vector(m) FROM big", "laban_vector", NULL,
+    {"laban_vector, " IR_BIG, "SELECT laban_vector(m) FROM big", "laban_vector", NULL, IR_THREAD,
+     IR_INTERRUPT_AFTER, NULL},
+    {"laban_shape_flow, " IR_BIG, "SELECT laban_shape_flow(m) FROM big", "laban_shape_flow", NULL,
      IR_THREAD, IR_INTERRUPT_AFTER, NULL},
-    {"laban_shape_flow, " IR_BIG, "SELECT laban_shape_flow(m) FROM big",
-     "laban_shape_flow", NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
-    {"motion_kinematics, " IR_BIG, "SELECT motion_kinematics(m) FROM big",
-     "motion_kinematics", NULL, IR_THREAD, 0.1, NULL},
-    {"motion_rigid, " IR_BIG, "SELECT motion_rigid(m) FROM big", "motion_rigid", NULL,
-     IR_THREAD, IR_INTERRUPT_AFTER, NULL},
+    {"motion_kinematics, " IR_BIG, "SELECT motion_kinematics(m) FROM big", "motion_kinematics",
+     NULL, IR_THREAD, 0.1, NULL},
+    {"motion_rigid, " IR_BIG, "SELECT motion_rigid(m) FROM big", "motion_rigid", NULL, IR_THREAD,
+     IR_INTERRUPT_AFTER, NULL},
     {"motion_to_bvh by inverse kinematics, " IR_BIG, "SELECT motion_to_bvh(m) FROM big",
      "motion_to_bvh", NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
     {"motion_to_bvh of stored rotations, " IR_BIG, "SELECT motion_to_bvh(m) FROM bigsk",
@@ -125,25 +125,24 @@ static const ir_case IR_CASES[] = {
     {"motion_angles by inverse kinematics, " IR_BIG,
      "SELECT count(*) FROM motion_angles((SELECT m FROM big))", "motion_angles", NULL, IR_THREAD,
      IR_INTERRUPT_AFTER, NULL},
-    {"laban_series, " IR_BIG,
-     "SELECT count(*), max(weight) FROM big, laban_series(big.m)", "laban_series",
-     NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
+    {"laban_series, " IR_BIG, "SELECT count(*), max(weight) FROM big, laban_series(big.m)",
+     "laban_series", NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
     {"laban_series, one window, " IR_BIG,
      "SELECT count(*) FROM big, laban_series(big.m, '{\"window_frames\":615701,"
-     "\"parts\":\"all\",\"time_method\":\"accumulated\"}')", "laban_series",
-     NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
-    {"motion_from_bvh, " IR_BIG, "SELECT motion_from_bvh(t) FROM bigbvh",
-     "motion_from_bvh", NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
-    {"motion_bvh_error, " IR_BIG, "SELECT motion_bvh_error(t) FROM bigbvh",
-     "motion_bvh_error", NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
-    {"motion_to_json, " IR_BIG, "SELECT motion_to_json(m) FROM big", "motion_to_json",
-     NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
-    {"motion_to_csv, " IR_BIG, "SELECT motion_to_csv(m) FROM big", "motion_to_csv", NULL,
+     "\"parts\":\"all\",\"time_method\":\"accumulated\"}')",
+     "laban_series", NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
+    {"motion_from_bvh, " IR_BIG, "SELECT motion_from_bvh(t) FROM bigbvh", "motion_from_bvh", NULL,
      IR_THREAD, IR_INTERRUPT_AFTER, NULL},
-    {"hmm_loglik 7x4 full, " IR_BIG, "SELECT hmm_loglik(h, m) FROM bigmodel, big",
-     "hmm_loglik", NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
-    {"hmm_viterbi 7x4 full, " IR_BIG, "SELECT hmm_viterbi(h, m) FROM bigmodel, big",
-     "hmm_viterbi", NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
+    {"motion_bvh_error, " IR_BIG, "SELECT motion_bvh_error(t) FROM bigbvh", "motion_bvh_error",
+     NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
+    {"motion_to_json, " IR_BIG, "SELECT motion_to_json(m) FROM big", "motion_to_json", NULL,
+     IR_THREAD, IR_INTERRUPT_AFTER, NULL},
+    {"motion_to_csv, " IR_BIG, "SELECT motion_to_csv(m) FROM big", "motion_to_csv", NULL, IR_THREAD,
+     IR_INTERRUPT_AFTER, NULL},
+    {"hmm_loglik 7x4 full, " IR_BIG, "SELECT hmm_loglik(h, m) FROM bigmodel, big", "hmm_loglik",
+     NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
+    {"hmm_viterbi 7x4 full, " IR_BIG, "SELECT hmm_viterbi(h, m) FROM bigmodel, big", "hmm_viterbi",
+     NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
     {"affect_classify, " IR_BIG, "SELECT affect_classify(c, m) FROM bigmodel, big",
      "affect_classify", NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
     {"affect_classify ml, " IR_BIG, "SELECT affect_classify(c, m, 'ml') FROM bigmodel, big",
@@ -490,8 +489,7 @@ static void ir_open_big(void)
 {
     char *err = NULL;
     if (sqlite3_exec(ir_db, IR_BIG_CORPUS, NULL, NULL, &err) != SQLITE_OK) {
-        fprintf(stderr, "cannot build the large motions: %s\n",
-                err ? err : sqlite3_errmsg(ir_db));
+        fprintf(stderr, "cannot build the large motions: %s\n", err ? err : sqlite3_errmsg(ir_db));
         exit(1);
     }
 }

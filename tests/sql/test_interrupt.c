@@ -9,12 +9,12 @@
  *
  * The calls, the corpus and how each run is stopped: interrupt_run.h (hmm_train, affect_train,
  * affect_crossval, motion_dtw, laban_salient, affect_generate, affect_generate_explain,
- * affect_strength, strength_edit and the laban index's 'rebuild', each running for seconds uninterrupted; an interrupt from a second
- * thread 0.3 s after the step starts, from the progress function as affect_train reaches a
- * stage, from a function in the statement's WHERE clause (while an aggregate reads its rows,
- * or just before a scalar call starts: the interrupt is then pending at the call's first
- * poll), or a progress handler that says stop from 0.3 s on). Checked for each, twice:
- * sqlite3_step returns SQLITE_INTERRUPT (also the extended code) with the message
+ * affect_strength, strength_edit and the laban index's 'rebuild', each running for seconds
+ * uninterrupted; an interrupt from a second thread 0.3 s after the step starts, from the progress
+ * function as affect_train reaches a stage, from a function in the statement's WHERE clause (while
+ * an aggregate reads its rows, or just before a scalar call starts: the interrupt is then pending
+ * at the call's first poll), or a progress handler that says stop from 0.3 s on). Checked for each,
+ * twice: sqlite3_step returns SQLITE_INTERRUPT (also the extended code) with the message
  * "<fn>: interrupted" (or SQLite's own "interrupted"), within LATENCY_MAX of the
  * interrupt (printed: the goal is 0.2 s; the bound leaves room for the sanitizer build and a
  * loaded 2-core machine); the connection works afterwards; and the second run leaves the memory
@@ -103,8 +103,7 @@ static bool check_run(const ir_case *c)
         fail("%s: returned %.3f s after the interrupt (at most %.1f s)", c->name, r.latency,
              ir_is_big(c) ? LATENCY_MAX_BIG : LATENCY_MAX);
     else if (ir_is_big(c) && r.cpu > CPU_MAX_BIG)
-        fail("%s: %.3f s of CPU after the interrupt (at most %.1f s)", c->name, r.cpu,
-             CPU_MAX_BIG);
+        fail("%s: %.3f s of CPU after the interrupt (at most %.1f s)", c->name, r.cpu, CPU_MAX_BIG);
     else
         ok = true;
     /* the connection works again */

@@ -98,21 +98,19 @@ static int oom_init(void *x)
     return SQLITE_OK;
 }
 
-static void oom_shutdown(void *x)
-{
-}
+static void oom_shutdown(void *x) {}
 
-static const sqlite3_mem_methods oom_methods = {oom_malloc, oom_free,   oom_realloc, oom_size,
+static const sqlite3_mem_methods oom_methods = {oom_malloc,  oom_free, oom_realloc,  oom_size,
                                                 oom_roundup, oom_init, oom_shutdown, NULL};
 
 /* ---- spec files ---- */
 
 typedef struct outcome {
-    int rc;            /* SQLITE_OK or the error code */
-    char *error;       /* error message (malloc'd) */
-    char *first;       /* first column of first row as text (malloc'd), or NULL */
-    char *failed_row;  /* a row whose check column was not 1 (malloc'd), or NULL */
-    int writes;        /* the statement is not read-only */
+    int rc;           /* SQLITE_OK or the error code */
+    char *error;      /* error message (malloc'd) */
+    char *first;      /* first column of first row as text (malloc'd), or NULL */
+    char *failed_row; /* a row whose check column was not 1 (malloc'd), or NULL */
+    int writes;       /* the statement is not read-only */
 } outcome;
 
 static void outcome_free(outcome *o)
@@ -257,7 +255,8 @@ static char *judge(const outcome *o, const char *expect, const char *error)
         if (o->rc == SQLITE_OK)
             snprintf(buf, sizeof buf, "expected error \"%s\", got success", error);
         else if (strcmp(o->error, error) != 0)
-            snprintf(buf, sizeof buf, "expected error\n      \"%s\"\n  got \"%s\"", error, o->error);
+            snprintf(buf, sizeof buf, "expected error\n      \"%s\"\n  got \"%s\"", error,
+                     o->error);
         else
             return NULL;
         return dup_text(buf);

@@ -26,11 +26,11 @@ extern "C" {
 
 typedef enum affect_status {
     AFFECT_OK = 0,
-    AFFECT_ERR_NOMEM = 1,   /* an allocation failed */
-    AFFECT_ERR_INVALID = 2, /* a bad argument or option */
-    AFFECT_ERR_FORMAT = 3,  /* malformed input data (text or BLOB) */
-    AFFECT_ERR_RANGE = 4,   /* a size or index out of the supported range */
-    AFFECT_ERR_MISSING = 5, /* a needed body-part role or joint is absent */
+    AFFECT_ERR_NOMEM = 1,      /* an allocation failed */
+    AFFECT_ERR_INVALID = 2,    /* a bad argument or option */
+    AFFECT_ERR_FORMAT = 3,     /* malformed input data (text or BLOB) */
+    AFFECT_ERR_RANGE = 4,      /* a size or index out of the supported range */
+    AFFECT_ERR_MISSING = 5,    /* a needed body-part role or joint is absent */
     AFFECT_ERR_INTERRUPTED = 6 /* the caller asked the call to stop (affect/monitor.h) */
 } affect_status;
 

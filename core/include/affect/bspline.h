@@ -87,8 +87,8 @@ void affect_bspline_normal(const affect_bspline *b, const double *t, const doubl
  * "the fit is singular: 3 samples cannot determine 20 coefficients with lambda = 0 (give a
  * positive lambda or a smaller basis)", "sample 4, column 2: non-finite value". */
 affect_status affect_bspline_fit(const affect_bspline *b, const double *r, const double *t,
-                                 const double *x, uint32_t T, uint32_t m, double lambda,
-                                 double *c, double *work, affect_error *err);
+                                 const double *x, uint32_t T, uint32_t m, double lambda, double *c,
+                                 double *work, affect_error *err);
 
 /* f (T × m) = Φ c: the fitted curve at T times (t, or equally spaced when NULL). */
 void affect_bspline_values(const affect_bspline *b, const double *c, uint32_t m, const double *t,

@@ -87,7 +87,10 @@ extern "C" {
  * block. A block that fits in one slab is computed exactly as with one array. */
 #define AFFECT_CLASSIFIER_SLAB_BYTES ((size_t)1 << 30)
 /* C values tried when svm_c = 0 (chosen by inner cross-validation; ties → the smallest) */
-#define AFFECT_CLASSIFIER_C_GRID {0.001, 0.01, 0.1, 1.0, 10.0, 100.0, 1000.0}
+#define AFFECT_CLASSIFIER_C_GRID                                                                   \
+    {                                                                                              \
+        0.001, 0.01, 0.1, 1.0, 10.0, 100.0, 1000.0                                                 \
+    }
 
 #define AFFECT_CLASSIFIER_GRID_MAX 128u
 
@@ -129,29 +132,29 @@ typedef enum affect_classifier_storage {
 } affect_classifier_storage;
 
 typedef struct affect_classifier_config {
-    affect_hmm_config hmm;          /* the class HMMs (dim = the feature dimension) */
-    unsigned groups;                /* Fisher groups (default AFFECT_FISHER_ALL) */
-    bool zscore;                    /* z-score normalization (default true) */
-    double score_clip;              /* z-scores limited to ± this (default 5; 0 = no limit) */
-    double svm_c;                   /* > 0, or 0 = inner cross-validation (default 0) */
-    uint32_t svm_folds;             /* inner folds for C (default 5) */
-    uint32_t spca_dims;             /* default 3 */
-    affect_spca_kernel spca_kernel; /* default RBF (the thesis's best) */
-    double spca_sigma;              /* RBF σ (default 0.25) */
-    uint32_t knn_k;                 /* default 5 */
-    affect_classifier_grid grid;    /* default: no search */
-    unsigned descriptors;           /* motion-level descriptors appended (affect/summary.h:
-                                       AFFECT_DESC_* mask, 0 = none; default kinematics) */
-    double descriptor_weight;       /* their block's share of the kernel (default 0.1) */
-    affect_classifier_mirror mirror; /* train on every motion and its mirror image (default
-                                        auto) */
+    affect_hmm_config hmm;             /* the class HMMs (dim = the feature dimension) */
+    unsigned groups;                   /* Fisher groups (default AFFECT_FISHER_ALL) */
+    bool zscore;                       /* z-score normalization (default true) */
+    double score_clip;                 /* z-scores limited to ± this (default 5; 0 = no limit) */
+    double svm_c;                      /* > 0, or 0 = inner cross-validation (default 0) */
+    uint32_t svm_folds;                /* inner folds for C (default 5) */
+    uint32_t spca_dims;                /* default 3 */
+    affect_spca_kernel spca_kernel;    /* default RBF (the thesis's best) */
+    double spca_sigma;                 /* RBF σ (default 0.25) */
+    uint32_t knn_k;                    /* default 5 */
+    affect_classifier_grid grid;       /* default: no search */
+    unsigned descriptors;              /* motion-level descriptors appended (affect/summary.h:
+                                          AFFECT_DESC_* mask, 0 = none; default kinematics) */
+    double descriptor_weight;          /* their block's share of the kernel (default 0.1) */
+    affect_classifier_mirror mirror;   /* train on every motion and its mirror image (default
+                                          auto) */
     affect_classifier_storage storage; /* default auto (above) */
-    uint32_t threads;               /* training: class HMMs and motions' Fisher scores on this
-                                       many threads (default 1, at most 64; the result does not
-                                       depend on it; not stored in the BLOB) */
-    size_t slab_bytes;              /* training: the largest allocation for the rows of a block
-                                       of Fisher scores; 0 (default) =
-                                       AFFECT_CLASSIFIER_SLAB_BYTES (tests set less; not stored) */
+    uint32_t threads;                  /* training: class HMMs and motions' Fisher scores on this
+                                          many threads (default 1, at most 64; the result does not
+                                          depend on it; not stored in the BLOB) */
+    size_t slab_bytes;                 /* training: the largest allocation for the rows of a block
+                                          of Fisher scores; 0 (default) =
+                                          AFFECT_CLASSIFIER_SLAB_BYTES (tests set less; not stored) */
 } affect_classifier_config;
 
 /* The measured best (docs/EVALUATION.md, "Choosing the defaults"), not the thesis's: class
@@ -176,19 +179,18 @@ typedef struct affect_classifier affect_classifier; /* opaque */
  * given"), ignored otherwise; a non-finite value is "motion 3: descriptor 5 is not finite". */
 affect_status affect_classifier_train(const affect_classifier_config *cfg,
                                       const affect_features *feat, const affect_hmm_seq *seqs,
-                                      const double *desc,
-                                      const uint32_t *y, uint32_t n, const char *const *labels,
-                                      uint32_t n_classes, affect_classifier **out,
-                                      affect_error *err);
+                                      const double *desc, const uint32_t *y, uint32_t n,
+                                      const char *const *labels, uint32_t n_classes,
+                                      affect_classifier **out, affect_error *err);
 void affect_classifier_free(affect_classifier *c);
 
 /* What evaluating one sequence gives; every pointer may be NULL (not wanted). */
 typedef struct affect_classifier_out {
-    double *loglik;   /* n_classes: log P(x | Λ_k) */
-    double *fisher;   /* dim: the normalized Fisher representation */
-    double *decision; /* n_classes (n_classes − 1) / 2: SVM one-vs-one decision values */
-    double *embed;    /* spca_dims: sPCA coordinates */
-    uint32_t *votes;  /* n_classes: kNN votes */
+    double *loglik;        /* n_classes: log P(x | Λ_k) */
+    double *fisher;        /* dim: the normalized Fisher representation */
+    double *decision;      /* n_classes (n_classes − 1) / 2: SVM one-vs-one decision values */
+    double *embed;         /* spca_dims: sPCA coordinates */
+    uint32_t *votes;       /* n_classes: kNN votes */
     uint32_t ml, svm, knn; /* labels (class indices) */
 } affect_classifier_out;
 

@@ -42,8 +42,8 @@ enum { AFFECT_CV_ML = 0, AFFECT_CV_SVM = 1, AFFECT_CV_KNN = 2, AFFECT_CV_METHODS
 
 typedef struct affect_cv_config {
     affect_classifier_config cls;
-    uint32_t folds; /* k of the stratified k-fold (default 10; ignored with groups) */
-    uint64_t seed;  /* fold assignment (default 1) */
+    uint32_t folds;   /* k of the stratified k-fold (default 10; ignored with groups) */
+    uint64_t seed;    /* fold assignment (default 1) */
     uint32_t threads; /* folds run at once, each in its own thread (default 1, at most 64) */
     void (*progress)(void *ctx, const char *line);
     void *progress_ctx;
@@ -52,8 +52,8 @@ typedef struct affect_cv_config {
 void affect_cv_config_default(affect_cv_config *cfg);
 
 typedef struct affect_cv_fold {
-    uint32_t fold;    /* 0-based */
-    int32_t group;    /* the held-out group, or −1 (k-fold) */
+    uint32_t fold; /* 0-based */
+    int32_t group; /* the held-out group, or −1 (k-fold) */
     uint32_t n_train, n_test;
     double accuracy[AFFECT_CV_METHODS], balanced[AFFECT_CV_METHODS], f1[AFFECT_CV_METHODS];
     uint32_t *confusion[AFFECT_CV_METHODS]; /* n_classes × n_classes each */
@@ -75,8 +75,7 @@ typedef struct affect_cv_result {
  * NULL = stratified k-fold, else leave-one-group-out over group[i] in 0 .. n_groups − 1. */
 affect_status affect_crossval(const affect_cv_config *cfg, const affect_features *feat,
                               const affect_hmm_seq *seqs, const double *desc, const uint32_t *y,
-                              uint32_t n,
-                              const char *const *labels, uint32_t n_classes,
+                              uint32_t n, const char *const *labels, uint32_t n_classes,
                               const uint32_t *group, uint32_t n_groups, affect_cv_result **out,
                               affect_error *err);
 void affect_cv_result_free(affect_cv_result *r);

@@ -89,18 +89,18 @@ typedef enum affect_fda_method {
 #define AFFECT_FDA_NOVAR_TOL 1e-20
 
 typedef struct affect_fda_config {
-    affect_fda_method method; /* default FFDA, the measured best (docs/EVALUATION.md) */
-    uint32_t order;           /* B-spline order k (default 4: cubic) */
-    uint32_t n_basis;         /* G (default 200, the thesis's for recognition) */
-    double lambda;            /* roughness penalty (default 1e-10; ignored with gcv) */
-    bool gcv;                 /* choose λ by GCV (default false) */
-    uint32_t dims;            /* embedding dimensions (default 3; 1 .. 64) */
+    affect_fda_method method;  /* default FFDA, the measured best (docs/EVALUATION.md) */
+    uint32_t order;            /* B-spline order k (default 4: cubic) */
+    uint32_t n_basis;          /* G (default 200, the thesis's for recognition) */
+    double lambda;             /* roughness penalty (default 1e-10; ignored with gcv) */
+    bool gcv;                  /* choose λ by GCV (default false) */
+    uint32_t dims;             /* embedding dimensions (default 3; 1 .. 64) */
     affect_spca_kernel kernel; /* FSPCA label kernel (default linear) */
-    double sigma;             /* FSPCA RBF σ (default 1) */
-    double ffda_reg;          /* FFDA γ (default 1e-3; ≥ 0) */
-    uint32_t isomap_k;        /* F-Isomap neighbours (default 7) */
-    uint32_t proto_dims;      /* P FPCA components of the prototype space (default 3) */
-    affect_monitor *monitor;  /* may be NULL */
+    double sigma;              /* FSPCA RBF σ (default 1) */
+    double ffda_reg;           /* FFDA γ (default 1e-3; ≥ 0) */
+    uint32_t isomap_k;         /* F-Isomap neighbours (default 7) */
+    uint32_t proto_dims;       /* P FPCA components of the prototype space (default 3) */
+    affect_monitor *monitor;   /* may be NULL */
 } affect_fda_config;
 
 void affect_fda_config_default(affect_fda_config *cfg);
@@ -164,10 +164,10 @@ affect_status affect_fda_perturbation(const affect_fda *f, uint32_t r, uint32_t 
 
 /* ---- accessors ---- */
 const affect_fda_config *affect_fda_get_config(const affect_fda *f); /* λ: the one used */
-uint32_t affect_fda_dims(const affect_fda *f);      /* p (may be below cfg.dims) */
-uint32_t affect_fda_coords(const affect_fda *f);    /* m */
-uint32_t affect_fda_train_size(const affect_fda *f); /* n */
-uint32_t affect_fda_classes(const affect_fda *f);   /* c */
+uint32_t affect_fda_dims(const affect_fda *f);                       /* p (may be below cfg.dims) */
+uint32_t affect_fda_coords(const affect_fda *f);                     /* m */
+uint32_t affect_fda_train_size(const affect_fda *f);                 /* n */
+uint32_t affect_fda_classes(const affect_fda *f);                    /* c */
 const char *affect_fda_class_name(const affect_fda *f, uint32_t k);
 const affect_features *affect_fda_features(const affect_fda *f); /* or NULL */
 /* The method's p eigenvalues (FPCA: covariance; FSPCA: sPCA's; FFDA: the generalized

@@ -48,17 +48,17 @@ typedef enum affect_features_frame {
 
 typedef struct affect_features {
     uint32_t n_joints;
-    char **joints;     /* n_joints entries as requested: role names or joint names */
-    char **skeleton;   /* n_joints: the joint each entry resolved to in the first motion */
-    int32_t *parents;  /* n_joints: index of the nearest listed ancestor in the first motion,
-                          or −1 */
-    int up_axis;       /* 0 = x, 1 = y, 2 = z */
+    char **joints;    /* n_joints entries as requested: role names or joint names */
+    char **skeleton;  /* n_joints: the joint each entry resolved to in the first motion */
+    int32_t *parents; /* n_joints: index of the nearest listed ancestor in the first motion,
+                         or −1 */
+    int up_axis;      /* 0 = x, 1 = y, 2 = z */
     affect_features_frame frame;
-    bool normalize;    /* first frame: remove the first frame's root translation and heading */
-    bool scale_arm;    /* divide by the right arm length */
-    bool velocity;     /* append velocities */
-    bool root;         /* append the root's body-frame velocity and turning rate (body frame) */
-    double fps;        /* frame rate of the training motions */
+    bool normalize; /* first frame: remove the first frame's root translation and heading */
+    bool scale_arm; /* divide by the right arm length */
+    bool velocity;  /* append velocities */
+    bool root;      /* append the root's body-frame velocity and turning rate (body frame) */
+    double fps;     /* frame rate of the training motions */
     char unit[AFFECT_MOTION_UNIT_MAX + 1]; /* unit of the positions ("arm" when scaled) */
 } affect_features;
 
@@ -69,7 +69,7 @@ typedef enum affect_features_scale {
 } affect_features_scale;
 
 typedef struct affect_features_options {
-    const char *const *joints;   /* entries (role or joint names); NULL = every joint */
+    const char *const *joints; /* entries (role or joint names); NULL = every joint */
     uint32_t n_joints;
     affect_features_frame frame; /* default first */
     bool normalize;              /* first frame only; default true */
@@ -84,9 +84,8 @@ void affect_features_options_default(affect_features_options *opt);
 /* Builds the definition from the options and the first training motion: resolves every entry
  * in it (an entry missing there is an error, as are two entries naming the same joint),
  * records the skeleton names, parents, fps and unit, and decides the automatic scale. */
-affect_status affect_features_create(const affect_features_options *opt,
-                                     const affect_motion *first, affect_features **out,
-                                     affect_error *err);
+affect_status affect_features_create(const affect_features_options *opt, const affect_motion *first,
+                                     affect_features **out, affect_error *err);
 void affect_features_free(affect_features *f);
 
 /* Observation dimension: 3 × joints, × 2 with velocity, + 4 with root. */
@@ -97,9 +96,8 @@ uint32_t affect_features_dim(const affect_features *f);
  * 'joint "Hand_L" of the model is not in the motion', 'no joint of the motion has the
  * left_hand role (used by the model)', and the normalization's missing roles; mon (may be
  * NULL) is polled between the passes over the frames (AFFECT_ERR_INTERRUPTED). */
-affect_status affect_features_extract(const affect_features *f, const affect_motion *m,
-                                      double **x, uint32_t *n_frames, affect_monitor *mon,
-                                      affect_error *err);
+affect_status affect_features_extract(const affect_features *f, const affect_motion *m, double **x,
+                                      uint32_t *n_frames, affect_monitor *mon, affect_error *err);
 
 /* ---- mirror images (training-set augmentation, affect/classifier.h) ----
  * The mirror image of a motion swaps its left and right: each entry's partner is the entry
@@ -144,8 +142,8 @@ bool affect_features_encoded_size(const affect_features *f, size_t *size);
 /* Writes the binary form into buf (affect_features_encoded_size bytes). */
 void affect_features_encode_into(const affect_features *f, unsigned char *buf);
 /* Decodes exactly size bytes; never reads outside them. */
-affect_status affect_features_decode(const unsigned char *data, size_t size,
-                                     affect_features **out, affect_error *err);
+affect_status affect_features_decode(const unsigned char *data, size_t size, affect_features **out,
+                                     affect_error *err);
 
 #ifdef __cplusplus
 }

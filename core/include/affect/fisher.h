@@ -79,8 +79,8 @@ size_t affect_fisher_dim(const affect_hmm_config *cfg, unsigned groups);
  * affect_hmm_posteriors's own. mon (may be NULL) is polled as the frames are read (per block of
  * frames): AFFECT_ERR_INTERRUPTED once it says stop. */
 affect_status affect_fisher_score(const affect_hmm *h, const double *x, uint32_t n_frames,
-                                  unsigned groups, double *out, double *loglik,
-                                  affect_monitor *mon, affect_error *err);
+                                  unsigned groups, double *out, double *loglik, affect_monitor *mon,
+                                  affect_error *err);
 
 /* What one score entry is (for salience reports): its group (one AFFECT_FISHER_* bit), the
  * state i, `other` = the destination l (transitions) or the mixture j (weights, means,

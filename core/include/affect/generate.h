@@ -38,11 +38,11 @@
  * AFFECT_GENERATE_LINEAR, each run of equal states of S contributes its mean at the run's
  * centre frame (real-valued) and frames between two centres are linear between the two means
  * (the first and last means held before the first and after the last centre), so that the
- * output has no jumps between state means; then it is low-pass filtered coordinate by coordinate (affect_lowpass: zero-lag
- * Butterworth at opt->cutoff_hz for x_d's fps; not filtered when the cut-off is 0, at or above
- * the Nyquist frequency, or the output has one frame), then de-normalized by the inverse of
- * x_d's normalization transform: p = origin + Rᵀ (scale · p'). With opt->rigid (the default)
- * these positions are then made a skeletal motion that plays them with constant bones
+ * output has no jumps between state means; then it is low-pass filtered coordinate by coordinate
+ * (affect_lowpass: zero-lag Butterworth at opt->cutoff_hz for x_d's fps; not filtered when the
+ * cut-off is 0, at or above the Nyquist frequency, or the output has one frame), then de-normalized
+ * by the inverse of x_d's normalization transform: p = origin + Rᵀ (scale · p'). With opt->rigid
+ * (the default) these positions are then made a skeletal motion that plays them with constant bones
  * (affect_motion_rigid, AFFECT_RIGID_SKELETON, the desired motion's median bone lengths): it
  * exports to BVH as it is. The result has x_d's joint names, parents, fps, unit and frame
  * count.
@@ -80,18 +80,18 @@ typedef enum affect_generate_render {
 } affect_generate_render;
 
 typedef struct affect_generate_options {
-    uint32_t states;         /* HMM states N (default 12) */
-    uint32_t copies;         /* n_d copies of x_d added to the training set (default 0) */
-    double cutoff_hz;        /* low-pass cut-off of the output (default 3; 0 = no filter) */
-    double covariance_scale; /* s > 0 multiplying every state covariance for Viterbi (1) */
-    uint64_t seed;           /* k-means seeding of the engine (default 1) */
-    uint32_t max_iter;       /* Baum–Welch iterations at most (default 50) */
-    double tol;              /* relative log-likelihood change to stop (default 1e-4) */
-    double reg;              /* covariance diagonal floor, in normalized units² (1e-4) */
-    int up_axis;             /* 0 = x, 1 = y (default), 2 = z */
+    uint32_t states;               /* HMM states N (default 12) */
+    uint32_t copies;               /* n_d copies of x_d added to the training set (default 0) */
+    double cutoff_hz;              /* low-pass cut-off of the output (default 3; 0 = no filter) */
+    double covariance_scale;       /* s > 0 multiplying every state covariance for Viterbi (1) */
+    uint64_t seed;                 /* k-means seeding of the engine (default 1) */
+    uint32_t max_iter;             /* Baum–Welch iterations at most (default 50) */
+    double tol;                    /* relative log-likelihood change to stop (default 1e-4) */
+    double reg;                    /* covariance diagonal floor, in normalized units² (1e-4) */
+    int up_axis;                   /* 0 = x, 1 = y (default), 2 = z */
     affect_generate_render render; /* AFFECT_GENERATE_STEPS (default) or _LINEAR */
-    bool keep_path;          /* keep x_d's horizontal root path (default true; see above) */
-    bool rigid;              /* output made a rigid skeletal motion (default true; see above) */
+    bool keep_path;                /* keep x_d's horizontal root path (default true; see above) */
+    bool rigid; /* output made a rigid skeletal motion (default true; see above) */
     /* Optional clock (seconds, monotonic) for the report's stage times; NULL (default) = not
      * timed. The core has no clock of its own: a benchmark passes one. It never changes the
      * result. */

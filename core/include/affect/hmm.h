@@ -81,8 +81,8 @@ typedef struct affect_hmm affect_hmm; /* opaque */
 
 /* Trains a model on n sequences (each at least n_states frames, every value finite). *out is
  * NULL on failure. */
-affect_status affect_hmm_train(const affect_hmm_config *cfg, const affect_hmm_seq *seqs,
-                               uint32_t n, affect_hmm **out, affect_error *err);
+affect_status affect_hmm_train(const affect_hmm_config *cfg, const affect_hmm_seq *seqs, uint32_t n,
+                               affect_hmm **out, affect_error *err);
 void affect_hmm_free(affect_hmm *h);
 
 /* Scoring (the three functions below) takes an optional monitor (NULL: none): its stop hook is
@@ -119,11 +119,11 @@ const double *affect_hmm_covariances(const affect_hmm *h);
 
 /* ---- training report ---- */
 typedef struct affect_hmm_report {
-    uint32_t iterations;       /* Baum–Welch iterations run */
-    bool converged;            /* stopped by tol rather than max_iter */
-    const double *loglik;      /* total log-likelihood after initialisation and each iteration
-                                  (iterations + 1 values) */
-    uint32_t reseeded;         /* mixture components re-seeded during training */
+    uint32_t iterations;  /* Baum–Welch iterations run */
+    bool converged;       /* stopped by tol rather than max_iter */
+    const double *loglik; /* total log-likelihood after initialisation and each iteration
+                             (iterations + 1 values) */
+    uint32_t reseeded;    /* mixture components re-seeded during training */
     uint32_t n_sequences;
     uint64_t n_frames;
 } affect_hmm_report;

@@ -16,10 +16,10 @@ extern "C" {
 #endif
 
 typedef struct affect_bvh_options {
-    double scale;      /* multiply every position by this (default 1) */
-    const char *unit;  /* recorded unit, or NULL/"" for unknown (default) */
-    uint64_t max_samples; /* largest frames × joints accepted; 0 (default) =
-                             AFFECT_MOTION_MAX_SAMPLES */
+    double scale;            /* multiply every position by this (default 1) */
+    const char *unit;        /* recorded unit, or NULL/"" for unknown (default) */
+    uint64_t max_samples;    /* largest frames × joints accepted; 0 (default) =
+                                AFFECT_MOTION_MAX_SAMPLES */
     affect_monitor *monitor; /* polled every few thousand frames (may be NULL): the parse
                                 stops with AFFECT_ERR_INTERRUPTED once it says so */
 } affect_bvh_options;
@@ -37,11 +37,11 @@ affect_status affect_bvh_parse(const char *text, size_t len, const affect_bvh_op
                                affect_motion **out, affect_error *err);
 
 typedef struct affect_bvh_write_options {
-    int order[3];          /* rotation channel order for every joint; order[0] < 0 (default)
-                              keeps each joint's own channels */
-    double frame_time;     /* seconds per frame; 0 (default) = 1 / fps */
-    int precision;         /* decimals of every number, 1 .. 9 (default 6) */
-    const char *root_name; /* name written for the first root, or NULL (default) */
+    int order[3];            /* rotation channel order for every joint; order[0] < 0 (default)
+                                keeps each joint's own channels */
+    double frame_time;       /* seconds per frame; 0 (default) = 1 / fps */
+    int precision;           /* decimals of every number, 1 .. 9 (default 6) */
+    const char *root_name;   /* name written for the first root, or NULL (default) */
     affect_monitor *monitor; /* polled every few thousand frames (default NULL): the export
                                 stops with AFFECT_ERR_INTERRUPTED once it says so */
 } affect_bvh_write_options;
@@ -59,11 +59,11 @@ affect_status affect_bvh_write(const affect_motion *m, const affect_bvh_write_op
                                char **out, size_t *len, affect_error *err);
 
 typedef struct affect_csv_options {
-    char delimiter;    /* ',' (default), ';', '\t' or ' ' */
-    int header;        /* −1 detect (default), 0 no header row, 1 header row */
-    const char *unit;  /* recorded unit, or NULL/"" */
-    uint64_t max_samples; /* largest frames × joints accepted; 0 (default) =
-                             AFFECT_MOTION_MAX_SAMPLES */
+    char delimiter;          /* ',' (default), ';', '\t' or ' ' */
+    int header;              /* −1 detect (default), 0 no header row, 1 header row */
+    const char *unit;        /* recorded unit, or NULL/"" */
+    uint64_t max_samples;    /* largest frames × joints accepted; 0 (default) =
+                                AFFECT_MOTION_MAX_SAMPLES */
     affect_monitor *monitor; /* polled every few thousand rows (default NULL): the parse stops
                                 with AFFECT_ERR_INTERRUPTED once it says so */
 } affect_csv_options;
@@ -80,8 +80,8 @@ affect_status affect_csv_parse(const char *text, size_t len, double fps,
 /* CSV with a "name.x,name.y,name.z,…" header, one line per frame, '\n' line ends. The text
  * writers and the JSON reader poll mon (may be NULL) every few thousand frames and stop with
  * AFFECT_ERR_INTERRUPTED once it says so. */
-affect_status affect_csv_write(const affect_motion *m, char **out, size_t *len,
-                               affect_monitor *mon, affect_error *err);
+affect_status affect_csv_write(const affect_motion *m, char **out, size_t *len, affect_monitor *mon,
+                               affect_error *err);
 
 /* JSON: {"fps": f, "joints": [names], "parents": [ints] (optional), "unit": "cm" (optional),
  *        "frames": [[[x, y, z], …joints], …frames]}. Frames × joints may not exceed

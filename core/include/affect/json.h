@@ -30,14 +30,14 @@ typedef enum affect_json_type {
 
 typedef struct affect_json_node {
     affect_json_type type;
-    uint32_t count;       /* ARRAY, OBJECT: number of children (members) */
-    int32_t first;        /* ARRAY, OBJECT: index of first child, −1 if none */
-    int32_t next;         /* index of next sibling, −1 at the end */
-    const char *key;      /* member of an OBJECT: its key (decoded), else NULL */
-    size_t key_len;       /* member of an OBJECT: bytes of key (it may contain \u0000) */
-    const char *str;      /* STRING: decoded text */
-    size_t str_len;       /* STRING: bytes (the text may contain \u0000) */
-    double num;           /* NUMBER */
+    uint32_t count;  /* ARRAY, OBJECT: number of children (members) */
+    int32_t first;   /* ARRAY, OBJECT: index of first child, −1 if none */
+    int32_t next;    /* index of next sibling, −1 at the end */
+    const char *key; /* member of an OBJECT: its key (decoded), else NULL */
+    size_t key_len;  /* member of an OBJECT: bytes of key (it may contain \u0000) */
+    const char *str; /* STRING: decoded text */
+    size_t str_len;  /* STRING: bytes (the text may contain \u0000) */
+    double num;      /* NUMBER */
 } affect_json_node;
 
 typedef struct affect_json_doc affect_json_doc;

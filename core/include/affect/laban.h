@@ -49,13 +49,13 @@ extern const char *const affect_laban_names[AFFECT_LABAN_N];
 int affect_laban_index(const char *name);
 
 typedef struct affect_laban_options {
-    double cutoff_hz;    /* low-pass cut-off (default 6) */
-    int up_axis;         /* 0 = x, 1 = y (default), 2 = z */
-    bool missing_null;   /* a component that cannot be computed becomes NaN instead of an error */
-    bool hull_box;       /* Shape Flow from the bounding box instead of the convex hull */
-    bool time_per_second;/* Time Q2 divided by the duration */
-    double speed_floor;  /* Shape Directional: ignore frames slower than this × peak (0.05) */
-    double max_ratio;    /* Space Q2 cap when the net displacement is near zero (100) */
+    double cutoff_hz;     /* low-pass cut-off (default 6) */
+    int up_axis;          /* 0 = x, 1 = y (default), 2 = z */
+    bool missing_null;    /* a component that cannot be computed becomes NaN instead of an error */
+    bool hull_box;        /* Shape Flow from the bounding box instead of the convex hull */
+    bool time_per_second; /* Time Q2 divided by the duration */
+    double speed_floor;   /* Shape Directional: ignore frames slower than this × peak (0.05) */
+    double max_ratio;     /* Space Q2 cap when the net displacement is near zero (100) */
     affect_monitor *monitor; /* polled every few thousand frames (default NULL): a component
                                 or vector stops with AFFECT_ERR_INTERRUPTED once it says so */
 } affect_laban_options;
@@ -68,8 +68,8 @@ void affect_laban_options_default(affect_laban_options *opt);
  * backward over x[0], x[stride], … (n values), into out (same layout; out == x allowed).
  * Edges: the series is extended at each end by min(9, n − 1) samples of its odd reflection
  * (2·x[0] − x[k]), and each pass starts from the filter's steady state for the straight line
- * through its first two inputs, so constants and straight lines pass unchanged. No filtering when cutoff_hz ≥ fps / 2 or
- * n < 2. scratch holds at least n + 18 doubles. */
+ * through its first two inputs, so constants and straight lines pass unchanged. No filtering when
+ * cutoff_hz ≥ fps / 2 or n < 2. scratch holds at least n + 18 doubles. */
 void affect_lowpass(const double *x, size_t n, size_t stride, double fps, double cutoff_hz,
                     double *scratch, double *out);
 
@@ -103,10 +103,7 @@ void affect_kinematics_free(affect_kinematics *k);
 
 /* ---- Effort components over a set of parts ---- */
 
-typedef enum affect_laban_method {
-    AFFECT_LABAN_Q1 = 1,
-    AFFECT_LABAN_Q2 = 2
-} affect_laban_method;
+typedef enum affect_laban_method { AFFECT_LABAN_Q1 = 1, AFFECT_LABAN_Q2 = 2 } affect_laban_method;
 
 /* Each takes n parts (1 for a single part, 6 for "all") and writes one value. */
 affect_status affect_laban_weight(const affect_motion *m, const affect_part *parts, uint32_t n,
@@ -177,8 +174,8 @@ affect_status affect_laban_stats_check(const double mean[AFFECT_LABAN_N],
  * otherwise). */
 affect_status affect_laban_l2_vector(const float x[AFFECT_LABAN_N],
                                      const double mean[AFFECT_LABAN_N],
-                                     const double sd[AFFECT_LABAN_N], const int *comp,
-                                     int n_comp, float *out, affect_error *err);
+                                     const double sd[AFFECT_LABAN_N], const int *comp, int n_comp,
+                                     float *out, affect_error *err);
 
 /* ---- windowed Effort series (laban_series.c) ----
  *
@@ -201,8 +198,13 @@ affect_status affect_laban_l2_vector(const float x[AFFECT_LABAN_N],
  * frame). */
 
 /* Quantities of a row, in this order. */
-enum { AFFECT_SERIES_WEIGHT, AFFECT_SERIES_TIME, AFFECT_SERIES_SPACE, AFFECT_SERIES_FLOW,
-       AFFECT_SERIES_N };
+enum {
+    AFFECT_SERIES_WEIGHT,
+    AFFECT_SERIES_TIME,
+    AFFECT_SERIES_SPACE,
+    AFFECT_SERIES_FLOW,
+    AFFECT_SERIES_N
+};
 
 /* A window covering the whole motion equals the per-clip sums within this relative tolerance. */
 #define AFFECT_LABAN_SERIES_RTOL 1e-12
@@ -230,8 +232,8 @@ typedef struct affect_laban_series affect_laban_series;
  * opt->monitor, which the series keeps polling in affect_laban_series_next). m and opt (NULL:
  * the defaults) must outlive the series; after an error of affect_laban_series_next only
  * affect_laban_series_free may be called. */
-affect_status affect_laban_series_new(const affect_motion *m, const affect_part *parts,
-                                      uint32_t n, const affect_laban_options *opt,
+affect_status affect_laban_series_new(const affect_motion *m, const affect_part *parts, uint32_t n,
+                                      const affect_laban_options *opt,
                                       const affect_laban_series_options *so,
                                       affect_laban_series **out, affect_error *err);
 /* Windows in all, and rows per window (n, + 1 with combined). */

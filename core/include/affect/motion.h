@@ -27,9 +27,9 @@ extern "C" {
 #endif
 
 #define AFFECT_MOTION_MAX_JOINTS 4096u
-#define AFFECT_MOTION_MAX_FRAMES 16777216u  /* 2^24 */
-#define AFFECT_MOTION_MAX_NAME 1024u        /* bytes of one joint name */
-#define AFFECT_MOTION_UNIT_MAX 15u          /* bytes of the unit string */
+#define AFFECT_MOTION_MAX_FRAMES 16777216u /* 2^24 */
+#define AFFECT_MOTION_MAX_NAME 1024u       /* bytes of one joint name */
+#define AFFECT_MOTION_UNIT_MAX 15u         /* bytes of the unit string */
 #define AFFECT_MOTION_MAX_FPS 100000.0
 
 /* The largest motion the text importers build unless their option max_samples raises it:
@@ -64,15 +64,16 @@ enum {
     AFFECT_CH_ZROT,
     AFFECT_CH_COUNT
 };
-#define AFFECT_JOINT_END_SITE 1u /* affect_skel_joint.flags: a BVH End Site (a leaf, no channels) */
+/* affect_skel_joint.flags: a BVH End Site (a leaf, no channels) */
+#define AFFECT_JOINT_END_SITE 1u
 
 /* One joint of a skeleton: its rest offset from its parent (in the parent's frame; for a root,
  * its rest position) and the channels it has in BVH, in file order. */
 typedef struct affect_skel_joint {
     double offset[3];
-    uint8_t n_channels;                /* 0 .. 6 */
-    uint8_t channel[6];                /* AFFECT_CH_*, distinct */
-    uint8_t flags;                     /* AFFECT_JOINT_END_SITE */
+    uint8_t n_channels; /* 0 .. 6 */
+    uint8_t channel[6]; /* AFFECT_CH_*, distinct */
+    uint8_t flags;      /* AFFECT_JOINT_END_SITE */
 } affect_skel_joint;
 
 typedef struct affect_motion {
@@ -115,19 +116,19 @@ affect_status affect_motion_set_name(affect_motion *m, uint32_t j, const char *n
 
 /* Replaces the parent indices (n_joints entries, −1 for a root) after checking them (in range,
  * acyclic); m is unchanged on error. Drops any skeleton (it described the old hierarchy). */
-affect_status affect_motion_set_parents(affect_motion *m, const int32_t *parents, affect_error *err);
+affect_status affect_motion_set_parents(affect_motion *m, const int32_t *parents,
+                                        affect_error *err);
 
 /* Sets the unit string; it must be at most AFFECT_MOTION_UNIT_MAX bytes of [A-Za-z0-9_.-]. */
 affect_status affect_motion_set_unit(affect_motion *m, const char *unit, affect_error *err);
 
-/* Checks the invariants above: names non-empty, valid UTF-8 free of NUL, and unique; parents in range and
- * acyclic; every coordinate finite (the message names the frame and joint); the skeleton's
- * channels, End Sites, finite offsets, unit quaternions and finite translations. */
+/* Checks the invariants above: names non-empty, valid UTF-8 free of NUL, and unique; parents in
+ * range and acyclic; every coordinate finite (the message names the frame and joint); the
+ * skeleton's channels, End Sites, finite offsets, unit quaternions and finite translations. */
 affect_status affect_motion_validate(const affect_motion *m, affect_error *err);
 
 /* Deep copy. */
-affect_status affect_motion_clone(const affect_motion *m, affect_motion **out,
-                                  affect_error *err);
+affect_status affect_motion_clone(const affect_motion *m, affect_motion **out, affect_error *err);
 
 /* Index of the joint whose name equals name exactly, or −1. */
 int32_t affect_motion_find_joint(const affect_motion *m, const char *name);

@@ -19,11 +19,11 @@ extern "C" {
 #endif
 
 typedef struct affect_normalize_options {
-    int up_axis;         /* 0 = x, 1 = y (default), 2 = z */
-    bool translation;    /* remove the first frame's horizontal root position (default true) */
-    bool vertical;       /* also remove the root's height (default false) */
-    bool heading;        /* remove the first frame's heading (default true) */
-    bool scale_arm;      /* divide by the right arm length (default false) */
+    int up_axis;      /* 0 = x, 1 = y (default), 2 = z */
+    bool translation; /* remove the first frame's horizontal root position (default true) */
+    bool vertical;    /* also remove the root's height (default false) */
+    bool heading;     /* remove the first frame's heading (default true) */
+    bool scale_arm;   /* divide by the right arm length (default false) */
 } affect_normalize_options;
 
 void affect_normalize_options_default(affect_normalize_options *opt);
@@ -38,8 +38,7 @@ typedef struct affect_normalize_transform {
 /* Computes the transform for m under roles and options (no change to m). */
 affect_status affect_normalize_transform_compute(const affect_motion *m, const affect_roles *roles,
                                                  const affect_normalize_options *opt,
-                                                 affect_normalize_transform *tf,
-                                                 affect_error *err);
+                                                 affect_normalize_transform *tf, affect_error *err);
 
 /* Applies tf to every position of m in place (out = in allowed) and sets the unit to "arm"
  * when tf->scale != 1 came from the arm length. A skeleton and rotations are transformed

@@ -44,10 +44,10 @@
 extern "C" {
 #endif
 
-#define AFFECT_RANK_MAX_ITER 100      /* Newton iterations (default 50) */
+#define AFFECT_RANK_MAX_ITER 100 /* Newton iterations (default 50) */
 #define AFFECT_RANK_MAX_CLUSTERS 256u
-#define AFFECT_RANK_MAX_DIM 1048576u  /* 2^20 */
-#define AFFECT_RANK_RANK_TOL 1e-10    /* singular values below this × the largest are dropped */
+#define AFFECT_RANK_MAX_DIM 1048576u /* 2^20 */
+#define AFFECT_RANK_RANK_TOL 1e-10   /* singular values below this × the largest are dropped */
 
 typedef struct affect_rank_pair {
     uint32_t i, j; /* ordered: x_i ranks above x_j; similar: unordered */
@@ -55,10 +55,10 @@ typedef struct affect_rank_pair {
 } affect_rank_pair;
 
 typedef struct affect_rank_options {
-    double C;          /* > 0 (default 1) */
-    uint32_t max_iter; /* Newton iterations (default 50, ≤ AFFECT_RANK_MAX_ITER) */
-    uint32_t clusters; /* 0 or 1: one ranker; k > 1: k-means pose clusters */
-    uint64_t seed;     /* k-means++ seeding */
+    double C;                /* > 0 (default 1) */
+    uint32_t max_iter;       /* Newton iterations (default 50, ≤ AFFECT_RANK_MAX_ITER) */
+    uint32_t clusters;       /* 0 or 1: one ranker; k > 1: k-means pose clusters */
+    uint64_t seed;           /* k-means++ seeding */
     affect_monitor *monitor; /* may be NULL */
 } affect_rank_options;
 
@@ -68,19 +68,19 @@ const char *affect_rank_check(const affect_rank_options *opt);
 
 /* What training measured (per ranker; summed or worst over clusters in a model). */
 typedef struct affect_rank_stats {
-    uint32_t iterations;   /* Newton iterations (the largest over clusters) */
-    uint32_t halvings;     /* step halvings taken */
+    uint32_t iterations;       /* Newton iterations (the largest over clusters) */
+    uint32_t halvings;         /* step halvings taken */
     uint64_t ordered, similar; /* pairs used */
-    uint64_t correct;      /* ordered pairs with wᵀ(x_i − x_j) > 0 after training */
-    double objective;      /* f(w) (summed over clusters) */
-    bool converged;        /* the active set stabilized within max_iter */
+    uint64_t correct;          /* ordered pairs with wᵀ(x_i − x_j) > 0 after training */
+    double objective;          /* f(w) (summed over clusters) */
+    bool converged;            /* the active set stabilized within max_iter */
 } affect_rank_stats;
 
 /* One ranker: w (d doubles) minimizing f over the n × d row-major samples X and the pairs. */
 affect_status affect_rank_fit(const double *X, uint32_t n, uint32_t d,
                               const affect_rank_pair *pairs, size_t n_pairs,
-                              const affect_rank_options *opt, double *w,
-                              affect_rank_stats *stats, affect_error *err);
+                              const affect_rank_options *opt, double *w, affect_rank_stats *stats,
+                              affect_error *err);
 
 /* f(w) and its gradient (grad: d doubles, may be NULL) — for tests and diagnostics. */
 double affect_rank_objective(const double *X, uint32_t d, const affect_rank_pair *pairs,
@@ -96,9 +96,9 @@ affect_status affect_rank_pairs(const int32_t *level, const uint32_t *group, uin
 
 /* A ranker model: one w, or k centroids and k w's. */
 typedef struct affect_ranker {
-    uint32_t dim, clusters;   /* clusters ≥ 1 */
-    double *centroids;        /* clusters × dim (all zero for one ranker) */
-    double *w;                /* clusters × dim */
+    uint32_t dim, clusters; /* clusters ≥ 1 */
+    double *centroids;      /* clusters × dim (all zero for one ranker) */
+    double *w;              /* clusters × dim */
     affect_rank_stats stats;
 } affect_ranker;
 

@@ -43,8 +43,7 @@ affect_status affect_motion_fk_error(const affect_motion *m, double *max_dist, u
                                      uint32_t *joint, affect_error *err);
 
 /* Marks free links (see above); free_link has n_joints entries, false for roots. */
-affect_status affect_motion_free_links(const affect_motion *m, bool *free_link,
-                                       affect_error *err);
+affect_status affect_motion_free_links(const affect_motion *m, bool *free_link, affect_error *err);
 
 /* Bone-length variation: over the bones (links that are not free), the largest
  * (max − min) / max of a bone's length over the frames (0 for a bone of length 0). *worst is
@@ -56,9 +55,9 @@ affect_status affect_motion_bone_variation(const affect_motion *m, double *varia
 double affect_motion_body_size(const affect_motion *m);
 
 typedef enum affect_rigid_lengths {
-    AFFECT_RIGID_MEDIAN,    /* each bone's median length over the frames (default) */
-    AFFECT_RIGID_FIRST,     /* its length in the first frame */
-    AFFECT_RIGID_REFERENCE  /* the median length in a reference motion with the same joints */
+    AFFECT_RIGID_MEDIAN,   /* each bone's median length over the frames (default) */
+    AFFECT_RIGID_FIRST,    /* its length in the first frame */
+    AFFECT_RIGID_REFERENCE /* the median length in a reference motion with the same joints */
 } affect_rigid_lengths;
 
 typedef enum affect_rigid_model {
@@ -106,10 +105,10 @@ typedef enum affect_ik_siblings {
 } affect_ik_siblings;
 
 typedef struct affect_ik_options {
-    uint32_t rest_frame;          /* the frame whose rigid pose is the rest pose (default 0) */
-    affect_ik_siblings siblings;  /* see above */
-    int order[3];                 /* rotation channel order (default ZXY: {2, 0, 1}) */
-    affect_rigid_options rigid;   /* how the positions are first made rigid */
+    uint32_t rest_frame;         /* the frame whose rigid pose is the rest pose (default 0) */
+    affect_ik_siblings siblings; /* see above */
+    int order[3];                /* rotation channel order (default ZXY: {2, 0, 1}) */
+    affect_rigid_options rigid;  /* how the positions are first made rigid */
 } affect_ik_options;
 
 void affect_ik_options_default(affect_ik_options *opt);
@@ -118,11 +117,11 @@ void affect_ik_options_default(affect_ik_options *opt);
  * (affect_motion_rigid); the rest skeleton is the rest frame's rigid pose (offsets = bone
  * vectors, rest rotations the identity), except that the offsets of a joint's several bone
  * children are their mean shape over all frames (generalized Procrustes, turned to the rest
- * frame's orientation), since the siblings' angles need not be constant; per frame and joint the local rotation turns the rest
- * offsets of its bone children onto their current directions: for one child the smallest
- * rotation from the previous frame's (so twist stays continuous and never flips), for several
- * the best-fit rotation (Horn's quaternion method) continued from the previous frame when the
- * children are collinear. Roots and free links get position channels. Leaves named
+ * frame's orientation), since the siblings' angles need not be constant; per frame and joint the
+ * local rotation turns the rest offsets of its bone children onto their current directions: for one
+ * child the smallest rotation from the previous frame's (so twist stays continuous and never
+ * flips), for several the best-fit rotation (Horn's quaternion method) continued from the previous
+ * frame when the children are collinear. Roots and free links get position channels. Leaves named
  * "<parent>_end" become End Sites. The result's positions are the forward kinematics of its
  * rotations. */
 affect_status affect_motion_ik(const affect_motion *m, const affect_ik_options *opt,
@@ -149,9 +148,8 @@ affect_status affect_motion_skeletal(const affect_motion *m, affect_rotation_sou
 /* Euler angles (degrees, continuous with prev when not NULL, see affect_quat_to_euler_deg) and
  * angular speed (rad/s; central difference of the rotations, one-sided at the ends) of joint j
  * at frame t. Needs m->rot. */
-void affect_motion_joint_angles(const affect_motion *m, uint32_t t, uint32_t j,
-                                const int order[3], const double *prev, double q[4],
-                                double deg[3], double *speed);
+void affect_motion_joint_angles(const affect_motion *m, uint32_t t, uint32_t j, const int order[3],
+                                const double *prev, double q[4], double deg[3], double *speed);
 
 #ifdef __cplusplus
 }

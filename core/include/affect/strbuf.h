@@ -15,10 +15,10 @@ extern "C" {
 #endif
 
 typedef struct affect_strbuf {
-    char *data;   /* NUL-terminated when len > 0 or after finish */
+    char *data; /* NUL-terminated when len > 0 or after finish */
     size_t len;
     size_t cap;
-    bool failed;  /* an allocation failed; the content is incomplete */
+    bool failed; /* an allocation failed; the content is incomplete */
 } affect_strbuf;
 
 void affect_strbuf_init(affect_strbuf *sb);

@@ -64,30 +64,30 @@ extern "C" {
 #define AFFECT_STRENGTH_MAX_DIM 16777216u /* D = 6 J q */
 #define AFFECT_STRENGTH_CV_FOLDS 5u
 #define AFFECT_STRENGTH_CORRECTIONS 4u /* target corrections of synthesis and editing */
-#define AFFECT_STRENGTH_TOL 0.01          /* strength miss at which the corrections stop */
-#define AFFECT_STRENGTH_SD_FLOOR 1e-9 /* standardization: sd below this × the largest → 1 */
-#define AFFECT_STRENGTH_SD_REL 0.1    /* … and at least this × the mean sd (no amplified noise) */
-#define AFFECT_STRENGTH_V_MIN 1e-12       /* v·v below this: the segment keeps its mean duration */
+#define AFFECT_STRENGTH_TOL 0.01       /* strength miss at which the corrections stop */
+#define AFFECT_STRENGTH_SD_FLOOR 1e-9  /* standardization: sd below this × the largest → 1 */
+#define AFFECT_STRENGTH_SD_REL 0.1  /* … and at least this × the mean sd (no amplified noise) */
+#define AFFECT_STRENGTH_V_MIN 1e-12 /* v·v below this: the segment keeps its mean duration */
 
 typedef enum affect_strength_regression {
-    AFFECT_STRENGTH_REG_AUTO,         /* the better of the two by cross-validation (default) */
+    AFFECT_STRENGTH_REG_AUTO, /* the better of the two by cross-validation (default) */
     AFFECT_STRENGTH_REG_KERNEL_RIDGE,
     AFFECT_STRENGTH_REG_LOCAL_LINEAR
 } affect_strength_regression;
 
 typedef struct affect_strength_options {
-    uint32_t keyframes;     /* default 13 */
-    uint32_t pca_dims;      /* default 40; 0 = no PCA */
-    double C;               /* ranker C (default 1) */
-    double fraction;        /* of the pairs kept, (0, 1] (default 1) */
-    bool similar;           /* use similar pairs (same label) too (default true) */
-    bool relative;          /* poses relative to the root joint (the pelvis role, else joint 0),
-                               the root's own position kept (default false: the paper's
-                               first-frame-normalized poses) */
-    bool standardize;       /* divide each feature by its training standard deviation before
-                               PCA and the ranker (default true: +5 to +19 points of held-out
-                               pair accuracy on all three tasks of docs/EVALUATION.md) */
-    uint64_t seed;          /* the pair sample */
+    uint32_t keyframes; /* default 13 */
+    uint32_t pca_dims;  /* default 40; 0 = no PCA */
+    double C;           /* ranker C (default 1) */
+    double fraction;    /* of the pairs kept, (0, 1] (default 1) */
+    bool similar;       /* use similar pairs (same label) too (default true) */
+    bool relative;      /* poses relative to the root joint (the pelvis role, else joint 0),
+                           the root's own position kept (default false: the paper's
+                           first-frame-normalized poses) */
+    bool standardize;   /* divide each feature by its training standard deviation before
+                           PCA and the ranker (default true: +5 to +19 points of held-out
+                           pair accuracy on all three tasks of docs/EVALUATION.md) */
+    uint64_t seed;      /* the pair sample */
     affect_strength_regression regression;
     affect_monitor *monitor; /* may be NULL */
 } affect_strength_options;
@@ -106,16 +106,16 @@ typedef struct affect_strength {
     uint32_t dim;       /* D = 6 J q */
     uint32_t pdim;      /* the ranker's dimension: the PCA dimension, or D without PCA */
     bool pca;
-    bool relative;      /* relative poses (see the options) */
-    uint32_t root;      /* the root joint of relative poses */
-    double *scale;      /* D standard deviations (standardize), else NULL */
-    double *mean;       /* D (PCA only; of the standardized features) */
-    double *comps;      /* pdim × D, orthonormal rows (PCA only) */
-    double pca_variance;/* fraction of the training variance kept (1 without PCA) */
-    double *seg_dt;     /* q − 1 mean training durations (s) */
+    bool relative;       /* relative poses (see the options) */
+    uint32_t root;       /* the root joint of relative poses */
+    double *scale;       /* D standard deviations (standardize), else NULL */
+    double *mean;        /* D (PCA only; of the standardized features) */
+    double *comps;       /* pdim × D, orthonormal rows (PCA only) */
+    double pca_variance; /* fraction of the training variance kept (1 without PCA) */
+    double *seg_dt;      /* q − 1 mean training durations (s) */
     /* ranker */
     double C;
-    double *w;          /* pdim */
+    double *w; /* pdim */
     affect_rank_stats stats;
     /* levels */
     uint32_t n_levels;
@@ -124,13 +124,13 @@ typedef struct affect_strength {
     uint32_t *level_count;
     /* training set and regression */
     uint32_t n_train;
-    double *train_r;    /* n_train strengths */
-    double *train_z;    /* n_train × pdim */
+    double *train_r;                       /* n_train strengths */
+    double *train_z;                       /* n_train × pdim */
     affect_strength_regression regression; /* the one used (never AUTO) */
-    double reg_h, reg_lambda;   /* bandwidth (strength units) and ridge (kernel ridge only) */
+    double reg_h, reg_lambda; /* bandwidth (strength units) and ridge (kernel ridge only) */
     double cv_kernel_ridge, cv_local_linear, cv_constant; /* mean squared error per motion */
-    double *alpha;      /* pdim × n_train (kernel ridge), else NULL */
-    double *zbar;       /* pdim: the training mean of z */
+    double *alpha; /* pdim × n_train (kernel ridge), else NULL */
+    double *zbar;  /* pdim: the training mean of z */
 } affect_strength;
 
 /* Trains a model. level[i] indexes level_names (n_levels names, in increasing strength); −1
@@ -143,9 +143,9 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
 
 /* The feature vector of a motion (D doubles; keyframes: q frames, may be NULL) and its PCA
  * coordinates (pdim doubles, may be NULL). */
-affect_status affect_strength_features(const affect_strength *s, const affect_motion *m,
-                                       double *x, double *z, uint32_t *keyframes,
-                                       affect_monitor *mon, affect_error *err);
+affect_status affect_strength_features(const affect_strength *s, const affect_motion *m, double *x,
+                                       double *z, uint32_t *keyframes, affect_monitor *mon,
+                                       affect_error *err);
 
 /* The strength r(x) of a motion. */
 affect_status affect_strength_score(const affect_strength *s, const affect_motion *m,
@@ -175,8 +175,8 @@ void affect_strength_free(affect_strength *s);
 
 affect_status affect_strength_encode(const affect_strength *s, unsigned char **out, size_t *size,
                                      affect_error *err);
-affect_status affect_strength_decode(const unsigned char *data, size_t size,
-                                     affect_strength **out, affect_error *err);
+affect_status affect_strength_decode(const unsigned char *data, size_t size, affect_strength **out,
+                                     affect_error *err);
 
 #ifdef __cplusplus
 }

@@ -30,18 +30,18 @@ typedef enum affect_svg_view {
 } affect_svg_view;
 
 typedef struct affect_svg_options {
-    affect_svg_view view;   /* default front */
-    uint32_t frames;        /* panels in the strip (default 8; clamped to the frame count) */
-    uint32_t panel_size;    /* panel width and height in pixels (default 160) */
-    int up_axis;            /* 0 = x, 1 = y (default), 2 = z */
-    bool trajectories;      /* draw end-effector paths (default true) */
-    bool labels;            /* frame number and time under each panel (default true) */
-    const char *title;      /* optional caption above the strip (NULL for none) */
-    bool animate;           /* one animated panel instead of the strip (default false) */
-    uint32_t keyframes;     /* animate: keyframes per loop, 2..1000, at most the frame count;
-                               0 (default) = AFFECT_SVG_KEY_RATE per second of motion, at most
-                               AFFECT_SVG_KEY_AUTO_MAX */
-    bool state_labels;      /* labels read "state N" (N = frame + 1: hmm_postures) */
+    affect_svg_view view; /* default front */
+    uint32_t frames;      /* panels in the strip (default 8; clamped to the frame count) */
+    uint32_t panel_size;  /* panel width and height in pixels (default 160) */
+    int up_axis;          /* 0 = x, 1 = y (default), 2 = z */
+    bool trajectories;    /* draw end-effector paths (default true) */
+    bool labels;          /* frame number and time under each panel (default true) */
+    const char *title;    /* optional caption above the strip (NULL for none) */
+    bool animate;         /* one animated panel instead of the strip (default false) */
+    uint32_t keyframes;   /* animate: keyframes per loop, 2..1000, at most the frame count;
+                             0 (default) = AFFECT_SVG_KEY_RATE per second of motion, at most
+                             AFFECT_SVG_KEY_AUTO_MAX */
+    bool state_labels;    /* labels read "state N" (N = frame + 1: hmm_postures) */
 } affect_svg_options;
 
 #define AFFECT_SVG_KEY_RATE 15.0     /* automatic keyframes per second */

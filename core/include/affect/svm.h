@@ -225,10 +225,10 @@ void affect_svm_encode(const affect_svm *m, affect_bw *w);
 /* Reads a model from r at its offset and advances past it; every count and length is checked
  * before anything is read or allocated, and offsets in messages are r's (AFFECT_ERR_FORMAT):
  * "SVM: truncated in the weights (offset 1234)", "SVM: unknown format version 3 at offset 0
- * (this build reads 1 .. 2)", "SVM: class count 1 out of range 2 .. 256 (offset 1)", "SVM: dimension
- * 0 out of range 1 .. 2147483647 (offset 5)", "SVM: C = -1 is not a positive finite number
- * (offset 13)", "SVM: sample count 2 out of range 3 .. 2147483645 (offset 21)", "SVM: 7 classes
- * but 3 labels (offset 25)", "SVM: label 2 at position 0, expected 0 (offset 29)", "SVM: 7
+ * (this build reads 1 .. 2)", "SVM: class count 1 out of range 2 .. 256 (offset 1)", "SVM:
+ * dimension 0 out of range 1 .. 2147483647 (offset 5)", "SVM: C = -1 is not a positive finite
+ * number (offset 13)", "SVM: sample count 2 out of range 3 .. 2147483645 (offset 21)", "SVM: 7
+ * classes but 3 labels (offset 25)", "SVM: label 2 at position 0, expected 0 (offset 29)", "SVM: 7
  * classes but 3 support-vector counts (offset 57)", "SVM: support-vector counts sum to 12 but
  * the total is 10 (offset 89)", "SVM: 50 support vectors but 40 training samples (offset 89)",
  * "SVM: support vector 3 has training index 50, not below 40 (offset 105)", "SVM: support

@@ -23,10 +23,10 @@ extern "C" {
 #endif
 
 typedef struct affect_synth_options {
-    double fps;        /* frame rate, 0 < fps <= 1000 (default 30) */
-    double intensity;  /* 0..2, scales how strongly the emotion shows (default 1) */
-    double noise;      /* standard deviation of the measurement noise in metres, 0..0.1
-                        * (default 0.0003) */
+    double fps;       /* frame rate, 0 < fps <= 1000 (default 30) */
+    double intensity; /* 0..2, scales how strongly the emotion shows (default 1) */
+    double noise;     /* standard deviation of the measurement noise in metres, 0..0.1
+                       * (default 0.0003) */
 } affect_synth_options;
 
 void affect_synth_options_default(affect_synth_options *opt);

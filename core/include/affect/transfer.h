@@ -42,11 +42,11 @@
  * Foot contacts (keep_contacts, default true; needs the left/right foot and hip roles): a foot
  * rests during a step from frame t to t + 1 when the foot joint or a joint below it (a toe)
  * moves slower than AFFECT_TRANSFER_CONTACT_SPEED × body size per second in the desired motion
- * (a planted heel or a planted toe); both frames of the step are contact frames. The leg's joints (from the hip role's
- * joint down to the foot's descendants) take the desired motion's own rotations at contact
- * frames, blended back to the transferred ones by slerp over 0.2 s on either side. As the
- * pelvis is unchanged, a foot at rest in the desired motion is exactly where it was: no
- * sliding is added.
+ * (a planted heel or a planted toe); both frames of the step are contact frames. The leg's joints
+ * (from the hip role's joint down to the foot's descendants) take the desired motion's own
+ * rotations at contact frames, blended back to the transferred ones by slerp over 0.2 s on either
+ * side. As the pelvis is unchanged, a foot at rest in the desired motion is exactly where it was:
+ * no sliding is added.
  *
  * Output: the desired motion's skeletal form with the new rotations and the forward
  * kinematics as positions (rigid: every bone keeps its rest length), the desired motion's
@@ -58,8 +58,8 @@
  * Laban vectors, the index's standardization: sample standard deviation, 1 when it is 0;
  * missing components skipped), so that the pair shows the same content in both emotions when
  * the corpus has it; when the caller knows each row's content (a content key), the target row
- * must also have the source row's key. Without a source emotion (source < 0) any row not of the target emotion
- * can donate the first motion.
+ * must also have the source row's key. Without a source emotion (source < 0) any row not of the
+ * target emotion can donate the first motion.
  *
  * Errors (AFFECT_ERR_INVALID unless said): an option out of range, named with every value:
  * "strength must be between 0 and 2 (strength 3, bands 1 and 3 Hz, max_ratio 3)", "band edges
@@ -136,9 +136,8 @@ affect_status affect_transfer(const affect_motion *desired, const affect_motion 
 affect_status affect_transfer_pairs(const double *x, uint32_t n, uint32_t p, const int32_t *label,
                                     const int64_t *group, const bool *use, const double *dq,
                                     int32_t source, int32_t target, uint32_t n_pairs,
-                                    uint32_t n_cand, uint32_t *from,
-                                    uint32_t *to, double *dist, uint32_t *got,
-                                    affect_error *err);
+                                    uint32_t n_cand, uint32_t *from, uint32_t *to, double *dist,
+                                    uint32_t *got, affect_error *err);
 
 /* The components for the donor search: those that do not discriminate the two emotions,
  * L \ (L′_source ∩ L′_target), or L \ L′_target when source < 0, from the salience flags
