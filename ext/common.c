@@ -150,6 +150,64 @@ ax_arg ax_arg_document(sqlite3_context *ctx, sqlite3_value **argv, int i, const 
     return AX_OK;
 }
 
+void ax_blob_cache_clear(ax_blob_cache *c)
+{
+    if (c->obj)
+        c->free_obj(c->obj);
+    sqlite3_free(c->bytes);
+    c->obj = NULL;
+    c->bytes = NULL;
+    c->size = 0;
+}
+
+ax_arg ax_arg_cached_blob(sqlite3_context *ctx, sqlite3_value **argv, ax_blob_cache *c,
+                          ax_decode_fn decode, void (*free_obj)(void *), const char *what,
+                          const char *from, const void **out)
+{
+    sqlite3_value *v = argv[0];
+    int type = sqlite3_value_type(v);
+    *out = NULL;
+    if (type == SQLITE_NULL)
+        return AX_NULL;
+    if (type != SQLITE_BLOB) {
+        ax_errorf(ctx, "argument 1 must be a %s BLOB (from %s), got %s", what, from,
+                  ax_type_name(v));
+        return AX_ERROR;
+    }
+    const unsigned char *data = sqlite3_value_blob(v);
+    size_t n = (size_t)sqlite3_value_bytes(v);
+    if (!data && n > 0) {
+        sqlite3_result_error_nomem(ctx);
+        return AX_ERROR;
+    }
+    if (c->obj && c->size == n && memcmp(c->bytes, data, n) == 0) {
+        *out = c->obj;
+        return AX_OK;
+    }
+    ax_blob_cache_clear(c);
+    void *obj = NULL;
+    affect_error err;
+    if (decode(data ? data : (const unsigned char *)"", n, &obj, &err)) {
+        if (err.status == AFFECT_ERR_NOMEM)
+            ax_error(ctx, &err); /* SQLITE_NOMEM, or the large block it could not allocate */
+        else
+            ax_errorf(ctx, "argument 1 is not a valid %s: %s", what, err.msg);
+        return AX_ERROR;
+    }
+    c->bytes = sqlite3_malloc64(n ? n : 1);
+    if (!c->bytes) {
+        free_obj(obj);
+        sqlite3_result_error_nomem(ctx);
+        return AX_ERROR;
+    }
+    memcpy(c->bytes, data, n);
+    c->size = n;
+    c->obj = obj;
+    c->free_obj = free_obj;
+    *out = obj;
+    return AX_OK;
+}
+
 ax_arg ax_arg_int(sqlite3_context *ctx, sqlite3_value **argv, int i, int64_t *out)
 {
     sqlite3_value *v = argv[i];

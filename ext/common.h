@@ -61,6 +61,27 @@ ax_arg ax_arg_motion(sqlite3_context *ctx, sqlite3_value **argv, int i, affect_m
 /* Argument i as text (its bytes and length); a BLOB is refused. */
 ax_arg ax_arg_text(sqlite3_context *ctx, sqlite3_value **argv, int i, const char **text,
                    size_t *len);
+/* A decoded BLOB argument that a function keeps between calls (the model of affect_classify,
+ * fda_embed, …): decoded again only when the argument's bytes change. */
+typedef affect_status (*ax_decode_fn)(const unsigned char *data, size_t size, void **out,
+                                      affect_error *err);
+typedef struct ax_blob_cache {
+    unsigned char *bytes; /* the BLOB obj was decoded from (size bytes) */
+    size_t size;
+    void *obj;                /* NULL when empty */
+    void (*free_obj)(void *); /* frees obj */
+} ax_blob_cache;
+
+/* Empties the cache. */
+void ax_blob_cache_clear(ax_blob_cache *c);
+
+/* Argument 1 (argv[0]) decoded by decode, from c when its bytes are the cached ones: AX_NULL
+ * for NULL; errors "argument 1 must be a <what> BLOB (from <from>), got text" and "argument 1
+ * is not a valid <what>: <decoder's message>", or SQLITE_NOMEM. *out stays owned by c. */
+ax_arg ax_arg_cached_blob(sqlite3_context *ctx, sqlite3_value **argv, ax_blob_cache *c,
+                          ax_decode_fn decode, void (*free_obj)(void *), const char *what,
+                          const char *from, const void **out);
+
 /* Argument i as a text document: text, or a BLOB holding text (as the shell's readfile()
  * returns). */
 ax_arg ax_arg_document(sqlite3_context *ctx, sqlite3_value **argv, int i, const char **text,

@@ -446,25 +446,28 @@ void ax_affect_train_final(sqlite3_context *ctx)
 
 struct ax_cls_fn {
     char name[32]; /* first: AX_NAME(ctx) reads it */
-    unsigned char *bytes;
-    size_t size;
-    affect_classifier *c;
+    ax_blob_cache cache;
 };
 
-static void cache_clear(ax_cls_fn *fn)
+static affect_status decode_model(const unsigned char *data, size_t size, void **out,
+                                  affect_error *err)
 {
-    affect_classifier_free(fn->c);
-    sqlite3_free(fn->bytes);
-    fn->c = NULL;
-    fn->bytes = NULL;
-    fn->size = 0;
+    affect_classifier *m = NULL;
+    affect_status st = affect_classifier_decode(data, size, &m, err);
+    *out = m;
+    return st;
+}
+
+static void free_model(void *m)
+{
+    affect_classifier_free(m);
 }
 
 void ax_cls_fn_free(void *p)
 {
     ax_cls_fn *fn = p;
     if (fn) {
-        cache_clear(fn);
+        ax_blob_cache_clear(&fn->cache);
         sqlite3_free(fn);
     }
 }
@@ -485,47 +488,11 @@ static ax_arg arg_classifier(sqlite3_context *ctx, sqlite3_value **argv,
                              const affect_classifier **out)
 {
     ax_cls_fn *fn = sqlite3_user_data(ctx);
-    sqlite3_value *v = argv[0];
-    int type = sqlite3_value_type(v);
-    *out = NULL;
-    if (type == SQLITE_NULL)
-        return AX_NULL;
-    if (type != SQLITE_BLOB) {
-        ax_errorf(ctx, "argument 1 must be a classifier BLOB (from affect_train), got %s",
-                  ax_type_name(v));
-        return AX_ERROR;
-    }
-    const unsigned char *data = sqlite3_value_blob(v);
-    size_t n = (size_t)sqlite3_value_bytes(v);
-    if (!data && n > 0) {
-        sqlite3_result_error_nomem(ctx);
-        return AX_ERROR;
-    }
-    if (fn->c && fn->size == n && memcmp(fn->bytes, data, n) == 0) {
-        *out = fn->c;
-        return AX_OK;
-    }
-    cache_clear(fn);
-    affect_classifier *c;
-    affect_error err;
-    if (affect_classifier_decode(data, n, &c, &err)) {
-        if (err.status == AFFECT_ERR_NOMEM)
-            ax_error(ctx, &err); /* SQLITE_NOMEM, or the large block it could not allocate */
-        else
-            ax_errorf(ctx, "argument 1 is not a valid classifier: %s", err.msg);
-        return AX_ERROR;
-    }
-    fn->bytes = sqlite3_malloc64(n ? n : 1);
-    if (!fn->bytes) {
-        affect_classifier_free(c);
-        sqlite3_result_error_nomem(ctx);
-        return AX_ERROR;
-    }
-    memcpy(fn->bytes, data, n);
-    fn->size = n;
-    fn->c = c;
-    *out = c;
-    return AX_OK;
+    const void *m;
+    ax_arg r = ax_arg_cached_blob(ctx, argv, &fn->cache, decode_model, free_model, "classifier",
+                                  "affect_train", &m);
+    *out = m;
+    return r;
 }
 
 /* The observations of the motion in argument 1 under the classifier's definition. */

@@ -287,25 +287,28 @@ void ax_fda_train_final(sqlite3_context *ctx)
 
 struct ax_fda_fn {
     char name[32]; /* first: AX_NAME(ctx) reads it */
-    unsigned char *bytes;
-    size_t size;
-    affect_fda *f;
+    ax_blob_cache cache;
 };
 
-static void cache_clear(ax_fda_fn *fn)
+static affect_status decode_model(const unsigned char *data, size_t size, void **out,
+                                  affect_error *err)
 {
-    affect_fda_free(fn->f);
-    sqlite3_free(fn->bytes);
-    fn->f = NULL;
-    fn->bytes = NULL;
-    fn->size = 0;
+    affect_fda *m = NULL;
+    affect_status st = affect_fda_decode(data, size, &m, err);
+    *out = m;
+    return st;
+}
+
+static void free_model(void *m)
+{
+    affect_fda_free(m);
 }
 
 void ax_fda_fn_free(void *p)
 {
     ax_fda_fn *fn = p;
     if (fn) {
-        cache_clear(fn);
+        ax_blob_cache_clear(&fn->cache);
         sqlite3_free(fn);
     }
 }
@@ -323,47 +326,11 @@ ax_fda_fn *ax_fda_fn_new(const char *name)
 static ax_arg arg_model(sqlite3_context *ctx, sqlite3_value **argv, const affect_fda **out)
 {
     ax_fda_fn *fn = sqlite3_user_data(ctx);
-    sqlite3_value *v = argv[0];
-    int type = sqlite3_value_type(v);
-    *out = NULL;
-    if (type == SQLITE_NULL)
-        return AX_NULL;
-    if (type != SQLITE_BLOB) {
-        ax_errorf(ctx, "argument 1 must be a functional model BLOB (from fda_train), got %s",
-                  ax_type_name(v));
-        return AX_ERROR;
-    }
-    const unsigned char *data = sqlite3_value_blob(v);
-    size_t n = (size_t)sqlite3_value_bytes(v);
-    if (!data && n > 0) {
-        sqlite3_result_error_nomem(ctx);
-        return AX_ERROR;
-    }
-    if (fn->f && fn->size == n && memcmp(fn->bytes, data, n) == 0) {
-        *out = fn->f;
-        return AX_OK;
-    }
-    cache_clear(fn);
-    affect_fda *f;
-    affect_error err;
-    if (affect_fda_decode(data ? data : (const unsigned char *)"", n, &f, &err)) {
-        if (err.status == AFFECT_ERR_NOMEM)
-            ax_error(ctx, &err);
-        else
-            ax_errorf(ctx, "argument 1 is not a valid functional model: %s", err.msg);
-        return AX_ERROR;
-    }
-    fn->bytes = sqlite3_malloc64(n ? n : 1);
-    if (!fn->bytes) {
-        affect_fda_free(f);
-        sqlite3_result_error_nomem(ctx);
-        return AX_ERROR;
-    }
-    memcpy(fn->bytes, data, n);
-    fn->size = n;
-    fn->f = f;
-    *out = f;
-    return AX_OK;
+    const void *m;
+    ax_arg r = ax_arg_cached_blob(ctx, argv, &fn->cache, decode_model, free_model,
+                                  "functional model", "fda_train", &m);
+    *out = m;
+    return r;
 }
 
 /* The model (argument 0) and the observations of the motion (argument 1) under its feature
