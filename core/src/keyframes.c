@@ -33,6 +33,30 @@ double affect_keyframes_error(const double *Y, uint32_t T, uint32_t D, const uin
     return sse;
 }
 
+/* The segment sums are added in blocks of this many ends b: a loop of a constant count over
+ * arrays that do not overlap, which compilers vectorize (the same operations per element, so
+ * the same bits). */
+#define KEYFRAME_BLOCK 8u
+
+/* Adds coordinate c's terms to the four sums of n segment ends (see affect_keyframes_select):
+ * y, sy, sty are the coordinate's values and prefix sums at those ends, ya, sya, stya at the
+ * segment's start a (fa = a). */
+static inline void segment_sums(const double *restrict y, const double *restrict sy,
+                                const double *restrict sty, double ya, double sya, double stya,
+                                double fa, double *restrict ysy, double *restrict tyd,
+                                double *restrict yd, double *restrict dd, uint32_t n)
+{
+    for (uint32_t j = 0; j < n; j++) {
+        double Sy = sy[j] - sya;
+        double Sty = sty[j] - stya;
+        double delta = y[j] - ya;
+        ysy[j] += ya * Sy;
+        tyd[j] += (Sty - fa * Sy) * delta;
+        yd[j] += ya * delta;
+        dd[j] += delta * delta;
+    }
+}
+
 affect_status affect_keyframes_select(const double *Y, uint32_t T, uint32_t D, uint32_t q,
                                       uint32_t *frames, uint32_t *n_out, double *sse,
                                       affect_monitor *mon, affect_error *err)
@@ -58,12 +82,23 @@ affect_status affect_keyframes_select(const double *Y, uint32_t T, uint32_t D, u
     if (!affect_mul_size(T, T, &cells) || cells > MAX_CELLS)
         return affect_fail(err, AFFECT_ERR_RANGE,
                            "%u frames is too many for exact keyframe selection (at most 16384)", T);
-    double *sq = NULL, *sy = NULL, *sty = NULL, *cost = NULL, *E = NULL;
+    /* Coordinate-major copies (c × frames) of Y and of its prefix sums, so that the segment
+     * costs of one start a are accumulated for every end b at once: each b's four sums still
+     * run over the coordinates in order (the same bits as one b at a time), but the ends are
+     * independent, so the loop over them is not bound by the latency of one chain. */
+    size_t T1 = (size_t)T + 1;
+    double *sq = NULL, *yt = NULL, *syt = NULL, *styt = NULL, *cost = NULL, *E = NULL;
+    double *acc_ysy = NULL, *acc_tyd = NULL, *acc_yd = NULL, *acc_dd = NULL;
     uint32_t *back = NULL;
     affect_ws_part parts[] = {
-        {(void **)&sq, (size_t)T + 1, sizeof(double)},
-        {(void **)&sy, ((size_t)T + 1) * D, sizeof(double)},
-        {(void **)&sty, ((size_t)T + 1) * D, sizeof(double)},
+        {(void **)&sq, T1, sizeof(double)},
+        {(void **)&yt, (size_t)T * D, sizeof(double)},
+        {(void **)&syt, T1 * D, sizeof(double)},
+        {(void **)&styt, T1 * D, sizeof(double)},
+        {(void **)&acc_ysy, T, sizeof(double)},
+        {(void **)&acc_tyd, T, sizeof(double)},
+        {(void **)&acc_yd, T, sizeof(double)},
+        {(void **)&acc_dd, T, sizeof(double)},
         {(void **)&cost, cells, sizeof(double)},
         {(void **)&E, (size_t)q * T, sizeof(double)},
         {(void **)&back, (size_t)q * T, sizeof(uint32_t)},
@@ -74,15 +109,16 @@ affect_status affect_keyframes_select(const double *Y, uint32_t T, uint32_t D, u
     affect_status status = AFFECT_OK;
     /* prefix sums over frames 0 .. t − 1 at index t */
     sq[0] = 0;
-    memset(sy, 0, sizeof(double) * D);
-    memset(sty, 0, sizeof(double) * D);
+    for (uint32_t c = 0; c < D; c++)
+        syt[c * T1] = styt[c * T1] = 0;
     for (uint32_t t = 0; t < T; t++) {
         const double *y = Y + (size_t)t * D;
         double n2 = 0;
         for (uint32_t c = 0; c < D; c++) {
             n2 += y[c] * y[c];
-            sy[(size_t)(t + 1) * D + c] = sy[(size_t)t * D + c] + y[c];
-            sty[(size_t)(t + 1) * D + c] = sty[(size_t)t * D + c] + (double)t * y[c];
+            yt[(size_t)c * T + t] = y[c];
+            syt[c * T1 + t + 1] = syt[c * T1 + t] + y[c];
+            styt[c * T1 + t + 1] = styt[c * T1 + t] + (double)t * y[c];
         }
         sq[t + 1] = sq[t] + n2;
     }
@@ -97,29 +133,35 @@ affect_status affect_keyframes_select(const double *Y, uint32_t T, uint32_t D, u
         cost[(size_t)a * T + a] = 0;
         if (a + 1 < T)
             cost[(size_t)a * T + a + 1] = 0;
-        for (uint32_t b = a + 2; b < T; b++) {
-            const double *yb = Y + (size_t)b * D;
+        if (a + 2 >= T)
+            continue;
+        /* Σ s_t (y_t − y_a)·Δ = (Σ (t − a) y_t · Δ)/L − s1 y_a·Δ: the four sums are
+         * accumulated apart (no division in the loop), for the ends b = a + 2 .. T − 1 */
+        uint32_t b0 = a + 2;
+        size_t nb = T - b0;
+        memset(acc_ysy + b0, 0, nb * sizeof(double));
+        memset(acc_tyd + b0, 0, nb * sizeof(double));
+        memset(acc_yd + b0, 0, nb * sizeof(double));
+        memset(acc_dd + b0, 0, nb * sizeof(double));
+        double fa = (double)a;
+        for (uint32_t c = 0; c < D; c++) {
+            const double *yc = yt + (size_t)c * T, *syc = syt + c * T1, *styc = styt + c * T1;
+            double yac = ya[c], sya = syc[a + 1], stya = styc[a + 1];
+            uint32_t b = b0;
+            for (; b + KEYFRAME_BLOCK <= T; b += KEYFRAME_BLOCK)
+                segment_sums(yc + b, syc + b, styc + b, yac, sya, stya, fa, acc_ysy + b,
+                             acc_tyd + b, acc_yd + b, acc_dd + b, KEYFRAME_BLOCK);
+            segment_sums(yc + b, syc + b, styc + b, yac, sya, stya, fa, acc_ysy + b, acc_tyd + b,
+                         acc_yd + b, acc_dd + b, T - b);
+        }
+        for (uint32_t b = b0; b < T; b++) {
             double m = (double)(b - a - 1); /* frames strictly inside */
             double L = (double)(b - a);
             /* Σ s_t = Σ_{k=1}^{L−1} k/L, Σ s_t² = Σ k²/L² */
             double s1 = (L - 1) / 2.0;
             double s2 = (L - 1) * (2 * L - 1) / (6.0 * L);
-            /* Σ s_t (y_t − y_a)·Δ = (Σ (t − a) y_t · Δ)/L − s1 y_a·Δ: the four sums are
-             * accumulated apart (independent chains; no division in the loop) */
-            const double *syb = sy + (size_t)b * D, *sya = sy + (size_t)(a + 1) * D;
-            const double *styb = sty + (size_t)b * D, *stya = sty + (size_t)(a + 1) * D;
-            double ySy = 0, tyd = 0, yd = 0, dd = 0, fa = (double)a;
-            for (uint32_t c = 0; c < D; c++) {
-                double Sy = syb[c] - sya[c];
-                double Sty = styb[c] - stya[c];
-                double delta = yb[c] - ya[c];
-                ySy += ya[c] * Sy;
-                tyd += (Sty - fa * Sy) * delta;
-                yd += ya[c] * delta;
-                dd += delta * delta;
-            }
-            double cross = tyd / L - s1 * yd;
-            double e = sq[b] - sq[a + 1] + m * na - 2 * ySy - 2 * cross + dd * s2;
+            double cross = acc_tyd[b] / L - s1 * acc_yd[b];
+            double e = sq[b] - sq[a + 1] + m * na - 2 * acc_ysy[b] - 2 * cross + acc_dd[b] * s2;
             cost[(size_t)a * T + b] = e > 0 ? e : 0;
         }
     }
