@@ -125,7 +125,7 @@ int main(void)
 }
 C
 cc -std=c11 -Wall -Wextra -Werror use_core.c -o use_core \
-    $(pkg-config --cflags sqlite-affect) $(pkg-config --static --libs sqlite-affect) ||
+    $(pkg-config --cflags sqlite-affect) $(pkg-config --libs sqlite-affect) ||
     fail "cannot build a program against the installed library"
 ./use_core || fail "the program linked against libsqlite_affect.a failed"
 echo "install: all checks passed"
