@@ -612,8 +612,9 @@ void ax_affect_scores(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         affect_strbuf_puts(&sb, ",\"ml\":");
         affect_strbuf_json_string(&sb, affect_classifier_label(c, b.o.ml));
         affect_strbuf_puts(&sb, "},\"classes\":{");
+        uint32_t svm_votes[AFFECT_SVM_MAX_CLASSES];
+        affect_svm_vote(b.o.decision, C, svm_votes);
         for (uint32_t k = 0; k < C; k++) {
-            uint32_t svm_votes = 0;
             if (k)
                 affect_strbuf_putc(&sb, ',');
             affect_strbuf_json_string(&sb, affect_classifier_label(c, k));
@@ -626,8 +627,7 @@ void ax_affect_scores(sqlite3_context *ctx, int argc, sqlite3_value **argv)
                     continue;
                 uint32_t lo = k < q ? k : q, hi = k < q ? q : k;
                 double v = b.o.decision[affect_svm_pair_index(affect_classifier_svm(c), lo, hi)];
-                double mine = k == lo ? v : -v;          /* positive: k wins against q */
-                svm_votes += k == lo ? v > 0 : !(v > 0); /* libsvm's vote: ties to hi */
+                double mine = k == lo ? v : -v; /* positive: k wins against q */
                 if (!first)
                     affect_strbuf_putc(&sb, ',');
                 first = false;
@@ -635,7 +635,7 @@ void ax_affect_scores(sqlite3_context *ctx, int argc, sqlite3_value **argv)
                 affect_strbuf_putc(&sb, ':');
                 affect_strbuf_double(&sb, mine);
             }
-            affect_strbuf_printf(&sb, "},\"svm_votes\":%u,\"knn_votes\":%u}", svm_votes,
+            affect_strbuf_printf(&sb, "},\"svm_votes\":%u,\"knn_votes\":%u}", svm_votes[k],
                                  b.o.votes[k]);
         }
         affect_strbuf_puts(&sb, "},\"embedding\":");

@@ -41,6 +41,12 @@
 #include "affect/roles.h"
 #include "affect/skeleton.h"
 
+/* Relative difference of two frame rates below which they are one rate (a neighbour at another
+ * rate is refused: the engine's states have one time step). Far above the rounding of a rate
+ * computed from a frame time or read back from text (about 1e-15 of it), far below any rate
+ * that differs really (29.97 and 30 fps differ by 1e-3 of it). */
+#define FPS_TOLERANCE 1e-6
+
 void affect_generate_options_default(affect_generate_options *opt)
 {
     opt->states = 12;
@@ -288,7 +294,7 @@ affect_status affect_generate(const affect_motion *desired, const affect_motion 
             excluded++;
             continue;
         }
-        if (fabs(nb->fps - desired->fps) > 1e-6 * desired->fps)
+        if (fabs(nb->fps - desired->fps) > FPS_TOLERANCE * desired->fps)
             return affect_fail(err, AFFECT_ERR_INVALID,
                                "neighbour %u is at %g fps, the desired motion at %g (resample it "
                                "first)",

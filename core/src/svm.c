@@ -362,16 +362,6 @@ static affect_status primal(affect_svm *m, const double *X, affect_error *err)
     return affect_svm_add_rows(m, X, m->d, 0, err);
 }
 
-/* libsvm's winner: most votes, the first (in libsvm's class order) among equals. */
-static uint32_t winner(const uint32_t *votes, uint32_t c)
-{
-    uint32_t best = 0;
-    for (uint32_t k = 1; k < c; k++)
-        if (votes[k] > votes[best])
-            best = k;
-    return best;
-}
-
 /* ---- training and prediction ---- */
 
 /* The dual part of training: libsvm on the Gram matrix G, a model without weights. */
@@ -504,51 +494,106 @@ affect_status affect_svm_add_rows(affect_svm *m, const double *B, size_t b, size
     return AFFECT_OK;
 }
 
+/* ---- the one-vs-one vote ---- */
+
+/* The decision value of the pair number p, (i, j) with i < j, for the sample of ctx. */
+typedef double (*pair_value)(const void *ctx, size_t p, uint32_t i, uint32_t j);
+
+/* libsvm's vote (svm_predict_values) over the pairs of c classes, 1 ≤ c ≤ AFFECT_SVM_MAX_CLASSES,
+ * in pair order: value(ctx, p, i, j) > 0 is a vote for i, anything else (NaN too) a vote for j;
+ * the class with the most votes wins, the first in class order among equals. The votes (c
+ * counts) go to votes when it is not NULL. The one place where votes are counted: prediction in
+ * the primal and in the dual, and affect_svm_vote on decision values already computed. */
+static uint32_t vote(uint32_t c, pair_value value, const void *ctx, uint32_t *votes)
+{
+    uint32_t own[AFFECT_SVM_MAX_CLASSES];
+    uint32_t *v = votes ? votes : own;
+    memset(v, 0, c * sizeof *v);
+    size_t p = 0;
+    for (uint32_t i = 0; i < c; i++)
+        for (uint32_t j = i + 1; j < c; j++, p++)
+            v[value(ctx, p, i, j) > 0 ? i : j]++;
+    uint32_t best = 0;
+    for (uint32_t k = 1; k < c; k++)
+        if (v[k] > v[best])
+            best = k;
+    return best;
+}
+
+static double stored_value(const void *ctx, size_t p, uint32_t i, uint32_t j)
+{
+    (void)i;
+    (void)j;
+    return ((const double *)ctx)[p];
+}
+
+uint32_t affect_svm_vote(const double *dec, uint32_t c, uint32_t *votes)
+{
+    if (c == 0 || c > AFFECT_SVM_MAX_CLASSES)
+        return UINT32_MAX;
+    return vote(c, stored_value, dec, votes);
+}
+
+/* ---- prediction ---- */
+
+typedef struct primal_sample {
+    const affect_svm *m;
+    const double *x;
+    double *dec; /* the decision values, or NULL */
+} primal_sample;
+
+/* dec_ij(x) = w_ij·x − rho_ij, kept in dec[p] when asked for. */
+static double primal_value(const void *ctx, size_t p, uint32_t i, uint32_t j)
+{
+    (void)i;
+    (void)j;
+    const primal_sample *q = ctx;
+    size_t d = q->m->d;
+    const double *w = q->m->w + p * d;
+    double s = 0;
+    for (size_t t = 0; t < d; t++)
+        s += w[t] * q->x[t];
+    s -= q->m->rho[p];
+    if (q->dec)
+        q->dec[p] = s;
+    return s;
+}
+
 uint32_t affect_svm_predict(const affect_svm *m, const double *x, double *dec)
 {
-    uint32_t votes[AFFECT_SVM_MAX_CLASSES] = {0};
-    size_t p = 0, d = m->d;
-    for (uint32_t i = 0; i < m->c; i++)
-        for (uint32_t j = i + 1; j < m->c; j++, p++) {
-            const double *w = m->w + p * d;
-            double s = 0;
-            for (size_t t = 0; t < d; t++)
-                s += w[t] * x[t];
-            s -= m->rho[p];
-            if (dec)
-                dec[p] = s;
-            if (s > 0)
-                votes[i]++;
-            else
-                votes[j]++;
-        }
-    return m->label[winner(votes, m->c)];
+    primal_sample q = {m, x, dec};
+    return m->label[vote(m->c, primal_value, &q, NULL)];
+}
+
+typedef struct dual_sample {
+    const affect_svm *m;
+    const double *g; /* the kernel values of the sample with every training sample */
+    uint32_t start[AFFECT_SVM_MAX_CLASSES];
+} dual_sample;
+
+/* svm_predict_values's sum for the pair (i, j): Σ coef · g over both classes' support vectors,
+ * class i's first, minus rho. */
+static double dual_value(const void *ctx, size_t p, uint32_t i, uint32_t j)
+{
+    const dual_sample *q = ctx;
+    const affect_svm *m = q->m;
+    const double *coef1 = m->sv_coef + (size_t)(j - 1) * m->l;
+    const double *coef2 = m->sv_coef + (size_t)i * m->l;
+    double s = 0;
+    for (uint32_t k = 0; k < m->nsv[i]; k++)
+        s += coef1[q->start[i] + k] * q->g[m->sv_index[q->start[i] + k]];
+    for (uint32_t k = 0; k < m->nsv[j]; k++)
+        s += coef2[q->start[j] + k] * q->g[m->sv_index[q->start[j] + k]];
+    return s - m->rho[p];
 }
 
 /* The prediction of a model without weights for the sample whose kernel values with every
  * sample are g (a row of the Gram matrix): svm_predict_values's sums and vote. */
 static uint32_t dual_predict(const affect_svm *m, const double *g)
 {
-    uint32_t votes[AFFECT_SVM_MAX_CLASSES] = {0};
-    uint32_t start[AFFECT_SVM_MAX_CLASSES];
-    sv_starts(m, start);
-    size_t p = 0;
-    for (uint32_t i = 0; i < m->c; i++)
-        for (uint32_t j = i + 1; j < m->c; j++, p++) {
-            const double *coef1 = m->sv_coef + (size_t)(j - 1) * m->l;
-            const double *coef2 = m->sv_coef + (size_t)i * m->l;
-            double s = 0;
-            for (uint32_t k = 0; k < m->nsv[i]; k++)
-                s += coef1[start[i] + k] * g[m->sv_index[start[i] + k]];
-            for (uint32_t k = 0; k < m->nsv[j]; k++)
-                s += coef2[start[j] + k] * g[m->sv_index[start[j] + k]];
-            s -= m->rho[p];
-            if (s > 0)
-                votes[i]++;
-            else
-                votes[j]++;
-        }
-    return m->label[winner(votes, m->c)];
+    dual_sample q = {.m = m, .g = g};
+    sv_starts(m, q.start);
+    return m->label[vote(m->c, dual_value, &q, NULL)];
 }
 
 uint32_t affect_svm_predict_gram(const affect_svm *m, const double *g)

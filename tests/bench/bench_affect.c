@@ -106,6 +106,7 @@
 #include <sys/time.h>
 #include <time.h>
 
+#define BENCH_NAME "bench_affect"
 #include "benchutil.h"
 
 #ifndef AFFECT_BENCH_CORPUS
@@ -156,30 +157,6 @@ static volatile double g_sink;
 static int cmp_stem(const void *a, const void *b)
 {
     return strcmp(((const item *)a)->stem, ((const item *)b)->stem);
-}
-
-static char *read_file(const char *path, size_t *len)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return NULL;
-    char *buf = NULL;
-    long size = -1;
-    if (fseek(f, 0, SEEK_END) == 0)
-        size = ftell(f);
-    if (size >= 0 && fseek(f, 0, SEEK_SET) == 0) {
-        buf = malloc((size_t)size + 1);
-        if (buf && fread(buf, 1, (size_t)size, f) != (size_t)size) {
-            free(buf);
-            buf = NULL;
-        }
-    }
-    fclose(f);
-    if (buf) {
-        buf[size] = '\0';
-        *len = (size_t)size;
-    }
-    return buf;
 }
 
 static int lower(int c)
@@ -291,7 +268,7 @@ static int load_corpus(const char *dir, dataset *d)
     for (uint32_t i = 0; i < d->n; i++) {
         snprintf(path, sizeof path, "%s/%s.bvh", dir, d->it[i].stem);
         size_t len = 0;
-        char *text = read_file(path, &len);
+        char *text = bench_read_file(path, &len);
         if (!text) {
             fprintf(stderr, "bench_affect: cannot read %s: %s\n", path, strerror(errno));
             return 2;
@@ -1038,18 +1015,6 @@ static int bench_fold(const dataset *d, uint32_t fold, uint32_t runs, double cv_
     return 0;
 }
 
-static int parse_count(const char *flag, const char *v, uint32_t max, uint32_t *out)
-{
-    char *end;
-    long n = strtol(v, &end, 10);
-    if (*end != '\0' || n < 1 || n > (long)max) {
-        fprintf(stderr, "bench_affect: %s must be from 1 to %u\n", flag, max);
-        return 1;
-    }
-    *out = (uint32_t)n;
-    return 0;
-}
-
 int main(int argc, char **argv)
 {
     const char *dir = AFFECT_BENCH_CORPUS;
@@ -1057,19 +1022,19 @@ int main(int argc, char **argv)
     bool cv_only = false;
     for (int i = 1; i < argc; i++) {
         if (strcmp(argv[i], "--repeat") == 0 && i + 1 < argc) {
-            if (parse_count("--repeat", argv[++i], MAX_REPEAT, &repeat))
+            if (bench_parse_count("--repeat", argv[++i], MAX_REPEAT, &repeat))
                 return 2;
         } else if (strcmp(argv[i], "--cv-runs") == 0 && i + 1 < argc) {
-            if (parse_count("--cv-runs", argv[++i], MAX_RUNS, &cv_runs))
+            if (bench_parse_count("--cv-runs", argv[++i], MAX_RUNS, &cv_runs))
                 return 2;
         } else if (strcmp(argv[i], "--fold-runs") == 0 && i + 1 < argc) {
-            if (parse_count("--fold-runs", argv[++i], MAX_RUNS, &fold_runs))
+            if (bench_parse_count("--fold-runs", argv[++i], MAX_RUNS, &fold_runs))
                 return 2;
         } else if (strcmp(argv[i], "--fold") == 0 && i + 1 < argc) {
-            if (parse_count("--fold", argv[++i], CV_FOLDS, &fold))
+            if (bench_parse_count("--fold", argv[++i], CV_FOLDS, &fold))
                 return 2;
         } else if (strcmp(argv[i], "--threads") == 0 && i + 1 < argc) {
-            if (parse_count("--threads", argv[++i], 64, &threads))
+            if (bench_parse_count("--threads", argv[++i], 64, &threads))
                 return 2;
         } else if (strcmp(argv[i], "--cv-only") == 0) {
             cv_only = true;

@@ -93,7 +93,6 @@
 #include "affect/motion.h"
 
 #include <cblas.h>
-#include <dirent.h>
 #include <errno.h>
 #include <stdbool.h>
 #include <stdint.h>
@@ -101,6 +100,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#define BENCH_NAME "bench_generate"
 #include "benchutil.h"
 
 #ifndef AFFECT_BENCH_MODULE
@@ -221,65 +221,26 @@ static void print_load(const char *when)
 
 /* ---- SQL helpers ---- */
 
-static int exec(sqlite3 *db, const char *sql)
-{
-    char *err = NULL;
-    if (sqlite3_exec(db, sql, NULL, NULL, &err) != SQLITE_OK) {
-        fprintf(stderr, "bench_generate: %s\n  in: %.300s\n", err ? err : sqlite3_errmsg(db), sql);
-        sqlite3_free(err);
-        return 1;
-    }
-    return 0;
-}
-
-static int prepare(sqlite3 *db, const char *sql, sqlite3_stmt **st)
-{
-    if (sqlite3_prepare_v2(db, sql, -1, st, NULL) != SQLITE_OK) {
-        fprintf(stderr, "bench_generate: %s\n  in: %.300s\n", sqlite3_errmsg(db), sql);
-        return 1;
-    }
-    return 0;
-}
-
-/* One integer from a query of one row. */
-static int query_int(sqlite3 *db, const char *sql, sqlite3_int64 *out)
-{
-    sqlite3_stmt *st = NULL;
-    if (prepare(db, sql, &st))
-        return 1;
-    int rc = sqlite3_step(st);
-    if (rc == SQLITE_ROW)
-        *out = sqlite3_column_int64(st, 0);
-    else
-        fprintf(stderr, "bench_generate: %s\n  in: %.300s\n", sqlite3_errmsg(db), sql);
-    sqlite3_finalize(st);
-    return rc != SQLITE_ROW;
-}
-
 /* ---- the corpus ---- */
-
-static bool has_suffix(const char *s, const char *suffix)
-{
-    size_t n = strlen(s), k = strlen(suffix);
-    return n >= k && strcmp(s + n - k, suffix) == 0;
-}
 
 /* The file stems of dir into table files(stem); 1 when dir cannot be opened, 2 on error. */
 static int list_files(sqlite3 *db, const char *dir)
 {
-    DIR *dh = opendir(dir);
-    if (!dh)
-        return 1;
+    char **names;
+    size_t n;
+    int rc = bench_list_files(dir, ".bvh", &names, &n);
     sqlite3_stmt *st = NULL;
-    int rc = 2;
-    if (exec(db, "CREATE TABLE files(stem TEXT PRIMARY KEY)") ||
-        prepare(db, "INSERT INTO files(stem) VALUES (?1)", &st))
+    if (rc) {
+        if (rc == 2)
+            fprintf(stderr, "bench_generate: out of memory\n");
         goto done;
-    struct dirent *de;
-    while ((de = readdir(dh)) != NULL) {
-        if (!has_suffix(de->d_name, ".bvh"))
-            continue;
-        sqlite3_bind_text(st, 1, de->d_name, (int)strlen(de->d_name) - 4, SQLITE_TRANSIENT);
+    }
+    rc = 2;
+    if (bench_exec(db, "CREATE TABLE files(stem TEXT PRIMARY KEY)") ||
+        bench_prepare(db, "INSERT INTO files(stem) VALUES (?1)", &st))
+        goto done;
+    for (size_t i = 0; i < n; i++) {
+        sqlite3_bind_text(st, 1, names[i], (int)strlen(names[i]) - 4, SQLITE_TRANSIENT);
         if (sqlite3_step(st) != SQLITE_DONE) {
             fprintf(stderr, "bench_generate: %s\n", sqlite3_errmsg(db));
             goto done;
@@ -289,7 +250,9 @@ static int list_files(sqlite3 *db, const char *dir)
     rc = 0;
 done:
     sqlite3_finalize(st);
-    closedir(dh);
+    for (size_t i = 0; i < n; i++)
+        free(names[i]);
+    free(names);
     return rc;
 }
 
@@ -315,13 +278,13 @@ static int import_corpus(sqlite3 *db, const char *dir, double *secs, sqlite3_int
     sqlite3_stmt *sel = NULL, *ins = NULL;
     char *text = NULL;
     *secs = 0;
-    if (exec(db, "CREATE TABLE corpus27(id INTEGER PRIMARY KEY, name TEXT, content TEXT, "
-                 "emotion TEXT, frames INTEGER, motion BLOB)") ||
-        prepare(db, SELECTED, &sel) ||
-        prepare(db,
-                "INSERT INTO corpus27(name, content, emotion, motion) "
-                "VALUES (?1, ?2, ?3, motion_from_bvh(?4, '{\"unit\":\"cm\"}'))",
-                &ins))
+    if (bench_exec(db, "CREATE TABLE corpus27(id INTEGER PRIMARY KEY, name TEXT, content TEXT, "
+                       "emotion TEXT, frames INTEGER, motion BLOB)") ||
+        bench_prepare(db, SELECTED, &sel) ||
+        bench_prepare(db,
+                      "INSERT INTO corpus27(name, content, emotion, motion) "
+                      "VALUES (?1, ?2, ?3, motion_from_bvh(?4, '{\"unit\":\"cm\"}'))",
+                      &ins))
         goto done;
     int step;
     while ((step = sqlite3_step(sel)) == SQLITE_ROW) {
@@ -351,8 +314,8 @@ static int import_corpus(sqlite3 *db, const char *dir, double *secs, sqlite3_int
         fprintf(stderr, "bench_generate: %s\n", sqlite3_errmsg(db));
         goto done;
     }
-    if (exec(db, "UPDATE corpus27 SET frames = motion_frames(motion)") ||
-        query_int(db, "SELECT sum(frames) FROM corpus27", frames))
+    if (bench_exec(db, "UPDATE corpus27 SET frames = motion_frames(motion)") ||
+        bench_query_int(db, "SELECT sum(frames) FROM corpus27", frames))
         goto done;
     rc = 0;
 done:
@@ -366,17 +329,17 @@ done:
 static int check_corpus(sqlite3 *db)
 {
     sqlite3_int64 n = 0, contents = 0, skeletons = 0, joints = 0, bad = 0;
-    if (query_int(db, "SELECT count(*) FROM corpus27", &n) ||
-        query_int(db, "SELECT count(DISTINCT content) FROM corpus27", &contents) ||
-        query_int(db,
-                  "SELECT count(DISTINCT json_extract(motion_info(motion), '$.names')) "
-                  "FROM corpus27",
-                  &skeletons) ||
-        query_int(db, "SELECT min(motion_joints(motion)) FROM corpus27", &joints) ||
-        query_int(db,
-                  "SELECT count(*) FROM (SELECT emotion FROM corpus27 GROUP BY emotion "
-                  "HAVING count(*) <> 11)",
-                  &bad))
+    if (bench_query_int(db, "SELECT count(*) FROM corpus27", &n) ||
+        bench_query_int(db, "SELECT count(DISTINCT content) FROM corpus27", &contents) ||
+        bench_query_int(db,
+                        "SELECT count(DISTINCT json_extract(motion_info(motion), '$.names')) "
+                        "FROM corpus27",
+                        &skeletons) ||
+        bench_query_int(db, "SELECT min(motion_joints(motion)) FROM corpus27", &joints) ||
+        bench_query_int(db,
+                        "SELECT count(*) FROM (SELECT emotion FROM corpus27 GROUP BY emotion "
+                        "HAVING count(*) <> 11)",
+                        &bad))
         return 1;
     if (n != EXPECTED_MOTIONS || contents != EXPECTED_CONTENTS || bad || skeletons != 1 ||
         joints != 27) {
@@ -403,17 +366,19 @@ static int make_corpus22(sqlite3 *db)
         k += snprintf(sql + k, sizeof sql - (size_t)k, "%s'%s'", i ? ", " : "", end_sites[i]);
     snprintf(sql + k, sizeof sql - (size_t)k, ") ORDER BY key)");
     sqlite3_int64 n = 0, joints = 0;
-    if (exec(db, sql) || query_int(db, "SELECT json_array_length(names) FROM keep22", &n))
+    if (bench_exec(db, sql) ||
+        bench_query_int(db, "SELECT json_array_length(names) FROM keep22", &n))
         return 1;
     if (n != 22) {
         fprintf(stderr, "bench_generate: the 22-joint selection has %lld joints\n", (long long)n);
         return 1;
     }
-    if (exec(db, "CREATE TABLE corpus22(id INTEGER PRIMARY KEY, name TEXT, content TEXT, "
-                 "emotion TEXT, frames INTEGER, motion BLOB);"
-                 "INSERT INTO corpus22 SELECT id, name, content, emotion, frames, "
-                 "motion_select(motion, (SELECT names FROM keep22)) FROM corpus27 ORDER BY id") ||
-        query_int(db, "SELECT max(motion_joints(motion)) FROM corpus22", &joints))
+    if (bench_exec(db,
+                   "CREATE TABLE corpus22(id INTEGER PRIMARY KEY, name TEXT, content TEXT, "
+                   "emotion TEXT, frames INTEGER, motion BLOB);"
+                   "INSERT INTO corpus22 SELECT id, name, content, emotion, frames, "
+                   "motion_select(motion, (SELECT names FROM keep22)) FROM corpus27 ORDER BY id") ||
+        bench_query_int(db, "SELECT max(motion_joints(motion)) FROM corpus22", &joints))
         return 1;
     return joints != 22;
 }
@@ -426,7 +391,7 @@ static int salient(sqlite3 *db, const char *sql, double *secs, char **json, bool
 {
     sqlite3_stmt *st = NULL;
     double t0 = now();
-    if (prepare(db, sql, &st))
+    if (bench_prepare(db, sql, &st))
         return 1;
     int rc = sqlite3_step(st);
     if (rc == SQLITE_ROW && json) {
@@ -473,7 +438,7 @@ static int force_refit(sqlite3 *db, const char *ix)
 {
     char sql[256];
     snprintf(sql, sizeof sql, "DELETE FROM \"%s_info\" WHERE key IN ('rmlr', 'rmlr_key')", ix);
-    if (exec(db, sql))
+    if (bench_exec(db, sql))
         return 1;
     char *err = NULL;
     if (sqlite3_load_extension(db, bench_module, "sqlite3_affect_init", &err) != SQLITE_OK) {
@@ -493,7 +458,7 @@ static int stored_now(sqlite3 *db, const char *ix, bool *yes)
              "(SELECT typeof(value) FROM \"%s_info\" WHERE key = 'rmlr') = 'blob'",
              ix, ix);
     sqlite3_int64 v = 0;
-    if (query_int(db, sql, &v))
+    if (bench_query_int(db, sql, &v))
         return 1;
     *yes = v == 1;
     return 0;
@@ -544,14 +509,15 @@ fail:
 static int fit_summary(sqlite3 *db, const char *json, char **out)
 {
     sqlite3_stmt *st = NULL;
-    if (prepare(db,
-                "SELECT printf('alpha %g, lambda %.4g, cv_error %.4f; salient components per "
-                "label: ', json_extract(?1, '$.alpha'), json_extract(?1, '$.lambda'), "
-                "json_extract(?1, '$.cv_error')) || (SELECT group_concat(key || ' ' || "
-                "json_array_length(value), ', ') FROM json_each(?1, '$.salient')) || '; per "
-                "pair: ' || (SELECT group_concat(key || ' ' || json_array_length(value), ', ') "
-                "FROM json_each(?1, '$.pairs'))",
-                &st))
+    if (bench_prepare(
+            db,
+            "SELECT printf('alpha %g, lambda %.4g, cv_error %.4f; salient components per "
+            "label: ', json_extract(?1, '$.alpha'), json_extract(?1, '$.lambda'), "
+            "json_extract(?1, '$.cv_error')) || (SELECT group_concat(key || ' ' || "
+            "json_array_length(value), ', ') FROM json_each(?1, '$.salient')) || '; per "
+            "pair: ' || (SELECT group_concat(key || ' ' || json_array_length(value), ', ') "
+            "FROM json_each(?1, '$.pairs'))",
+            &st))
         return 1;
     sqlite3_bind_text(st, 1, json, -1, SQLITE_STATIC);
     int rc = sqlite3_step(st);
@@ -674,7 +640,7 @@ static int load_paths(sqlite3 *db, const char *content, bool sliced, path **out,
     sqlite3_stmt *st = NULL;
     path *p = NULL;
     uint32_t k = 0;
-    if (prepare(db, sql, &st))
+    if (bench_prepare(db, sql, &st))
         return 1;
     p = calloc(EXPECTED_MOTIONS, sizeof *p);
     if (!p)
@@ -743,12 +709,13 @@ static int explain_jobs(sqlite3 *db, workload *w)
 {
     sqlite3_stmt *st = NULL;
     int rc = 1;
-    if (prepare(db,
-                "WITH e AS (SELECT affect_generate_explain(?1, ?2, ?3, ?4) AS e) "
-                "SELECT json_extract(e, '$.components.used'), json_extract(r.value, '$.rowid'), "
-                "json_extract(r.value, '$.distance') FROM e, json_each(e, '$.neighbours.rows') "
-                "AS r ORDER BY r.key",
-                &st))
+    if (bench_prepare(
+            db,
+            "WITH e AS (SELECT affect_generate_explain(?1, ?2, ?3, ?4) AS e) "
+            "SELECT json_extract(e, '$.components.used'), json_extract(r.value, '$.rowid'), "
+            "json_extract(r.value, '$.distance') FROM e, json_each(e, '$.neighbours.rows') "
+            "AS r ORDER BY r.key",
+            &st))
         return 1;
     for (uint32_t i = 0; i < w->n_jobs; i++) {
         job *j = &w->jobs[i];
@@ -793,7 +760,7 @@ static int search(sqlite3 *db, const workload *w, const job *j, sqlite3_int64 *i
                  "components = ?3 AND %s = ?4 ORDER BY distance, rowid",
                  w->index, pass ? "k" : "radius");
         sqlite3_stmt *st = NULL;
-        if (prepare(db, sql, &st))
+        if (bench_prepare(db, sql, &st))
             return 1;
         sqlite3_bind_blob(st, 1, j->p->blob, j->p->len, SQLITE_STATIC);
         sqlite3_bind_text(st, 2, emotions[j->target], -1, SQLITE_STATIC);
@@ -823,7 +790,7 @@ static int read_neighbours(sqlite3 *db, const workload *w, const sqlite3_int64 *
     char sql[128];
     snprintf(sql, sizeof sql, "SELECT motion FROM \"%s\" WHERE rowid = ?1", w->content);
     sqlite3_stmt *st = NULL;
-    if (prepare(db, sql, &st))
+    if (bench_prepare(db, sql, &st))
         return 1;
     int rc = 0;
     for (uint32_t i = 0; i < n && !rc; i++) {
@@ -946,7 +913,7 @@ static int bench_workload(sqlite3 *db, workload *w, uint32_t reps)
     unsigned char *a = NULL, *b = NULL;
     int rc = 1;
     double t0 = now(), c0 = cpu_now();
-    if (explain_jobs(db, w) || prepare(db, "SELECT affect_generate(?1, ?2, ?3, ?4)", &st))
+    if (explain_jobs(db, w) || bench_prepare(db, "SELECT affect_generate(?1, ?2, ?3, ?4)", &st))
         goto done;
     double warm[S_COUNT]; /* an untimed generation first */
     if (run_split(db, w, &w->jobs[0], warm, false, NULL, NULL) ||
@@ -1013,7 +980,7 @@ static int bench_transfer(sqlite3 *db, const char *index, const path *paths, uin
     char sql[128];
     snprintf(sql, sizeof sql,
              "SELECT affect_generate('%s', ?1, ?2, json_object('source_label', ?3))", index);
-    if (prepare(db, sql, &st))
+    if (bench_prepare(db, sql, &st))
         return 1;
     double *med = calloc((size_t)n_paths * N_EMOTIONS + 1, sizeof *med), rv[MAX_REPS];
     uint32_t n = 0;
@@ -1123,18 +1090,6 @@ static void print_workload(const workload *w, uint32_t reps)
 
 /* ---- main ---- */
 
-static int parse_count(const char *flag, const char *v, uint32_t max, uint32_t *out)
-{
-    char *end;
-    long n = strtol(v, &end, 10);
-    if (*end != '\0' || n < 1 || n > (long)max) {
-        fprintf(stderr, "bench_generate: %s must be from 1 to %u\n", flag, max);
-        return 1;
-    }
-    *out = (uint32_t)n;
-    return 0;
-}
-
 /* Times the RMLR fit with {"threads":N} (or without options for N = 1) on ix22. */
 static int rmlr_only(sqlite3 *db, uint32_t threads, uint32_t runs)
 {
@@ -1178,13 +1133,13 @@ int main(int argc, char **argv)
         if (strcmp(argv[i], "--module") == 0 && i + 1 < argc) {
             module = argv[++i];
         } else if (strcmp(argv[i], "--reps") == 0 && i + 1 < argc) {
-            if (parse_count("--reps", argv[++i], MAX_REPS, &reps))
+            if (bench_parse_count("--reps", argv[++i], MAX_REPS, &reps))
                 return 2;
         } else if (strcmp(argv[i], "--rmlr-runs") == 0 && i + 1 < argc) {
-            if (parse_count("--rmlr-runs", argv[++i], MAX_RMLR_RUNS, &rmlr_runs))
+            if (bench_parse_count("--rmlr-runs", argv[++i], MAX_RMLR_RUNS, &rmlr_runs))
                 return 2;
         } else if (strcmp(argv[i], "--threads") == 0 && i + 1 < argc) {
-            if (parse_count("--threads", argv[++i], 64, &threads))
+            if (bench_parse_count("--threads", argv[++i], 64, &threads))
                 return 2;
         } else if (strcmp(argv[i], "--quick") == 0) {
             quick = true;
@@ -1230,10 +1185,10 @@ int main(int argc, char **argv)
         goto done;
     }
     sqlite3_int64 have = 0;
-    if (query_int(db,
-                  "SELECT count(*) FROM pragma_function_list WHERE name IN "
-                  "('affect_generate', 'affect_generate_explain', 'laban_salient')",
-                  &have))
+    if (bench_query_int(db,
+                        "SELECT count(*) FROM pragma_function_list WHERE name IN "
+                        "('affect_generate', 'affect_generate_explain', 'laban_salient')",
+                        &have))
         goto done;
     if (have < 3) {
         printf("bench_generate: %s has no affect_generate: nothing to measure\n", module);
@@ -1258,15 +1213,15 @@ int main(int argc, char **argv)
     if (lc || check_corpus(db) || make_corpus22(db))
         goto done;
     t0 = now();
-    if (exec(db, "CREATE VIRTUAL TABLE ix22 USING laban(content=corpus22, motion=motion, "
-                 "label=emotion)"))
+    if (bench_exec(db, "CREATE VIRTUAL TABLE ix22 USING laban(content=corpus22, motion=motion, "
+                       "label=emotion)"))
         goto done;
     double build22 = now() - t0, build27 = 0;
     bool with27 = !quick && !only_rmlr;
     if (with27) {
         t0 = now();
-        if (exec(db, "CREATE VIRTUAL TABLE ix27 USING laban(content=corpus27, motion=motion, "
-                     "label=emotion)"))
+        if (bench_exec(db, "CREATE VIRTUAL TABLE ix27 USING laban(content=corpus27, motion=motion, "
+                           "label=emotion)"))
             goto done;
         build27 = now() - t0;
     }

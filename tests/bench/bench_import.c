@@ -37,6 +37,7 @@
 #include <string.h>
 #include <time.h>
 
+#define BENCH_NAME "bench_import"
 #include "benchutil.h"
 
 #ifndef AFFECT_BENCH_CORPUS
@@ -44,9 +45,7 @@
 #endif
 
 typedef struct item {
-    char *name;
-    char *text; /* the BVH file */
-    size_t text_len;
+    bench_text file;     /* the BVH file: name, text, len (first: bench_load_items) */
     unsigned char *blob; /* its motion, encoded */
     size_t blob_len;
     uint32_t n_frames;
@@ -66,8 +65,7 @@ static volatile uint64_t g_sink;
 static void free_corpus(corpus *c)
 {
     for (size_t i = 0; i < c->n; i++) {
-        free(c->items[i].name);
-        free(c->items[i].text);
+        bench_free_text(&c->items[i].file);
         affect_free(c->items[i].blob);
     }
     free(c->items);
@@ -77,25 +75,10 @@ static void free_corpus(corpus *c)
  * error. */
 static int load_corpus(const char *dir, corpus *c)
 {
-    bench_text *t;
-    size_t n;
-    int rc = bench_load_texts(dir, ".bvh", &t, &n, &c->text_bytes);
-    c->items = t ? calloc(n ? n : 1, sizeof *c->items) : NULL;
-    c->cap = n;
-    if (!rc && !c->items)
-        rc = 2;
-    for (size_t i = 0; i < n; i++) {
-        if (!c->items) {
-            free(t[i].name);
-            free(t[i].text);
-            continue;
-        }
-        c->items[i].name = t[i].name;
-        c->items[i].text = t[i].text;
-        c->items[i].text_len = t[i].len;
-    }
-    c->n = c->items ? n : 0;
-    free(t);
+    void *items;
+    int rc = bench_load_items(dir, ".bvh", sizeof *c->items, &items, &c->n, &c->text_bytes);
+    c->items = items;
+    c->cap = c->n;
     return rc;
 }
 
@@ -106,9 +89,9 @@ static int prepare(corpus *c)
         item *it = &c->items[i];
         affect_motion *m = NULL;
         affect_error err;
-        if (affect_bvh_parse(it->text, it->text_len, NULL, &m, &err) ||
+        if (affect_bvh_parse(it->file.text, it->file.len, NULL, &m, &err) ||
             affect_motion_encode(m, &it->blob, &it->blob_len, &err)) {
-            fprintf(stderr, "%s: %s\n", it->name, err.msg);
+            fprintf(stderr, "%s: %s\n", it->file.name, err.msg);
             affect_motion_free(m);
             return 1;
         }
@@ -132,8 +115,8 @@ static int k_read_floor(const corpus *c, void *ctx)
     (void)ctx;
     uint64_t total = 0;
     for (size_t i = 0; i < c->n; i++) {
-        const unsigned char *p = (const unsigned char *)c->items[i].text;
-        size_t n = c->items[i].text_len;
+        const unsigned char *p = (const unsigned char *)c->items[i].file.text;
+        size_t n = c->items[i].file.len;
         uint64_t lines = 0, sum = 0;
         for (size_t k = 0; k < n; k++) {
             lines += p[k] == '\n';
@@ -151,8 +134,8 @@ static int k_bvh_import(const corpus *c, void *ctx)
     for (size_t i = 0; i < c->n; i++) {
         affect_motion *m = NULL;
         affect_error err;
-        if (affect_bvh_parse(c->items[i].text, c->items[i].text_len, NULL, &m, &err)) {
-            fprintf(stderr, "%s: %s\n", c->items[i].name, err.msg);
+        if (affect_bvh_parse(c->items[i].file.text, c->items[i].file.len, NULL, &m, &err)) {
+            fprintf(stderr, "%s: %s\n", c->items[i].file.name, err.msg);
             return 1;
         }
         g_sink += m->n_frames;
@@ -178,7 +161,7 @@ static int k_blob_decode(const corpus *c, void *ctx)
         affect_motion *m = NULL;
         affect_error err;
         if (affect_motion_decode(c->items[i].blob, c->items[i].blob_len, &m, &err)) {
-            fprintf(stderr, "%s (BLOB): %s\n", c->items[i].name, err.msg);
+            fprintf(stderr, "%s (BLOB): %s\n", c->items[i].file.name, err.msg);
             return 1;
         }
         g_sink += m->n_frames;
@@ -219,22 +202,9 @@ static void row(const char *name, const result *r, double bytes, double frames, 
 int main(int argc, char **argv)
 {
     const char *dir = AFFECT_BENCH_CORPUS;
-    unsigned repeat = 0;
-    for (int i = 1; i < argc; i++) {
-        if (strcmp(argv[i], "--repeat") == 0 && i + 1 < argc) {
-            long v = strtol(argv[++i], NULL, 10);
-            if (v < 1 || v > MAX_REPEAT) {
-                fprintf(stderr, "--repeat must be from 1 to %d\n", MAX_REPEAT);
-                return 2;
-            }
-            repeat = (unsigned)v;
-        } else if (argv[i][0] == '-') {
-            fprintf(stderr, "usage: %s [corpus directory] [--repeat N]\n", argv[0]);
-            return 2;
-        } else {
-            dir = argv[i];
-        }
-    }
+    unsigned repeat;
+    if (bench_dir_args(argc, argv, &dir, &repeat))
+        return 2;
 
     corpus c = {0};
     int rc = load_corpus(dir, &c);

@@ -58,6 +58,7 @@
 #include <string.h>
 #include <time.h>
 
+#define BENCH_NAME "bench_knn"
 #include "benchutil.h"
 
 #ifndef AFFECT_BENCH_MODULE
@@ -128,41 +129,6 @@ static void sb_add(sbuf *b, const char *fmt, ...)
         b->s = grown;
         b->cap = cap;
     }
-}
-
-static int exec(sqlite3 *db, const char *sql)
-{
-    char *err = NULL;
-    if (sqlite3_exec(db, sql, NULL, NULL, &err) != SQLITE_OK) {
-        fprintf(stderr, "%s\n  in: %.200s\n", err ? err : sqlite3_errmsg(db), sql);
-        sqlite3_free(err);
-        return 1;
-    }
-    return 0;
-}
-
-static int prepare(sqlite3 *db, const char *sql, sqlite3_stmt **st)
-{
-    if (sqlite3_prepare_v2(db, sql, -1, st, NULL) != SQLITE_OK) {
-        fprintf(stderr, "%s\n  in: %.300s\n", sqlite3_errmsg(db), sql);
-        return 1;
-    }
-    return 0;
-}
-
-/* One integer from a query of one row. */
-static int query_int(sqlite3 *db, const char *sql, sqlite3_int64 *out)
-{
-    sqlite3_stmt *st = NULL;
-    if (prepare(db, sql, &st))
-        return 1;
-    int rc = sqlite3_step(st);
-    if (rc == SQLITE_ROW)
-        *out = sqlite3_column_int64(st, 0);
-    else
-        fprintf(stderr, "%s\n  in: %s\n", sqlite3_errmsg(db), sql);
-    sqlite3_finalize(st);
-    return rc != SQLITE_ROW;
 }
 
 /* Runs st with ?1 bound to query i (a rowid, or a BLOB when blob); collects up to MAX_HITS
@@ -346,7 +312,7 @@ static int setup(sqlite3 *db, char names[N_COMP][32], inputs *in, double *gen_s,
                  sqlite3_int64 *frames)
 {
     double t0 = now();
-    if (exec(
+    if (bench_exec(
             db,
             "CREATE TABLE motions(id INTEGER PRIMARY KEY, action TEXT, emotion TEXT, "
             "seed INTEGER, motion BLOB);"
@@ -361,28 +327,29 @@ static int setup(sqlite3 *db, char names[N_COMP][32], inputs *in, double *gen_s,
                          "emotion;"))
         return 1;
     *gen_s = now() - t0;
-    if (exec(db, "CREATE TABLE queries(id INTEGER PRIMARY KEY, motion BLOB);"
-                 "WITH RECURSIVE seeds(seed) AS (SELECT 626 UNION ALL SELECT seed + 1 FROM seeds "
-                 "WHERE seed < 641), "
-                 "actions(action) AS (VALUES ('knock'), ('wave'), ('walk'), ('bow')), "
-                 "emotions(emotion) AS (VALUES ('neutral'), ('happy'), ('sad'), ('angry')) "
-                 "INSERT INTO queries(motion) "
-                 "SELECT motion_synth(action, emotion, seed, '{\"fps\":10}') "
-                 "FROM seeds, actions, emotions ORDER BY seed, action, emotion;"))
+    if (bench_exec(db,
+                   "CREATE TABLE queries(id INTEGER PRIMARY KEY, motion BLOB);"
+                   "WITH RECURSIVE seeds(seed) AS (SELECT 626 UNION ALL SELECT seed + 1 FROM seeds "
+                   "WHERE seed < 641), "
+                   "actions(action) AS (VALUES ('knock'), ('wave'), ('walk'), ('bow')), "
+                   "emotions(emotion) AS (VALUES ('neutral'), ('happy'), ('sad'), ('angry')) "
+                   "INSERT INTO queries(motion) "
+                   "SELECT motion_synth(action, emotion, seed, '{\"fps\":10}') "
+                   "FROM seeds, actions, emotions ORDER BY seed, action, emotion;"))
         return 1;
     sqlite3_int64 n = 0;
-    if (query_int(db, "SELECT count(*) FROM motions", &n))
+    if (bench_query_int(db, "SELECT count(*) FROM motions", &n))
         return 1;
     if (n != N_MOTIONS) {
         fprintf(stderr, "expected %d motions, made %lld\n", N_MOTIONS, (long long)n);
         return 1;
     }
-    if (query_int(db, "SELECT sum(motion_frames(motion)) FROM motions", frames))
+    if (bench_query_int(db, "SELECT sum(motion_frames(motion)) FROM motions", frames))
         return 1;
 
     sqlite3_stmt *st = NULL;
     int i = 0;
-    if (prepare(db, "SELECT value FROM json_each(laban_names())", &st))
+    if (bench_prepare(db, "SELECT value FROM json_each(laban_names())", &st))
         return 1;
     while (sqlite3_step(st) == SQLITE_ROW && i < N_COMP)
         snprintf(names[i++], 32, "%s", (const char *)sqlite3_column_text(st, 0));
@@ -391,7 +358,7 @@ static int setup(sqlite3 *db, char names[N_COMP][32], inputs *in, double *gen_s,
         fprintf(stderr, "laban_names() has %d names, expected %d\n", i, N_COMP);
         return 1;
     }
-    if (prepare(db, "SELECT motion FROM queries ORDER BY id LIMIT 250", &st))
+    if (bench_prepare(db, "SELECT motion FROM queries ORDER BY id LIMIT 250", &st))
         return 1;
     for (i = 0; i < N_QUERIES && sqlite3_step(st) == SQLITE_ROW; i++) {
         int len = sqlite3_column_bytes(st, 0);
@@ -420,28 +387,28 @@ static int setup(sqlite3 *db, char names[N_COMP][32], inputs *in, double *gen_s,
  * Then the same for the descriptors alone (vec). */
 static int measure_build(sqlite3 *db, double t[RUNS], double vec[RUNS])
 {
-    if (exec(db, CREATE_INDEX) || exec(db, "DROP TABLE motion_laban"))
+    if (bench_exec(db, CREATE_INDEX) || bench_exec(db, "DROP TABLE motion_laban"))
         return 1;
     for (int run = 0; run < RUNS; run++) {
         double t0 = now();
-        if (exec(db, CREATE_INDEX))
+        if (bench_exec(db, CREATE_INDEX))
             return 1;
         t[run] = now() - t0;
-        if (exec(db, "DROP TABLE motion_laban"))
+        if (bench_exec(db, "DROP TABLE motion_laban"))
             return 1;
     }
     qsort(t, RUNS, sizeof t[0], cmp_double);
     sqlite3_int64 bytes = 0;
-    if (query_int(db, VECTOR_SCAN, &bytes))
+    if (bench_query_int(db, VECTOR_SCAN, &bytes))
         return 1;
     for (int run = 0; run < RUNS; run++) {
         double t0 = now();
-        if (query_int(db, VECTOR_SCAN, &bytes))
+        if (bench_query_int(db, VECTOR_SCAN, &bytes))
             return 1;
         vec[run] = now() - t0;
     }
     qsort(vec, RUNS, sizeof vec[0], cmp_double);
-    return exec(db, CREATE_INDEX);
+    return bench_exec(db, CREATE_INDEX);
 }
 
 enum { Q_ROWID, Q_BLOB, Q_VECTOR, Q_RADIUS, Q_COMPS, Q_FIXED, Q_COUNT };
@@ -484,7 +451,7 @@ int main(int argc, char **argv)
         goto done;
     }
     sqlite3_int64 have = 0;
-    if (query_int(db, "SELECT count(*) FROM pragma_module_list WHERE name = 'laban'", &have))
+    if (bench_query_int(db, "SELECT count(*) FROM pragma_module_list WHERE name = 'laban'", &have))
         goto done;
     if (!have) {
         printf("bench_knn: %s has no laban virtual table: nothing to measure\n", module);
@@ -521,9 +488,9 @@ int main(int argc, char **argv)
     sql[Q_RADIUS] = brute_sql(names, "rowid", all, N_COMP, 0, 0.1);
     sql[Q_COMPS] = brute_sql(names, "rowid", two, 2, 5, 0);
     for (int q = 0; q < Q_COUNT; q++) {
-        if (prepare(db, vt_sql[q], &vt[q]))
+        if (bench_prepare(db, vt_sql[q], &vt[q]))
             goto done;
-        if (q != Q_VECTOR && q != Q_FIXED && (!sql[q] || prepare(db, sql[q], &bf[q])))
+        if (q != Q_VECTOR && q != Q_FIXED && (!sql[q] || bench_prepare(db, sql[q], &bf[q])))
             goto done;
     }
 

@@ -59,7 +59,6 @@
 #include "affect/roles.h"
 #include "affect/synth.h"
 
-#include <dirent.h>
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -67,6 +66,7 @@
 #include <string.h>
 #include <time.h>
 
+#define BENCH_NAME "bench_laban"
 #include "benchutil.h"
 
 #ifndef AFFECT_BENCH_CORPUS
@@ -97,41 +97,6 @@ typedef struct dataset {
 
 /* Values the timed loops write so the compiler cannot drop their work. */
 static volatile double g_sink;
-
-static int cmp_str(const void *a, const void *b)
-{
-    return strcmp(*(char *const *)a, *(char *const *)b);
-}
-
-static char *read_file(const char *path, size_t *len)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return NULL;
-    char *buf = NULL;
-    long size = -1;
-    if (fseek(f, 0, SEEK_END) == 0)
-        size = ftell(f);
-    if (size >= 0 && fseek(f, 0, SEEK_SET) == 0) {
-        buf = malloc((size_t)size + 1);
-        if (buf && fread(buf, 1, (size_t)size, f) != (size_t)size) {
-            free(buf);
-            buf = NULL;
-        }
-    }
-    fclose(f);
-    if (buf) {
-        buf[size] = '\0';
-        *len = (size_t)size;
-    }
-    return buf;
-}
-
-static bool has_suffix(const char *s, const char *suffix)
-{
-    size_t n = strlen(s), k = strlen(suffix);
-    return n >= k && strcmp(s + n - k, suffix) == 0;
-}
 
 static void free_dataset(dataset *d)
 {
@@ -195,39 +160,16 @@ static int add_motion(dataset *d, affect_motion *m, const char *what)
 /* Every *.bvh of dir, parsed; 1 when dir cannot be opened, 2 on any other error. */
 static int load_corpus(const char *dir, dataset *d)
 {
-    DIR *dh = opendir(dir);
-    if (!dh)
+    char **names;
+    size_t n;
+    int rc = bench_list_files(dir, ".bvh", &names, &n);
+    if (rc == 1)
         return 1;
-    char **names = NULL;
-    size_t n = 0, cap = 0;
-    int rc = 0;
-    struct dirent *de;
-    while (!rc && (de = readdir(dh)) != NULL) {
-        if (!has_suffix(de->d_name, ".bvh"))
-            continue;
-        if (n == cap) {
-            cap = cap ? 2 * cap : 256;
-            char **grown = realloc(names, cap * sizeof *grown);
-            if (!grown) {
-                rc = 2;
-                break;
-            }
-            names = grown;
-        }
-        if (!(names[n] = malloc(strlen(de->d_name) + 1))) {
-            rc = 2;
-            break;
-        }
-        strcpy(names[n++], de->d_name);
-    }
-    closedir(dh);
-    if (!rc)
-        qsort(names, n, sizeof *names, cmp_str);
     char path[4096];
     for (size_t i = 0; i < n && !rc; i++) {
         snprintf(path, sizeof path, "%s/%s", dir, names[i]);
         size_t len = 0;
-        char *text = read_file(path, &len);
+        char *text = bench_read_file(path, &len);
         if (!text) {
             fprintf(stderr, "cannot read %s: %s\n", path, strerror(errno));
             rc = 2;
@@ -573,22 +515,9 @@ static int run_dataset(const dataset *d, const char *key, unsigned repeat)
 int main(int argc, char **argv)
 {
     const char *dir = AFFECT_BENCH_CORPUS;
-    unsigned repeat = 0;
-    for (int i = 1; i < argc; i++) {
-        if (strcmp(argv[i], "--repeat") == 0 && i + 1 < argc) {
-            long v = strtol(argv[++i], NULL, 10);
-            if (v < 1 || v > MAX_REPEAT) {
-                fprintf(stderr, "--repeat must be from 1 to %d\n", MAX_REPEAT);
-                return 2;
-            }
-            repeat = (unsigned)v;
-        } else if (argv[i][0] == '-') {
-            fprintf(stderr, "usage: %s [corpus directory] [--repeat N]\n", argv[0]);
-            return 2;
-        } else {
-            dir = argv[i];
-        }
-    }
+    unsigned repeat;
+    if (bench_dir_args(argc, argv, &dir, &repeat))
+        return 2;
 
     printf("%d runs per kernel, each of 'passes' passes over the data set; times in seconds "
            "per run;\nframes/s and ns/frame per pass; %% vector = share of the default laban "

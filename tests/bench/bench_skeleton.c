@@ -64,6 +64,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#define BENCH_NAME "bench_skeleton"
 #include "benchutil.h"
 
 #ifndef AFFECT_BENCH_CORPUS
@@ -83,10 +84,8 @@
 #define GOAL_IK_JFS 1e6
 
 typedef struct item {
-    char *name;
-    char *text; /* the BVH file */
-    size_t text_len;
-    char *out; /* its export */
+    bench_text file; /* the BVH file: name, text, len (first: bench_load_items) */
+    char *out;       /* its export */
     size_t out_len;
     affect_motion *m;   /* skeletal, as imported */
     affect_motion *pos; /* position-only copy */
@@ -118,8 +117,7 @@ static volatile uint64_t g_sink;
 static void free_corpus(corpus *c)
 {
     for (size_t i = 0; i < c->n; i++) {
-        free(c->items[i].name);
-        free(c->items[i].text);
+        bench_free_text(&c->items[i].file);
         affect_free(c->items[i].out);
         affect_motion_free(c->items[i].m);
         affect_motion_free(c->items[i].pos);
@@ -152,25 +150,10 @@ static void corpus_tag(const char *dir, char *tag, size_t cap)
  * error. */
 static int load_corpus(const char *dir, corpus *c)
 {
-    bench_text *t;
-    size_t n;
-    int rc = bench_load_texts(dir, ".bvh", &t, &n, &c->text_bytes);
-    c->items = t ? calloc(n ? n : 1, sizeof *c->items) : NULL;
-    c->cap = n;
-    if (!rc && !c->items)
-        rc = 2;
-    for (size_t i = 0; i < n; i++) {
-        if (!c->items) {
-            free(t[i].name);
-            free(t[i].text);
-            continue;
-        }
-        c->items[i].name = t[i].name;
-        c->items[i].text = t[i].text;
-        c->items[i].text_len = t[i].len;
-    }
-    c->n = c->items ? n : 0;
-    free(t);
+    void *items;
+    int rc = bench_load_items(dir, ".bvh", sizeof *c->items, &items, &c->n, &c->text_bytes);
+    c->items = items;
+    c->cap = c->n;
     return rc;
 }
 
@@ -221,18 +204,18 @@ static int prepare(corpus *c)
         affect_error err;
         affect_bvh_write_options wo;
         affect_bvh_write_options_default(&wo);
-        if (affect_bvh_parse(it->text, it->text_len, NULL, &it->m, &err) ||
+        if (affect_bvh_parse(it->file.text, it->file.len, NULL, &it->m, &err) ||
             affect_motion_clone(it->m, &it->pos, &err)) {
-            fprintf(stderr, "%s: %s\n", it->name, err.msg);
+            fprintf(stderr, "%s: %s\n", it->file.name, err.msg);
             return 1;
         }
         if (!it->m->rot) {
-            fprintf(stderr, "%s: the import kept no rotations\n", it->name);
+            fprintf(stderr, "%s: the import kept no rotations\n", it->file.name);
             return 1;
         }
         affect_motion_drop_skeleton(it->pos);
         if (affect_bvh_write(it->m, &wo, &it->out, &it->out_len, &err)) {
-            fprintf(stderr, "%s (export): %s\n", it->name, err.msg);
+            fprintf(stderr, "%s (export): %s\n", it->file.name, err.msg);
             return 1;
         }
         c->frames += it->m->n_frames;
@@ -245,12 +228,12 @@ static int prepare(corpus *c)
 
         affect_motion *back = NULL;
         if (affect_bvh_parse(it->out, it->out_len, NULL, &back, &err)) {
-            fprintf(stderr, "%s (re-import of the export): %s\n", it->name, err.msg);
+            fprintf(stderr, "%s (re-import of the export): %s\n", it->file.name, err.msg);
             return 1;
         }
         double d, coord;
         uint32_t t, j;
-        int rc = max_distance(it->m, back, &d, &coord, &t, &j, it->name);
+        int rc = max_distance(it->m, back, &d, &coord, &t, &j, it->file.name);
         affect_motion_free(back);
         if (rc)
             return 1;
@@ -272,15 +255,15 @@ static int prepare(corpus *c)
         if (affect_motion_ik(it->pos, &io, &ik, &err) ||
             affect_motion_rigid(it->pos, &io.rigid, &rigid, &err) ||
             affect_motion_bone_variation(it->pos, &var, &worst, &err)) {
-            fprintf(stderr, "%s (IK): %s\n", it->name, err.msg);
+            fprintf(stderr, "%s (IK): %s\n", it->file.name, err.msg);
             affect_motion_free(ik);
             affect_motion_free(rigid);
             return 1;
         }
         double d_ik, d_rigid, d_ik_rigid;
-        rc = max_distance(it->pos, ik, &d_ik, &coord, &t, &j, it->name) ||
-             max_distance(it->pos, rigid, &d_rigid, &coord, &t, &j, it->name) ||
-             max_distance(rigid, ik, &d_ik_rigid, &coord, &t, &j, it->name);
+        rc = max_distance(it->pos, ik, &d_ik, &coord, &t, &j, it->file.name) ||
+             max_distance(it->pos, rigid, &d_rigid, &coord, &t, &j, it->file.name) ||
+             max_distance(rigid, ik, &d_ik_rigid, &coord, &t, &j, it->file.name);
         if (!rc && (d_ik_rigid > c->ik_rigid_max || i == 0)) {
             c->ik_rigid_max = d_ik_rigid;
             c->ik_rigid_item = i;
@@ -314,8 +297,8 @@ static int k_import(const corpus *c)
     for (size_t i = 0; i < c->n; i++) {
         affect_motion *m = NULL;
         affect_error err;
-        if (affect_bvh_parse(c->items[i].text, c->items[i].text_len, NULL, &m, &err)) {
-            fprintf(stderr, "%s: %s\n", c->items[i].name, err.msg);
+        if (affect_bvh_parse(c->items[i].file.text, c->items[i].file.len, NULL, &m, &err)) {
+            fprintf(stderr, "%s: %s\n", c->items[i].file.name, err.msg);
             return 1;
         }
         g_sink += m->n_frames;
@@ -333,7 +316,7 @@ static int k_export(const corpus *c)
         size_t len = 0;
         affect_error err;
         if (affect_bvh_write(c->items[i].m, &wo, &text, &len, &err)) {
-            fprintf(stderr, "%s (export): %s\n", c->items[i].name, err.msg);
+            fprintf(stderr, "%s (export): %s\n", c->items[i].file.name, err.msg);
             return 1;
         }
         g_sink += len + (unsigned char)text[len / 2];
@@ -348,7 +331,7 @@ static int k_reimport(const corpus *c)
         affect_motion *m = NULL;
         affect_error err;
         if (affect_bvh_parse(c->items[i].out, c->items[i].out_len, NULL, &m, &err)) {
-            fprintf(stderr, "%s (re-import): %s\n", c->items[i].name, err.msg);
+            fprintf(stderr, "%s (re-import): %s\n", c->items[i].file.name, err.msg);
             return 1;
         }
         g_sink += m->n_frames;
@@ -365,7 +348,7 @@ static int k_rigid(const corpus *c)
         affect_motion *r = NULL;
         affect_error err;
         if (affect_motion_rigid(c->items[i].pos, &ro, &r, &err)) {
-            fprintf(stderr, "%s (rigid): %s\n", c->items[i].name, err.msg);
+            fprintf(stderr, "%s (rigid): %s\n", c->items[i].file.name, err.msg);
             return 1;
         }
         g_sink += r->n_frames;
@@ -382,7 +365,7 @@ static int k_ik(const corpus *c)
         affect_motion *r = NULL;
         affect_error err;
         if (affect_motion_ik(c->items[i].pos, &io, &r, &err)) {
-            fprintf(stderr, "%s (IK): %s\n", c->items[i].name, err.msg);
+            fprintf(stderr, "%s (IK): %s\n", c->items[i].file.name, err.msg);
             return 1;
         }
         g_sink += r->n_frames;
@@ -570,14 +553,15 @@ static int run_corpus(const char *dir, unsigned repeat, int only, verdict *v)
     printf("round trip (export with the stored rotations, 6 decimals, re-import): largest "
            "position error %.3g %s (largest coordinate error %.3g), %s frame %u joint %s; "
            "%.2g of that motion's body size\n",
-           c.rt_max, rt->m->unit[0] ? rt->m->unit : "units", c.rt_max_coord, rt->name, c.rt_frame,
-           rt->m->names[c.rt_joint], c.rt_max / c.rt_body);
+           c.rt_max, rt->m->unit[0] ? rt->m->unit : "units", c.rt_max_coord, rt->file.name,
+           c.rt_frame, rt->m->names[c.rt_joint], c.rt_max / c.rt_body);
     printf("IK (by-products, default options): the input's bones vary in length by up to "
            "%.3g%% (%s);\n  largest distance rigid projection - input %.3g (%s), IK - rigid "
            "projection %.3g (%s frame %u joint %s), IK - input %.3g (%s)\n",
-           100 * c.bone_var, c.items[c.bone_var_item].name, c.rigid_max, c.items[c.rigid_item].name,
-           c.ik_rigid_max, c.items[c.ik_rigid_item].name, c.ik_rigid_frame,
-           c.items[c.ik_rigid_item].m->names[c.ik_rigid_joint], c.ik_max, c.items[c.ik_item].name);
+           100 * c.bone_var, c.items[c.bone_var_item].file.name, c.rigid_max,
+           c.items[c.rigid_item].file.name, c.ik_rigid_max, c.items[c.ik_rigid_item].file.name,
+           c.ik_rigid_frame, c.items[c.ik_rigid_item].m->names[c.ik_rigid_joint], c.ik_max,
+           c.items[c.ik_item].file.name);
 
     double exp_mbs = 0, imp_mbs = 0, ik_jfs = 0;
     if (done[K_EXPORT]) {
@@ -646,12 +630,8 @@ int main(int argc, char **argv)
     unsigned repeat = 0;
     for (int i = 1; i < argc; i++) {
         if (strcmp(argv[i], "--repeat") == 0 && i + 1 < argc) {
-            long v = strtol(argv[++i], NULL, 10);
-            if (v < 1 || v > MAX_REPEAT) {
-                fprintf(stderr, "--repeat must be from 1 to %d\n", MAX_REPEAT);
+            if (bench_parse_count("--repeat", argv[++i], MAX_REPEAT, &repeat))
                 return 2;
-            }
-            repeat = (unsigned)v;
         } else if (strcmp(argv[i], "--only") == 0 && i + 1 < argc) {
             const char *k = argv[++i];
             for (int j = 0; j < K_COUNT; j++)

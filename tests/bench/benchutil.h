@@ -9,8 +9,15 @@
  * For latency distributions (one time per request rather than per run), bench_summarize gives
  * the median, mean, fastest and slowest of n times. bench_read_file reads a whole file and
  * bench_list_files lists a folder's files by suffix, sorted, and bench_load_texts reads them all
- * (the corpus benchmarks' BVH files).
+ * (the corpus benchmarks' BVH files); bench_load_items reads them into a benchmark's own items.
  * Each run's process CPU time is read too (a shared machine slows a run without it waiting).
+ *
+ * Command lines: bench_parse_count reads a count option (--repeat N and the like),
+ * bench_dir_args the plain "[corpus directory] [--repeat N]" of several benchmarks. Messages
+ * start with BENCH_NAME (define it before including this header; default "bench").
+ *
+ * SQL (only when <sqlite3.h> is included before this header): bench_exec, bench_prepare and
+ * bench_query_int run a statement and print SQLite's message with the SQL on failure.
  */
 #ifndef AFFECT_BENCHUTIL_H
 #define AFFECT_BENCHUTIL_H
@@ -21,6 +28,10 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+
+#ifndef BENCH_NAME
+#define BENCH_NAME "bench"
+#endif
 
 #define RUNS 5
 #define TARGET_RUN_SECONDS 1.0
@@ -231,4 +242,110 @@ static inline int bench_load_texts(const char *dir, const char *suffix, bench_te
     return rc;
 }
 
+static inline void bench_free_text(bench_text *t)
+{
+    free(t->name);
+    free(t->text);
+}
+
+/* bench_load_texts into *items: n items of item_size bytes each (calloc'ed; free each item's
+ * text with bench_free_text, then the array), an item being a struct whose first member is the
+ * bench_text of its file. Returns as bench_load_texts (2 also when out of memory); the items
+ * read are there (*n of them) even on failure. */
+static inline int bench_load_items(const char *dir, const char *suffix, size_t item_size,
+                                   void **items, size_t *n, size_t *bytes)
+{
+    bench_text *t;
+    size_t count;
+    int rc = bench_load_texts(dir, suffix, &t, &count, bytes);
+    unsigned char *it = t ? calloc(count ? count : 1, item_size) : NULL;
+    if (!rc && !it)
+        rc = 2;
+    for (size_t i = 0; i < count; i++) {
+        if (it)
+            memcpy(it + i * item_size, &t[i], sizeof t[i]);
+        else
+            bench_free_text(&t[i]);
+    }
+    *items = it;
+    *n = it ? count : 0;
+    free(t);
+    return rc;
+}
+
+/* ---- command lines ---- */
+
+/* *out = the count v (a whole number from 1 to max), or 1 with a message. */
+static inline int bench_parse_count(const char *flag, const char *v, unsigned max, unsigned *out)
+{
+    char *end;
+    long n = strtol(v, &end, 10);
+    if (*end != '\0' || n < 1 || n > (long)max) {
+        fprintf(stderr, BENCH_NAME ": %s must be from 1 to %u\n", flag, max);
+        return 1;
+    }
+    *out = (unsigned)n;
+    return 0;
+}
+
+/* "[corpus directory] [--repeat N]": *dir (unchanged when not given) and *repeat (0 when not
+ * given: calibrate). 0, or 2 with a message (the exit status of a bad command line). */
+static inline int bench_dir_args(int argc, char **argv, const char **dir, unsigned *repeat)
+{
+    *repeat = 0;
+    for (int i = 1; i < argc; i++) {
+        if (strcmp(argv[i], "--repeat") == 0 && i + 1 < argc) {
+            if (bench_parse_count("--repeat", argv[++i], MAX_REPEAT, repeat))
+                return 2;
+        } else if (argv[i][0] == '-') {
+            fprintf(stderr, "usage: %s [corpus directory] [--repeat N]\n", argv[0]);
+            return 2;
+        } else {
+            *dir = argv[i];
+        }
+    }
+    return 0;
+}
+
+/* ---- SQL ---- */
+#ifdef SQLITE_VERSION
+
+/* Runs sql (any number of statements); 0, or 1 with SQLite's message and the SQL. */
+static inline int bench_exec(sqlite3 *db, const char *sql)
+{
+    char *err = NULL;
+    if (sqlite3_exec(db, sql, NULL, NULL, &err) != SQLITE_OK) {
+        fprintf(stderr, BENCH_NAME ": %s\n  in: %.300s\n", err ? err : sqlite3_errmsg(db), sql);
+        sqlite3_free(err);
+        return 1;
+    }
+    return 0;
+}
+
+/* Prepares one statement; 0, or 1 with SQLite's message and the SQL. */
+static inline int bench_prepare(sqlite3 *db, const char *sql, sqlite3_stmt **st)
+{
+    if (sqlite3_prepare_v2(db, sql, -1, st, NULL) != SQLITE_OK) {
+        fprintf(stderr, BENCH_NAME ": %s\n  in: %.300s\n", sqlite3_errmsg(db), sql);
+        return 1;
+    }
+    return 0;
+}
+
+/* One integer from a query of one row; 0, or 1 with a message. */
+static inline int bench_query_int(sqlite3 *db, const char *sql, sqlite3_int64 *out)
+{
+    sqlite3_stmt *st = NULL;
+    if (bench_prepare(db, sql, &st))
+        return 1;
+    int rc = sqlite3_step(st);
+    if (rc == SQLITE_ROW)
+        *out = sqlite3_column_int64(st, 0);
+    else
+        fprintf(stderr, BENCH_NAME ": %s\n  in: %.300s\n", sqlite3_errmsg(db), sql);
+    sqlite3_finalize(st);
+    return rc != SQLITE_ROW;
+}
+
+#endif
 #endif

@@ -28,18 +28,12 @@ Output: Markdown tables with the thesis's rates beside ours, and the CPU time pe
 import argparse
 import json
 import os
-import sqlite3
 import struct
 import sys
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-CORPORA = os.path.join(ROOT, "..", "shared", "corpora")
-EXT = os.environ.get("AFFECT_EXT", os.path.join(ROOT, "build", "affect"))
+from corpus_import import CORPORA, FOUR, ROOT, TEN, connect, import_corpora
 
-FOUR = ["angry", "happy", "normal", "sad"]
-TEN = ["walk", "run", "dash", "walk-back", "walk-left", "walk-right", "bow", "bye", "byebye",
-       "guide"]
 METHODS = {
     "fpca": {"method": "fpca"},
     "ffda": {"method": "ffda"},
@@ -50,34 +44,6 @@ METHODS = {
 # The thesis's Table 3.1/3.2 test rates (hand set; full-body set), SCIENCE.md §4.
 THESIS = {"fpca": (67, 43), "ffda": (30, 37), "fspca-linear": (97, 44), "fspca-rbf": (93, 54),
           "fisomap": (57, 44)}
-
-
-def connect(path):
-    con = sqlite3.connect(path)
-    con.enable_load_extension(True)
-    con.load_extension(EXT)
-    return con
-
-
-def import_corpora(con, which):
-    con.execute("CREATE TABLE IF NOT EXISTS motions(id INTEGER PRIMARY KEY, source TEXT, "
-                "name TEXT UNIQUE, content TEXT, style TEXT, frames INTEGER, motion BLOB)")
-    for source in which:
-        have = con.execute("SELECT count(*) FROM motions WHERE source = ?",
-                           (source,)).fetchone()[0]
-        data = os.path.join(CORPORA, source, "data")
-        files = sorted(f for f in os.listdir(data) if f.endswith(".bvh"))
-        if have == len(files):
-            continue
-        for f in files:
-            _, content, style, _ = f[:-4].split("_")
-            with open(os.path.join(data, f), encoding="utf-8") as fh:
-                text = fh.read()
-            con.execute("INSERT OR REPLACE INTO motions(source, name, content, style, motion) "
-                        "VALUES (?, ?, ?, ?, motion_from_bvh(?, '{\"unit\":\"cm\"}'))",
-                        (source, f[:-4], content, style, text))
-        con.execute("UPDATE motions SET frames = motion_frames(motion) WHERE frames IS NULL")
-        con.commit()
 
 
 def f32(blob):

@@ -6,7 +6,7 @@ Usage (from the repository root, after any build of build/affect.so):
         [--db build/recognition.db] [--corpus 1|2|both] [--options JSON] [--quick]
         [--protocol takes|content|both]
 AFFECT_EXT overrides the extension's path (default build/affect). The corpora are imported into
---db by recognition_eval.py's importer (once; reused when the file holds them).
+--db by corpus_import.py (once; reused when the file holds them).
 
 Everything generated goes through SQL: affect_generate(index, source, target, options) with
 {"source_label": the source's style} added to --options (default: none, i.e. the defaults).
@@ -38,7 +38,6 @@ import argparse
 import json
 import math
 import os
-import sqlite3
 import statistics
 import struct
 import sys
@@ -46,7 +45,7 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-import recognition_eval as rec  # noqa: E402  (the importer and the corpora's lists)
+import corpus_import as ci  # noqa: E402  (the importer and the corpora's lists)
 
 ROOT = os.path.dirname(os.path.dirname(HERE))
 
@@ -154,14 +153,14 @@ def corpus1(con, options, quick):
     con.execute("DROP TABLE IF EXISTS pool")
     con.execute("CREATE TEMP TABLE pool AS SELECT id, content, style, substr(name, -3) AS take, "
                 "motion FROM motions WHERE source = 'bandai-namco-1' AND style IN (%s) AND "
-                "content IN (%s) ORDER BY id" % (",".join("'%s'" % e for e in rec.FOUR),
-                                                  ",".join("'%s'" % c for c in rec.TEN)))
+                "content IN (%s) ORDER BY id" % (",".join("'%s'" % e for e in ci.FOUR),
+                                                  ",".join("'%s'" % c for c in ci.TEN)))
     rows = con.execute("SELECT id, content, style, take, motion, laban_vector(motion) "
                        "FROM pool ORDER BY id").fetchall()
     by_id = {r[0]: r for r in rows}
     z = zscorer([vec(r[5]) for r in rows])
     refs = [(r[0], r[4], r[1]) for r in rows]
-    contents = rec.TEN[:2] if quick else rec.TEN
+    contents = ci.TEN[:2] if quick else ci.TEN
     results, real = [], []
     own = sum(nearest_content(con, r[4], refs, r[0]) == r[1] for r in rows if r[1] in contents)
     n_own = sum(1 for r in rows if r[1] in contents)
@@ -172,7 +171,7 @@ def corpus1(con, options, quick):
         for r in held:
             real.append(con.execute("SELECT affect_classify(?, ?)", (model, r[4])).fetchone()[0]
                         == r[2])
-        gens = generate(con, index, model, [(r[0], r[4], r[2]) for r in held], rec.FOUR,
+        gens = generate(con, index, model, [(r[0], r[4], r[2]) for r in held], ci.FOUR,
                         options)
         for sid, t, g, recog in gens:
             s = by_id[sid]
@@ -216,12 +215,12 @@ def corpus1(con, options, quick):
              statistics.fmean(r["dtw_s"] for r in results)))
     print_fidelity(results)
     print("Recognized (rows: target, columns: label):\n")
-    print("| target | " + " | ".join(rec.FOUR) + " |")
-    print("|---|" + "---:|" * len(rec.FOUR))
-    for t in rec.FOUR:
+    print("| target | " + " | ".join(ci.FOUR) + " |")
+    print("|---|" + "---:|" * len(ci.FOUR))
+    for t in ci.FOUR:
         print("| %s | %s |" % (t, " | ".join(
             str(sum(1 for r in results if r["target"] == t and r["label"] == l))
-            for l in rec.FOUR)))
+            for l in ci.FOUR)))
     print()
 
 
@@ -316,10 +315,10 @@ def main():
     ap.add_argument("--protocol", default="both", choices=["takes", "content", "both"],
                     help="bandai-namco-2-dev: which protocol(s)")
     a = ap.parse_args()
-    if not os.path.isdir(rec.CORPORA):
-        sys.exit("generation_eval.py: the corpora are not at %s (../shared)" % rec.CORPORA)
-    con = rec.connect(a.db)
-    rec.import_corpora(con)
+    if not os.path.isdir(ci.CORPORA):
+        sys.exit("generation_eval.py: the corpora are not at %s (../shared)" % ci.CORPORA)
+    con = ci.connect(a.db)
+    ci.import_corpora(con)
     options = json.loads(a.options)
     print("affect_generate options: %s (plus source_label)\n" % json.dumps(options))
     if a.corpus in ("1", "both"):

@@ -31,13 +31,11 @@ accuracy of each held-out content).
 import argparse
 import json
 import os
-import sqlite3
 import sys
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-CORPORA = os.path.join(ROOT, "..", "shared", "corpora")
-EXT = os.environ.get("AFFECT_EXT", os.path.join(ROOT, "build", "affect"))
+import corpus_import
+from corpus_import import CORPORA, FOUR, ROOT, TEN, connect
 
 # name → options (merged into every protocol's options); "defaults" passes none of its own
 CONFIGS = {
@@ -113,38 +111,13 @@ def grid(con):
             flush=True)
 
 
-FOUR = ("angry", "happy", "sad", "normal")
-TEN = ("walk", "run", "dash", "walk-back", "walk-left", "walk-right", "bow", "bye", "byebye",
-       "guide")
 CROSS = {"active": "active", "feminine": "feminine", "masculinity": "masculine",
          "normal": "normal", "tired": "exhausted", "old": "elderly", "childish": "youthful"}
 
 
-def connect(db):
-    con = sqlite3.connect(db)
-    con.enable_load_extension(True)
-    con.load_extension(EXT)
-    return con
-
-
 def import_corpora(con):
-    con.execute("CREATE TABLE IF NOT EXISTS motions(id INTEGER PRIMARY KEY, source TEXT, "
-                "name TEXT UNIQUE, content TEXT, style TEXT, frames INTEGER, motion BLOB)")
-    for source in ("bandai-namco-1", "bandai-namco-2-dev"):
-        have = con.execute("SELECT count(*) FROM motions WHERE source = ?", (source,)).fetchone()[0]
-        data = os.path.join(CORPORA, source, "data")
-        files = sorted(f for f in os.listdir(data) if f.endswith(".bvh"))
-        if have == len(files):
-            continue
-        for f in files:
-            _, content, style, _ = f[:-4].split("_")
-            with open(os.path.join(data, f), encoding="utf-8") as fh:
-                text = fh.read()
-            con.execute("INSERT OR REPLACE INTO motions(source, name, content, style, motion) "
-                        "VALUES (?, ?, ?, ?, motion_from_bvh(?, '{\"unit\":\"cm\"}'))",
-                        (source, f[:-4], content, style, text))
-        con.execute("UPDATE motions SET frames = motion_frames(motion) WHERE frames IS NULL")
-        con.commit()
+    """Both corpora into motions (corpus_import.py), and their time-stretched copies."""
+    corpus_import.import_corpora(con)
     # the time-stretched copies: 200 frames at 30 fps
     con.execute("CREATE TABLE IF NOT EXISTS stretched(id INTEGER PRIMARY KEY, motion BLOB)")
     if con.execute("SELECT count(*) FROM stretched").fetchone()[0] != \

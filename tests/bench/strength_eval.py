@@ -32,16 +32,11 @@ import json
 import math
 import os
 import random
-import sqlite3
 import sys
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-CORPORA = os.path.join(ROOT, "..", "shared", "corpora")
-EXT = os.environ.get("AFFECT_EXT", os.path.join(ROOT, "build", "affect"))
+from corpus_import import CORPORA, ROOT, TEN, connect, import_corpora
 
-TEN = ["walk", "run", "dash", "walk-back", "walk-left", "walk-right", "bow", "bye", "byebye",
-       "guide"]
 TASKS = {
     "anger": ("bandai-namco-1", ["normal", "angry"]),
     "happiness": ("bandai-namco-1", ["sad", "normal", "happy"]),
@@ -55,33 +50,6 @@ CONFIGS = [("PCA-40", {"pca_dims": 40}), ("PCA-80", {"pca_dims": 80}),
            ("PCA-40, relative poses", {"pca_dims": 40, "relative": True}),
            ("PCA-40, not standardized (the paper's features)",
             {"pca_dims": 40, "standardize": False})]
-
-
-def connect(db):
-    con = sqlite3.connect(db)
-    con.enable_load_extension(True)
-    con.load_extension(EXT)
-    return con
-
-
-def import_corpora(con):
-    con.execute("CREATE TABLE IF NOT EXISTS motions(id INTEGER PRIMARY KEY, source TEXT, "
-                "name TEXT UNIQUE, content TEXT, style TEXT, frames INTEGER, motion BLOB)")
-    for source in ("bandai-namco-1", "bandai-namco-2-dev"):
-        data = os.path.join(CORPORA, source, "data")
-        files = sorted(f for f in os.listdir(data) if f.endswith(".bvh"))
-        have = con.execute("SELECT count(*) FROM motions WHERE source = ?", (source,)).fetchone()[0]
-        if have == len(files):
-            continue
-        for f in files:
-            _, content, style, _ = f[:-4].split("_")
-            with open(os.path.join(data, f), encoding="utf-8") as fh:
-                text = fh.read()
-            con.execute("INSERT OR REPLACE INTO motions(source, name, content, style, motion) "
-                        "VALUES (?, ?, ?, ?, motion_from_bvh(?, '{\"unit\":\"cm\"}'))",
-                        (source, f[:-4], content, style, text))
-        con.execute("UPDATE motions SET frames = motion_frames(motion) WHERE frames IS NULL")
-        con.commit()
 
 
 def task_rows(con, task):

@@ -392,9 +392,41 @@ static uint32_t vote_of(uint32_t c, const double *target)
     uint32_t k = affect_svm_predict(m, &x, dec);
     for (size_t q = 0; q < n_pairs(c); q++)
         assert_true(dec[q] == target[q]);
+    /* the vote on the decision values is the model's (its classes are 0 .. c − 1 in order) */
+    uint32_t votes[8];
+    assert_int_equal(affect_svm_vote(dec, c, votes), k);
+    assert_int_equal(affect_svm_vote(dec, c, NULL), k);
+    uint32_t total = 0;
+    for (uint32_t i = 0; i < c; i++)
+        total += votes[i];
+    assert_int_equal(total, n_pairs(c));
     affect_svm_free(m);
     affect_bw_free(&w);
     return k;
+}
+
+/* affect_svm_vote's counts, and its answer outside 1 .. AFFECT_SVM_MAX_CLASSES classes. */
+static void test_vote_counts(void **state)
+{
+    (void)state;
+    static const double clear[6] = {-1, 1, 1, 1, 1, 1};
+    static const double tie123[6] = {-1, -1, -1, 1, -1, 1};
+    static const double nan6[6] = {NAN, NAN, NAN, NAN, NAN, NAN}; /* each a vote for q */
+    static const uint32_t clear_votes[4] = {2, 3, 1, 0}, tie_votes[4] = {0, 2, 2, 2};
+    static const uint32_t nan_votes[4] = {0, 1, 2, 3};
+    uint32_t v[4];
+    assert_int_equal(affect_svm_vote(clear, 4, v), 1);
+    assert_memory_equal(v, clear_votes, sizeof v);
+    assert_int_equal(affect_svm_vote(tie123, 4, v), 1);
+    assert_memory_equal(v, tie_votes, sizeof v);
+    assert_int_equal(affect_svm_vote(nan6, 4, v), 3);
+    assert_memory_equal(v, nan_votes, sizeof v);
+    assert_int_equal(affect_svm_vote(NULL, 1, v), 0); /* one class: no pair, it wins */
+    assert_int_equal(v[0], 0);
+    v[0] = 7;
+    assert_int_equal(affect_svm_vote(clear, 0, v), UINT32_MAX);
+    assert_int_equal(affect_svm_vote(clear, AFFECT_SVM_MAX_CLASSES + 1, v), UINT32_MAX);
+    assert_int_equal(v[0], 7);
 }
 
 static void test_vote(void **state)
@@ -1214,12 +1246,12 @@ static void test_out_of_memory(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_separable),     cmocka_unit_test(test_matches_libsvm),
-        cmocka_unit_test(test_vote),          cmocka_unit_test(test_vote_trained),
-        cmocka_unit_test(test_folds),         cmocka_unit_test(test_select_c),
-        cmocka_unit_test(test_gram_blocks),   cmocka_unit_test(test_errors),
-        cmocka_unit_test(test_round_trip),    cmocka_unit_test(test_corrupt),
-        cmocka_unit_test(test_out_of_memory),
+        cmocka_unit_test(test_separable),    cmocka_unit_test(test_matches_libsvm),
+        cmocka_unit_test(test_vote),         cmocka_unit_test(test_vote_counts),
+        cmocka_unit_test(test_vote_trained), cmocka_unit_test(test_folds),
+        cmocka_unit_test(test_select_c),     cmocka_unit_test(test_gram_blocks),
+        cmocka_unit_test(test_errors),       cmocka_unit_test(test_round_trip),
+        cmocka_unit_test(test_corrupt),      cmocka_unit_test(test_out_of_memory),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -143,6 +143,14 @@ void affect_svm_free(affect_svm *m);
  * decision values, each a vote for the pair's second class. */
 uint32_t affect_svm_predict(const affect_svm *m, const double *x, double *dec);
 
+/* The one-vs-one vote on decision values already computed: dec holds the c(c−1)/2 values in
+ * pair order (as affect_svm_predict gives them); dec_pq > 0 is a vote for p, anything else (NaN
+ * too) for q. Returns the class with the most votes, the smallest index among equals, and the
+ * c vote counts in votes (when not NULL): the vote affect_svm_predict makes, so that a caller
+ * reporting the votes reports the ones that chose the label. UINT32_MAX (and votes untouched)
+ * when c is 0 or above AFFECT_SVM_MAX_CLASSES. */
+uint32_t affect_svm_vote(const double *dec, uint32_t c, uint32_t *votes);
+
 /* ---- accessors ---- */
 uint32_t affect_svm_n_classes(const affect_svm *m);
 size_t affect_svm_dim(const affect_svm *m);
