@@ -1531,13 +1531,12 @@ static affect_status decode_head(affect_br *r, affect_classifier **out, affect_e
         !affect_br_u32(r, &flags) || !affect_br_u32(r, &n_classes))
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "truncated: %zu bytes is shorter than the classifier header", r->size);
-    if (memcmp(magic, AFFECT_CLASSIFIER_MAGIC, 4) != 0)
-        return affect_fail(err, AFFECT_ERR_FORMAT,
-                           "not a classifier (bad magic bytes at offset 0)");
-    if (version < 1 || version > AFFECT_CLASSIFIER_VERSION)
-        return affect_fail(err, AFFECT_ERR_FORMAT,
-                           "unknown classifier format version %u (this build reads 1 .. %u)",
-                           version, AFFECT_CLASSIFIER_VERSION);
+    affect_status st;
+    if ((st = affect_check_magic(magic, AFFECT_CLASSIFIER_MAGIC, NULL, "a classifier", 0, err)) !=
+        AFFECT_OK)
+        return st;
+    if ((st = affect_check_version(version, AFFECT_CLASSIFIER_VERSION, NULL, err)) != AFFECT_OK)
+        return st;
     if (flags != 0)
         return affect_fail(err, AFFECT_ERR_FORMAT, "unknown classifier flags %u (offset 8)", flags);
     if (n_classes < 2 || n_classes > AFFECT_CLASSIFIER_MAX_CLASSES)
@@ -1741,9 +1740,9 @@ affect_status affect_classifier_decode(const unsigned char *data, size_t size,
     if (size < 24)
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "truncated: %zu bytes is shorter than the classifier header", size);
-    if (memcmp(data, AFFECT_CLASSIFIER_MAGIC, 4) != 0)
-        return affect_fail(err, AFFECT_ERR_FORMAT,
-                           "not a classifier (bad magic bytes at offset 0)");
+    if (affect_check_magic(data, AFFECT_CLASSIFIER_MAGIC, NULL, "a classifier", 0, err) !=
+        AFFECT_OK)
+        return AFFECT_ERR_FORMAT;
     uint64_t sum = 0;
     for (int i = 0; i < 8; i++)
         sum |= (uint64_t)data[size - 8 + (size_t)i] << (8 * i);

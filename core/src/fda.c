@@ -1408,11 +1408,8 @@ static affect_status decode_head(affect_br *r, affect_fda *f, affect_error *err)
     /* the caller checked the header's length and magic: skip the magic */
     affect_br_u32(r, &version);
     affect_br_u32(r, &version);
-    if (version != AFFECT_FDA_VERSION)
-        return affect_fail(err, AFFECT_ERR_FORMAT,
-                           "unknown format version %u, this build reads "
-                           "%u (offset 4)",
-                           version, AFFECT_FDA_VERSION);
+    if (affect_check_version(version, AFFECT_FDA_VERSION, NULL, err) != AFFECT_OK)
+        return AFFECT_ERR_FORMAT;
     affect_br_u32(r, &flags);
     affect_br_u32(r, &method);
     affect_br_u32(r, &order);
@@ -1590,10 +1587,8 @@ affect_status affect_fda_decode(const unsigned char *data, size_t size, affect_f
                            "truncated: %zu bytes is shorter than the "
                            "functional model header",
                            size);
-    if (memcmp(data, AFFECT_FDA_MAGIC, 4) != 0)
-        return affect_fail(err, AFFECT_ERR_FORMAT,
-                           "not a functional model (bad magic bytes at "
-                           "offset 0)");
+    if (affect_check_magic(data, AFFECT_FDA_MAGIC, NULL, "a functional model", 0, err) != AFFECT_OK)
+        return AFFECT_ERR_FORMAT;
     uint64_t sum = 0;
     for (int i = 0; i < 8; i++)
         sum |= (uint64_t)data[size - 8 + (size_t)i] << (8 * i);

@@ -703,8 +703,8 @@ affect_status affect_ranker_decode(const unsigned char *data, size_t size, affec
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "not a ranker BLOB (%zu bytes, the header alone is %u)", size,
                            HEADER_SIZE + 8);
-    if (memcmp(data, AFFECT_RANKER_MAGIC, 4) != 0)
-        return affect_fail(err, AFFECT_ERR_FORMAT, "not a ranker BLOB (bad magic)");
+    if (affect_check_magic(data, AFFECT_RANKER_MAGIC, NULL, "a ranker", 0, err) != AFFECT_OK)
+        return AFFECT_ERR_FORMAT;
     affect_br rd;
     affect_br_init(&rd, data, size);
     const unsigned char *magic;
@@ -724,10 +724,8 @@ affect_status affect_ranker_decode(const unsigned char *data, size_t size, affec
     affect_br_u64(&rd, &correct);
     affect_br_f64(&rd, &objective);
     affect_br_u64(&rd, &reserved);
-    if (version < 1 || version > AFFECT_RANKER_VERSION)
-        return affect_fail(err, AFFECT_ERR_FORMAT,
-                           "unsupported ranker version %u (this build reads 1 to %u)", version,
-                           AFFECT_RANKER_VERSION);
+    if (affect_check_version(version, AFFECT_RANKER_VERSION, NULL, err) != AFFECT_OK)
+        return AFFECT_ERR_FORMAT;
     if (flags != 0 || conv > 1 || reserved != 0)
         return affect_fail(err, AFFECT_ERR_FORMAT, "reserved ranker fields are not zero");
     if (dim < 1 || dim > AFFECT_RANK_MAX_DIM || clusters < 1 || clusters > AFFECT_RANK_MAX_CLUSTERS)

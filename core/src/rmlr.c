@@ -2090,9 +2090,10 @@ void affect_impute_column_means(double *x, size_t n, size_t p)
 
 /* ---- serialisation ---- */
 
-void affect_rmlr_encode(const affect_rmlr *m, affect_bw *w)
+/* The fit's fields after the version: the whole of version 1 but its first byte, the body of
+ * version 2 (affect/rmlr.h). */
+static void encode_body(const affect_rmlr *m, affect_bw *w)
 {
-    affect_bw_u8(w, AFFECT_RMLR_FORMAT_VERSION);
     affect_bw_u32(w, m->K);
     affect_bw_u32(w, (uint32_t)m->p);
     affect_bw_u32(w, m->n_train);
@@ -2107,6 +2108,18 @@ void affect_rmlr_encode(const affect_rmlr *m, affect_bw *w)
     affect_bw_f64s(w, m->sd, m->p);
     affect_bw_f64s(w, m->beta0, m->K);
     affect_bw_f64s(w, m->beta, (size_t)m->K * m->p);
+}
+
+void affect_rmlr_encode(const affect_rmlr *m, affect_bw *w)
+{
+    size_t start = w->len;
+    affect_bw_header(w, AFFECT_RMLR_MAGIC, AFFECT_RMLR_FORMAT_VERSION, 0);
+    affect_bw_u64(w, 0); /* the total length, known at the end */
+    encode_body(m, w);
+    if (w->failed)
+        return;
+    affect_put_u64(w->data + start + 12, (uint64_t)(w->len - start) + 8);
+    affect_bw_checksum(w, start);
 }
 
 static affect_status truncated(affect_error *err, const char *field, size_t off)
@@ -2146,23 +2159,16 @@ static affect_status check_finite(const double *v, size_t n, size_t off, const c
     return AFFECT_OK;
 }
 
-affect_status affect_rmlr_decode(affect_br *r, affect_rmlr **out, affect_error *err)
+/* The fields after the version (encode_body), from r's offset. */
+static affect_status decode_body(affect_br *r, affect_rmlr **out, affect_error *err)
 {
     affect_status st;
     size_t off, need, kp;
-    uint8_t version, conv;
+    uint8_t conv;
     uint32_t K, p, n, L, idx;
     double alpha, cve;
     affect_rmlr *m = NULL;
-    *out = NULL;
 
-    off = r->off;
-    if (!affect_br_u8(r, &version))
-        return truncated(err, "the version", off);
-    if (version != AFFECT_RMLR_FORMAT_VERSION)
-        return affect_fail(err, AFFECT_ERR_FORMAT,
-                           "RMLR: unknown format version %u at offset %zu (this build reads %u)",
-                           version, off, AFFECT_RMLR_FORMAT_VERSION);
     off = r->off;
     if ((st = get_u32(r, &K, "the class count", err)) != AFFECT_OK)
         return st;
@@ -2283,4 +2289,70 @@ affect_status affect_rmlr_decode(affect_br *r, affect_rmlr **out, affect_error *
 cleanup:
     affect_rmlr_free(m);
     return st;
+}
+
+/* Bytes of version 2 around the body: the header (magic, version, flags, total length) and the
+ * checksum. */
+#define RMLR_HEAD 20u
+#define RMLR_TAIL 8u
+
+affect_status affect_rmlr_decode(affect_br *r, affect_rmlr **out, affect_error *err)
+{
+    affect_status st;
+    *out = NULL;
+    size_t start = r->off, left = r->size - r->off;
+    const unsigned char *p = r->data + start;
+    /* Version 1 has no magic: its first byte is its version, 1, never the magic's 'A'. */
+    if (left >= 1 && p[0] == 1) {
+        r->off++;
+        return decode_body(r, out, err);
+    }
+    uint32_t version, flags;
+    if ((st = affect_br_header(r, AFFECT_RMLR_MAGIC, AFFECT_RMLR_FORMAT_VERSION,
+                               "RMLR: ", "an RMLR fit", &version, &flags, err)) != AFFECT_OK)
+        return st;
+    if (version != AFFECT_RMLR_FORMAT_VERSION) {
+        r->off = start;
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "RMLR: version 1 is stored without a header (offset %zu)", start + 4);
+    }
+    if (flags != 0) {
+        r->off = start;
+        return affect_fail(err, AFFECT_ERR_FORMAT, "RMLR: flags 0x%x are not 0 (offset %zu)", flags,
+                           start + 8);
+    }
+    uint64_t total;
+    if (!affect_br_u64(r, &total)) {
+        r->off = start;
+        return truncated(err, "the length", start + 12);
+    }
+    if (total < RMLR_HEAD + RMLR_TAIL || total > left) {
+        r->off = start;
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "RMLR: truncated: %zu bytes, the header says %llu (offset %zu)", left,
+                           (unsigned long long)total, start + 12);
+    }
+    size_t body_end = start + (size_t)total - RMLR_TAIL;
+    if (!affect_checksum_ok(p, (size_t)total - RMLR_TAIL)) {
+        r->off = start;
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "RMLR: checksum mismatch: the fit is corrupt (offset %zu)", body_end);
+    }
+    affect_br body;
+    affect_br_init(&body, r->data, body_end);
+    body.off = r->off;
+    if ((st = decode_body(&body, out, err)) != AFFECT_OK) {
+        r->off = start;
+        return st;
+    }
+    if (body.off != body_end) {
+        affect_rmlr_free(*out);
+        *out = NULL;
+        r->off = start;
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "RMLR: %zu bytes follow the coefficients (offset %zu)",
+                           body_end - body.off, body.off);
+    }
+    r->off = start + (size_t)total;
+    return AFFECT_OK;
 }

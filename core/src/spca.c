@@ -745,13 +745,10 @@ affect_status affect_spca_decode(affect_br *r, affect_spca **out, affect_error *
     affect_br_u64(r, &n);
     affect_br_u64(r, &d);
     affect_br_f64(r, &sigma);
-    if (memcmp(magic, AFFECT_SPCA_MAGIC, 4) != 0)
-        return affect_fail(err, AFFECT_ERR_FORMAT, "sPCA: bad magic bytes (offset %zu)", start);
-    if (version != AFFECT_SPCA_VERSION)
-        return affect_fail(err, AFFECT_ERR_FORMAT,
-                           "sPCA: unknown format version %" PRIu32 ", this build reads %u "
-                           "(offset %zu)",
-                           version, AFFECT_SPCA_VERSION, start + 4);
+    if (affect_check_magic(magic, AFFECT_SPCA_MAGIC, "sPCA: ", "an sPCA record", start, err) !=
+            AFFECT_OK ||
+        affect_check_version(version, AFFECT_SPCA_VERSION, "sPCA: ", err) != AFFECT_OK)
+        return AFFECT_ERR_FORMAT;
     if ((flags & ~(uint32_t)(FLAG_F32 | FLAG_Q4)) || flags == (FLAG_F32 | FLAG_Q4))
         return affect_fail(err, AFFECT_ERR_FORMAT, "sPCA: unknown flags 0x%" PRIx32 " (offset %zu)",
                            flags, start + 8);

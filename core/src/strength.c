@@ -1298,8 +1298,9 @@ affect_status affect_strength_decode(const unsigned char *data, size_t size, aff
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "not a strength model BLOB (%zu bytes, the header alone is %u)", size,
                            (unsigned)(FIXED_SIZE + 8));
-    if (memcmp(data, AFFECT_STRENGTH_MAGIC, 4) != 0)
-        return affect_fail(err, AFFECT_ERR_FORMAT, "not a strength model BLOB (bad magic)");
+    if (affect_check_magic(data, AFFECT_STRENGTH_MAGIC, NULL, "a strength model", 0, err) !=
+        AFFECT_OK)
+        return AFFECT_ERR_FORMAT;
     affect_br r;
     affect_br_init(&r, data, size - 8);
     const unsigned char *magic;
@@ -1315,10 +1316,8 @@ affect_status affect_strength_decode(const unsigned char *data, size_t size, aff
     affect_br_u32(&r, &L);
     affect_br_u32(&r, &reg);
     affect_br_u32(&r, &root);
-    if (version < 1 || version > AFFECT_STRENGTH_VERSION)
-        return affect_fail(err, AFFECT_ERR_FORMAT,
-                           "unsupported strength model version %u (this build reads 1 to %u)",
-                           version, AFFECT_STRENGTH_VERSION);
+    if (affect_check_version(version, AFFECT_STRENGTH_VERSION, NULL, err) != AFFECT_OK)
+        return AFFECT_ERR_FORMAT;
     bool pca = (flags & FLAG_PCA) != 0, stdz = (flags & FLAG_STANDARDIZE) != 0;
     bool relative = (flags & FLAG_RELATIVE) != 0;
     if ((flags & ~(FLAG_PCA | FLAG_RELATIVE | FLAG_STANDARDIZE)) != 0 || root >= J ||

@@ -1001,12 +1001,8 @@ affect_status affect_svm_decode(affect_br *r, affect_svm **out, affect_error *er
         st = truncated(err, "the version", off);
         goto cleanup;
     }
-    if (version < 1 || version > AFFECT_SVM_FORMAT_VERSION) {
-        st = affect_fail(err, AFFECT_ERR_FORMAT,
-                         "SVM: unknown format version %u at offset %zu (this build reads 1 .. %u)",
-                         version, off, AFFECT_SVM_FORMAT_VERSION);
+    if ((st = affect_check_version(version, AFFECT_SVM_FORMAT_VERSION, "SVM: ", err)) != AFFECT_OK)
         goto cleanup;
-    }
     off = r->off;
     if ((st = get_u32(r, &c, "the class count", err)) != AFFECT_OK)
         goto cleanup;
