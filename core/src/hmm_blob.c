@@ -204,7 +204,7 @@ affect_status affect_hmm_blob_decode(const unsigned char *data, size_t size, aff
                            "dimensions",
                            size < total ? "truncated" : "trailing bytes", size, total, cfg.n_states,
                            cfg.n_mix, cfg.dim);
-    if (affect_get_u64(data + size - 8) != affect_fnv1a64(data, size - 8))
+    if (!affect_checksum_ok(data, size - 8))
         return affect_fail(err, AFFECT_ERR_FORMAT, "model checksum mismatch: the BLOB is corrupt");
 
     /* contents: the hash matched, so these fail only for a BLOB written wrongly */

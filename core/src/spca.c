@@ -702,9 +702,10 @@ void affect_spca_encode(const affect_spca *s, affect_bw *w)
     if (w->failed)
         return;
     size_t start = w->len;
-    affect_bw_bytes(w, AFFECT_SPCA_MAGIC, 4);
-    affect_bw_u32(w, AFFECT_SPCA_VERSION);
-    affect_bw_u32(w, s->q4 ? FLAG_Q4 : s->f32 ? FLAG_F32 : 0u);
+    affect_bw_header(w, AFFECT_SPCA_MAGIC, AFFECT_SPCA_VERSION,
+                     s->q4    ? FLAG_Q4
+                     : s->f32 ? FLAG_F32
+                              : 0u);
     affect_bw_u32(w, (uint32_t)s->kernel);
     affect_bw_u32(w, s->classes);
     affect_bw_u32(w, s->dims);
@@ -722,7 +723,7 @@ void affect_spca_encode(const affect_spca *s, affect_bw *w)
         affect_bw_f64s_as_f32(w, s->axes, pd);
     if (w->failed)
         return;
-    affect_bw_u64(w, affect_fnv1a64(w->data + start, w->len - start));
+    affect_bw_checksum(w, start);
 }
 
 affect_status affect_spca_decode(affect_br *r, affect_spca **out, affect_error *err)
