@@ -274,6 +274,32 @@ affect_status affect_check_version(uint32_t version, uint32_t newest, const char
                        prefix ? prefix : "", (unsigned)version, (unsigned)newest);
 }
 
+affect_status affect_fail_truncated(affect_error *err, const char *prefix, const char *field,
+                                    size_t off)
+{
+    return affect_fail(err, AFFECT_ERR_FORMAT, "%struncated in %s (offset %zu)",
+                       prefix ? prefix : "", field, off);
+}
+
+affect_status affect_br_need(const affect_br *r, size_t n, size_t elem, const char *prefix,
+                             const char *field, affect_error *err)
+{
+    return affect_br_has(r, n, elem) ? AFFECT_OK
+                                     : affect_fail_truncated(err, prefix, field, r->off);
+}
+
+affect_status affect_br_u32_field(affect_br *r, uint32_t *v, const char *prefix, const char *field,
+                                  affect_error *err)
+{
+    return affect_br_u32(r, v) ? AFFECT_OK : affect_fail_truncated(err, prefix, field, r->off);
+}
+
+affect_status affect_br_f64_field(affect_br *r, double *v, const char *prefix, const char *field,
+                                  affect_error *err)
+{
+    return affect_br_f64(r, v) ? AFFECT_OK : affect_fail_truncated(err, prefix, field, r->off);
+}
+
 void affect_bw_header(affect_bw *w, const char magic[4], uint32_t version, uint32_t flags)
 {
     affect_bw_bytes(w, magic, 4);

@@ -2122,28 +2122,14 @@ void affect_rmlr_encode(const affect_rmlr *m, affect_bw *w)
     affect_bw_checksum(w, start);
 }
 
-static affect_status truncated(affect_error *err, const char *field, size_t off)
-{
-    return affect_fail(err, AFFECT_ERR_FORMAT, "RMLR: truncated in %s (offset %zu)", field, off);
-}
-
-static affect_status get_u32(affect_br *r, uint32_t *v, const char *field, affect_error *err)
-{
-    return affect_br_u32(r, v) ? AFFECT_OK : truncated(err, field, r->off);
-}
-
-static affect_status get_f64(affect_br *r, double *v, const char *field, affect_error *err)
-{
-    return affect_br_f64(r, v) ? AFFECT_OK : truncated(err, field, r->off);
-}
-
 /* n float64 values into v (n checked against the bytes left first); *off receives the offset
  * of the first. Values are not checked. */
 static affect_status get_f64s(affect_br *r, double *v, size_t n, size_t *off, const char *field,
                               affect_error *err)
 {
-    if (!affect_br_has(r, n, 8))
-        return truncated(err, field, r->off);
+    affect_status st = affect_br_need(r, n, 8, "RMLR: ", field, err);
+    if (st != AFFECT_OK)
+        return st;
     *off = r->off;
     affect_br_f64s(r, v, n);
     return AFFECT_OK;
@@ -2170,35 +2156,35 @@ static affect_status decode_body(affect_br *r, affect_rmlr **out, affect_error *
     affect_rmlr *m = NULL;
 
     off = r->off;
-    if ((st = get_u32(r, &K, "the class count", err)) != AFFECT_OK)
+    if ((st = affect_br_u32_field(r, &K, "RMLR: ", "the class count", err)) != AFFECT_OK)
         return st;
     if (K < 2 || K > AFFECT_RMLR_MAX_CLASSES)
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "RMLR: class count %u out of range 2 .. %u (offset %zu)", K,
                            AFFECT_RMLR_MAX_CLASSES, off);
     off = r->off;
-    if ((st = get_u32(r, &p, "the feature count", err)) != AFFECT_OK)
+    if ((st = affect_br_u32_field(r, &p, "RMLR: ", "the feature count", err)) != AFFECT_OK)
         return st;
     if (p < 1 || p > AFFECT_RMLR_MAX_FEATURES)
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "RMLR: feature count %u out of range 1 .. %u (offset %zu)", p,
                            AFFECT_RMLR_MAX_FEATURES, off);
     off = r->off;
-    if ((st = get_u32(r, &n, "the sample count", err)) != AFFECT_OK)
+    if ((st = affect_br_u32_field(r, &n, "RMLR: ", "the sample count", err)) != AFFECT_OK)
         return st;
     if (n < K)
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "RMLR: sample count %u below the class count %u (offset %zu)", n, K,
                            off);
     off = r->off;
-    if ((st = get_u32(r, &L, "the lambda count", err)) != AFFECT_OK)
+    if ((st = affect_br_u32_field(r, &L, "RMLR: ", "the lambda count", err)) != AFFECT_OK)
         return st;
     if (L < 1 || L > AFFECT_RMLR_MAX_LAMBDAS)
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "RMLR: lambda count %u out of range 1 .. %u (offset %zu)", L,
                            AFFECT_RMLR_MAX_LAMBDAS, off);
     off = r->off;
-    if ((st = get_u32(r, &idx, "the lambda index", err)) != AFFECT_OK)
+    if ((st = affect_br_u32_field(r, &idx, "RMLR: ", "the lambda index", err)) != AFFECT_OK)
         return st;
     if (idx >= L)
         return affect_fail(err, AFFECT_ERR_FORMAT,
@@ -2206,18 +2192,19 @@ static affect_status decode_body(affect_br *r, affect_rmlr **out, affect_error *
                            L, off);
     off = r->off;
     if (!affect_br_u8(r, &conv))
-        return truncated(err, "the converged flag", off);
+        return affect_fail_truncated(err, "RMLR: ", "the converged flag", off);
     if (conv > 1)
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "RMLR: converged flag %u is not 0 or 1 (offset %zu)", conv, off);
     off = r->off;
-    if ((st = get_f64(r, &alpha, "alpha", err)) != AFFECT_OK)
+    if ((st = affect_br_f64_field(r, &alpha, "RMLR: ", "alpha", err)) != AFFECT_OK)
         return st;
     if (!(alpha >= 0 && alpha <= 1))
         return affect_fail(err, AFFECT_ERR_FORMAT, "RMLR: alpha = %g is not in [0, 1] (offset %zu)",
                            alpha, off);
     off = r->off;
-    if ((st = get_f64(r, &cve, "the cross-validation error", err)) != AFFECT_OK)
+    if ((st = affect_br_f64_field(r, &cve, "RMLR: ", "the cross-validation error", err)) !=
+        AFFECT_OK)
         return st;
     if (!(cve >= 0 && cve <= 1))
         return affect_fail(err, AFFECT_ERR_FORMAT,
@@ -2241,7 +2228,7 @@ static affect_status decode_body(affect_br *r, affect_rmlr **out, affect_error *
             left -= 8 * bounds[s];
             at += 8 * bounds[s];
         }
-        return truncated(err, field, at);
+        return affect_fail_truncated(err, "RMLR: ", field, at);
     }
     if ((st = model_new(K, p, L, &m, err)) != AFFECT_OK)
         return st;
@@ -2324,7 +2311,7 @@ affect_status affect_rmlr_decode(affect_br *r, affect_rmlr **out, affect_error *
     uint64_t total;
     if (!affect_br_u64(r, &total)) {
         r->off = start;
-        return truncated(err, "the length", start + 12);
+        return affect_fail_truncated(err, "RMLR: ", "the length", start + 12);
     }
     if (total < RMLR_HEAD + RMLR_TAIL || total > left) {
         r->off = start;

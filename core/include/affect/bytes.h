@@ -141,6 +141,19 @@ affect_status affect_check_magic(const unsigned char *p, const char magic[4], co
 affect_status affect_check_version(uint32_t version, uint32_t newest, const char *prefix,
                                    affect_error *err);
 
+/* Named fields of the records that report where they are truncated (SVM, RMLR):
+ * AFFECT_ERR_FORMAT "<prefix>truncated in <field> (offset <off>)". affect_br_need fails so
+ * unless n elements of elem bytes are left (at r's offset); the reads fail so, reading
+ * nothing, when their value is not all there. */
+affect_status affect_fail_truncated(affect_error *err, const char *prefix, const char *field,
+                                    size_t off);
+affect_status affect_br_need(const affect_br *r, size_t n, size_t elem, const char *prefix,
+                             const char *field, affect_error *err);
+affect_status affect_br_u32_field(affect_br *r, uint32_t *v, const char *prefix, const char *field,
+                                  affect_error *err);
+affect_status affect_br_f64_field(affect_br *r, double *v, const char *prefix, const char *field,
+                                  affect_error *err);
+
 /* Appends magic, version (uint32) and flags (uint32). */
 void affect_bw_header(affect_bw *w, const char magic[4], uint32_t version, uint32_t flags);
 
