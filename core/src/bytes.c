@@ -5,6 +5,8 @@
  */
 #include "affect/bytes.h"
 
+#include "affect/hmm_blob.h" /* affect_fnv1a64 */
+
 #include <string.h>
 
 void affect_bw_init(affect_bw *w)
@@ -65,6 +67,11 @@ static void put_le(affect_bw *w, uint64_t v, unsigned bytes)
 void affect_bw_u8(affect_bw *w, uint8_t v)
 {
     put_le(w, v, 1);
+}
+
+void affect_bw_u16(affect_bw *w, uint16_t v)
+{
+    put_le(w, v, 2);
 }
 
 void affect_bw_u32(affect_bw *w, uint32_t v)
@@ -182,6 +189,14 @@ bool affect_br_u8(affect_br *r, uint8_t *v)
     return true;
 }
 
+bool affect_br_u16(affect_br *r, uint16_t *v)
+{
+    if (!affect_br_has(r, 1, 2))
+        return false;
+    *v = (uint16_t)get_le(r, 2);
+    return true;
+}
+
 bool affect_br_u32(affect_br *r, uint32_t *v)
 {
     if (!affect_br_has(r, 1, 4))
@@ -236,4 +251,91 @@ bool affect_br_u32s(affect_br *r, uint32_t *v, size_t n)
     for (size_t i = 0; i < n; i++)
         v[i] = (uint32_t)get_le(r, 4);
     return true;
+}
+
+/* ---- headers and checksums ---- */
+
+affect_status affect_check_magic(const unsigned char *p, const char magic[4], const char *prefix,
+                                 const char *what, size_t off, affect_error *err)
+{
+    if (memcmp(p, magic, 4) == 0)
+        return AFFECT_OK;
+    return affect_fail(err, AFFECT_ERR_FORMAT, "%snot %s (bad magic bytes at offset %zu)",
+                       prefix ? prefix : "", what, off);
+}
+
+affect_status affect_check_version(uint32_t version, uint32_t newest, const char *prefix,
+                                   affect_error *err)
+{
+    if (version >= 1 && version <= newest)
+        return AFFECT_OK;
+    return affect_fail(err, AFFECT_ERR_FORMAT,
+                       "%sunknown format version %u (this build reads 1 .. %u)",
+                       prefix ? prefix : "", (unsigned)version, (unsigned)newest);
+}
+
+affect_status affect_fail_truncated(affect_error *err, const char *prefix, const char *field,
+                                    size_t off)
+{
+    return affect_fail(err, AFFECT_ERR_FORMAT, "%struncated in %s (offset %zu)",
+                       prefix ? prefix : "", field, off);
+}
+
+affect_status affect_br_need(const affect_br *r, size_t n, size_t elem, const char *prefix,
+                             const char *field, affect_error *err)
+{
+    return affect_br_has(r, n, elem) ? AFFECT_OK
+                                     : affect_fail_truncated(err, prefix, field, r->off);
+}
+
+affect_status affect_br_u32_field(affect_br *r, uint32_t *v, const char *prefix, const char *field,
+                                  affect_error *err)
+{
+    return affect_br_u32(r, v) ? AFFECT_OK : affect_fail_truncated(err, prefix, field, r->off);
+}
+
+affect_status affect_br_f64_field(affect_br *r, double *v, const char *prefix, const char *field,
+                                  affect_error *err)
+{
+    return affect_br_f64(r, v) ? AFFECT_OK : affect_fail_truncated(err, prefix, field, r->off);
+}
+
+void affect_bw_header(affect_bw *w, const char magic[4], uint32_t version, uint32_t flags)
+{
+    affect_bw_bytes(w, magic, 4);
+    affect_bw_u32(w, version);
+    affect_bw_u32(w, flags);
+}
+
+affect_status affect_br_header(affect_br *r, const char magic[4], uint32_t newest,
+                               const char *prefix, const char *what, uint32_t *version,
+                               uint32_t *flags, affect_error *err)
+{
+    affect_status st;
+    if (!affect_br_has(r, 12, 1))
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "%struncated: %zu bytes is shorter than the 12-byte header",
+                           prefix ? prefix : "", r->size - r->off);
+    const unsigned char *p = r->data + r->off;
+    if ((st = affect_check_magic(p, magic, prefix, what, r->off, err)) != AFFECT_OK)
+        return st;
+    uint32_t v = affect_get_u32(p + 4);
+    if ((st = affect_check_version(v, newest, prefix, err)) != AFFECT_OK)
+        return st;
+    *version = v;
+    *flags = affect_get_u32(p + 8);
+    r->off += 12;
+    return AFFECT_OK;
+}
+
+void affect_bw_checksum(affect_bw *w, size_t start)
+{
+    if (w->failed || start > w->len)
+        return;
+    affect_bw_u64(w, affect_fnv1a64(w->data + start, w->len - start));
+}
+
+bool affect_checksum_ok(const unsigned char *data, size_t n)
+{
+    return affect_get_u64(data + n) == affect_fnv1a64(data, n);
 }

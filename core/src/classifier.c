@@ -1403,9 +1403,7 @@ static affect_status hmm_from_triangles(const unsigned char *p, size_t len, unsi
                 memcpy(cov + 8 * ((g * m + r) * m + q), t, 8);
                 memcpy(cov + 8 * ((g * m + q) * m + r), t, 8);
             }
-    uint64_t sum = affect_fnv1a64(b, head + full);
-    for (int i = 0; i < 8; i++)
-        b[head + full + (size_t)i] = (unsigned char)(sum >> (8 * i));
+    affect_put_u64(b + head + full, affect_fnv1a64(b, head + full));
     *out = b;
     *out_len = total;
     return AFFECT_OK;
@@ -1419,9 +1417,7 @@ affect_status affect_classifier_encode(const affect_classifier *c, unsigned char
     affect_bw w;
     affect_bw_init(&w);
     const affect_classifier_config *cfg = &c->cfg;
-    affect_bw_bytes(&w, AFFECT_CLASSIFIER_MAGIC, 4);
-    affect_bw_u32(&w, c->compact ? AFFECT_CLASSIFIER_VERSION : 2u);
-    affect_bw_u32(&w, 0);
+    affect_bw_header(&w, AFFECT_CLASSIFIER_MAGIC, c->compact ? AFFECT_CLASSIFIER_VERSION : 2u, 0);
     affect_bw_u32(&w, c->n_classes);
     for (uint32_t k = 0; k < c->n_classes; k++) {
         size_t len = strlen(c->labels[k]);
@@ -1487,7 +1483,7 @@ affect_status affect_classifier_encode(const affect_classifier *c, unsigned char
     affect_bw_u32s(&w, c->train_y, c->n_train);
     affect_bw_f64s(&w, c->train_z, (size_t)c->n_train * p);
     if (!w.failed)
-        affect_bw_u64(&w, affect_fnv1a64(w.data, w.len));
+        affect_bw_checksum(&w, 0);
     if (w.failed) {
         size_t len = w.len;
         affect_bw_free(&w);
@@ -1531,13 +1527,12 @@ static affect_status decode_head(affect_br *r, affect_classifier **out, affect_e
         !affect_br_u32(r, &flags) || !affect_br_u32(r, &n_classes))
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "truncated: %zu bytes is shorter than the classifier header", r->size);
-    if (memcmp(magic, AFFECT_CLASSIFIER_MAGIC, 4) != 0)
-        return affect_fail(err, AFFECT_ERR_FORMAT,
-                           "not a classifier (bad magic bytes at offset 0)");
-    if (version < 1 || version > AFFECT_CLASSIFIER_VERSION)
-        return affect_fail(err, AFFECT_ERR_FORMAT,
-                           "unknown classifier format version %u (this build reads 1 .. %u)",
-                           version, AFFECT_CLASSIFIER_VERSION);
+    affect_status st;
+    if ((st = affect_check_magic(magic, AFFECT_CLASSIFIER_MAGIC, NULL, "a classifier", 0, err)) !=
+        AFFECT_OK)
+        return st;
+    if ((st = affect_check_version(version, AFFECT_CLASSIFIER_VERSION, NULL, err)) != AFFECT_OK)
+        return st;
     if (flags != 0)
         return affect_fail(err, AFFECT_ERR_FORMAT, "unknown classifier flags %u (offset 8)", flags);
     if (n_classes < 2 || n_classes > AFFECT_CLASSIFIER_MAX_CLASSES)
@@ -1741,13 +1736,10 @@ affect_status affect_classifier_decode(const unsigned char *data, size_t size,
     if (size < 24)
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "truncated: %zu bytes is shorter than the classifier header", size);
-    if (memcmp(data, AFFECT_CLASSIFIER_MAGIC, 4) != 0)
-        return affect_fail(err, AFFECT_ERR_FORMAT,
-                           "not a classifier (bad magic bytes at offset 0)");
-    uint64_t sum = 0;
-    for (int i = 0; i < 8; i++)
-        sum |= (uint64_t)data[size - 8 + (size_t)i] << (8 * i);
-    if (affect_fnv1a64(data, size - 8) != sum)
+    if (affect_check_magic(data, AFFECT_CLASSIFIER_MAGIC, NULL, "a classifier", 0, err) !=
+        AFFECT_OK)
+        return AFFECT_ERR_FORMAT;
+    if (!affect_checksum_ok(data, size - 8))
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "classifier checksum mismatch: the BLOB is corrupt");
     affect_br r;

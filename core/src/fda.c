@@ -1298,9 +1298,7 @@ affect_status affect_fda_encode(const affect_fda *f, unsigned char **out, size_t
     affect_bw w;
     affect_bw_init(&w);
     const affect_fda_config *cfg = &f->cfg;
-    affect_bw_bytes(&w, AFFECT_FDA_MAGIC, 4);
-    affect_bw_u32(&w, AFFECT_FDA_VERSION);
-    affect_bw_u32(&w, 0); /* flags */
+    affect_bw_header(&w, AFFECT_FDA_MAGIC, AFFECT_FDA_VERSION, 0);
     affect_bw_u32(&w, (uint32_t)cfg->method);
     affect_bw_u32(&w, f->b.order);
     affect_bw_u32(&w, f->b.n);
@@ -1358,7 +1356,7 @@ affect_status affect_fda_encode(const affect_fda *f, unsigned char **out, size_t
         affect_bw_f64s(&w, f->geo, n * n);
     }
     if (!w.failed)
-        affect_bw_u64(&w, affect_fnv1a64(w.data, w.len));
+        affect_bw_checksum(&w, 0);
     if (w.failed) {
         size_t len = w.len;
         affect_bw_free(&w);
@@ -1408,11 +1406,8 @@ static affect_status decode_head(affect_br *r, affect_fda *f, affect_error *err)
     /* the caller checked the header's length and magic: skip the magic */
     affect_br_u32(r, &version);
     affect_br_u32(r, &version);
-    if (version != AFFECT_FDA_VERSION)
-        return affect_fail(err, AFFECT_ERR_FORMAT,
-                           "unknown format version %u, this build reads "
-                           "%u (offset 4)",
-                           version, AFFECT_FDA_VERSION);
+    if (affect_check_version(version, AFFECT_FDA_VERSION, NULL, err) != AFFECT_OK)
+        return AFFECT_ERR_FORMAT;
     affect_br_u32(r, &flags);
     affect_br_u32(r, &method);
     affect_br_u32(r, &order);
@@ -1590,14 +1585,9 @@ affect_status affect_fda_decode(const unsigned char *data, size_t size, affect_f
                            "truncated: %zu bytes is shorter than the "
                            "functional model header",
                            size);
-    if (memcmp(data, AFFECT_FDA_MAGIC, 4) != 0)
-        return affect_fail(err, AFFECT_ERR_FORMAT,
-                           "not a functional model (bad magic bytes at "
-                           "offset 0)");
-    uint64_t sum = 0;
-    for (int i = 0; i < 8; i++)
-        sum |= (uint64_t)data[size - 8 + (size_t)i] << (8 * i);
-    if (affect_fnv1a64(data, size - 8) != sum)
+    if (affect_check_magic(data, AFFECT_FDA_MAGIC, NULL, "a functional model", 0, err) != AFFECT_OK)
+        return AFFECT_ERR_FORMAT;
+    if (!affect_checksum_ok(data, size - 8))
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "functional model checksum mismatch: the BLOB "
                            "is corrupt");

@@ -12,6 +12,8 @@
  */
 #include "affect/features.h"
 
+#include "affect/bytes.h"
+
 #include <math.h>
 #include <string.h>
 
@@ -495,46 +497,6 @@ fail:
 
 /* ---- binary form ---- */
 
-static void put_u16(unsigned char *p, uint16_t v)
-{
-    p[0] = (unsigned char)v;
-    p[1] = (unsigned char)(v >> 8);
-}
-
-static void put_u32(unsigned char *p, uint32_t v)
-{
-    for (int i = 0; i < 4; i++)
-        p[i] = (unsigned char)(v >> (8 * i));
-}
-
-static uint16_t get_u16(const unsigned char *p)
-{
-    return (uint16_t)(p[0] | (p[1] << 8));
-}
-
-static uint32_t get_u32(const unsigned char *p)
-{
-    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
-}
-
-static double get_f64(const unsigned char *p)
-{
-    uint64_t u = 0;
-    for (int i = 7; i >= 0; i--)
-        u = (u << 8) | p[i];
-    double d;
-    memcpy(&d, &u, sizeof d);
-    return d;
-}
-
-static void put_f64(unsigned char *p, double d)
-{
-    uint64_t u;
-    memcpy(&u, &d, sizeof u);
-    for (int i = 0; i < 8; i++)
-        p[i] = (unsigned char)(u >> (8 * i));
-}
-
 enum { FLAG_NORMALIZE = 1, FLAG_SCALE_ARM = 2, FLAG_VELOCITY = 4, FLAG_BODY = 8, FLAG_ROOT = 16 };
 
 bool affect_features_encoded_size(const affect_features *f, size_t *size)
@@ -552,7 +514,7 @@ bool affect_features_encoded_size(const affect_features *f, size_t *size)
 static unsigned char *put_name(unsigned char *p, const char *s)
 {
     size_t len = strlen(s);
-    put_u16(p, (uint16_t)len);
+    affect_put_u16(p, (uint16_t)len);
     memcpy(p + 2, s, len);
     return p + 2 + len;
 }
@@ -568,8 +530,8 @@ void affect_features_encode_into(const affect_features *f, unsigned char *buf)
                         (f->root ? FLAG_ROOT : 0));
     buf[2] = (unsigned char)unit_len;
     buf[3] = 0;
-    put_u32(buf + 4, f->n_joints);
-    put_f64(buf + 8, f->fps);
+    affect_put_u32(buf + 4, f->n_joints);
+    affect_put_f64(buf + 8, f->fps);
     unsigned char *p = buf + AFFECT_FEATURES_HEADER_SIZE;
     memcpy(p, f->unit, unit_len);
     p += unit_len;
@@ -578,7 +540,7 @@ void affect_features_encode_into(const affect_features *f, unsigned char *buf)
     for (uint32_t j = 0; j < f->n_joints; j++)
         p = put_name(p, f->skeleton[j]);
     for (uint32_t j = 0; j < f->n_joints; j++, p += 4)
-        put_u32(p, (uint32_t)f->parents[j]);
+        affect_put_u32(p, (uint32_t)f->parents[j]);
 }
 
 /* Reads one length-prefixed name at *off into a new string *out. */
@@ -588,7 +550,7 @@ static affect_status get_name(const unsigned char *data, size_t size, size_t *of
     if (size - *off < 2)
         return affect_fail(err, AFFECT_ERR_FORMAT, "truncated in %s %u (offset %zu)", what, j,
                            *off);
-    size_t len = get_u16(data + *off);
+    size_t len = affect_get_u16(data + *off);
     if (len == 0 || len > AFFECT_MOTION_MAX_NAME)
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "%s %u: length %zu out of range (1 .. %u) at offset %zu", what, j, len,
@@ -627,8 +589,8 @@ affect_status affect_features_decode(const unsigned char *data, size_t size, aff
     int up = data[0];
     unsigned flags = data[1];
     size_t unit_len = data[2];
-    uint32_t n = get_u32(data + 4);
-    double fps = get_f64(data + 8);
+    uint32_t n = affect_get_u32(data + 4);
+    double fps = affect_get_f64(data + 8);
     if (up > 2)
         return affect_fail(err, AFFECT_ERR_FORMAT, "up axis %d out of range (0 .. 2)", up);
     if (flags &
@@ -686,7 +648,7 @@ affect_status affect_features_decode(const unsigned char *data, size_t size, aff
         goto fail;
     }
     for (uint32_t j = 0; j < n; j++, off += 4) {
-        int32_t p = (int32_t)get_u32(data + off);
+        int32_t p = (int32_t)affect_get_u32(data + off);
         if (p < -1 || p >= (int32_t)n) {
             st = affect_fail(err, AFFECT_ERR_FORMAT, "parent %d of joint %u out of range", (int)p,
                              j);

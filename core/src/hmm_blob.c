@@ -11,6 +11,8 @@
  */
 #include "affect/hmm_blob.h"
 
+#include "affect/bytes.h"
+
 #include <math.h>
 #include <string.h>
 
@@ -24,57 +26,6 @@ uint64_t affect_fnv1a64_update(uint64_t h, const unsigned char *data, size_t siz
 uint64_t affect_fnv1a64(const unsigned char *data, size_t size)
 {
     return affect_fnv1a64_update(0xcbf29ce484222325ull, data, size);
-}
-
-static void put_u16(unsigned char *p, uint16_t v)
-{
-    p[0] = (unsigned char)v;
-    p[1] = (unsigned char)(v >> 8);
-}
-
-static void put_u32(unsigned char *p, uint32_t v)
-{
-    for (int i = 0; i < 4; i++)
-        p[i] = (unsigned char)(v >> (8 * i));
-}
-
-static void put_u64(unsigned char *p, uint64_t v)
-{
-    for (int i = 0; i < 8; i++)
-        p[i] = (unsigned char)(v >> (8 * i));
-}
-
-static void put_f64(unsigned char *p, double d)
-{
-    uint64_t u;
-    memcpy(&u, &d, sizeof u);
-    put_u64(p, u);
-}
-
-static uint16_t get_u16(const unsigned char *p)
-{
-    return (uint16_t)(p[0] | (p[1] << 8));
-}
-
-static uint32_t get_u32(const unsigned char *p)
-{
-    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
-}
-
-static uint64_t get_u64(const unsigned char *p)
-{
-    uint64_t v = 0;
-    for (int i = 7; i >= 0; i--)
-        v = (v << 8) | p[i];
-    return v;
-}
-
-static double get_f64(const unsigned char *p)
-{
-    uint64_t u = get_u64(p);
-    double d;
-    memcpy(&d, &u, sizeof d);
-    return d;
 }
 
 /* Counts of doubles in each parameter section. */
@@ -117,7 +68,7 @@ static bool blob_size(size_t f_len, size_t n_ll, const sections *s, size_t *size
 static unsigned char *put_doubles(unsigned char *p, const double *v, size_t n)
 {
     for (size_t i = 0; i < n; i++, p += 8)
-        put_f64(p, v[i]);
+        affect_put_f64(p, v[i]);
     return p;
 }
 
@@ -142,25 +93,25 @@ affect_status affect_hmm_blob_encode(const affect_hmm *h, const affect_features 
         return affect_nomem(err);
     unsigned char *p = buf;
     memcpy(p, AFFECT_HMM_MAGIC, 4);
-    put_u16(p + 4, AFFECT_HMM_BLOB_VERSION);
-    put_u16(p + 6, 0);
-    put_u32(p + 8, cfg->n_states);
-    put_u32(p + 12, cfg->n_mix);
-    put_u32(p + 16, cfg->dim);
+    affect_put_u16(p + 4, AFFECT_HMM_BLOB_VERSION);
+    affect_put_u16(p + 6, 0);
+    affect_put_u32(p + 8, cfg->n_states);
+    affect_put_u32(p + 12, cfg->n_mix);
+    affect_put_u32(p + 16, cfg->dim);
     p[20] = (unsigned char)cfg->cov;
     p[21] = (unsigned char)cfg->topology;
     p[22] = cfg->learn_start ? 1 : 0;
     p[23] = rep.converged ? 1 : 0;
-    put_u32(p + 24, cfg->max_jump);
-    put_u32(p + 28, cfg->max_iter);
-    put_f64(p + 32, cfg->tol);
-    put_f64(p + 40, cfg->reg);
-    put_u64(p + 48, cfg->seed);
-    put_u32(p + 56, rep.iterations);
-    put_u32(p + 60, rep.reseeded);
-    put_u32(p + 64, rep.n_sequences);
-    put_u32(p + 68, (uint32_t)f_len);
-    put_u64(p + 72, rep.n_frames);
+    affect_put_u32(p + 24, cfg->max_jump);
+    affect_put_u32(p + 28, cfg->max_iter);
+    affect_put_f64(p + 32, cfg->tol);
+    affect_put_f64(p + 40, cfg->reg);
+    affect_put_u64(p + 48, cfg->seed);
+    affect_put_u32(p + 56, rep.iterations);
+    affect_put_u32(p + 60, rep.reseeded);
+    affect_put_u32(p + 64, rep.n_sequences);
+    affect_put_u32(p + 68, (uint32_t)f_len);
+    affect_put_u64(p + 72, rep.n_frames);
     p += AFFECT_HMM_BLOB_HEADER_SIZE;
     affect_features_encode_into(f, p);
     p += f_len;
@@ -170,7 +121,7 @@ affect_status affect_hmm_blob_encode(const affect_hmm *h, const affect_features 
     p = put_doubles(p, affect_hmm_weights(h), s.weights);
     p = put_doubles(p, affect_hmm_means(h), s.means);
     p = put_doubles(p, affect_hmm_covariances(h), s.covs);
-    put_u64(p, affect_fnv1a64(buf, (size_t)(p - buf)));
+    affect_put_u64(p, affect_fnv1a64(buf, (size_t)(p - buf)));
     *out = buf;
     *size = total;
     return AFFECT_OK;
@@ -181,7 +132,7 @@ static affect_status get_doubles(const unsigned char *data, size_t *off, double 
                                  const char *section, affect_error *err)
 {
     for (size_t i = 0; i < n; i++, *off += 8) {
-        v[i] = get_f64(data + *off);
+        v[i] = affect_get_f64(data + *off);
         if (!isfinite(v[i]))
             return affect_fail(err, AFFECT_ERR_FORMAT, "non-finite value in the %s (offset %zu)",
                                section, *off);
@@ -196,22 +147,20 @@ affect_status affect_hmm_blob_decode(const unsigned char *data, size_t size, aff
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "truncated: %zu bytes is shorter than the %u-byte header", size,
                            AFFECT_HMM_BLOB_HEADER_SIZE);
-    if (memcmp(data, AFFECT_HMM_MAGIC, 4) != 0)
-        return affect_fail(err, AFFECT_ERR_FORMAT, "not a model (bad magic bytes at offset 0)");
-    uint16_t version = get_u16(data + 4);
-    if (version < 1 || version > AFFECT_HMM_BLOB_VERSION)
-        return affect_fail(err, AFFECT_ERR_FORMAT,
-                           "unknown format version %u (this build reads 1 .. %u)", version,
-                           AFFECT_HMM_BLOB_VERSION);
-    uint16_t flags = get_u16(data + 6);
+    if (affect_check_magic(data, AFFECT_HMM_MAGIC, NULL, "a model", 0, err) != AFFECT_OK)
+        return AFFECT_ERR_FORMAT;
+    uint16_t version = affect_get_u16(data + 4);
+    if (affect_check_version(version, AFFECT_HMM_BLOB_VERSION, NULL, err) != AFFECT_OK)
+        return AFFECT_ERR_FORMAT;
+    uint16_t flags = affect_get_u16(data + 6);
     if (flags != 0)
         return affect_fail(err, AFFECT_ERR_FORMAT, "unknown flags 0x%04x (offset 6)", flags);
 
     affect_hmm_config cfg;
     affect_hmm_config_default(&cfg);
-    cfg.n_states = get_u32(data + 8);
-    cfg.n_mix = get_u32(data + 12);
-    cfg.dim = get_u32(data + 16);
+    cfg.n_states = affect_get_u32(data + 8);
+    cfg.n_mix = affect_get_u32(data + 12);
+    cfg.dim = affect_get_u32(data + 16);
     if (cfg.n_states < 1 || cfg.n_states > AFFECT_HMM_MAX_STATES)
         return affect_fail(err, AFFECT_ERR_FORMAT, "state count %u out of range (1 .. %u)",
                            cfg.n_states, AFFECT_HMM_MAX_STATES);
@@ -228,19 +177,19 @@ affect_status affect_hmm_blob_decode(const unsigned char *data, size_t size, aff
     cfg.cov = data[20] ? AFFECT_HMM_DIAG : AFFECT_HMM_FULL;
     cfg.topology = data[21] ? AFFECT_HMM_LEFT_RIGHT : AFFECT_HMM_ERGODIC;
     cfg.learn_start = data[22] != 0;
-    cfg.max_jump = get_u32(data + 24);
-    cfg.max_iter = get_u32(data + 28);
-    cfg.tol = get_f64(data + 32);
-    cfg.reg = get_f64(data + 40);
-    cfg.seed = get_u64(data + 48);
+    cfg.max_jump = affect_get_u32(data + 24);
+    cfg.max_iter = affect_get_u32(data + 28);
+    cfg.tol = affect_get_f64(data + 32);
+    cfg.reg = affect_get_f64(data + 40);
+    cfg.seed = affect_get_u64(data + 48);
     affect_hmm_report rep;
     memset(&rep, 0, sizeof rep);
     rep.converged = data[23] != 0;
-    rep.iterations = get_u32(data + 56);
-    rep.reseeded = get_u32(data + 60);
-    rep.n_sequences = get_u32(data + 64);
-    size_t f_len = get_u32(data + 68);
-    rep.n_frames = get_u64(data + 72);
+    rep.iterations = affect_get_u32(data + 56);
+    rep.reseeded = affect_get_u32(data + 60);
+    rep.n_sequences = affect_get_u32(data + 64);
+    size_t f_len = affect_get_u32(data + 68);
+    rep.n_frames = affect_get_u64(data + 72);
     if (rep.iterations > cfg.max_iter)
         return affect_fail(err, AFFECT_ERR_FORMAT, "%u iterations exceed max_iter %u (offset 56)",
                            rep.iterations, cfg.max_iter);
@@ -255,7 +204,7 @@ affect_status affect_hmm_blob_decode(const unsigned char *data, size_t size, aff
                            "dimensions",
                            size < total ? "truncated" : "trailing bytes", size, total, cfg.n_states,
                            cfg.n_mix, cfg.dim);
-    if (get_u64(data + size - 8) != affect_fnv1a64(data, size - 8))
+    if (!affect_checksum_ok(data, size - 8))
         return affect_fail(err, AFFECT_ERR_FORMAT, "model checksum mismatch: the BLOB is corrupt");
 
     /* contents: the hash matched, so these fail only for a BLOB written wrongly */

@@ -31,6 +31,7 @@
  * (within AFFECT_MOTION_QUAT_NORM_TOL of 1) and translations.
  */
 #include "affect/motion.h"
+#include "affect/bytes.h"
 #include "affect/quat.h"
 #include "affect/skeleton.h"
 #include "internal.h"
@@ -38,44 +39,6 @@
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
-
-/* ---- little-endian helpers (byte by byte: no struct copies, no alignment assumptions) ---- */
-
-static void put_u16(unsigned char *p, uint16_t v)
-{
-    p[0] = (unsigned char)v;
-    p[1] = (unsigned char)(v >> 8);
-}
-
-static void put_u32(unsigned char *p, uint32_t v)
-{
-    for (int i = 0; i < 4; i++)
-        p[i] = (unsigned char)(v >> (8 * i));
-}
-
-static void put_u64(unsigned char *p, uint64_t v)
-{
-    for (int i = 0; i < 8; i++)
-        p[i] = (unsigned char)(v >> (8 * i));
-}
-
-static uint16_t get_u16(const unsigned char *p)
-{
-    return (uint16_t)(p[0] | (p[1] << 8));
-}
-
-static uint32_t get_u32(const unsigned char *p)
-{
-    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
-}
-
-static uint64_t get_u64(const unsigned char *p)
-{
-    uint64_t v = 0;
-    for (int i = 7; i >= 0; i--)
-        v = (v << 8) | p[i];
-    return v;
-}
 
 static double u64_to_double(uint64_t u)
 {
@@ -650,7 +613,7 @@ static unsigned char *put_floats(unsigned char *p, const float *v, size_t n)
     for (size_t i = 0; i < n; i++, p += 4) {
         uint32_t u;
         memcpy(&u, &v[i], 4);
-        put_u32(p, u);
+        affect_put_u32(p, u);
     }
     return p;
 }
@@ -663,7 +626,7 @@ static void get_floats(const unsigned char *p, float *v, size_t n)
         return;
     }
     for (size_t i = 0; i < n; i++, p += 4) {
-        uint32_t u = get_u32(p);
+        uint32_t u = affect_get_u32(p);
         memcpy(&v[i], &u, 4);
     }
 }
@@ -692,11 +655,11 @@ void affect_motion_encode_into(const affect_motion *m, unsigned char *buf)
     unsigned flags =
         m->skel ? AFFECT_MOTION_FLAG_SKELETON | (m->rot ? AFFECT_MOTION_FLAG_ROTATIONS : 0) : 0;
     memcpy(p, AFFECT_MOTION_MAGIC, 4);
-    put_u16(p + 4, flags ? 2 : 1);
-    put_u16(p + 6, (uint16_t)flags);
-    put_u32(p + 8, m->n_frames);
-    put_u32(p + 12, m->n_joints);
-    put_u64(p + 16, double_to_u64(m->fps));
+    affect_put_u16(p + 4, flags ? 2 : 1);
+    affect_put_u16(p + 6, (uint16_t)flags);
+    affect_put_u32(p + 8, m->n_frames);
+    affect_put_u32(p + 12, m->n_joints);
+    affect_put_u64(p + 16, double_to_u64(m->fps));
     p[24] = (unsigned char)unit_len;
     memset(p + 25, 0, 7);
     p += AFFECT_MOTION_HEADER_SIZE;
@@ -704,12 +667,12 @@ void affect_motion_encode_into(const affect_motion *m, unsigned char *buf)
     p += unit_len;
     for (uint32_t j = 0; j < m->n_joints; j++) {
         size_t len = strlen(m->names[j]);
-        put_u16(p, (uint16_t)len);
+        affect_put_u16(p, (uint16_t)len);
         memcpy(p + 2, m->names[j], len);
         p += 2 + len;
     }
     for (uint32_t j = 0; j < m->n_joints; j++, p += 4)
-        put_u32(p, (uint32_t)m->parents[j]);
+        affect_put_u32(p, (uint32_t)m->parents[j]);
     size_t nj = m->n_joints, n = (size_t)m->n_frames * nj;
     p = put_floats(p, m->pos, n * 3);
     if (!m->skel)
@@ -717,7 +680,7 @@ void affect_motion_encode_into(const affect_motion *m, unsigned char *buf)
     for (uint32_t j = 0; j < nj; j++, p += AFFECT_MOTION_JOINT_SIZE) {
         const affect_skel_joint *s = &m->skel[j];
         for (int a = 0; a < 3; a++)
-            put_u64(p + 8 * a, double_to_u64(s->offset[a]));
+            affect_put_u64(p + 8 * a, double_to_u64(s->offset[a]));
         p[24] = s->n_channels;
         for (int c = 0; c < 6; c++)
             p[25 + c] = c < s->n_channels ? s->channel[c] : 0;
@@ -764,21 +727,19 @@ affect_status affect_motion_decode_monitored(const unsigned char *data, size_t s
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "truncated: %zu bytes is shorter than the %u-byte header", size,
                            AFFECT_MOTION_HEADER_SIZE);
-    if (memcmp(data, AFFECT_MOTION_MAGIC, 4) != 0)
-        return affect_fail(err, AFFECT_ERR_FORMAT, "not a motion (bad magic bytes at offset 0)");
-    uint16_t version = get_u16(data + 4);
-    if (version < 1 || version > AFFECT_MOTION_VERSION)
-        return affect_fail(err, AFFECT_ERR_FORMAT,
-                           "unknown format version %u (this build reads 1 .. %u)", version,
-                           AFFECT_MOTION_VERSION);
-    uint16_t flags = get_u16(data + 6);
+    if (affect_check_magic(data, AFFECT_MOTION_MAGIC, NULL, "a motion", 0, err) != AFFECT_OK)
+        return AFFECT_ERR_FORMAT;
+    uint16_t version = affect_get_u16(data + 4);
+    if (affect_check_version(version, AFFECT_MOTION_VERSION, NULL, err) != AFFECT_OK)
+        return AFFECT_ERR_FORMAT;
+    uint16_t flags = affect_get_u16(data + 6);
     /* version 2 exists for the skeleton: without it the encoder writes version 1 */
     if (version == 1 ? flags != 0
                      : (flags & ~(AFFECT_MOTION_FLAG_SKELETON | AFFECT_MOTION_FLAG_ROTATIONS)) ||
                            !(flags & AFFECT_MOTION_FLAG_SKELETON))
         return affect_fail(err, AFFECT_ERR_FORMAT, "unknown flags 0x%04x (offset 6)", flags);
-    uint32_t n_frames = get_u32(data + 8), n_joints = get_u32(data + 12);
-    double fps = u64_to_double(get_u64(data + 16));
+    uint32_t n_frames = affect_get_u32(data + 8), n_joints = affect_get_u32(data + 12);
+    double fps = u64_to_double(affect_get_u64(data + 16));
     affect_error size_err;
     if (check_sizes(n_frames, n_joints, fps, &size_err))
         return affect_fail(err, AFFECT_ERR_FORMAT, "%s (header)", size_err.msg);
@@ -803,7 +764,7 @@ affect_status affect_motion_decode_monitored(const unsigned char *data, size_t s
         if (size - off < 2)
             return affect_fail(err, AFFECT_ERR_FORMAT,
                                "truncated in the name of joint %u (offset %zu)", j, off);
-        size_t len = get_u16(data + off);
+        size_t len = affect_get_u16(data + off);
         if (len == 0 || len > AFFECT_MOTION_MAX_NAME)
             return affect_fail(err, AFFECT_ERR_FORMAT,
                                "joint %u: name length %zu out of range (1 .. %u) at offset %zu", j,
@@ -847,14 +808,14 @@ affect_status affect_motion_decode_monitored(const unsigned char *data, size_t s
     m->unit[unit_len] = '\0';
     off = names_off;
     for (uint32_t j = 0; j < n_joints; j++) {
-        size_t len = get_u16(data + off);
+        size_t len = affect_get_u16(data + off);
         st = affect_motion_set_name(m, j, (const char *)data + off + 2, len, err);
         if (st)
             goto fail;
         off += 2 + len;
     }
     for (uint32_t j = 0; j < n_joints; j++, off += 4)
-        m->parents[j] = (int32_t)get_u32(data + off);
+        m->parents[j] = (int32_t)affect_get_u32(data + off);
     if ((st = get_floats_polled(data + off, m->pos, n_vals, mon, err)))
         goto fail;
     off += n_vals * 4;
@@ -866,7 +827,7 @@ affect_status affect_motion_decode_monitored(const unsigned char *data, size_t s
         for (uint32_t j = 0; j < n_joints; j++, off += AFFECT_MOTION_JOINT_SIZE) {
             affect_skel_joint *s = &m->skel[j];
             for (int a = 0; a < 3; a++)
-                s->offset[a] = u64_to_double(get_u64(data + off + 8 * a));
+                s->offset[a] = u64_to_double(affect_get_u64(data + off + 8 * a));
             s->n_channels = data[off + 24];
             for (int c = 0; c < 6; c++) {
                 s->channel[c] = data[off + 25 + c];

@@ -669,9 +669,7 @@ affect_status affect_ranker_encode(const affect_ranker *r, unsigned char **out, 
     size_t cd = (size_t)r->dim * r->clusters;
     affect_bw w;
     affect_bw_init(&w);
-    affect_bw_bytes(&w, AFFECT_RANKER_MAGIC, 4);
-    affect_bw_u32(&w, AFFECT_RANKER_VERSION);
-    affect_bw_u32(&w, 0); /* flags */
+    affect_bw_header(&w, AFFECT_RANKER_MAGIC, AFFECT_RANKER_VERSION, 0);
     affect_bw_u32(&w, r->dim);
     affect_bw_u32(&w, r->clusters);
     affect_bw_u32(&w, r->stats.iterations);
@@ -685,7 +683,7 @@ affect_status affect_ranker_encode(const affect_ranker *r, unsigned char **out, 
     affect_bw_f64s(&w, r->centroids, cd);
     affect_bw_f64s(&w, r->w, cd);
     if (!w.failed)
-        affect_bw_u64(&w, affect_fnv1a64(w.data, w.len));
+        affect_bw_checksum(&w, 0);
     if (w.failed) {
         affect_bw_free(&w);
         return affect_nomem(err);
@@ -703,8 +701,8 @@ affect_status affect_ranker_decode(const unsigned char *data, size_t size, affec
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "not a ranker BLOB (%zu bytes, the header alone is %u)", size,
                            HEADER_SIZE + 8);
-    if (memcmp(data, AFFECT_RANKER_MAGIC, 4) != 0)
-        return affect_fail(err, AFFECT_ERR_FORMAT, "not a ranker BLOB (bad magic)");
+    if (affect_check_magic(data, AFFECT_RANKER_MAGIC, NULL, "a ranker", 0, err) != AFFECT_OK)
+        return AFFECT_ERR_FORMAT;
     affect_br rd;
     affect_br_init(&rd, data, size);
     const unsigned char *magic;
@@ -724,10 +722,8 @@ affect_status affect_ranker_decode(const unsigned char *data, size_t size, affec
     affect_br_u64(&rd, &correct);
     affect_br_f64(&rd, &objective);
     affect_br_u64(&rd, &reserved);
-    if (version < 1 || version > AFFECT_RANKER_VERSION)
-        return affect_fail(err, AFFECT_ERR_FORMAT,
-                           "unsupported ranker version %u (this build reads 1 to %u)", version,
-                           AFFECT_RANKER_VERSION);
+    if (affect_check_version(version, AFFECT_RANKER_VERSION, NULL, err) != AFFECT_OK)
+        return AFFECT_ERR_FORMAT;
     if (flags != 0 || conv > 1 || reserved != 0)
         return affect_fail(err, AFFECT_ERR_FORMAT, "reserved ranker fields are not zero");
     if (dim < 1 || dim > AFFECT_RANK_MAX_DIM || clusters < 1 || clusters > AFFECT_RANK_MAX_CLUSTERS)
@@ -739,10 +735,7 @@ affect_status affect_ranker_decode(const unsigned char *data, size_t size, affec
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "ranker BLOB length %zu does not match its sizes (expected %zu)", size,
                            expect);
-    uint64_t sum = 0;
-    for (int b = 0; b < 8; b++)
-        sum |= (uint64_t)data[size - 8 + (size_t)b] << (8 * b);
-    if (sum != affect_fnv1a64(data, size - 8))
+    if (!affect_checksum_ok(data, size - 8))
         return affect_fail(err, AFFECT_ERR_FORMAT, "ranker checksum mismatch: the BLOB is corrupt");
     if (!isfinite(objective) || correct > ordered)
         return affect_fail(err, AFFECT_ERR_FORMAT, "inconsistent ranker statistics");

@@ -2090,9 +2090,10 @@ void affect_impute_column_means(double *x, size_t n, size_t p)
 
 /* ---- serialisation ---- */
 
-void affect_rmlr_encode(const affect_rmlr *m, affect_bw *w)
+/* The fit's fields after the version: the whole of version 1 but its first byte, the body of
+ * version 2 (affect/rmlr.h). */
+static void encode_body(const affect_rmlr *m, affect_bw *w)
 {
-    affect_bw_u8(w, AFFECT_RMLR_FORMAT_VERSION);
     affect_bw_u32(w, m->K);
     affect_bw_u32(w, (uint32_t)m->p);
     affect_bw_u32(w, m->n_train);
@@ -2109,19 +2110,16 @@ void affect_rmlr_encode(const affect_rmlr *m, affect_bw *w)
     affect_bw_f64s(w, m->beta, (size_t)m->K * m->p);
 }
 
-static affect_status truncated(affect_error *err, const char *field, size_t off)
+void affect_rmlr_encode(const affect_rmlr *m, affect_bw *w)
 {
-    return affect_fail(err, AFFECT_ERR_FORMAT, "RMLR: truncated in %s (offset %zu)", field, off);
-}
-
-static affect_status get_u32(affect_br *r, uint32_t *v, const char *field, affect_error *err)
-{
-    return affect_br_u32(r, v) ? AFFECT_OK : truncated(err, field, r->off);
-}
-
-static affect_status get_f64(affect_br *r, double *v, const char *field, affect_error *err)
-{
-    return affect_br_f64(r, v) ? AFFECT_OK : truncated(err, field, r->off);
+    size_t start = w->len;
+    affect_bw_header(w, AFFECT_RMLR_MAGIC, AFFECT_RMLR_FORMAT_VERSION, 0);
+    affect_bw_u64(w, 0); /* the total length, known at the end */
+    encode_body(m, w);
+    if (w->failed)
+        return;
+    affect_put_u64(w->data + start + 12, (uint64_t)(w->len - start) + 8);
+    affect_bw_checksum(w, start);
 }
 
 /* n float64 values into v (n checked against the bytes left first); *off receives the offset
@@ -2129,8 +2127,9 @@ static affect_status get_f64(affect_br *r, double *v, const char *field, affect_
 static affect_status get_f64s(affect_br *r, double *v, size_t n, size_t *off, const char *field,
                               affect_error *err)
 {
-    if (!affect_br_has(r, n, 8))
-        return truncated(err, field, r->off);
+    affect_status st = affect_br_need(r, n, 8, "RMLR: ", field, err);
+    if (st != AFFECT_OK)
+        return st;
     *off = r->off;
     affect_br_f64s(r, v, n);
     return AFFECT_OK;
@@ -2146,53 +2145,46 @@ static affect_status check_finite(const double *v, size_t n, size_t off, const c
     return AFFECT_OK;
 }
 
-affect_status affect_rmlr_decode(affect_br *r, affect_rmlr **out, affect_error *err)
+/* The fields after the version (encode_body), from r's offset. */
+static affect_status decode_body(affect_br *r, affect_rmlr **out, affect_error *err)
 {
     affect_status st;
     size_t off, need, kp;
-    uint8_t version, conv;
+    uint8_t conv;
     uint32_t K, p, n, L, idx;
     double alpha, cve;
     affect_rmlr *m = NULL;
-    *out = NULL;
 
     off = r->off;
-    if (!affect_br_u8(r, &version))
-        return truncated(err, "the version", off);
-    if (version != AFFECT_RMLR_FORMAT_VERSION)
-        return affect_fail(err, AFFECT_ERR_FORMAT,
-                           "RMLR: unknown format version %u at offset %zu (this build reads %u)",
-                           version, off, AFFECT_RMLR_FORMAT_VERSION);
-    off = r->off;
-    if ((st = get_u32(r, &K, "the class count", err)) != AFFECT_OK)
+    if ((st = affect_br_u32_field(r, &K, "RMLR: ", "the class count", err)) != AFFECT_OK)
         return st;
     if (K < 2 || K > AFFECT_RMLR_MAX_CLASSES)
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "RMLR: class count %u out of range 2 .. %u (offset %zu)", K,
                            AFFECT_RMLR_MAX_CLASSES, off);
     off = r->off;
-    if ((st = get_u32(r, &p, "the feature count", err)) != AFFECT_OK)
+    if ((st = affect_br_u32_field(r, &p, "RMLR: ", "the feature count", err)) != AFFECT_OK)
         return st;
     if (p < 1 || p > AFFECT_RMLR_MAX_FEATURES)
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "RMLR: feature count %u out of range 1 .. %u (offset %zu)", p,
                            AFFECT_RMLR_MAX_FEATURES, off);
     off = r->off;
-    if ((st = get_u32(r, &n, "the sample count", err)) != AFFECT_OK)
+    if ((st = affect_br_u32_field(r, &n, "RMLR: ", "the sample count", err)) != AFFECT_OK)
         return st;
     if (n < K)
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "RMLR: sample count %u below the class count %u (offset %zu)", n, K,
                            off);
     off = r->off;
-    if ((st = get_u32(r, &L, "the lambda count", err)) != AFFECT_OK)
+    if ((st = affect_br_u32_field(r, &L, "RMLR: ", "the lambda count", err)) != AFFECT_OK)
         return st;
     if (L < 1 || L > AFFECT_RMLR_MAX_LAMBDAS)
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "RMLR: lambda count %u out of range 1 .. %u (offset %zu)", L,
                            AFFECT_RMLR_MAX_LAMBDAS, off);
     off = r->off;
-    if ((st = get_u32(r, &idx, "the lambda index", err)) != AFFECT_OK)
+    if ((st = affect_br_u32_field(r, &idx, "RMLR: ", "the lambda index", err)) != AFFECT_OK)
         return st;
     if (idx >= L)
         return affect_fail(err, AFFECT_ERR_FORMAT,
@@ -2200,18 +2192,19 @@ affect_status affect_rmlr_decode(affect_br *r, affect_rmlr **out, affect_error *
                            L, off);
     off = r->off;
     if (!affect_br_u8(r, &conv))
-        return truncated(err, "the converged flag", off);
+        return affect_fail_truncated(err, "RMLR: ", "the converged flag", off);
     if (conv > 1)
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "RMLR: converged flag %u is not 0 or 1 (offset %zu)", conv, off);
     off = r->off;
-    if ((st = get_f64(r, &alpha, "alpha", err)) != AFFECT_OK)
+    if ((st = affect_br_f64_field(r, &alpha, "RMLR: ", "alpha", err)) != AFFECT_OK)
         return st;
     if (!(alpha >= 0 && alpha <= 1))
         return affect_fail(err, AFFECT_ERR_FORMAT, "RMLR: alpha = %g is not in [0, 1] (offset %zu)",
                            alpha, off);
     off = r->off;
-    if ((st = get_f64(r, &cve, "the cross-validation error", err)) != AFFECT_OK)
+    if ((st = affect_br_f64_field(r, &cve, "RMLR: ", "the cross-validation error", err)) !=
+        AFFECT_OK)
         return st;
     if (!(cve >= 0 && cve <= 1))
         return affect_fail(err, AFFECT_ERR_FORMAT,
@@ -2235,7 +2228,7 @@ affect_status affect_rmlr_decode(affect_br *r, affect_rmlr **out, affect_error *
             left -= 8 * bounds[s];
             at += 8 * bounds[s];
         }
-        return truncated(err, field, at);
+        return affect_fail_truncated(err, "RMLR: ", field, at);
     }
     if ((st = model_new(K, p, L, &m, err)) != AFFECT_OK)
         return st;
@@ -2283,4 +2276,70 @@ affect_status affect_rmlr_decode(affect_br *r, affect_rmlr **out, affect_error *
 cleanup:
     affect_rmlr_free(m);
     return st;
+}
+
+/* Bytes of version 2 around the body: the header (magic, version, flags, total length) and the
+ * checksum. */
+#define RMLR_HEAD 20u
+#define RMLR_TAIL 8u
+
+affect_status affect_rmlr_decode(affect_br *r, affect_rmlr **out, affect_error *err)
+{
+    affect_status st;
+    *out = NULL;
+    size_t start = r->off, left = r->size - r->off;
+    const unsigned char *p = r->data + start;
+    /* Version 1 has no magic: its first byte is its version, 1, never the magic's 'A'. */
+    if (left >= 1 && p[0] == 1) {
+        r->off++;
+        return decode_body(r, out, err);
+    }
+    uint32_t version, flags;
+    if ((st = affect_br_header(r, AFFECT_RMLR_MAGIC, AFFECT_RMLR_FORMAT_VERSION,
+                               "RMLR: ", "an RMLR fit", &version, &flags, err)) != AFFECT_OK)
+        return st;
+    if (version != AFFECT_RMLR_FORMAT_VERSION) {
+        r->off = start;
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "RMLR: version 1 is stored without a header (offset %zu)", start + 4);
+    }
+    if (flags != 0) {
+        r->off = start;
+        return affect_fail(err, AFFECT_ERR_FORMAT, "RMLR: flags 0x%x are not 0 (offset %zu)", flags,
+                           start + 8);
+    }
+    uint64_t total;
+    if (!affect_br_u64(r, &total)) {
+        r->off = start;
+        return affect_fail_truncated(err, "RMLR: ", "the length", start + 12);
+    }
+    if (total < RMLR_HEAD + RMLR_TAIL || total > left) {
+        r->off = start;
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "RMLR: truncated: %zu bytes, the header says %llu (offset %zu)", left,
+                           (unsigned long long)total, start + 12);
+    }
+    size_t body_end = start + (size_t)total - RMLR_TAIL;
+    if (!affect_checksum_ok(p, (size_t)total - RMLR_TAIL)) {
+        r->off = start;
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "RMLR: checksum mismatch: the fit is corrupt (offset %zu)", body_end);
+    }
+    affect_br body;
+    affect_br_init(&body, r->data, body_end);
+    body.off = r->off;
+    if ((st = decode_body(&body, out, err)) != AFFECT_OK) {
+        r->off = start;
+        return st;
+    }
+    if (body.off != body_end) {
+        affect_rmlr_free(*out);
+        *out = NULL;
+        r->off = start;
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "RMLR: %zu bytes follow the coefficients (offset %zu)",
+                           body_end - body.off, body.off);
+    }
+    r->off = start + (size_t)total;
+    return AFFECT_OK;
 }

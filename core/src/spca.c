@@ -702,9 +702,10 @@ void affect_spca_encode(const affect_spca *s, affect_bw *w)
     if (w->failed)
         return;
     size_t start = w->len;
-    affect_bw_bytes(w, AFFECT_SPCA_MAGIC, 4);
-    affect_bw_u32(w, AFFECT_SPCA_VERSION);
-    affect_bw_u32(w, s->q4 ? FLAG_Q4 : s->f32 ? FLAG_F32 : 0u);
+    affect_bw_header(w, AFFECT_SPCA_MAGIC, AFFECT_SPCA_VERSION,
+                     s->q4    ? FLAG_Q4
+                     : s->f32 ? FLAG_F32
+                              : 0u);
     affect_bw_u32(w, (uint32_t)s->kernel);
     affect_bw_u32(w, s->classes);
     affect_bw_u32(w, s->dims);
@@ -722,7 +723,7 @@ void affect_spca_encode(const affect_spca *s, affect_bw *w)
         affect_bw_f64s_as_f32(w, s->axes, pd);
     if (w->failed)
         return;
-    affect_bw_u64(w, affect_fnv1a64(w->data + start, w->len - start));
+    affect_bw_checksum(w, start);
 }
 
 affect_status affect_spca_decode(affect_br *r, affect_spca **out, affect_error *err)
@@ -745,13 +746,10 @@ affect_status affect_spca_decode(affect_br *r, affect_spca **out, affect_error *
     affect_br_u64(r, &n);
     affect_br_u64(r, &d);
     affect_br_f64(r, &sigma);
-    if (memcmp(magic, AFFECT_SPCA_MAGIC, 4) != 0)
-        return affect_fail(err, AFFECT_ERR_FORMAT, "sPCA: bad magic bytes (offset %zu)", start);
-    if (version != AFFECT_SPCA_VERSION)
-        return affect_fail(err, AFFECT_ERR_FORMAT,
-                           "sPCA: unknown format version %" PRIu32 ", this build reads %u "
-                           "(offset %zu)",
-                           version, AFFECT_SPCA_VERSION, start + 4);
+    if (affect_check_magic(magic, AFFECT_SPCA_MAGIC, "sPCA: ", "an sPCA record", start, err) !=
+            AFFECT_OK ||
+        affect_check_version(version, AFFECT_SPCA_VERSION, "sPCA: ", err) != AFFECT_OK)
+        return AFFECT_ERR_FORMAT;
     if ((flags & ~(uint32_t)(FLAG_F32 | FLAG_Q4)) || flags == (FLAG_F32 | FLAG_Q4))
         return affect_fail(err, AFFECT_ERR_FORMAT, "sPCA: unknown flags 0x%" PRIx32 " (offset %zu)",
                            flags, start + 8);

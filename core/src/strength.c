@@ -1195,10 +1195,9 @@ affect_status affect_strength_encode(const affect_strength *s, unsigned char **o
     *size = 0;
     affect_bw w;
     affect_bw_init(&w);
-    affect_bw_bytes(&w, AFFECT_STRENGTH_MAGIC, 4);
-    affect_bw_u32(&w, AFFECT_STRENGTH_VERSION);
-    affect_bw_u32(&w, (s->pca ? FLAG_PCA : 0u) | (s->relative ? FLAG_RELATIVE : 0u) |
-                          (s->scale ? FLAG_STANDARDIZE : 0u));
+    affect_bw_header(&w, AFFECT_STRENGTH_MAGIC, AFFECT_STRENGTH_VERSION,
+                     (s->pca ? FLAG_PCA : 0u) | (s->relative ? FLAG_RELATIVE : 0u) |
+                         (s->scale ? FLAG_STANDARDIZE : 0u));
     affect_bw_u32(&w, s->n_joints);
     affect_bw_u32(&w, s->keyframes);
     affect_bw_u32(&w, s->dim);
@@ -1251,7 +1250,7 @@ affect_status affect_strength_encode(const affect_strength *s, unsigned char **o
     if (s->regression == AFFECT_STRENGTH_REG_KERNEL_RIDGE)
         affect_bw_f64s(&w, s->alpha, (size_t)s->n_train * s->pdim);
     if (!w.failed)
-        affect_bw_u64(&w, affect_fnv1a64(w.data, w.len));
+        affect_bw_checksum(&w, 0);
     if (w.failed) {
         affect_bw_free(&w);
         return affect_nomem(err);
@@ -1298,8 +1297,9 @@ affect_status affect_strength_decode(const unsigned char *data, size_t size, aff
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "not a strength model BLOB (%zu bytes, the header alone is %u)", size,
                            (unsigned)(FIXED_SIZE + 8));
-    if (memcmp(data, AFFECT_STRENGTH_MAGIC, 4) != 0)
-        return affect_fail(err, AFFECT_ERR_FORMAT, "not a strength model BLOB (bad magic)");
+    if (affect_check_magic(data, AFFECT_STRENGTH_MAGIC, NULL, "a strength model", 0, err) !=
+        AFFECT_OK)
+        return AFFECT_ERR_FORMAT;
     affect_br r;
     affect_br_init(&r, data, size - 8);
     const unsigned char *magic;
@@ -1315,10 +1315,8 @@ affect_status affect_strength_decode(const unsigned char *data, size_t size, aff
     affect_br_u32(&r, &L);
     affect_br_u32(&r, &reg);
     affect_br_u32(&r, &root);
-    if (version < 1 || version > AFFECT_STRENGTH_VERSION)
-        return affect_fail(err, AFFECT_ERR_FORMAT,
-                           "unsupported strength model version %u (this build reads 1 to %u)",
-                           version, AFFECT_STRENGTH_VERSION);
+    if (affect_check_version(version, AFFECT_STRENGTH_VERSION, NULL, err) != AFFECT_OK)
+        return AFFECT_ERR_FORMAT;
     bool pca = (flags & FLAG_PCA) != 0, stdz = (flags & FLAG_STANDARDIZE) != 0;
     bool relative = (flags & FLAG_RELATIVE) != 0;
     if ((flags & ~(FLAG_PCA | FLAG_RELATIVE | FLAG_STANDARDIZE)) != 0 || root >= J ||
@@ -1333,10 +1331,7 @@ affect_status affect_strength_decode(const unsigned char *data, size_t size, aff
                            "strength model sizes out of range (%u joints, %u keyframes, "
                            "dimension %u of %u, %u motions, %u levels)",
                            J, q, p, D, n, L);
-    uint64_t sum = 0;
-    for (int b = 0; b < 8; b++)
-        sum |= (uint64_t)data[size - 8 + (size_t)b] << (8 * b);
-    if (sum != affect_fnv1a64(data, size - 8))
+    if (!affect_checksum_ok(data, size - 8))
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "strength model checksum mismatch: the BLOB is corrupt");
     /* the arrays must fit in what is left (before allocating them) */

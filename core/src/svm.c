@@ -925,23 +925,13 @@ bool affect_svm_round_weights(affect_svm *m)
     return true;
 }
 
-static affect_status truncated(affect_error *err, const char *field, size_t off)
-{
-    return affect_fail(err, AFFECT_ERR_FORMAT, "SVM: truncated in %s (offset %zu)", field, off);
-}
-
-static affect_status get_u32(affect_br *r, uint32_t *v, const char *field, affect_error *err)
-{
-    return affect_br_u32(r, v) ? AFFECT_OK : truncated(err, field, r->off);
-}
-
 /* A count that must equal expected: "SVM: 3 classes but 2 labels (offset 25)". */
 static affect_status get_count(affect_br *r, uint32_t c, uint32_t expected, const char *field,
                                const char *what, affect_error *err)
 {
     size_t off = r->off;
     uint32_t v;
-    affect_status st = get_u32(r, &v, field, err);
+    affect_status st = affect_br_u32_field(r, &v, "SVM: ", field, err);
     if (st != AFFECT_OK)
         return st;
     if (v != expected)
@@ -954,8 +944,9 @@ static affect_status get_count(affect_br *r, uint32_t c, uint32_t expected, cons
 static affect_status get_u32s(affect_br *r, size_t n, uint32_t **out, const char *field,
                               affect_error *err)
 {
-    if (!affect_br_has(r, n, 4))
-        return truncated(err, field, r->off);
+    affect_status st = affect_br_need(r, n, 4, "SVM: ", field, err);
+    if (st != AFFECT_OK)
+        return st;
     *out = affect_malloc_array(n, sizeof **out);
     if (!*out)
         return affect_nomem(err);
@@ -967,8 +958,9 @@ static affect_status get_u32s(affect_br *r, size_t n, uint32_t **out, const char
 static affect_status get_f64s(affect_br *r, size_t n, double **out, const char *field,
                               affect_error *err)
 {
-    if (!affect_br_has(r, n, 8))
-        return truncated(err, field, r->off);
+    affect_status st = affect_br_need(r, n, 8, "SVM: ", field, err);
+    if (st != AFFECT_OK)
+        return st;
     *out = affect_malloc_array(n, sizeof **out);
     if (!*out)
         return affect_nomem(err);
@@ -985,8 +977,9 @@ static affect_status get_f64s(affect_br *r, size_t n, double **out, const char *
 static affect_status get_f32s(affect_br *r, size_t n, double **out, const char *field,
                               affect_error *err)
 {
-    if (!affect_br_has(r, n, 4))
-        return truncated(err, field, r->off);
+    affect_status st = affect_br_need(r, n, 4, "SVM: ", field, err);
+    if (st != AFFECT_OK)
+        return st;
     float *tmp = affect_malloc_array(n ? n : 1, sizeof *tmp);
     *out = affect_malloc_array(n ? n : 1, sizeof **out);
     if (!tmp || !*out) {
@@ -1012,7 +1005,7 @@ static affect_status get_q4s(affect_br *r, size_t P, size_t d, double **out, aff
 {
     size_t bytes, n;
     if (!affect_q4_size(d, &bytes) || !affect_br_has(r, P, bytes) || !affect_mul_size(P, d, &n))
-        return truncated(err, "the weights", r->off);
+        return affect_fail_truncated(err, "SVM: ", "the weights", r->off);
     *out = affect_malloc_array(n ? n : 1, sizeof **out);
     if (!*out)
         return affect_nomem(err);
@@ -1043,17 +1036,13 @@ affect_status affect_svm_decode(affect_br *r, affect_svm **out, affect_error *er
 
     off = r->off;
     if (!affect_br_u8(r, &version)) {
-        st = truncated(err, "the version", off);
+        st = affect_fail_truncated(err, "SVM: ", "the version", off);
         goto cleanup;
     }
-    if (version < 1 || version > AFFECT_SVM_FORMAT_VERSION) {
-        st = affect_fail(err, AFFECT_ERR_FORMAT,
-                         "SVM: unknown format version %u at offset %zu (this build reads 1 .. %u)",
-                         version, off, AFFECT_SVM_FORMAT_VERSION);
+    if ((st = affect_check_version(version, AFFECT_SVM_FORMAT_VERSION, "SVM: ", err)) != AFFECT_OK)
         goto cleanup;
-    }
     off = r->off;
-    if ((st = get_u32(r, &c, "the class count", err)) != AFFECT_OK)
+    if ((st = affect_br_u32_field(r, &c, "SVM: ", "the class count", err)) != AFFECT_OK)
         goto cleanup;
     if (c < 2 || c > AFFECT_SVM_MAX_CLASSES) {
         st = affect_fail(err, AFFECT_ERR_FORMAT,
@@ -1063,7 +1052,7 @@ affect_status affect_svm_decode(affect_br *r, affect_svm **out, affect_error *er
     }
     off = r->off;
     if (!affect_br_u64(r, &d)) {
-        st = truncated(err, "the dimension", off);
+        st = affect_fail_truncated(err, "SVM: ", "the dimension", off);
         goto cleanup;
     }
     if (d < 1 || d > AFFECT_SVM_MAX_DIM) {
@@ -1074,7 +1063,7 @@ affect_status affect_svm_decode(affect_br *r, affect_svm **out, affect_error *er
     }
     off = r->off;
     if (!affect_br_f64(r, &C)) {
-        st = truncated(err, "C", off);
+        st = affect_fail_truncated(err, "SVM: ", "C", off);
         goto cleanup;
     }
     if (!positive_finite(C)) {
@@ -1083,7 +1072,7 @@ affect_status affect_svm_decode(affect_br *r, affect_svm **out, affect_error *er
         goto cleanup;
     }
     off = r->off;
-    if ((st = get_u32(r, &n, "the sample count", err)) != AFFECT_OK)
+    if ((st = affect_br_u32_field(r, &n, "SVM: ", "the sample count", err)) != AFFECT_OK)
         goto cleanup;
     if (n < c || n > AFFECT_SVM_MAX_SAMPLES) {
         st = affect_fail(err, AFFECT_ERR_FORMAT,
@@ -1117,7 +1106,8 @@ affect_status affect_svm_decode(affect_br *r, affect_svm **out, affect_error *er
     for (uint32_t k = 0; k < c; k++)
         sum += m->nsv[k];
     off = r->off;
-    if ((st = get_u32(r, &l, "the total of support vectors", err)) != AFFECT_OK)
+    if ((st = affect_br_u32_field(r, &l, "SVM: ", "the total of support vectors", err)) !=
+        AFFECT_OK)
         goto cleanup;
     if (sum != l) {
         st = affect_fail(err, AFFECT_ERR_FORMAT,
@@ -1159,7 +1149,7 @@ affect_status affect_svm_decode(affect_br *r, affect_svm **out, affect_error *er
         AFFECT_OK)
         goto cleanup;
     if (!affect_mul_size(c - 1, l, &n_coef)) {
-        st = truncated(err, "the coefficients", r->off);
+        st = affect_fail_truncated(err, "SVM: ", "the coefficients", r->off);
         goto cleanup;
     }
     if ((st = get_f64s(r, n_coef, &m->sv_coef, "the coefficients", err)) != AFFECT_OK)
@@ -1173,7 +1163,7 @@ affect_status affect_svm_decode(affect_br *r, affect_svm **out, affect_error *er
                         err)) != AFFECT_OK)
         goto cleanup;
     if (!affect_mul_size(P, m->d, &n_w)) {
-        st = truncated(err, "the weights", r->off);
+        st = affect_fail_truncated(err, "SVM: ", "the weights", r->off);
         goto cleanup;
     }
     if (version == 1) {

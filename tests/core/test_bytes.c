@@ -1,7 +1,8 @@
 /*
  * test_bytes.c — the little-endian writer and bounds-checked reader (affect/bytes.h): exact
  * byte layout, round trips, every truncation refused without reading past the end, and the
- * writer's sticky failure under out-of-memory.
+ * writer's sticky failure under out-of-memory; the header and checksum helpers with their one
+ * wording of magic, version and truncation errors.
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -12,6 +13,7 @@
 #include <string.h>
 
 #include "affect/bytes.h"
+#include "affect/hmm_blob.h" /* affect_fnv1a64 */
 #include "testutil.h"
 
 static void write_all(affect_bw *w)
@@ -120,12 +122,86 @@ static void test_out_of_memory(void **state)
     assert_true(tu_oom_sweep(oom_op, NULL, NULL, NULL) > 1);
 }
 
+static void test_header_and_checksum(void **state)
+{
+    (void)state;
+    affect_bw w;
+    affect_bw_init(&w);
+    affect_bw_u8(&w, 0xee); /* a record after other bytes */
+    affect_bw_header(&w, "ABCD", 2, 0x0301);
+    affect_bw_u16(&w, 0xbeef);
+    affect_bw_checksum(&w, 1);
+    assert_false(w.failed);
+    static const unsigned char want[] = {0xee, 'A', 'B', 'C', 'D', 2,    0,   0,
+                                         0,    1,   3,   0,   0,   0xef, 0xbe};
+    assert_int_equal(w.len, sizeof want + 8);
+    assert_memory_equal(w.data, want, sizeof want);
+    assert_true(affect_checksum_ok(w.data + 1, sizeof want - 1));
+    assert_int_equal(affect_get_u64(w.data + sizeof want),
+                     affect_fnv1a64(w.data + 1, sizeof want - 1));
+    /* the pointer loads and stores agree with the writer */
+    unsigned char b[8];
+    affect_put_u16(b, 0xbeef);
+    assert_int_equal(affect_get_u16(b), 0xbeef);
+    affect_put_u32(b, 0x01020304u);
+    assert_int_equal(b[0], 4);
+    assert_int_equal(affect_get_u32(b), 0x01020304u);
+    affect_put_f64(b, -2.5);
+    assert_true(affect_get_f64(b) == -2.5);
+    w.data[sizeof want] ^= 1;
+    assert_false(affect_checksum_ok(w.data + 1, sizeof want - 1));
+
+    affect_br r;
+    affect_error err;
+    uint32_t version, flags;
+    uint16_t u16;
+    affect_br_init(&r, w.data, w.len);
+    r.off = 1;
+    assert_int_equal(affect_br_header(&r, "ABCD", 2, NULL, "an abcd", &version, &flags, &err),
+                     AFFECT_OK);
+    assert_int_equal(version, 2);
+    assert_int_equal(flags, 0x0301);
+    assert_int_equal(r.off, 13);
+    assert_true(affect_br_u16(&r, &u16) && u16 == 0xbeef);
+    /* errors: one wording, nothing consumed */
+    r.off = 1;
+    assert_int_equal(affect_br_header(&r, "ABCD", 1, "X: ", "an abcd", &version, &flags, &err),
+                     AFFECT_ERR_FORMAT);
+    assert_string_equal(err.msg, "X: unknown format version 2 (this build reads 1 .. 1)");
+    assert_int_equal(r.off, 1);
+    assert_int_equal(affect_br_header(&r, "ABCE", 2, NULL, "an abce", &version, &flags, &err),
+                     AFFECT_ERR_FORMAT);
+    assert_string_equal(err.msg, "not an abce (bad magic bytes at offset 1)");
+    affect_br_init(&r, w.data, 12);
+    r.off = 1;
+    assert_int_equal(affect_br_header(&r, "ABCD", 2, NULL, "an abcd", &version, &flags, &err),
+                     AFFECT_ERR_FORMAT);
+    assert_string_equal(err.msg, "truncated: 11 bytes is shorter than the 12-byte header");
+    assert_int_equal(affect_check_version(0, 3, NULL, &err), AFFECT_ERR_FORMAT);
+    assert_string_equal(err.msg, "unknown format version 0 (this build reads 1 .. 3)");
+    assert_int_equal(affect_check_version(3, 3, NULL, &err), AFFECT_OK);
+    /* named fields */
+    uint32_t u32;
+    double d;
+    affect_br_init(&r, w.data, 3);
+    assert_int_equal(affect_br_u32_field(&r, &u32, "R: ", "the count", &err), AFFECT_ERR_FORMAT);
+    assert_string_equal(err.msg, "R: truncated in the count (offset 0)");
+    assert_int_equal(affect_br_need(&r, 2, 1, NULL, "x", &err), AFFECT_OK);
+    assert_int_equal(affect_br_need(&r, 2, 2, NULL, "the pairs", &err), AFFECT_ERR_FORMAT);
+    assert_string_equal(err.msg, "truncated in the pairs (offset 0)");
+    affect_br_init(&r, w.data, w.len);
+    assert_int_equal(affect_br_f64_field(&r, &d, NULL, "x", &err), AFFECT_OK);
+    assert_int_equal(r.off, 8);
+    affect_bw_free(&w);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_layout),
         cmocka_unit_test(test_round_trip_and_truncation),
         cmocka_unit_test(test_out_of_memory),
+        cmocka_unit_test(test_header_and_checksum),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -690,8 +690,8 @@ static void test_bad_fields(void **state)
         const char *msg;
     } cases[] = {
         {0, 'X', MAGIC_MSG},
-        {4, 4, "unknown classifier format version 4 (this build reads 1 .. 3)"},
-        {4, 0, "unknown classifier format version 0 (this build reads 1 .. 3)"},
+        {4, 4, "unknown format version 4 (this build reads 1 .. 3)"},
+        {4, 0, "unknown format version 0 (this build reads 1 .. 3)"},
         {8, 1, "unknown classifier flags 1 (offset 8)"},
         {12, 1, "invalid class count 1 (offset 12)"},
         {12, 65, "invalid class count 65 (offset 12)"},

@@ -5,10 +5,12 @@
  * handling (with 1 and 2 threads) and the column-mean imputation of missing values.
  */
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "testutil.h"
 
+#include "affect/hmm_blob.h" /* affect_fnv1a64 */
 #include "affect/rmlr.h"
 #include "affect/rng.h"
 
@@ -704,7 +706,8 @@ static void test_round_trip(void **state)
     affect_bw_init(&w);
     affect_bw_init(&w2);
     affect_rmlr_encode(m, &w);
-    assert_int_equal(w.len, 38 + 8 * (2 * 5 + 2 * P + 3 + 3 * P));
+    assert_int_equal(w.len, 20 + 37 + 8 * (2 * 5 + 2 * P + 3 + 3 * P) + 8);
+    assert_memory_equal(w.data, "AFRL\x02\0\0\0\0\0\0\0", 12);
     affect_br_init(&r, w.data, w.len);
     assert_int_equal(affect_rmlr_decode(&r, &m2, &err), AFFECT_OK);
     assert_int_equal(r.off, w.len);
@@ -729,6 +732,12 @@ static void test_round_trip(void **state)
 static void put_u32(unsigned char *p, uint32_t v)
 {
     for (int i = 0; i < 4; i++)
+        p[i] = (unsigned char)(v >> (8 * i));
+}
+
+static void put_u64_at(unsigned char *p, uint64_t v)
+{
+    for (int i = 0; i < 8; i++)
         p[i] = (unsigned char)(v >> (8 * i));
 }
 
@@ -822,17 +831,37 @@ static void e_beta(unsigned char *b)
     put_f64(b + 118 + 16 * P + 24 + 8 * 50, NAN);
 }
 
+/* Version 1 of a fit: its version byte, then version 2's body (affect/rmlr.h). */
+static void encode_v1(const affect_rmlr *m, affect_bw *w)
+{
+    affect_bw v2;
+    affect_bw_init(&v2);
+    affect_rmlr_encode(m, &v2);
+    assert_false(v2.failed);
+    affect_bw_u8(w, 1);
+    affect_bw_bytes(w, v2.data + 20, v2.len - 28);
+    assert_false(w->failed);
+    affect_bw_free(&v2);
+}
+
 static void test_corrupt(void **state)
 {
     (void)state;
     affect_rmlr *m = small_model();
     affect_bw w;
     affect_bw_init(&w);
-    affect_rmlr_encode(m, &w);
-    /* every truncation fails */
+    encode_v1(m, &w);
+    /* version 1 is still read, and every truncation of it fails */
+    affect_br r0;
+    affect_rmlr *m0;
+    affect_error err0;
+    affect_br_init(&r0, w.data, w.len);
+    assert_int_equal(affect_rmlr_decode(&r0, &m0, &err0), AFFECT_OK);
+    assert_int_equal(r0.off, w.len);
+    affect_rmlr_free(m0);
     for (size_t s = 0; s < w.len; s++)
         expect_decode(&w, s, NULL, NULL);
-    expect_decode(&w, 0, NULL, "RMLR: truncated in the version (offset 0)");
+    expect_decode(&w, 0, NULL, "RMLR: truncated: 0 bytes is shorter than the 12-byte header");
     expect_decode(&w, 3, NULL, "RMLR: truncated in the class count (offset 1)");
     expect_decode(&w, 21, NULL, "RMLR: truncated in the converged flag (offset 21)");
     expect_decode(&w, 29, NULL, "RMLR: truncated in alpha (offset 22)");
@@ -841,9 +870,7 @@ static void test_corrupt(void **state)
     expect_decode(&w, 118 + 8 * P, NULL, "RMLR: truncated in the standard deviations (offset 334)");
     expect_decode(&w, 118 + 16 * P + 8, NULL, "RMLR: truncated in the intercepts (offset 550)");
     expect_decode(&w, w.len - 1, NULL, "RMLR: truncated in the coefficients (offset 574)");
-    expect_decode(&w, w.len, e_version,
-                  "RMLR: unknown format version 2 at offset 0 (this build "
-                  "reads 1)");
+    expect_decode(&w, w.len, e_version, "RMLR: not an RMLR fit (bad magic bytes at offset 0)");
     expect_decode(&w, w.len, e_classes, "RMLR: class count 1 out of range 2 .. 256 (offset 1)");
     expect_decode(&w, w.len, e_features,
                   "RMLR: feature count 0 out of range 1 .. 1048576 (offset 5)");
@@ -867,6 +894,141 @@ static void test_corrupt(void **state)
     expect_decode(&w, w.len, e_beta, "RMLR: non-finite value in the coefficients (offset 974)");
     affect_bw_free(&w);
     affect_rmlr_free(m);
+}
+
+/* Version 2 with one edit, its checksum recomputed unless keep_sum. */
+static void expect_v2(const affect_bw *w, size_t size, size_t at, const void *bytes, size_t n,
+                      bool keep_sum, const char *message)
+{
+    affect_bw c;
+    affect_bw_init(&c);
+    affect_bw_bytes(&c, w->data, w->len);
+    assert_false(c.failed);
+    if (n)
+        memcpy(c.data + at, bytes, n);
+    if (!keep_sum)
+        put_u64_at(c.data + w->len - 8, affect_fnv1a64(c.data, w->len - 8));
+    expect_decode(&c, size, NULL, message);
+    affect_bw_free(&c);
+}
+
+static void test_corrupt_v2(void **state)
+{
+    (void)state;
+    affect_rmlr *m = small_model();
+    affect_bw w;
+    affect_bw_init(&w);
+    affect_rmlr_encode(m, &w);
+    size_t len = w.len;
+    for (size_t s = 0; s < len; s++)
+        expect_decode(&w, s, NULL, NULL);
+    expect_decode(&w, 3, NULL, "RMLR: truncated: 3 bytes is shorter than the 12-byte header");
+    expect_decode(&w, 19, NULL, "RMLR: truncated in the length (offset 12)");
+    char msg[160];
+    snprintf(msg, sizeof msg, "RMLR: truncated: %zu bytes, the header says %zu (offset 12)",
+             len - 1, len);
+    expect_decode(&w, len - 1, NULL, msg);
+    expect_v2(&w, len, 0, "AFRM", 4, false, "RMLR: not an RMLR fit (bad magic bytes at offset 0)");
+    expect_v2(&w, len, 4, "\3", 1, false,
+              "RMLR: unknown format version 3 (this build reads 1 .. 2)");
+    expect_v2(&w, len, 4, "\0", 1, false,
+              "RMLR: unknown format version 0 (this build reads 1 .. 2)");
+    expect_v2(&w, len, 4, "\1", 1, false, "RMLR: version 1 is stored without a header (offset 4)");
+    expect_v2(&w, len, 8, "\1", 1, false, "RMLR: flags 0x1 are not 0 (offset 8)");
+    unsigned char seven[8];
+    put_u64_at(seven, 7);
+    snprintf(msg, sizeof msg, "RMLR: truncated: %zu bytes, the header says 7 (offset 12)", len);
+    expect_v2(&w, len, 12, seven, 8, false, msg);
+    snprintf(msg, sizeof msg, "RMLR: checksum mismatch: the fit is corrupt (offset %zu)", len - 8);
+    expect_v2(&w, len, 100, "\xff", 1, true, msg);
+    /* the body's errors, 19 bytes further than version 1's */
+    expect_v2(&w, len, 20, "\1\0\0\0", 4, false,
+              "RMLR: class count 1 out of range 2 .. 256 (offset 20)");
+    uint64_t nan_bits = 0x7ff8000000000000ull;
+    unsigned char nanb[8];
+    put_u64_at(nanb, nan_bits);
+    expect_v2(&w, len, 118 + 16 * P + 24 + 8 * 50 + 19, nanb, 8, false,
+              "RMLR: non-finite value in the coefficients (offset 993)");
+    /* a record two bytes shorter than its length says: bytes follow the coefficients; a
+     * record followed by other bytes is read up to its end */
+    {
+        affect_bw c;
+        affect_bw_init(&c);
+        affect_bw_bytes(&c, w.data, len - 8);
+        affect_bw_u64(&c, 0);
+        affect_bw_u64(&c, 0);
+        put_u64_at(c.data + 12, len + 8);
+        put_u64_at(c.data + len, affect_fnv1a64(c.data, len));
+        snprintf(msg, sizeof msg, "RMLR: 8 bytes follow the coefficients (offset %zu)", len - 8);
+        expect_decode(&c, c.len, NULL, msg);
+        affect_bw_free(&c);
+        affect_bw_init(&c);
+        affect_bw_bytes(&c, w.data, len);
+        affect_bw_bytes(&c, "xyz", 3);
+        affect_br r;
+        affect_rmlr *m2;
+        affect_error err;
+        affect_br_init(&r, c.data, c.len);
+        assert_int_equal(affect_rmlr_decode(&r, &m2, &err), AFFECT_OK);
+        assert_int_equal(r.off, len);
+        affect_rmlr_free(m2);
+        affect_bw_free(&c);
+    }
+    affect_bw_free(&w);
+    affect_rmlr_free(m);
+}
+
+/* tests/fixtures/rmlr-v1.bin: the fit laban_salient cached for the fuzz fixtures' index before
+ * the header existed (3 classes, 27 Laban components, 12 rows); rmlr-v2.bin: the same fit as
+ * today's encoder writes it. */
+static void test_fixtures(void **state)
+{
+    (void)state;
+    size_t n1, n2;
+    unsigned char *v1 = (unsigned char *)tu_read_file(AFFECT_FIXTURES_DIR "/rmlr-v1.bin", &n1);
+    assert_non_null(v1);
+    affect_rmlr *m1, *m2;
+    affect_br r;
+    affect_error err;
+    affect_br_init(&r, v1, n1);
+    assert_int_equal(affect_rmlr_decode(&r, &m1, &err), AFFECT_OK);
+    assert_int_equal(r.off, n1);
+    assert_int_equal(affect_rmlr_n_classes(m1), 3);
+    assert_int_equal(affect_rmlr_n_features(m1), 27);
+    assert_int_equal(affect_rmlr_n_train(m1), 12);
+    affect_bw w;
+    affect_bw_init(&w);
+    affect_rmlr_encode(m1, &w);
+    assert_false(w.failed);
+    /* version 2 is version 1's body between the header and the checksum */
+    assert_int_equal(w.len, n1 - 1 + 28);
+    assert_memory_equal(w.data + 20, v1 + 1, n1 - 1);
+    if (getenv("AFFECT_WRITE_FIXTURES")) { /* regenerate: AFFECT_WRITE_FIXTURES=1 test_rmlr */
+        FILE *out = fopen(AFFECT_FIXTURES_DIR "/rmlr-v2.bin", "wb");
+        assert_non_null(out);
+        assert_int_equal(fwrite(w.data, 1, w.len, out), w.len);
+        fclose(out);
+    }
+    unsigned char *v2 = (unsigned char *)tu_read_file(AFFECT_FIXTURES_DIR "/rmlr-v2.bin", &n2);
+    assert_non_null(v2);
+    assert_int_equal(n2, w.len);
+    assert_memory_equal(v2, w.data, n2);
+    affect_br_init(&r, v2, n2);
+    assert_int_equal(affect_rmlr_decode(&r, &m2, &err), AFFECT_OK);
+    assert_int_equal(r.off, n2);
+    affect_bw w2;
+    affect_bw_init(&w2);
+    affect_rmlr_encode(m2, &w2);
+    assert_int_equal(w2.len, n2);
+    assert_memory_equal(w2.data, v2, n2);
+    assert_true(affect_rmlr_alpha(m1) == affect_rmlr_alpha(m2));
+    assert_memory_equal(affect_rmlr_beta(m1), affect_rmlr_beta(m2), 3 * 27 * sizeof(double));
+    affect_bw_free(&w);
+    affect_bw_free(&w2);
+    affect_rmlr_free(m1);
+    affect_rmlr_free(m2);
+    free(v1);
+    free(v2);
 }
 
 /* ---- out of memory ---- */
@@ -1002,6 +1164,7 @@ int main(void)
         cmocka_unit_test(test_recovery),      cmocka_unit_test(test_constant_feature),
         cmocka_unit_test(test_determinism),   cmocka_unit_test(test_errors),
         cmocka_unit_test(test_round_trip),    cmocka_unit_test(test_corrupt),
+        cmocka_unit_test(test_corrupt_v2),    cmocka_unit_test(test_fixtures),
         cmocka_unit_test(test_out_of_memory), cmocka_unit_test(test_threads),
         cmocka_unit_test(test_impute),        cmocka_unit_test(test_strong_rule_kkt),
         cmocka_unit_test(test_newton_vs_cd),

@@ -834,8 +834,8 @@ static void test_truncations_and_corruptions(void **state)
         double value;
         const char *msg;
     } cases[] = {
-        {0, 4, 0x50534641 + 1, "sPCA: bad magic bytes (offset 0)"},
-        {4, 4, 2, "sPCA: unknown format version 2, this build reads 1 (offset 4)"},
+        {0, 4, 0x50534641 + 1, "sPCA: not an sPCA record (bad magic bytes at offset 0)"},
+        {4, 4, 2, "sPCA: unknown format version 2 (this build reads 1 .. 1)"},
         {8, 4, 3, "sPCA: unknown flags 0x3 (offset 8)"},
         {8, 4, 4, "sPCA: unknown flags 0x4 (offset 8)"},
         {12, 4, 2, "sPCA: unknown label kernel 2 (offset 12)"},

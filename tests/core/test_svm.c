@@ -1077,8 +1077,8 @@ static void test_corrupt(void **state)
         expect_decode(b, len, AFFECT_ERR_FORMAT, message);                                         \
     } while (0)
 
-    CORRUPT(b[0] = 4, "SVM: unknown format version 4 at offset 0 (this build reads 1 .. 3)");
-    CORRUPT(b[0] = 0, "SVM: unknown format version 0 at offset 0 (this build reads 1 .. 3)");
+    CORRUPT(b[0] = 4, "SVM: unknown format version 4 (this build reads 1 .. 3)");
+    CORRUPT(b[0] = 0, "SVM: unknown format version 0 (this build reads 1 .. 3)");
     CORRUPT(put32(b + 1, 1), "SVM: class count 1 out of range 2 .. 256 (offset 1)");
     CORRUPT(put32(b + 1, 257), "SVM: class count 257 out of range 2 .. 256 (offset 1)");
     CORRUPT(put64(b + 5, 0), "SVM: dimension 0 out of range 1 .. 2147483647 (offset 5)");

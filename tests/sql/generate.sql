@@ -365,6 +365,13 @@ SELECT 'a fit of another shape under this index''s key is not used either: 4 lab
 -- oom: skip
 INSERT INTO idx(idx) VALUES('check');
 
+-- a fit cached before the RMLR fit had a header (version 1: a version byte 1, then the body
+-- that version 2 keeps between its 20-byte header and its 8-byte checksum) is still read
+SELECT 'the stored fit is version 2 (magic AFRL)', substr(value, 1, 4) = CAST('AFRL' AS BLOB)
+  FROM idx3_info WHERE key = 'rmlr';
+UPDATE idx3_info SET value = CAST(x'01' || substr(value, 21, length(value) - 28) AS BLOB)
+ WHERE key = 'rmlr';
+INSERT INTO idx3(idx3) VALUES('check');
 UPDATE idx3_info SET value = CAST(value || x'00' AS BLOB) WHERE key = 'rmlr';
 INSERT INTO idx3(idx3) VALUES('check');
 -- error: laban: cache entry 'rmlr' is corrupt: 1 bytes follow the RMLR fit; the next laban_salient or affect_generate on the index replaces it

@@ -842,7 +842,7 @@ INSERT INTO small_laban(small_laban) VALUES('check');
 UPDATE small_laban_info SET value = '0123456789abcdef:3:1:10' WHERE key = 'rmlr_key';
 
 INSERT INTO small_laban(small_laban) VALUES('check');
--- error: laban: cache entry 'rmlr' is corrupt: it is not an RMLR fit (RMLR: unknown format version 0 at offset 0 (this build reads 1)); the next laban_salient or affect_generate on the index replaces it
+-- error: laban: cache entry 'rmlr' is corrupt: it is not an RMLR fit (RMLR: truncated: 1 bytes is shorter than the 12-byte header); the next laban_salient or affect_generate on the index replaces it
 
 UPDATE small_laban_info SET value = 'fit' WHERE key = 'rmlr';
 

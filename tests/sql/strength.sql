@@ -243,7 +243,7 @@ SELECT affect_strength(r, motion_slice(m, 0, 2)) FROM models, s WHERE name = 'sm
 -- error: affect_strength: 3 frames, fewer than the 4 keyframes
 
 SELECT affect_strength((SELECT r FROM rankers LIMIT 1), m) FROM s LIMIT 1;
--- error: affect_strength: argument 1 is not a valid strength model: not a strength model BLOB (bad magic)
+-- error: affect_strength: argument 1 is not a valid strength model: not a strength model (bad magic bytes at offset 0)
 
 SELECT strength_synthesize(r, 'furious') FROM models WHERE name = 'small';
 -- error: strength_synthesize: argument 2: "furious" is not a trained label of the model

@@ -79,8 +79,9 @@ extern "C" {
 /* options.solver (see the method above). */
 #define AFFECT_RMLR_SOLVER_NEWTON 0u
 #define AFFECT_RMLR_SOLVER_CD 1u
-/* Version of the encoding written by affect_rmlr_encode. */
-#define AFFECT_RMLR_FORMAT_VERSION 1u
+/* Version of the encoding written by affect_rmlr_encode (1, headerless, is still read). */
+#define AFFECT_RMLR_FORMAT_VERSION 2u
+#define AFFECT_RMLR_MAGIC "AFRL"
 
 typedef struct affect_rmlr_options {
     uint32_t n_lambda;       /* λ values on the automatic path (100) */
@@ -188,7 +189,15 @@ uint32_t affect_rmlr_predict(const affect_rmlr *m, const double *x, double *prob
 void affect_impute_column_means(double *x, size_t n, size_t p);
 
 /* ---- serialisation ----
- * Layout, version 1 (little-endian, through affect/bytes.h), offsets relative to the start:
+ * Layout, version 2 (little-endian, through affect/bytes.h; docs/FORMATS.md), offsets
+ * relative to the start:
+ *    0  4    magic "AFRL"
+ *    4  4    format version (2)
+ *    8  4    flags (0)
+ *   12  8    total length N of the record, header and checksum included (uint64)
+ *   20  …    the body: version 1's fields after its version byte (below, offsets + 19)
+ *  N-8  8    checksum: FNV-1a 64 of every byte of the record before it
+ * Version 1 (written before the header existed; still read: fits cached in laban indexes):
  *    0  1    format version (1)
  *    1  4    classes K (2 .. 256)
  *    5  4    features p (1 .. 1048576)
@@ -204,25 +213,29 @@ void affect_impute_column_means(double *x, size_t n, size_t p);
  *       8p   standard deviations (float64, finite, ≥ 0)
  *       8K   intercepts (float64, finite)
  *       8Kp  coefficients, class after class (float64, finite)
- * No checksum and no total length: the object is meant to be embedded in a BLOB carrying both;
- * decoding stops after the coefficients. */
+ * Version 1 has no checksum and no length: decoding it stops after the coefficients. */
 
-/* Appends m to w (a failed allocation sets w->failed). */
+/* Appends m to w in version 2 (a failed allocation sets w->failed). */
 void affect_rmlr_encode(const affect_rmlr *m, affect_bw *w);
 
-/* Reads a model from r at its offset and advances past it; every count and length is checked
- * before anything is read or allocated; offsets are r's (AFFECT_ERR_FORMAT): "RMLR: truncated
- * in the lambdas (offset 38)", "RMLR: unknown format version 2 at offset 0 (this build reads
- * 1)", "RMLR: class count 1 out of range 2 .. 256 (offset 1)", "RMLR: feature count 0 out of
- * range 1 .. 1048576 (offset 5)", "RMLR: sample count 1 below the class count 2 (offset 9)",
- * "RMLR: lambda count 0 out of range 1 .. 1048576 (offset 13)", "RMLR: lambda index 5 not
- * below the lambda count 5 (offset 17)", "RMLR: converged flag 2 is not 0 or 1 (offset 21)",
- * "RMLR: alpha = 2 is not in [0, 1] (offset 22)", "RMLR: cross-validation error 2 is not in
- * [0, 1] (offset 30)", "RMLR: lambda 3 = -1 is not a positive finite number (offset 62)",
- * "RMLR: cross-validation error 2 is not in [0, 1] (offset 70)" (along the path), "RMLR:
- * non-finite value in the means (offset 90)" (likewise "the intercepts", "the coefficients"),
- * "RMLR: standard deviation -1 is not a non-negative finite number (offset 98)";
- * AFFECT_ERR_NOMEM. *out is NULL on failure. */
+/* Reads a model (version 2, or version 1 when the first byte is 1) from r at its offset and
+ * advances past it; every count and length is checked before anything is read or allocated;
+ * offsets are r's (AFFECT_ERR_FORMAT). Version 2: "RMLR: truncated: 3 bytes is shorter than
+ * the 12-byte header", "RMLR: not an RMLR fit (bad magic bytes at offset 0)", "RMLR: unknown
+ * format version 3 (this build reads 1 .. 2)", "RMLR: flags 0x1 are not 0 (offset 8)",
+ * "RMLR: truncated: 600 bytes, the header says 1000 (offset 12)", "RMLR: checksum mismatch:
+ * the fit is corrupt (offset 992)", "RMLR: 8 bytes follow the coefficients (offset 984)"; then
+ * the body's errors, at offsets 19 bytes further than version 1's. Version 1 (and the body):
+ * "RMLR: truncated in the lambdas (offset 38)", "RMLR: class count 1 out of range 2 .. 256
+ * (offset 1)", "RMLR: feature count 0 out of range 1 .. 1048576 (offset 5)", "RMLR: sample
+ * count 1 below the class count 2 (offset 9)", "RMLR: lambda count 0 out of range 1 .. 1048576
+ * (offset 13)", "RMLR: lambda index 5 not below the lambda count 5 (offset 17)", "RMLR:
+ * converged flag 2 is not 0 or 1 (offset 21)", "RMLR: alpha = 2 is not in [0, 1] (offset
+ * 22)", "RMLR: cross-validation error 2 is not in [0, 1] (offset 30)", "RMLR: lambda 3 = -1 is
+ * not a positive finite number (offset 62)", "RMLR: cross-validation error 2 is not in [0, 1]
+ * (offset 70)" (along the path), "RMLR: non-finite value in the means (offset 90)" (likewise
+ * "the intercepts", "the coefficients"), "RMLR: standard deviation -1 is not a non-negative
+ * finite number (offset 98)"; AFFECT_ERR_NOMEM. *out is NULL on failure. */
 affect_status affect_rmlr_decode(affect_br *r, affect_rmlr **out, affect_error *err);
 
 #ifdef __cplusplus
