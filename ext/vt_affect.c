@@ -287,10 +287,12 @@ static const ax_rows_spec salience_spec = {
     "SELECT * FROM affect_salience(:classifier [, top])",
     false};
 
-int ax_register_affect_tables(sqlite3 *db)
+int ax_register_affect_salience(sqlite3 *db)
 {
-    int rc = ax_rows_register(db, &cv_spec);
-    if (rc == SQLITE_OK)
-        rc = ax_rows_register(db, &salience_spec);
-    return rc;
+    return ax_rows_register(db, &salience_spec);
+}
+
+int ax_register_affect_crossval(sqlite3 *db)
+{
+    return ax_rows_register(db, &cv_spec);
 }
