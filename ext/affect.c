@@ -131,7 +131,7 @@ static void *generation_cache_new(const char *name)
 static const ax_user_data classifier_cache = {classifier_cache_new, ax_cls_fn_free};
 /* the functions on a functional model BLOB: a one-model cache (fn_fda.c) */
 static const ax_user_data fda_cache = {fda_cache_new, ax_fda_fn_free};
-/* generation: what it reads from, and may cache of, the index named by its argument */
+/* generation: the RMLR fit of the last laban index used (fn_generate.c) */
 static const ax_user_data generation_cache = {generation_cache_new, ax_gen_fn_free};
 
 typedef struct ax_function {
