@@ -6,10 +6,24 @@
  *
  * sqlite3_affect_init checks the host SQLite's version, routes the core library's allocations
  * to sqlite3_malloc64 (so SQLite's memory accounting and fault injection cover them), and
- * registers every SQL function from one table per kind (scalar functions, aggregates),
- * reporting a failure with the function's name.
- * Every function here is pure (deterministic, no file or table access), so each is
- * SQLITE_DETERMINISTIC | SQLITE_INNOCUOUS.
+ * registers everything from two tables, each in the order of docs/reference.md's contents:
+ *   functions  every SQL function (scalar or aggregate), one row per accepted argument count:
+ *              name, argument count, flags, xFunc or xStep/xFinal, and how its user data is
+ *              made (the name itself, which AX_NAME reads, or a constructor/destructor pair for
+ *              the functions that keep a cache: fn_affect.c, fn_fda.c, fn_generate.c);
+ *   modules    every virtual-table module (the eponymous table-valued functions and the laban
+ *              virtual table), by the function of its vt_*.c file that registers it.
+ * One loop registers each table; a failure is reported with the function's or module's name
+ * ("affect: cannot register motion_slice/3: …").
+ *
+ * Flags: pure functions (deterministic, no file or table access) are
+ * SQLITE_UTF8 | SQLITE_DETERMINISTIC | SQLITE_INNOCUOUS. The functions that read the laban index
+ * named by their argument (laban_zvector, laban_salient, affect_generate,
+ * affect_generate_explain) are SQLITE_UTF8 | SQLITE_DIRECTONLY and not deterministic: their
+ * result follows the index, and they are not for triggers, views, generated columns or
+ * expression indexes. Scalar functions returning JSON text (subtype 'J') add
+ * SQLITE_RESULT_SUBTYPE, which is left out when the host SQLite is older than 3.45 (it does not
+ * know the flag).
  */
 #include <string.h>
 
@@ -91,136 +105,200 @@ static void fn_build_info(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     ax_result_json_buffer(ctx, &sb);
 }
 
+/* How a function's user data is made: the per-function caches, one per registration, freed
+ * with the connection (or by SQLite when the registration fails). */
+typedef struct ax_user_data {
+    void *(*make)(const char *name); /* NULL when out of memory */
+    void (*destroy)(void *);
+} ax_user_data;
+
+static void *classifier_cache_new(const char *name)
+{
+    return ax_cls_fn_new(name);
+}
+
+static void *fda_cache_new(const char *name)
+{
+    return ax_fda_fn_new(name);
+}
+
+static void *generation_cache_new(const char *name)
+{
+    return ax_gen_fn_new(name);
+}
+
+/* the functions on a classifier BLOB: a one-classifier cache (fn_affect.c) */
+static const ax_user_data classifier_cache = {classifier_cache_new, ax_cls_fn_free};
+/* the functions on a functional model BLOB: a one-model cache (fn_fda.c) */
+static const ax_user_data fda_cache = {fda_cache_new, ax_fda_fn_free};
+/* generation: the RMLR fit of the last laban index used (fn_generate.c) */
+static const ax_user_data generation_cache = {generation_cache_new, ax_gen_fn_free};
+
 typedef struct ax_function {
     const char *name;
     int n_arg;
-    bool json; /* returns JSON text (subtype 'J') */
-    void (*fn)(sqlite3_context *, int, sqlite3_value **);
+    int flags;
+    void (*func)(sqlite3_context *, int, sqlite3_value **); /* a scalar function */
+    void (*step)(sqlite3_context *, int, sqlite3_value **); /* an aggregate */
+    void (*final)(sqlite3_context *);
+    const ax_user_data *user; /* NULL: the user data is the name */
 } ax_function;
 
-/* Every scalar function, one row per accepted argument count. */
+#define PURE AX_PURE
+#define READS (SQLITE_UTF8 | SQLITE_DIRECTONLY) /* reads the laban index named by an argument */
+#define JSON SQLITE_RESULT_SUBTYPE              /* returns JSON text (subtype 'J') */
+
+/* Every SQL function, one row per accepted argument count, in the reference's order. */
 static const ax_function functions[] = {
-    {"affect_version", 0, false, fn_version},
-    {"affect_build_info", 0, true, fn_build_info},
-    {"motion_from_bvh", 1, false, ax_motion_from_bvh},
-    {"motion_from_bvh", 2, false, ax_motion_from_bvh},
-    {"motion_bvh_error", 1, false, ax_motion_bvh_error},
-    {"motion_bvh_error", 2, false, ax_motion_bvh_error},
-    {"motion_from_csv", 2, false, ax_motion_from_csv},
-    {"motion_from_csv", 3, false, ax_motion_from_csv},
-    {"motion_from_json", 1, false, ax_motion_from_json},
-    {"motion_to_json", 1, true, ax_motion_to_json},
-    {"motion_to_csv", 1, false, ax_motion_to_csv},
-    {"motion_to_bvh", 1, false, ax_motion_to_bvh},
-    {"motion_to_bvh", 2, false, ax_motion_to_bvh},
-    {"motion_rigid", 1, false, ax_motion_rigid},
-    {"motion_rigid", 2, false, ax_motion_rigid},
-    {"motion_rigid", 3, false, ax_motion_rigid},
-    {"motion_info", 1, true, ax_motion_info},
-    {"motion_frames", 1, false, ax_motion_scalar},
-    {"motion_joints", 1, false, ax_motion_scalar},
-    {"motion_fps", 1, false, ax_motion_scalar},
-    {"motion_duration", 1, false, ax_motion_scalar},
-    {"motion_slice", 3, false, ax_motion_slice},
-    {"motion_resample", 2, false, ax_motion_resample},
-    {"motion_select", 2, false, ax_motion_select},
-    {"motion_dtw", 2, false, ax_motion_dtw},
-    {"motion_roles", 1, true, ax_motion_roles},
-    {"motion_roles", 2, true, ax_motion_roles},
-    {"motion_normalize", 1, false, ax_motion_normalize},
-    {"motion_normalize", 2, false, ax_motion_normalize},
-    {"motion_svg", 1, false, ax_motion_svg},
-    {"motion_svg", 2, false, ax_motion_svg},
-    {"motion_synth", 3, false, ax_motion_synth},
-    {"motion_synth", 4, false, ax_motion_synth},
-    {"laban_weight", 1, false, ax_laban_weight},
-    {"laban_weight", 2, false, ax_laban_weight},
-    {"laban_weight", 3, false, ax_laban_weight},
-    {"laban_time", 1, false, ax_laban_time},
-    {"laban_time", 2, false, ax_laban_time},
-    {"laban_time", 3, false, ax_laban_time},
-    {"laban_flow", 1, false, ax_laban_flow},
-    {"laban_flow", 2, false, ax_laban_flow},
-    {"laban_flow", 3, false, ax_laban_flow},
-    {"laban_space", 1, false, ax_laban_space},
-    {"laban_space", 2, false, ax_laban_space},
-    {"laban_space", 3, false, ax_laban_space},
-    {"laban_shape_directional", 2, false, ax_laban_shape_directional},
-    {"laban_shape_directional", 3, false, ax_laban_shape_directional},
-    {"laban_shape_shaping", 1, true, ax_laban_shape_shaping},
-    {"laban_shape_shaping", 2, true, ax_laban_shape_shaping},
-    {"laban_shape_flow", 1, false, ax_laban_shape_flow},
-    {"laban_shape_flow", 2, false, ax_laban_shape_flow},
-    {"laban", 1, true, ax_laban},
-    {"laban", 2, true, ax_laban},
-    {"motion_kinematics", 1, false, ax_motion_kinematics},
-    {"motion_kinematics", 2, false, ax_motion_kinematics},
-    {"laban_vector", 1, false, ax_laban_vector},
-    {"laban_vector", 2, false, ax_laban_vector},
-    {"laban_names", 0, true, ax_laban_names},
-    {"hmm_loglik", 2, false, ax_hmm_loglik},
-    {"hmm_loglik", 3, false, ax_hmm_loglik},
-    {"hmm_viterbi", 2, true, ax_hmm_viterbi},
-    {"hmm_viterbi_loglik", 2, false, ax_hmm_viterbi_loglik},
-    {"hmm_info", 1, true, ax_hmm_info},
-    {"hmm_postures", 1, false, ax_hmm_postures},
+    {"affect_version", 0, PURE, .func = fn_version},
+    {"affect_build_info", 0, PURE | JSON, .func = fn_build_info},
+    {"motion_from_bvh", 1, PURE, .func = ax_motion_from_bvh},
+    {"motion_from_bvh", 2, PURE, .func = ax_motion_from_bvh},
+    {"motion_bvh_error", 1, PURE, .func = ax_motion_bvh_error},
+    {"motion_bvh_error", 2, PURE, .func = ax_motion_bvh_error},
+    {"motion_from_csv", 2, PURE, .func = ax_motion_from_csv},
+    {"motion_from_csv", 3, PURE, .func = ax_motion_from_csv},
+    {"motion_from_json", 1, PURE, .func = ax_motion_from_json},
+    {"motion_to_json", 1, PURE | JSON, .func = ax_motion_to_json},
+    {"motion_to_csv", 1, PURE, .func = ax_motion_to_csv},
+    {"motion_to_bvh", 1, PURE, .func = ax_motion_to_bvh},
+    {"motion_to_bvh", 2, PURE, .func = ax_motion_to_bvh},
+    {"motion_info", 1, PURE | JSON, .func = ax_motion_info},
+    {"motion_frames", 1, PURE, .func = ax_motion_scalar},
+    {"motion_joints", 1, PURE, .func = ax_motion_scalar},
+    {"motion_fps", 1, PURE, .func = ax_motion_scalar},
+    {"motion_duration", 1, PURE, .func = ax_motion_scalar},
+    {"motion_slice", 3, PURE, .func = ax_motion_slice},
+    {"motion_resample", 2, PURE, .func = ax_motion_resample},
+    {"motion_select", 2, PURE, .func = ax_motion_select},
+    {"motion_roles", 1, PURE | JSON, .func = ax_motion_roles},
+    {"motion_roles", 2, PURE | JSON, .func = ax_motion_roles},
+    {"motion_normalize", 1, PURE, .func = ax_motion_normalize},
+    {"motion_normalize", 2, PURE, .func = ax_motion_normalize},
+    {"motion_rigid", 1, PURE, .func = ax_motion_rigid},
+    {"motion_rigid", 2, PURE, .func = ax_motion_rigid},
+    {"motion_rigid", 3, PURE, .func = ax_motion_rigid},
+    {"motion_svg", 1, PURE, .func = ax_motion_svg},
+    {"motion_svg", 2, PURE, .func = ax_motion_svg},
+    {"motion_svg_group", 2, PURE, .step = ax_motion_svg_group_step,
+     .final = ax_motion_svg_group_final},
+    {"motion_svg_group", 3, PURE, .step = ax_motion_svg_group_step,
+     .final = ax_motion_svg_group_final},
+    {"affect_heatmap", 3, PURE, .step = ax_affect_heatmap_step, .final = ax_affect_heatmap_final},
+    {"affect_heatmap", 4, PURE, .step = ax_affect_heatmap_step, .final = ax_affect_heatmap_final},
+    {"motion_synth", 3, PURE, .func = ax_motion_synth},
+    {"motion_synth", 4, PURE, .func = ax_motion_synth},
+    /* Laban */
+    {"laban_weight", 1, PURE, .func = ax_laban_weight},
+    {"laban_weight", 2, PURE, .func = ax_laban_weight},
+    {"laban_weight", 3, PURE, .func = ax_laban_weight},
+    {"laban_time", 1, PURE, .func = ax_laban_time},
+    {"laban_time", 2, PURE, .func = ax_laban_time},
+    {"laban_time", 3, PURE, .func = ax_laban_time},
+    {"laban_flow", 1, PURE, .func = ax_laban_flow},
+    {"laban_flow", 2, PURE, .func = ax_laban_flow},
+    {"laban_flow", 3, PURE, .func = ax_laban_flow},
+    {"laban_space", 1, PURE, .func = ax_laban_space},
+    {"laban_space", 2, PURE, .func = ax_laban_space},
+    {"laban_space", 3, PURE, .func = ax_laban_space},
+    {"laban_shape_directional", 2, PURE, .func = ax_laban_shape_directional},
+    {"laban_shape_directional", 3, PURE, .func = ax_laban_shape_directional},
+    {"laban_shape_shaping", 1, PURE | JSON, .func = ax_laban_shape_shaping},
+    {"laban_shape_shaping", 2, PURE | JSON, .func = ax_laban_shape_shaping},
+    {"laban_shape_flow", 1, PURE, .func = ax_laban_shape_flow},
+    {"laban_shape_flow", 2, PURE, .func = ax_laban_shape_flow},
+    {"laban", 1, PURE | JSON, .func = ax_laban},
+    {"laban", 2, PURE | JSON, .func = ax_laban},
+    {"laban_names", 0, PURE | JSON, .func = ax_laban_names},
+    {"laban_vector", 1, PURE, .func = ax_laban_vector},
+    {"laban_vector", 2, PURE, .func = ax_laban_vector},
+    {"laban_zvector", 2, READS, .func = ax_laban_zvector},
+    {"laban_zvector", 3, READS, .func = ax_laban_zvector},
+    {"laban_plot", 3, PURE, .step = ax_laban_plot_step, .final = ax_laban_plot_final},
+    {"laban_plot", 4, PURE, .step = ax_laban_plot_step, .final = ax_laban_plot_final},
+    {"motion_kinematics", 1, PURE, .func = ax_motion_kinematics},
+    {"motion_kinematics", 2, PURE, .func = ax_motion_kinematics},
+    /* HMMs */
+    {"hmm_train", 1, PURE, .step = ax_hmm_train_step, .final = ax_hmm_train_final},
+    {"hmm_train", 2, PURE, .step = ax_hmm_train_step, .final = ax_hmm_train_final},
+    {"hmm_loglik", 2, PURE, .func = ax_hmm_loglik},
+    {"hmm_loglik", 3, PURE, .func = ax_hmm_loglik},
+    {"hmm_viterbi", 2, PURE | JSON, .func = ax_hmm_viterbi},
+    {"hmm_viterbi_loglik", 2, PURE, .func = ax_hmm_viterbi_loglik},
+    {"hmm_info", 1, PURE | JSON, .func = ax_hmm_info},
+    {"hmm_postures", 1, PURE, .func = ax_hmm_postures},
+    /* recognition */
+    {"affect_train", 2, PURE, .step = ax_affect_train_step, .final = ax_affect_train_final},
+    {"affect_train", 3, PURE, .step = ax_affect_train_step, .final = ax_affect_train_final},
+    {"affect_classify", 2, PURE, .func = ax_affect_classify, .user = &classifier_cache},
+    {"affect_classify", 3, PURE, .func = ax_affect_classify, .user = &classifier_cache},
+    {"affect_scores", 2, PURE | JSON, .func = ax_affect_scores, .user = &classifier_cache},
+    {"fisher_score", 2, PURE, .func = ax_fisher_score, .user = &classifier_cache},
+    {"affect_embed", 2, PURE, .func = ax_affect_embed, .user = &classifier_cache},
+    {"affect_info", 1, PURE | JSON, .func = ax_affect_info, .user = &classifier_cache},
+    {"affect_crossval_json", 4, PURE, .step = ax_affect_crossval_step,
+     .final = ax_affect_crossval_final},
+    /* functional analysis */
+    {"fda_train", 2, PURE, .step = ax_fda_train_step, .final = ax_fda_train_final},
+    {"fda_train", 3, PURE, .step = ax_fda_train_step, .final = ax_fda_train_final},
+    {"fda_embed", 2, PURE, .func = ax_fda_embed, .user = &fda_cache},
+    {"fda_classify", 2, PURE, .func = ax_fda_classify, .user = &fda_cache},
+    {"fda_classify", 3, PURE, .func = ax_fda_classify, .user = &fda_cache},
+    {"fda_info", 1, PURE | JSON, .func = ax_fda_info, .user = &fda_cache},
+    {"fda_prototype", 2, PURE, .func = ax_fda_prototype, .user = &fda_cache},
+    {"fda_plot", 1, PURE, .func = ax_fda_plot, .user = &fda_cache},
+    {"fda_plot", 2, PURE, .func = ax_fda_plot, .user = &fda_cache},
+    /* generation */
+    {"laban_salient", 1, READS | JSON, .func = ax_laban_salient, .user = &generation_cache},
+    {"laban_salient", 2, READS | JSON, .func = ax_laban_salient, .user = &generation_cache},
+    {"affect_generate", 3, READS, .func = ax_affect_generate, .user = &generation_cache},
+    {"affect_generate", 4, READS, .func = ax_affect_generate, .user = &generation_cache},
+    {"affect_generate_explain", 3, READS | JSON, .func = ax_affect_generate_explain,
+     .user = &generation_cache},
+    {"affect_generate_explain", 4, READS | JSON, .func = ax_affect_generate_explain,
+     .user = &generation_cache},
+    {"motion_dtw", 2, PURE, .func = ax_motion_dtw},
     /* emotion strength (fn_strength.c) */
-    {"affect_strength", 2, false, ax_affect_strength},
-    {"strength_synthesize", 2, false, ax_strength_synthesize},
-    {"strength_synthesize", 3, false, ax_strength_synthesize},
-    {"strength_edit", 3, false, ax_strength_edit},
-    {"strength_edit", 4, false, ax_strength_edit},
-    {"strength_info", 1, true, ax_strength_info},
-    {"motion_keyframes", 1, true, ax_motion_keyframes},
-    {"motion_keyframes", 2, true, ax_motion_keyframes},
-    {"rank_score", 2, false, ax_rank_score},
+    {"strength_train", 2, PURE, .step = ax_strength_train_step, .final = ax_strength_train_final},
+    {"strength_train", 3, PURE, .step = ax_strength_train_step, .final = ax_strength_train_final},
+    {"affect_strength", 2, PURE, .func = ax_affect_strength},
+    {"strength_synthesize", 2, PURE, .func = ax_strength_synthesize},
+    {"strength_synthesize", 3, PURE, .func = ax_strength_synthesize},
+    {"strength_edit", 3, PURE, .func = ax_strength_edit},
+    {"strength_edit", 4, PURE, .func = ax_strength_edit},
+    {"strength_info", 1, PURE | JSON, .func = ax_strength_info},
+    {"motion_keyframes", 1, PURE | JSON, .func = ax_motion_keyframes},
+    {"motion_keyframes", 2, PURE | JSON, .func = ax_motion_keyframes},
+    {"rank_train", 2, PURE, .step = ax_rank_train_step, .final = ax_rank_train_final},
+    {"rank_train", 3, PURE, .step = ax_rank_train_step, .final = ax_rank_train_final},
+    {"rank_score", 2, PURE, .func = ax_rank_score},
 };
 
-typedef struct ax_aggregate {
+#undef PURE
+#undef READS
+#undef JSON
+
+/* The laban virtual table's caches for other files: generation's RMLR fit (fn_generate.c). */
+static const ax_laban_cache_kind laban_caches[] = {{"rmlr", ax_gen_check_fit}, {NULL, NULL}};
+
+static int register_laban(sqlite3 *db)
+{
+    return ax_register_laban(db, laban_caches);
+}
+
+typedef struct ax_module {
     const char *name;
-    int n_arg;
-    void (*step)(sqlite3_context *, int, sqlite3_value **);
-    void (*final)(sqlite3_context *);
-} ax_aggregate;
+    int (*reg)(sqlite3 *db); /* sqlite3_create_module of that name, in its vt_*.c */
+} ax_module;
 
-/* Every aggregate function, one row per accepted argument count. */
-static const ax_aggregate aggregates[] = {
-    {"laban_plot", 3, ax_laban_plot_step, ax_laban_plot_final},
-    {"laban_plot", 4, ax_laban_plot_step, ax_laban_plot_final},
-    {"motion_svg_group", 2, ax_motion_svg_group_step, ax_motion_svg_group_final},
-    {"motion_svg_group", 3, ax_motion_svg_group_step, ax_motion_svg_group_final},
-    {"affect_heatmap", 3, ax_affect_heatmap_step, ax_affect_heatmap_final},
-    {"affect_heatmap", 4, ax_affect_heatmap_step, ax_affect_heatmap_final},
-    {"hmm_train", 1, ax_hmm_train_step, ax_hmm_train_final},
-    {"hmm_train", 2, ax_hmm_train_step, ax_hmm_train_final},
-    {"affect_train", 2, ax_affect_train_step, ax_affect_train_final},
-    {"affect_train", 3, ax_affect_train_step, ax_affect_train_final},
-    {"affect_crossval_json", 4, ax_affect_crossval_step, ax_affect_crossval_final},
-    {"strength_train", 2, ax_strength_train_step, ax_strength_train_final},
-    {"strength_train", 3, ax_strength_train_step, ax_strength_train_final},
-    {"rank_train", 2, ax_rank_train_step, ax_rank_train_final},
-    {"rank_train", 3, ax_rank_train_step, ax_rank_train_final},
-    {"fda_train", 2, ax_fda_train_step, ax_fda_train_final},
-    {"fda_train", 3, ax_fda_train_step, ax_fda_train_final},
-};
-
-/* The functions on a classifier BLOB: each registration gets its own one-classifier cache
- * (fn_affect.c) as user data, freed with the connection. */
-static const ax_function classifier_functions[] = {
-    {"affect_classify", 2, false, ax_affect_classify},
-    {"affect_classify", 3, false, ax_affect_classify},
-    {"affect_scores", 2, true, ax_affect_scores},
-    {"fisher_score", 2, false, ax_fisher_score},
-    {"affect_embed", 2, false, ax_affect_embed},
-    {"affect_info", 1, true, ax_affect_info},
-};
-
-/* The functions on a functional model BLOB (fn_fda.c), each with its one-model cache. */
-static const ax_function fda_functions[] = {
-    {"fda_embed", 2, false, ax_fda_embed},         {"fda_classify", 2, false, ax_fda_classify},
-    {"fda_classify", 3, false, ax_fda_classify},   {"fda_info", 1, true, ax_fda_info},
-    {"fda_prototype", 2, false, ax_fda_prototype}, {"fda_plot", 1, false, ax_fda_plot},
-    {"fda_plot", 2, false, ax_fda_plot},
+/* Every virtual-table module, in the reference's order. */
+static const ax_module modules[] = {
+    {"motion_points", ax_register_points},
+    {"motion_angles", ax_register_angles},
+    {"laban_series", ax_register_laban_series},
+    {"laban", register_laban},
+    {"affect_salience", ax_register_affect_salience},
+    {"affect_crossval", ax_register_affect_crossval},
 };
 
 #ifdef _WIN32
@@ -241,123 +319,29 @@ int sqlite3_affect_init(sqlite3 *db, char **err, const sqlite3_api_routines *api
     static const affect_allocator allocator = {ax_malloc, ax_realloc, ax_free};
     affect_set_allocator(&allocator);
 
-    int subtype_flag = sqlite3_libversion_number() >= 3045000 ? SQLITE_RESULT_SUBTYPE : 0;
+    /* an older host does not know the result-subtype flag */
+    int unknown = sqlite3_libversion_number() >= 3045000 ? 0 : SQLITE_RESULT_SUBTYPE;
     for (size_t i = 0; i < sizeof functions / sizeof functions[0]; i++) {
         const ax_function *f = &functions[i];
-        int flags = AX_PURE | (f->json ? subtype_flag : 0);
-        int rc = sqlite3_create_function_v2(db, f->name, f->n_arg, flags, (void *)f->name, f->fn,
-                                            NULL, NULL, NULL);
-        if (rc != SQLITE_OK) {
-            *err = sqlite3_mprintf("affect: cannot register %s/%d: %s", f->name, f->n_arg,
-                                   sqlite3_errmsg(db));
-            return rc;
-        }
-    }
-    for (size_t i = 0; i < sizeof aggregates / sizeof aggregates[0]; i++) {
-        const ax_aggregate *a = &aggregates[i];
-        int rc = sqlite3_create_function_v2(db, a->name, a->n_arg, AX_PURE, (void *)a->name, NULL,
-                                            a->step, a->final, NULL);
-        if (rc != SQLITE_OK) {
-            *err = sqlite3_mprintf("affect: cannot register %s/%d: %s", a->name, a->n_arg,
-                                   sqlite3_errmsg(db));
-            return rc;
-        }
-    }
-    for (size_t i = 0; i < sizeof classifier_functions / sizeof classifier_functions[0]; i++) {
-        const ax_function *f = &classifier_functions[i];
-        ax_cls_fn *user = ax_cls_fn_new(f->name);
-        if (!user)
+        void *user = (void *)f->name;
+        if (f->user && !(user = f->user->make(f->name)))
             return SQLITE_NOMEM;
-        int flags = AX_PURE | (f->json ? subtype_flag : 0);
-        int rc = sqlite3_create_function_v2(db, f->name, f->n_arg, flags, user, f->fn, NULL, NULL,
-                                            ax_cls_fn_free); /* frees user on failure */
-        if (rc != SQLITE_OK) {
+        int rc =
+            sqlite3_create_function_v2(db, f->name, f->n_arg, f->flags & ~unknown, user, f->func,
+                                       f->step, f->final, f->user ? f->user->destroy : NULL);
+        if (rc != SQLITE_OK) { /* SQLite has destroyed user */
             *err = sqlite3_mprintf("affect: cannot register %s/%d: %s", f->name, f->n_arg,
                                    sqlite3_errmsg(db));
             return rc;
         }
     }
-    for (size_t i = 0; i < sizeof fda_functions / sizeof fda_functions[0]; i++) {
-        const ax_function *f = &fda_functions[i];
-        ax_fda_fn *user = ax_fda_fn_new(f->name);
-        if (!user)
-            return SQLITE_NOMEM;
-        int flags = AX_PURE | (f->json ? subtype_flag : 0);
-        int rc = sqlite3_create_function_v2(db, f->name, f->n_arg, flags, user, f->fn, NULL, NULL,
-                                            ax_fda_fn_free); /* frees user on failure */
+    for (size_t i = 0; i < sizeof modules / sizeof modules[0]; i++) {
+        int rc = modules[i].reg(db);
         if (rc != SQLITE_OK) {
-            *err = sqlite3_mprintf("affect: cannot register %s/%d: %s", f->name, f->n_arg,
+            *err = sqlite3_mprintf("affect: cannot register %s: %s", modules[i].name,
                                    sqlite3_errmsg(db));
             return rc;
         }
-    }
-    /* generation: reads (and may cache into) the laban index named by its argument, so not
-     * deterministic in SQLite's sense and not for triggers or views */
-    static const ax_function generation_functions[] = {
-        {"affect_generate", 3, false, ax_affect_generate},
-        {"affect_generate", 4, false, ax_affect_generate},
-        {"affect_generate_explain", 3, true, ax_affect_generate_explain},
-        {"affect_generate_explain", 4, true, ax_affect_generate_explain},
-        {"laban_salient", 1, true, ax_laban_salient},
-        {"laban_salient", 2, true, ax_laban_salient},
-    };
-    for (size_t i = 0; i < sizeof generation_functions / sizeof generation_functions[0]; i++) {
-        const ax_function *f = &generation_functions[i];
-        ax_gen_fn *user = ax_gen_fn_new(f->name);
-        if (!user)
-            return SQLITE_NOMEM;
-        int flags = SQLITE_UTF8 | SQLITE_DIRECTONLY | (f->json ? subtype_flag : 0);
-        int rc = sqlite3_create_function_v2(db, f->name, f->n_arg, flags, user, f->fn, NULL, NULL,
-                                            ax_gen_fn_free);
-        if (rc != SQLITE_OK) {
-            *err = sqlite3_mprintf("affect: cannot register %s/%d: %s", f->name, f->n_arg,
-                                   sqlite3_errmsg(db));
-            return rc;
-        }
-    }
-    /* laban_zvector reads the statistics of the laban index named by its argument: not
-     * deterministic in SQLite's sense (the vector follows the index) and not for triggers,
-     * views, generated columns or expression indexes */
-    static const ax_function index_functions[] = {
-        {"laban_zvector", 2, false, ax_laban_zvector},
-        {"laban_zvector", 3, false, ax_laban_zvector},
-    };
-    for (size_t i = 0; i < sizeof index_functions / sizeof index_functions[0]; i++) {
-        const ax_function *f = &index_functions[i];
-        int rc = sqlite3_create_function_v2(db, f->name, f->n_arg, SQLITE_UTF8 | SQLITE_DIRECTONLY,
-                                            (void *)f->name, f->fn, NULL, NULL, NULL);
-        if (rc != SQLITE_OK) {
-            *err = sqlite3_mprintf("affect: cannot register %s/%d: %s", f->name, f->n_arg,
-                                   sqlite3_errmsg(db));
-            return rc;
-        }
-    }
-    int rc = ax_register_affect_tables(db);
-    if (rc != SQLITE_OK) {
-        *err = sqlite3_mprintf("affect: cannot register affect_crossval/affect_salience: %s",
-                               sqlite3_errmsg(db));
-        return rc;
-    }
-    rc = ax_register_points(db);
-    if (rc != SQLITE_OK) {
-        *err = sqlite3_mprintf("affect: cannot register motion_points: %s", sqlite3_errmsg(db));
-        return rc;
-    }
-    rc = ax_register_angles(db);
-    if (rc != SQLITE_OK) {
-        *err = sqlite3_mprintf("affect: cannot register motion_angles: %s", sqlite3_errmsg(db));
-        return rc;
-    }
-    rc = ax_register_laban_series(db);
-    if (rc != SQLITE_OK) {
-        *err = sqlite3_mprintf("affect: cannot register laban_series: %s", sqlite3_errmsg(db));
-        return rc;
-    }
-    static const ax_laban_cache_kind laban_caches[] = {{"rmlr", ax_gen_check_fit}, {NULL, NULL}};
-    rc = ax_register_laban(db, laban_caches);
-    if (rc != SQLITE_OK) {
-        *err = sqlite3_mprintf("affect: cannot register laban: %s", sqlite3_errmsg(db));
-        return rc;
     }
     return SQLITE_OK;
 }

@@ -49,12 +49,9 @@ void ax_errorf(sqlite3_context *ctx, const char *fmt, ...)
     sqlite3_result_error(ctx, msg, -1);
 }
 
-char *ax_mprintf(const char *fmt, ...)
+/* raw (sqlite3_malloc'd, may be NULL) escaped into a new string; raw is freed. */
+static char *escape_message(char *raw)
 {
-    va_list ap;
-    va_start(ap, fmt);
-    char *raw = sqlite3_vmprintf(fmt, ap);
-    va_end(ap);
     if (!raw)
         return NULL;
     size_t len = strlen(raw);
@@ -63,6 +60,30 @@ char *ax_mprintf(const char *fmt, ...)
         affect_escape_text(msg, 4 * len + 1, raw, len);
     sqlite3_free(raw);
     return msg;
+}
+
+char *ax_mprintf(const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    char *raw = sqlite3_vmprintf(fmt, ap);
+    va_end(ap);
+    return escape_message(raw);
+}
+
+int ax_vtab_error(sqlite3_vtab *vt, const affect_error *err, const char *fmt, ...)
+{
+    if (err && err->status == AFFECT_ERR_NOMEM)
+        return SQLITE_NOMEM;
+    if (err && err->status == AFFECT_ERR_INTERRUPTED)
+        return SQLITE_INTERRUPT;
+    va_list ap;
+    va_start(ap, fmt);
+    char *raw = sqlite3_vmprintf(fmt, ap);
+    va_end(ap);
+    sqlite3_free(vt->zErrMsg);
+    vt->zErrMsg = escape_message(raw);
+    return vt->zErrMsg ? SQLITE_ERROR : SQLITE_NOMEM;
 }
 
 const char *ax_type_name(sqlite3_value *v)
@@ -625,11 +646,9 @@ int ax_motion_tvf_best_index(sqlite3_vtab *vt, sqlite3_index_info *info, int col
     if (motion < 0) {
         if (seen)
             return SQLITE_CONSTRAINT;
-        sqlite3_free(vt->zErrMsg);
-        vt->zErrMsg = sqlite3_mprintf("%s: a motion argument is required, as in "
-                                      "SELECT * FROM %s(:motion)",
-                                      name, name);
-        return vt->zErrMsg ? SQLITE_ERROR : SQLITE_NOMEM;
+        return ax_vtab_error(vt, NULL,
+                             "%s: a motion argument is required, as in SELECT * FROM %s(:motion)",
+                             name, name);
     }
     info->aConstraintUsage[motion].argvIndex = 1;
     info->aConstraintUsage[motion].omit = 1;

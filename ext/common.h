@@ -50,9 +50,21 @@ void ax_errorf(sqlite3_context *ctx, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)))
 #endif
     ;
-/* sqlite3_mprintf (its %q, %w, …) with the result escaped as above, for virtual-table errors
- * (zErrMsg); NULL when out of memory. */
+/* sqlite3_mprintf (its %q, %w, …) with the result escaped as above; NULL when out of memory. */
 char *ax_mprintf(const char *fmt, ...);
+/* Every error of a virtual table's method goes through this: the message (printf's format,
+ * escaped as above) replaces vt->zErrMsg, and the method returns SQLITE_ERROR (SQLITE_NOMEM
+ * when the message cannot be allocated). err, when not NULL, is the core's error the message
+ * reports: AFFECT_ERR_NOMEM gives SQLITE_NOMEM and AFFECT_ERR_INTERRUPTED SQLITE_INTERRUPT,
+ * with no message. Usage:
+ *     return ax_vtab_error(vt, NULL, "motion_points: the argument must be a motion BLOB, got %s",
+ *                          ax_type_name(argv[0]));
+ *     if (st) return ax_vtab_error(cur->pVtab, &err, "motion_angles: %s", err.msg); */
+int ax_vtab_error(sqlite3_vtab *vt, const affect_error *err, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
 /* Name of a value's type for messages: "integer", "real", "text", "blob", "null". */
 const char *ax_type_name(sqlite3_value *v);
 

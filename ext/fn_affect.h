@@ -21,6 +21,8 @@ AX_FN(ax_affect_embed);
 AX_FN(ax_affect_info);
 void ax_affect_crossval_step(sqlite3_context *ctx, int argc, sqlite3_value **argv);
 void ax_affect_crossval_final(sqlite3_context *ctx);
-int ax_register_affect_tables(sqlite3 *db);
+/* The table-valued functions affect_salience and affect_crossval (vt_affect.c). */
+int ax_register_affect_salience(sqlite3 *db);
+int ax_register_affect_crossval(sqlite3 *db);
 
 #endif

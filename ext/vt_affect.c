@@ -62,19 +62,18 @@ static int group_column(const char *options, size_t len, char **out)
     return rc;
 }
 
-static int cv_fill(sqlite3 *db, int argc, sqlite3_value **argv, ax_rows *rows, char **msg)
+static int cv_fill(sqlite3_vtab *vt, sqlite3 *db, int argc, sqlite3_value **argv, ax_rows *rows)
 {
     for (int i = 0; i < 3; i++)
-        if (argc <= i || sqlite3_value_type(argv[i]) != SQLITE_TEXT) {
-            *msg = sqlite3_mprintf("affect_crossval: argument %d (%s) must be a name, as in "
-                                   "SELECT * FROM affect_crossval('motions', 'motion', "
-                                   "'emotion', '{\"folds\":10}')",
-                                   i + 1,
-                                   i == 0   ? "table"
-                                   : i == 1 ? "motion column"
-                                            : "label column");
-            return *msg ? SQLITE_ERROR : SQLITE_NOMEM;
-        }
+        if (argc <= i || sqlite3_value_type(argv[i]) != SQLITE_TEXT)
+            return ax_vtab_error(vt, NULL,
+                                 "affect_crossval: argument %d (%s) must be a name, as in "
+                                 "SELECT * FROM affect_crossval('motions', 'motion', "
+                                 "'emotion', '{\"folds\":10}')",
+                                 i + 1,
+                                 i == 0   ? "table"
+                                 : i == 1 ? "motion column"
+                                          : "label column");
     const char *table = (const char *)sqlite3_value_text(argv[0]);
     const char *motion = (const char *)sqlite3_value_text(argv[1]);
     const char *label = (const char *)sqlite3_value_text(argv[2]);
@@ -139,14 +138,15 @@ static int cv_fill(sqlite3 *db, int argc, sqlite3_value **argv, ax_rows *rows, c
         }
         rc = SQLITE_OK;
     }
-    if (rc == SQLITE_DONE)
+    if (rc == SQLITE_DONE) {
         rc = SQLITE_OK;
-    else if (rc == SQLITE_INTERRUPT) /* not "affect_crossval: affect_crossval_json: …" */
-        *msg = sqlite3_mprintf("affect_crossval: interrupted");
-    else if (rc != SQLITE_NOMEM)
-        *msg = sqlite3_mprintf("affect_crossval: %s", sqlite3_errmsg(db));
+    } else if (rc != SQLITE_NOMEM) { /* an interrupt: "affect_crossval: interrupted" */
+        const char *why = rc == SQLITE_INTERRUPT ? "interrupted" : sqlite3_errmsg(db);
+        if (ax_vtab_error(vt, NULL, "affect_crossval: %s", why) == SQLITE_NOMEM)
+            rc = SQLITE_NOMEM;
+    }
     sqlite3_finalize(st);
-    return rc == SQLITE_OK ? SQLITE_OK : (*msg || rc == SQLITE_NOMEM ? rc : SQLITE_NOMEM);
+    return rc;
 }
 
 static const ax_rows_spec cv_spec = {
@@ -200,20 +200,13 @@ static char *top_json(const affect_features *f, const affect_salience_row *row, 
     return text;
 }
 
-static int salience_error(char **msg, const char *fmt, const char *detail)
-{
-    *msg = sqlite3_mprintf(fmt, detail);
-    return *msg ? SQLITE_ERROR : SQLITE_NOMEM;
-}
-
-static int salience_rows(const affect_classifier *c, uint32_t top, ax_rows *rows, char **msg)
+static int salience_rows(sqlite3_vtab *vt, const affect_classifier *c, uint32_t top, ax_rows *rows)
 {
     affect_salience_row *sr = NULL;
     size_t n = 0;
     affect_error err;
     if (affect_classifier_salience(c, top, &sr, &n, &err))
-        return err.status == AFFECT_ERR_NOMEM ? SQLITE_NOMEM
-                                              : salience_error(msg, "affect_salience: %s", err.msg);
+        return ax_vtab_error(vt, &err, "affect_salience: %s", err.msg);
     const affect_features *f = affect_classifier_features(c);
     int rc = SQLITE_OK;
     for (size_t i = 0; i < n && rc == SQLITE_OK; i++) {
@@ -234,9 +227,7 @@ static int salience_rows(const affect_classifier *c, uint32_t top, ax_rows *rows
         size_t size = 0;
         if (affect_features_posture_motion(f, mean, 1, &m, &err) ||
             affect_motion_encode(m, &blob, &size, &err))
-            rc = err.status == AFFECT_ERR_NOMEM
-                     ? SQLITE_NOMEM
-                     : salience_error(msg, "affect_salience: posture: %s", err.msg);
+            rc = ax_vtab_error(vt, &err, "affect_salience: posture: %s", err.msg);
         else
             ax_rows_take_blob(rows, blob, size);
         affect_motion_free(m);
@@ -245,30 +236,30 @@ static int salience_rows(const affect_classifier *c, uint32_t top, ax_rows *rows
     return rc;
 }
 
-static int salience_fill(sqlite3 *db, int argc, sqlite3_value **argv, ax_rows *rows, char **msg)
+static int salience_fill(sqlite3_vtab *vt, sqlite3 *db, int argc, sqlite3_value **argv,
+                         ax_rows *rows)
 {
     (void)db;
     if (argc < 1 || sqlite3_value_type(argv[0]) == SQLITE_NULL)
         return SQLITE_OK;
     if (sqlite3_value_type(argv[0]) != SQLITE_BLOB)
-        return salience_error(msg,
-                              "affect_salience: argument 1 must be a classifier BLOB "
-                              "(from affect_train), got %s",
-                              ax_type_name(argv[0]));
+        return ax_vtab_error(vt, NULL,
+                             "affect_salience: argument 1 must be a classifier BLOB "
+                             "(from affect_train), got %s",
+                             ax_type_name(argv[0]));
     uint32_t top = 5;
     if (argc > 1 && sqlite3_value_type(argv[1]) != SQLITE_NULL) {
         if (sqlite3_value_type(argv[1]) != SQLITE_INTEGER)
-            return salience_error(msg,
-                                  "affect_salience: argument 2 (top) must be an integer "
-                                  "from 1 to 32, got %s",
-                                  ax_type_name(argv[1]));
+            return ax_vtab_error(vt, NULL,
+                                 "affect_salience: argument 2 (top) must be an integer "
+                                 "from 1 to 32, got %s",
+                                 ax_type_name(argv[1]));
         if (sqlite3_value_int64(argv[1]) < 1 ||
-            sqlite3_value_int64(argv[1]) > AFFECT_SALIENCE_TOP_MAX) {
-            *msg = sqlite3_mprintf("affect_salience: argument 2 (top) must be an integer from 1 "
-                                   "to 32, got %lld",
-                                   sqlite3_value_int64(argv[1]));
-            return *msg ? SQLITE_ERROR : SQLITE_NOMEM;
-        }
+            sqlite3_value_int64(argv[1]) > AFFECT_SALIENCE_TOP_MAX)
+            return ax_vtab_error(vt, NULL,
+                                 "affect_salience: argument 2 (top) must be an integer from 1 "
+                                 "to 32, got %lld",
+                                 sqlite3_value_int64(argv[1]));
         top = (uint32_t)sqlite3_value_int64(argv[1]);
     }
     const unsigned char *data = sqlite3_value_blob(argv[0]);
@@ -278,13 +269,9 @@ static int salience_fill(sqlite3 *db, int argc, sqlite3_value **argv, ax_rows *r
     affect_classifier *c;
     affect_error err;
     if (affect_classifier_decode(data, (size_t)n, &c, &err))
-        return err.status == AFFECT_ERR_NOMEM
-                   ? SQLITE_NOMEM
-                   : salience_error(msg,
-                                    "affect_salience: argument 1 is not a valid "
-                                    "classifier: %s",
-                                    err.msg);
-    int rc = salience_rows(c, top, rows, msg);
+        return ax_vtab_error(vt, &err, "affect_salience: argument 1 is not a valid classifier: %s",
+                             err.msg);
+    int rc = salience_rows(vt, c, top, rows);
     affect_classifier_free(c);
     return rc;
 }
@@ -300,10 +287,12 @@ static const ax_rows_spec salience_spec = {
     "SELECT * FROM affect_salience(:classifier [, top])",
     false};
 
-int ax_register_affect_tables(sqlite3 *db)
+int ax_register_affect_salience(sqlite3 *db)
 {
-    int rc = ax_rows_register(db, &cv_spec);
-    if (rc == SQLITE_OK)
-        rc = ax_rows_register(db, &salience_spec);
-    return rc;
+    return ax_rows_register(db, &salience_spec);
+}
+
+int ax_register_affect_crossval(sqlite3 *db)
+{
+    return ax_rows_register(db, &cv_spec);
 }

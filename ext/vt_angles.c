@@ -111,17 +111,6 @@ static int angles_close(sqlite3_vtab_cursor *cur)
     return SQLITE_OK;
 }
 
-static int vtab_error(sqlite3_vtab *vt, const affect_error *err)
-{
-    if (err->status == AFFECT_ERR_NOMEM)
-        return SQLITE_NOMEM;
-    if (err->status == AFFECT_ERR_INTERRUPTED)
-        return SQLITE_INTERRUPT;
-    sqlite3_free(vt->zErrMsg);
-    vt->zErrMsg = ax_mprintf("motion_angles: %s", err->msg);
-    return vt->zErrMsg ? SQLITE_ERROR : SQLITE_NOMEM;
-}
-
 /* Computes the current row's values (rows are visited in order, so prev holds frame t − 1). */
 static void angles_compute(angles_cursor *c)
 {
@@ -172,12 +161,12 @@ static int angles_filter(sqlite3_vtab_cursor *cur, int idx_num, const char *idx_
     affect_status st = ax_motion_tvf_args(idx_num, argc, argv, &am.mon, &c->m, &text, &len, &err);
     if (st || !c->m) { /* an error, or a NULL motion: no rows */
         ax_monitor_end(&am);
-        return st ? vtab_error(cur->pVtab, &err) : SQLITE_OK;
+        return st ? ax_vtab_error(cur->pVtab, &err, "motion_angles: %s", err.msg) : SQLITE_OK;
     }
     ax_skel_opts so;
     if (ax_skel_opts_parse(text, len, angle_keys, c->m, &so, &err)) {
         ax_monitor_end(&am);
-        return vtab_error(cur->pVtab, &err);
+        return ax_vtab_error(cur->pVtab, &err, "motion_angles: %s", err.msg);
     }
     so.ik.rigid.monitor = &am.mon; /* inverse kinematics of a long motion */
     st = ax_skeletal(c->m, &so, &c->sk, &err);
@@ -193,7 +182,7 @@ static int angles_filter(sqlite3_vtab_cursor *cur, int idx_num, const char *idx_
     }
     ax_skel_opts_free(&so);
     if (st)
-        return vtab_error(cur->pVtab, &err);
+        return ax_vtab_error(cur->pVtab, &err, "motion_angles: %s", err.msg);
     c->n_rows = (sqlite3_int64)c->sk->n_frames * c->sk->n_joints;
     angles_compute(c);
     return SQLITE_OK;

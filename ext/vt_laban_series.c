@@ -152,21 +152,15 @@ static int series_close(sqlite3_vtab_cursor *cur)
     return SQLITE_OK;
 }
 
-/* Sets "laban_series: …" as the table's error; the status as an SQLite code. */
-static int vtab_error(sqlite3_vtab *vt, const affect_error *err)
+/* "laban_series: …" as the table's error (ax_vtab_error); a missing role says how to assign it. */
+static int series_error(sqlite3_vtab *vt, const affect_error *err)
 {
-    if (err->status == AFFECT_ERR_NOMEM)
-        return SQLITE_NOMEM;
-    if (err->status == AFFECT_ERR_INTERRUPTED)
-        return SQLITE_INTERRUPT;
-    sqlite3_free(vt->zErrMsg);
     if (err->status == AFFECT_ERR_MISSING)
-        vt->zErrMsg = ax_mprintf("laban_series: %s (assign it with {\"roles\": {…}}, or use "
-                                 "{\"missing\": \"null\"})",
-                                 err->msg);
-    else
-        vt->zErrMsg = ax_mprintf("laban_series: %s", err->msg);
-    return vt->zErrMsg ? SQLITE_ERROR : SQLITE_NOMEM;
+        return ax_vtab_error(vt, err,
+                             "laban_series: %s (assign it with {\"roles\": {…}}, or use "
+                             "{\"missing\": \"null\"})",
+                             err->msg);
+    return ax_vtab_error(vt, err, "laban_series: %s", err->msg);
 }
 
 /* ---- options ---- */
@@ -486,7 +480,7 @@ static int series_filter(sqlite3_vtab_cursor *cur, int idx_num, const char *idx_
     }
     c->monitoring = true;
     if (ax_motion_tvf_args(idx_num, argc, argv, &c->am.mon, &c->m, &text, &len, &err))
-        return vtab_error(cur->pVtab, &err);
+        return series_error(cur->pVtab, &err);
     if (!c->m)
         return SQLITE_OK; /* a NULL motion: no rows */
     static const char *const missing[] = {"error", "null", NULL};
@@ -530,7 +524,7 @@ static int series_filter(sqlite3_vtab_cursor *cur, int idx_num, const char *idx_
         st = opt_parts(&o, c, &err);
     affect_json_free(o.doc);
     if (st)
-        return vtab_error(cur->pVtab, &err);
+        return series_error(cur->pVtab, &err);
     c->lo.missing_null = miss == 1;
     c->lo.monitor = &c->am.mon;
     so.window = c->window;
@@ -541,13 +535,13 @@ static int series_filter(sqlite3_vtab_cursor *cur, int idx_num, const char *idx_
         return SQLITE_OK; /* no rows */
     st = start_series(c, &roles, &so, &err);
     if (st)
-        return vtab_error(cur->pVtab, &err);
+        return series_error(cur->pVtab, &err);
     c->n_windows = c->series                 ? affect_laban_series_windows(c->series)
                    : c->window < c->n_frames ? (c->n_frames - c->window) / c->hop + 1
                                              : 1;
     c->eof = false;
     if ((st = load_window(c, &err)))
-        return vtab_error(cur->pVtab, &err);
+        return series_error(cur->pVtab, &err);
     return SQLITE_OK;
 }
 
@@ -560,7 +554,7 @@ static int series_next(sqlite3_vtab_cursor *cur)
     c->win++;
     affect_error err;
     affect_status st = load_window(c, &err);
-    return st ? vtab_error(cur->pVtab, &err) : SQLITE_OK;
+    return st ? series_error(cur->pVtab, &err) : SQLITE_OK;
 }
 
 static int series_eof(sqlite3_vtab_cursor *cur)

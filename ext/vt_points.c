@@ -8,8 +8,8 @@
  * How it works: an eponymous-only virtual table with the schema
  *   CREATE TABLE x(frame INTEGER, joint INTEGER, name TEXT, x REAL, y REAL, z REAL,
  *                  motion HIDDEN)
- * The hidden column is the function's argument. xBestIndex accepts only an equality
- * constraint on it:
+ * The hidden column is the function's argument. xBestIndex (ax_motion_tvf_best_index, common.h)
+ * accepts only an equality constraint on it:
  *   idxNum 1   motion = ? is usable and passed as argv[0] to xFilter
  * A plan where the constraint exists but is unusable gets SQLITE_CONSTRAINT so SQLite picks
  * another; no constraint at all is an error with the usage in the message. The motion is
@@ -69,13 +69,6 @@ static int points_close(sqlite3_vtab_cursor *cur)
     return SQLITE_OK;
 }
 
-static int set_vtab_error(sqlite3_vtab *vt, const char *fmt, const char *detail)
-{
-    sqlite3_free(vt->zErrMsg);
-    vt->zErrMsg = ax_mprintf(fmt, detail);
-    return vt->zErrMsg ? SQLITE_ERROR : SQLITE_NOMEM;
-}
-
 static int points_filter(sqlite3_vtab_cursor *cur, int idx_num, const char *idx_str, int argc,
                          sqlite3_value **argv)
 {
@@ -86,20 +79,17 @@ static int points_filter(sqlite3_vtab_cursor *cur, int idx_num, const char *idx_
     if (argc < 1 || sqlite3_value_type(argv[0]) == SQLITE_NULL)
         return SQLITE_OK;
     if (sqlite3_value_type(argv[0]) != SQLITE_BLOB)
-        return set_vtab_error(cur->pVtab,
-                              "motion_points: the argument must be a motion BLOB, got %s",
-                              ax_type_name(argv[0]));
+        return ax_vtab_error(cur->pVtab, NULL,
+                             "motion_points: the argument must be a motion BLOB, got %s",
+                             ax_type_name(argv[0]));
     const unsigned char *data = sqlite3_value_blob(argv[0]);
     int n = sqlite3_value_bytes(argv[0]);
     if (!data && n > 0)
         return SQLITE_NOMEM;
     affect_error err;
-    if (affect_motion_decode(data, (size_t)n, &c->m, &err)) {
-        if (err.status == AFFECT_ERR_NOMEM)
-            return SQLITE_NOMEM;
-        return set_vtab_error(cur->pVtab, "motion_points: the argument is not a valid motion: %s",
-                              err.msg);
-    }
+    if (affect_motion_decode(data, (size_t)n, &c->m, &err))
+        return ax_vtab_error(cur->pVtab, &err,
+                             "motion_points: the argument is not a valid motion: %s", err.msg);
     c->n_rows = (sqlite3_int64)c->m->n_frames * c->m->n_joints;
     return SQLITE_OK;
 }
@@ -156,28 +146,7 @@ static int points_rowid(sqlite3_vtab_cursor *cur, sqlite3_int64 *rowid)
 
 static int points_best_index(sqlite3_vtab *vt, sqlite3_index_info *info)
 {
-    int usable = -1, seen = 0;
-    for (int i = 0; i < info->nConstraint; i++) {
-        const struct sqlite3_index_constraint *k = &info->aConstraint[i];
-        if (k->iColumn != COL_MOTION)
-            continue;
-        seen = 1;
-        if (k->usable && k->op == SQLITE_INDEX_CONSTRAINT_EQ)
-            usable = i;
-    }
-    if (usable < 0) {
-        if (seen)
-            return SQLITE_CONSTRAINT;
-        return set_vtab_error(vt, "%s",
-                              "motion_points: a motion argument is required, as in "
-                              "SELECT * FROM motion_points(:motion)");
-    }
-    info->aConstraintUsage[usable].argvIndex = 1;
-    info->aConstraintUsage[usable].omit = 1;
-    info->idxNum = 1;
-    info->estimatedCost = 1000.0;
-    info->estimatedRows = 10000;
-    return SQLITE_OK;
+    return ax_motion_tvf_best_index(vt, info, COL_MOTION, -1, "motion_points");
 }
 
 static sqlite3_module points_module = {

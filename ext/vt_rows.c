@@ -8,8 +8,9 @@
  * joined later) gets SQLITE_CONSTRAINT, so SQLite picks a plan that knows it. A plan without
  * a required argument (SQLite asks for such plans when it splits an OR of constraints) gets a
  * huge cost and, should it still be chosen, fails in xFilter with the usage. xFilter rebuilds the
- * argument list (NULL for the ones not given), clears the previous rows, and calls fill. Cells are
- * returned as stored (text and BLOBs copied by SQLite, SQLITE_TRANSIENT).
+ * argument list (NULL for the ones not given), clears the previous rows, and calls fill (which
+ * sets its errors with ax_vtab_error). Cells are returned as stored (text and BLOBs copied by
+ * SQLite, SQLITE_TRANSIENT).
  */
 #include "vt_rows.h"
 
@@ -222,12 +223,9 @@ static int rows_filter(sqlite3_vtab_cursor *cur, int idx_num, const char *idx_st
     rows_cursor *c = (rows_cursor *)cur;
     rows_vtab *vt = (rows_vtab *)cur->pVtab;
     const ax_rows_spec *spec = vt->spec;
-    if (idx_num >> MISSING_SHIFT) {
-        sqlite3_free(vt->base.zErrMsg);
-        vt->base.zErrMsg = sqlite3_mprintf("%s: argument %d is required, as in %s", spec->name,
-                                           idx_num >> MISSING_SHIFT, spec->usage);
-        return vt->base.zErrMsg ? SQLITE_ERROR : SQLITE_NOMEM;
-    }
+    if (idx_num >> MISSING_SHIFT)
+        return ax_vtab_error(&vt->base, NULL, "%s: argument %d is required, as in %s", spec->name,
+                             idx_num >> MISSING_SHIFT, spec->usage);
     sqlite3_value *args[MAX_ARGS];
     int given = 0;
     for (int a = 0; a < spec->n_args; a++)
@@ -237,22 +235,13 @@ static int rows_filter(sqlite3_vtab_cursor *cur, int idx_num, const char *idx_st
         n--;
     rows_clear(&c->rows);
     c->row = c->n_rows = 0;
-    char *msg = NULL;
-    int rc = spec->fill(vt->db, n, args, &c->rows, &msg);
+    int rc = spec->fill(&vt->base, vt->db, n, args, &c->rows);
     if (rc == SQLITE_OK && c->rows.nomem)
         rc = SQLITE_NOMEM;
     if (rc != SQLITE_OK) {
         rows_clear(&c->rows);
-        if (msg) { /* valid UTF-8 whatever it quotes (a table name, a label) */
-            sqlite3_free(vt->base.zErrMsg);
-            vt->base.zErrMsg = ax_mprintf("%s", msg);
-            sqlite3_free(msg);
-            if (!vt->base.zErrMsg)
-                rc = SQLITE_NOMEM;
-        }
         return rc;
     }
-    sqlite3_free(msg);
     c->n_rows = spec->n_visible ? c->rows.n_cells / (size_t)spec->n_visible : 0;
     return SQLITE_OK;
 }

@@ -5,15 +5,16 @@
  * typed cells, and the cursor walks them.
  *
  * Usage:
- *     static int fill(sqlite3 *db, int argc, sqlite3_value **argv, ax_rows *rows, char **msg)
- *     {   ... ax_rows_int(rows, 3); ax_rows_text(rows, "sad", -1); ax_rows_end(rows) ...  }
+ *     static int fill(sqlite3_vtab *vt, sqlite3 *db, int argc, sqlite3_value **argv,
+ *                     ax_rows *rows)
+ *     {   ... ax_rows_int(rows, 3); ax_rows_text(rows, "sad", 3); ...  }
  *     static const ax_rows_spec spec = {"affect_salience",
  *         "CREATE TABLE x(label TEXT, weight REAL, classifier HIDDEN)", 2, 1, 1, fill,
  *         "SELECT * FROM affect_salience(:classifier)"};
  *     ax_rows_register(db, &spec);
- * fill returns SQLITE_OK, SQLITE_NOMEM, or SQLITE_ERROR with *msg (sqlite3_malloc'd) the whole
- * error text. The append functions record the first allocation failure in rows->nomem; fill
- * checks it (ax_rows_failed) or lets the caller do so after it returns.
+ * fill returns SQLITE_OK, SQLITE_NOMEM, or an error code with the whole error text set by
+ * ax_vtab_error(vt, …) (common.h). The append functions record the first allocation failure in
+ * rows->nomem; fill checks it (ax_rows_failed) or lets the caller do so after it returns.
  */
 #ifndef AFFECT_EXT_VT_ROWS_H
 #define AFFECT_EXT_VT_ROWS_H
@@ -36,7 +37,8 @@ typedef struct ax_rows {
     bool nomem;
 } ax_rows;
 
-typedef int (*ax_rows_fill)(sqlite3 *db, int argc, sqlite3_value **argv, ax_rows *rows, char **msg);
+typedef int (*ax_rows_fill)(sqlite3_vtab *vt, sqlite3 *db, int argc, sqlite3_value **argv,
+                            ax_rows *rows);
 
 typedef struct ax_rows_spec {
     const char *name;
