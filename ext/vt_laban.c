@@ -149,7 +149,7 @@ typedef struct lab_cache {
     int refs;
     sqlite3_int64 generation;
     size_t n, cap;
-    sqlite3_int64 *ids;     /* ascending */
+    int64_t *ids;           /* ascending */
     int32_t *label;         /* per row: index into labels, −1 for a NULL label */
     float *raw;             /* n × LAB_N, NaN where missing */
     double *z;              /* n × LAB_N standardized */
@@ -170,12 +170,6 @@ typedef struct lab_vtab {
     const ax_laban_cache_kind *caches; /* the module's aux: what 'check' validates in _info */
 } lab_vtab;
 
-typedef struct lab_hit {
-    double d;
-    sqlite3_int64 id;
-    size_t row;
-} lab_hit;
-
 typedef struct lab_cursor {
     sqlite3_vtab_cursor base;
     lab_cache *cache;
@@ -184,7 +178,7 @@ typedef struct lab_cursor {
     size_t pos, end;
     unsigned char *label_ok; /* per distinct label; NULL = no label filter */
     /* KNN */
-    lab_hit *hits;
+    affect_laban_hit *hits;
     size_t n_hits, hit;
     sqlite3_value *args[4]; /* query, k, radius, components, for their hidden columns */
 } lab_cursor;
@@ -488,7 +482,7 @@ static int lab_cache_grow(lab_cache *c)
     if (!affect_mul_size(cap, sizeof *c->ids, &b_ids) ||
         !affect_mul_size(cap, LAB_N * sizeof *c->raw, &b_raw))
         return SQLITE_NOMEM;
-    sqlite3_int64 *ids = sqlite3_realloc64(c->ids, b_ids);
+    int64_t *ids = sqlite3_realloc64(c->ids, b_ids);
     if (!ids)
         return SQLITE_NOMEM;
     c->ids = ids;
@@ -1704,47 +1698,6 @@ done:
     return rc;
 }
 
-static int lab_hit_cmp(const lab_hit *a, const lab_hit *b)
-{
-    if (a->d != b->d)
-        return a->d < b->d ? -1 : 1;
-    return (a->id > b->id) - (a->id < b->id);
-}
-
-static int lab_hit_qsort(const void *a, const void *b)
-{
-    return lab_hit_cmp(a, b);
-}
-
-/* Keeps the cap smallest hits seen so far in a max-heap h of *n entries. */
-static void lab_heap_offer(lab_hit *h, size_t *n, size_t cap, lab_hit x)
-{
-    size_t i;
-    if (*n < cap) {
-        for (i = (*n)++; i > 0; i = (i - 1) / 2) {
-            if (lab_hit_cmp(&h[(i - 1) / 2], &x) >= 0)
-                break;
-            h[i] = h[(i - 1) / 2];
-        }
-        h[i] = x;
-        return;
-    }
-    if (lab_hit_cmp(&x, &h[0]) >= 0)
-        return;
-    for (i = 0;;) {
-        size_t l = 2 * i + 1, big = l;
-        if (l >= cap)
-            break;
-        if (l + 1 < cap && lab_hit_cmp(&h[l + 1], &h[l]) > 0)
-            big = l + 1;
-        if (lab_hit_cmp(&h[big], &x) <= 0)
-            break;
-        h[i] = h[big];
-        i = big;
-    }
-    h[i] = x;
-}
-
 /* Rows whose label passes the label = ? constraint (NULL: every row). */
 static int lab_label_filter(const lab_cache *ca, sqlite3_value *want, unsigned char **out)
 {
@@ -1795,60 +1748,30 @@ static int lab_query_vector(lab_vtab *vt, const lab_cache *ca, sqlite3_value *q,
     return SQLITE_OK;
 }
 
-/* Nearest rows: the k smallest distances (k > 0) or the radius ball (k = 0). */
+/* Nearest rows: the k smallest distances (k > 0) or the radius ball (k = 0), by
+ * affect_laban_search_run (core/src/laban_search.c: the distance, the heap and the tie rule). */
 static int lab_knn(lab_cursor *c, const double zq[LAB_N], ptrdiff_t self, size_t lo, size_t hi,
                    sqlite3_int64 k, double radius, const int *comp, int nc)
 {
     const lab_cache *ca = c->cache;
-    size_t cap = hi - lo;
-    if (k > 0 && (sqlite3_uint64)k < cap)
-        cap = (size_t)k;
-    size_t bytes;
-    if (!affect_mul_size(cap ? cap : 1, sizeof(lab_hit), &bytes) ||
+    affect_laban_search s = {
+        .z = ca->z,
+        .ids = ca->ids,
+        .lo = lo,
+        .hi = hi,
+        .self = self < 0 ? SIZE_MAX : (size_t)self,
+        .label = ca->label,
+        .label_ok = c->label_ok,
+        .comp = comp,
+        .n_comp = nc,
+        .k = (uint64_t)k,
+        .radius = radius,
+    };
+    size_t cap = affect_laban_search_capacity(&s), bytes;
+    if (!affect_mul_size(cap ? cap : 1, sizeof *c->hits, &bytes) ||
         !(c->hits = sqlite3_malloc64(bytes)))
         return SQLITE_NOMEM;
-    size_t n = 0;
-    double dmax = 0;
-    lab_hit nearest = {INFINITY, 0, 0};
-    for (size_t i = lo; i < hi; i++) {
-        if ((ptrdiff_t)i == self ||
-            (c->label_ok && (ca->label[i] < 0 || !c->label_ok[ca->label[i]])))
-            continue;
-        const double *zx = ca->z + i * LAB_N;
-        double s = 0;
-        int used = 0;
-        for (int t = 0; t < nc; t++) {
-            double diff = zq[comp[t]] - zx[comp[t]];
-            if (!isnan(diff)) {
-                s += diff * diff;
-                used++;
-            }
-        }
-        if (!used)
-            continue; /* nothing in common with the query */
-        lab_hit h = {sqrt(s), ca->ids[i], i};
-        if (k > 0) {
-            lab_heap_offer(c->hits, &n, cap, h);
-        } else {
-            c->hits[n++] = h;
-            if (h.d > dmax)
-                dmax = h.d;
-            if (lab_hit_cmp(&h, &nearest) < 0)
-                nearest = h;
-        }
-    }
-    if (k == 0 && n > 0) {
-        double limit = radius * dmax;
-        size_t kept = 0;
-        for (size_t i = 0; i < n; i++)
-            if (c->hits[i].d <= limit)
-                c->hits[kept++] = c->hits[i];
-        if (kept == 0)
-            c->hits[kept++] = nearest;
-        n = kept;
-    }
-    qsort(c->hits, n, sizeof *c->hits, lab_hit_qsort);
-    c->n_hits = n;
+    affect_laban_search_run(&s, zq, c->hits, &c->n_hits);
     return SQLITE_OK;
 }
 

@@ -1,0 +1,127 @@
+/*
+ * laban_search.c — the laban index's queries as arithmetic (affect/laban.h, "search of
+ * standardized vectors"): the masked distance, the k nearest rows kept in a bounded max-heap,
+ * the relative radius ball, and the tie rule (distance, then id) that orders the hits.
+ *
+ * The index (ext/vt_laban.c) keeps its rows' z-scores in memory and calls
+ * affect_laban_search_run once per query; the arithmetic here is what it answers with, so its
+ * order of operations is fixed: the squared differences are summed in the order of comp, in
+ * double, and the distance is the sqrt of that sum (the README's outputs and the SQL specs
+ * print these distances).
+ *
+ * The heap. For k > 0 the hits array is a max-heap (by the tie rule) of the k best rows seen so
+ * far: a row enters while the heap is not full, then only when it is better than the root, which
+ * it replaces before sifting down. At the end the array is sorted. For the radius the array
+ * holds every qualifying row, then keeps those within radius · the largest distance (or the
+ * nearest one alone when none is: a small radius, or a NaN one), then is sorted.
+ */
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+
+#include "affect/laban.h"
+
+static inline double distance(const double *q, const double *x, const int *comp, int n_comp)
+{
+    double s = 0;
+    int used = 0;
+    for (int t = 0; t < n_comp; t++) {
+        double diff = q[comp[t]] - x[comp[t]];
+        if (!isnan(diff)) {
+            s += diff * diff;
+            used++;
+        }
+    }
+    return used ? sqrt(s) : NAN;
+}
+
+double affect_laban_distance(const double *q, const double *x, const int *comp, int n_comp)
+{
+    return distance(q, x, comp, n_comp);
+}
+
+int affect_laban_hit_cmp(const affect_laban_hit *a, const affect_laban_hit *b)
+{
+    if (a->d != b->d)
+        return a->d < b->d ? -1 : 1;
+    return (a->id > b->id) - (a->id < b->id);
+}
+
+static int hit_qsort(const void *a, const void *b)
+{
+    return affect_laban_hit_cmp(a, b);
+}
+
+/* Keeps the cap smallest hits seen so far in a max-heap h of *n entries. */
+static void heap_offer(affect_laban_hit *h, size_t *n, size_t cap, affect_laban_hit x)
+{
+    size_t i;
+    if (*n < cap) {
+        for (i = (*n)++; i > 0; i = (i - 1) / 2) {
+            if (affect_laban_hit_cmp(&h[(i - 1) / 2], &x) >= 0)
+                break;
+            h[i] = h[(i - 1) / 2];
+        }
+        h[i] = x;
+        return;
+    }
+    if (affect_laban_hit_cmp(&x, &h[0]) >= 0)
+        return;
+    for (i = 0;;) {
+        size_t l = 2 * i + 1, big = l;
+        if (l >= cap)
+            break;
+        if (l + 1 < cap && affect_laban_hit_cmp(&h[l + 1], &h[l]) > 0)
+            big = l + 1;
+        if (affect_laban_hit_cmp(&h[big], &x) <= 0)
+            break;
+        h[i] = h[big];
+        i = big;
+    }
+    h[i] = x;
+}
+
+size_t affect_laban_search_capacity(const affect_laban_search *s)
+{
+    size_t cap = s->hi > s->lo ? s->hi - s->lo : 0;
+    if (s->k > 0 && s->k < cap)
+        cap = (size_t)s->k;
+    return cap;
+}
+
+void affect_laban_search_run(const affect_laban_search *s, const double *q, affect_laban_hit *hits,
+                             size_t *n_hits)
+{
+    size_t cap = affect_laban_search_capacity(s), n = 0;
+    double dmax = 0;
+    affect_laban_hit nearest = {INFINITY, 0, 0};
+    for (size_t i = s->lo; i < s->hi; i++) {
+        if (i == s->self || (s->label_ok && (s->label[i] < 0 || !s->label_ok[s->label[i]])))
+            continue;
+        double d = distance(q, s->z + i * AFFECT_LABAN_N, s->comp, s->n_comp);
+        if (isnan(d))
+            continue; /* nothing in common with the query */
+        affect_laban_hit h = {d, s->ids[i], i};
+        if (s->k > 0) {
+            heap_offer(hits, &n, cap, h);
+        } else {
+            hits[n++] = h;
+            if (h.d > dmax)
+                dmax = h.d;
+            if (affect_laban_hit_cmp(&h, &nearest) < 0)
+                nearest = h;
+        }
+    }
+    if (s->k == 0 && n > 0) {
+        double limit = s->radius * dmax;
+        size_t kept = 0;
+        for (size_t i = 0; i < n; i++)
+            if (hits[i].d <= limit)
+                hits[kept++] = hits[i];
+        if (kept == 0)
+            hits[kept++] = nearest;
+        n = kept;
+    }
+    qsort(hits, n, sizeof *hits, hit_qsort);
+    *n_hits = n;
+}
