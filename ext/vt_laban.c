@@ -1965,15 +1965,106 @@ void ax_laban_rows_free(ax_laban_rows *r)
     memset(r, 0, sizeof *r);
 }
 
-/* The content table and motion column of a laban table; SQLITE_NOTFOUND if it is not one. */
+/* ---- which tables are laban indexes ---- */
+
+/* p past blanks and SQL comments. */
+static const char *def_skip_blank(const char *p)
+{
+    for (;;) {
+        while (*p == ' ' || *p == '\t' || *p == '\n' || *p == '\r' || *p == '\f')
+            p++;
+        if (p[0] == '-' && p[1] == '-') {
+            while (*p && *p != '\n')
+                p++;
+        } else if (p[0] == '/' && p[1] == '*') {
+            const char *end = strstr(p + 2, "*/");
+            p = end ? end + 2 : p + strlen(p);
+        } else {
+            return p;
+        }
+    }
+}
+
+static bool def_ident_char(char c)
+{
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
+           c == '$' || (unsigned char)c >= 0x80;
+}
+
+/* p past one name ("…", `…`, '…' with doubled quotes, […], or a bare identifier), with its text
+ * (quotes excluded, doubled quotes as they are) in *text and *len; NULL when there is none. */
+static const char *def_name(const char *p, const char **text, size_t *len)
+{
+    char close = *p == '"' ? '"' : *p == '`' ? '`' : *p == '\'' ? '\'' : *p == '[' ? ']' : 0;
+    if (close) {
+        *text = p + 1;
+        for (p++; *p; p++) {
+            if (*p != close)
+                continue;
+            if (close != ']' && p[1] == close) {
+                p++;
+                continue;
+            }
+            *len = (size_t)(p - *text);
+            return p + 1;
+        }
+        return NULL;
+    }
+    *text = p;
+    while (def_ident_char(*p))
+        p++;
+    *len = (size_t)(p - *text);
+    return *len ? p : NULL;
+}
+
+/* Whether def, the sql of a table in sqlite_schema, creates a table of the module "laban". SQLite
+ * stores a virtual table's statement as "CREATE VIRTUAL TABLE " and then its text from the
+ * table's name on: the name (quoted or bare), USING, the module's name (case-insensitive, quoted
+ * or not) and its arguments, with blanks and comments allowed between them. Read token by token,
+ * so that a table whose quoted name contains "USING laban(" is not taken for one. */
+static bool lab_is_laban_def(const char *def)
+{
+    static const char prefix[] = "CREATE VIRTUAL TABLE";
+    const char *text;
+    size_t len;
+    if (!def || sqlite3_strnicmp(def, prefix, (int)sizeof prefix - 1) != 0)
+        return false;
+    const char *p = def_skip_blank(def + sizeof prefix - 1);
+    if (p == def + sizeof prefix - 1 || !(p = def_name(p, &text, &len)))
+        return false;
+    p = def_skip_blank(p);
+    if (sqlite3_strnicmp(p, "USING", 5) != 0 || def_ident_char(p[5]))
+        return false;
+    p = def_name(def_skip_blank(p + 5), &text, &len);
+    return p && len == 5 && sqlite3_strnicmp(text, "laban", 5) == 0 && !def_ident_char(*p);
+}
+
+/* The format of _info (column col of st) as this version reads it: SQLITE_OK for text '1';
+ * SQLITE_NOMEM; else SQLITE_ERROR with *err: "g_info has format "2"; this version reads
+ * format 1 (index "g")" (NULL when the row is missing). */
+static int rows_check_format(sqlite3_stmt *st, int col, const char *name, char **err)
+{
+    const char *format = (const char *)sqlite3_column_text(st, col);
+    if (sqlite3_column_type(st, col) == SQLITE_TEXT && format && !strcmp(format, LAB_FORMAT))
+        return SQLITE_OK;
+    if (!format && sqlite3_column_type(st, col) != SQLITE_NULL)
+        return SQLITE_NOMEM;
+    return rows_error(
+        err, "%s_info has format %s%s%s; this version reads format " LAB_FORMAT " (index \"%w\")",
+        name, format ? "\"" : "", format ? format : "NULL", format ? "\"" : "", name);
+}
+
+/* The content table and motion column of a laban table; SQLITE_NOTFOUND if it is not one
+ * (lab_is_laban_def), SQLITE_ERROR with *err if its _info has another format. */
 static int rows_info(sqlite3 *db, const char *name, ax_laban_rows *r, char **err)
 {
     sqlite3_stmt *st = NULL;
     char *sql = sqlite3_mprintf(
         "SELECT (SELECT sql FROM sqlite_schema WHERE type = 'table' AND name = %Q), "
         "(SELECT value FROM \"%w_info\" WHERE key = 'content'), "
-        "(SELECT value FROM \"%w_info\" WHERE key = 'motion')",
-        name, name, name);
+        "(SELECT value FROM \"%w_info\" WHERE key = 'motion'), "
+        "(SELECT value FROM \"%w_info\" WHERE key = 'format')",
+        name, name, name, name);
     if (!sql)
         return SQLITE_NOMEM;
     int rc = sqlite3_prepare_v2(db, sql, -1, &st, NULL);
@@ -1986,11 +2077,16 @@ static int rows_info(sqlite3 *db, const char *name, ax_laban_rows *r, char **err
         return code == SQLITE_NOMEM || code == SQLITE_INTERRUPT ? code : SQLITE_NOTFOUND;
     }
     const char *def = (const char *)sqlite3_column_text(st, 0);
-    bool is_laban = def && sqlite3_strlike("%USING laban(%", def, 0) == 0 &&
-                    sqlite3_column_type(st, 1) == SQLITE_TEXT &&
-                    sqlite3_column_type(st, 2) == SQLITE_TEXT;
-    rc = SQLITE_NOTFOUND;
-    if (is_laban) {
+    if (!def && sqlite3_column_type(st, 0) != SQLITE_NULL) {
+        sqlite3_finalize(st);
+        return SQLITE_NOMEM;
+    }
+    bool is_laban = lab_is_laban_def(def);
+    rc = is_laban ? rows_check_format(st, 3, name, err) : SQLITE_NOTFOUND;
+    if (rc == SQLITE_OK &&
+        (sqlite3_column_type(st, 1) != SQLITE_TEXT || sqlite3_column_type(st, 2) != SQLITE_TEXT))
+        rc = SQLITE_NOTFOUND;
+    if (rc == SQLITE_OK) {
         const char *content = (const char *)sqlite3_column_text(st, 1);
         const char *motion = (const char *)sqlite3_column_text(st, 2);
         r->content = content ? sqlite3_mprintf("%s", content) : NULL;
@@ -1998,7 +2094,6 @@ static int rows_info(sqlite3 *db, const char *name, ax_laban_rows *r, char **err
         rc = r->content && r->motion ? SQLITE_OK : SQLITE_NOMEM;
     }
     sqlite3_finalize(st);
-    (void)err;
     return rc;
 }
 
@@ -2333,7 +2428,11 @@ int ax_laban_stats_read(sqlite3 *db, const char *name, ax_laban_stats *out, char
         rc = rows_db_error(err, db, rc);
         goto done;
     }
-    if (!def || sqlite3_strlike("%USING laban(%", def, 0) != 0) {
+    if (!def && rc == SQLITE_ROW && sqlite3_column_type(st, 0) != SQLITE_NULL) {
+        rc = SQLITE_NOMEM;
+        goto done;
+    }
+    if (!lab_is_laban_def(def)) {
         rc = SQLITE_NOTFOUND;
         goto done;
     }
@@ -2363,18 +2462,8 @@ int ax_laban_stats_read(sqlite3 *db, const char *name, ax_laban_stats *out, char
                               sqlite3_errmsg(db));
         goto done;
     }
-    const char *format = (const char *)sqlite3_column_text(st, 0);
-    if (sqlite3_column_type(st, 0) != SQLITE_TEXT || !format || strcmp(format, LAB_FORMAT)) {
-        if (!format && sqlite3_column_type(st, 0) != SQLITE_NULL) {
-            rc = SQLITE_NOMEM;
-            goto done;
-        }
-        rc = rows_error(
-            err,
-            "%s_info has format %s%s%s; this version reads format " LAB_FORMAT " (index \"%w\")",
-            name, format ? "\"" : "", format ? format : "NULL", format ? "\"" : "", name);
+    if ((rc = rows_check_format(st, 0, name, err)) != SQLITE_OK)
         goto done;
-    }
     char why[200];
     const char *bad = NULL;
     bool nomem = false;
