@@ -53,10 +53,13 @@
  * the rows they see. Distance: Euclidean over the chosen components (default all 27) of the
  * standardized vectors; a component missing in either vector is skipped, and a row that shares no
  * component with the query is not a candidate. Ties are broken by rowid ascending, so results are
- * deterministic. Each connection caches the vectors (raw and standardized) in memory, keyed by the
- * generation in _info: a query re-reads one _info row and reloads the cache only when the index
- * changed (here or in another connection); a rollback drops the cache. Cursors hold a reference to
- * the cache they started with, so a write during a scan cannot pull it from under them.
+ * deterministic. The arithmetic is the core's (affect_laban_standardize, affect_laban_search_run
+ * in core/src/laban_search.c: the distance, the k-nearest heap, the ε-ball, the tie rule); this
+ * file feeds it the cached rows and the constraints. Each connection caches the vectors (raw and
+ * standardized) in memory, keyed by the generation in _info: a query re-reads one _info row and
+ * reloads the cache only when the index changed (here or in another connection); a rollback drops
+ * the cache. Cursors hold a reference to the cache they started with, so a write during a scan
+ * cannot pull it from under them.
  *
  * Queries. xBestIndex uses these equality constraints; idxNum says which are present, and they
  * are passed to xFilter in this order:
@@ -100,6 +103,12 @@
  * names the first rowid or entry that is wrong. Every reader of the vectors (queries, scans,
  * ax_laban_read) refuses a corrupt one: "stored vector of rowid 17 is corrupt (1 bytes,
  * expected 108); run INSERT INTO …('rebuild')".
+ *
+ * Which tables are indexes. Other files read an index only through vt_laban.h (ax_laban_read,
+ * ax_laban_stats_read, ax_laban_label_of, ax_laban_cache_get/put). Those that take an index by
+ * name recognize one by its module: sqlite_schema's statement read token by token
+ * (lab_is_laban_def: CREATE VIRTUAL TABLE <name> USING laban), then _info's format, which must
+ * be '1' ("g_info has format "2"; this version reads format 1 (index "g")").
  *
  * Trust. The table reads another table (of its own database only, so a schema cannot use it
  * to reach an attached database) and writes only its shadow tables. It is not marked
@@ -536,9 +545,7 @@ static int lab_cache_standardize(lab_cache *c)
     c->z = sqlite3_malloc64(bytes);
     if (!c->z)
         return SQLITE_NOMEM;
-    for (size_t i = 0; i < c->n; i++)
-        for (int j = 0; j < LAB_N; j++)
-            c->z[i * LAB_N + j] = ((double)c->raw[i * LAB_N + j] - c->mean[j]) / c->sd[j];
+    affect_laban_standardize(c->raw, c->n, c->mean, c->sd, c->z);
     return SQLITE_OK;
 }
 
@@ -1743,8 +1750,7 @@ static int lab_query_vector(lab_vtab *vt, const lab_cache *ca, sqlite3_value *q,
     affect_error e;
     if (lab_vector(vt, data, (size_t)n, v, &bad, &e))
         return lab_core_error(err, &e, bad ? "query is not a valid motion: " : "query: ");
-    for (int j = 0; j < LAB_N; j++)
-        zq[j] = ((double)v[j] - ca->mean[j]) / ca->sd[j];
+    affect_laban_standardize(v, 1, ca->mean, ca->sd, zq);
     return SQLITE_OK;
 }
 

@@ -157,6 +157,11 @@ float affect_laban_f32(double v);
 void affect_laban_stats(const float *x, size_t n, double mean[AFFECT_LABAN_N],
                         double sd[AFFECT_LABAN_N]);
 
+/* The z-scores of n vectors x (n × AFFECT_LABAN_N, NaN = missing) into z (the same shape):
+ * z = ((double)x − mean) / sd per component, NaN where x or mean is missing. */
+void affect_laban_standardize(const float *x, size_t n, const double mean[AFFECT_LABAN_N],
+                              const double sd[AFFECT_LABAN_N], double *z);
+
 /* Checks statistics read back from storage: every mean finite or NaN (missing everywhere),
  * every sd finite and > 0. AFFECT_ERR_FORMAT naming the first bad one ("sd[3] (WeightLHand) is
  * -1, expected a finite number > 0"). */
