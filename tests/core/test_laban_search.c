@@ -77,6 +77,13 @@ static void make_set(set *s, const double *d, const int64_t *ids, size_t n)
     }
 }
 
+/* The query of those sets: 0 in component 0, the rest missing. */
+static void query_0(double *q)
+{
+    missing(q);
+    q[0] = 0;
+}
+
 static affect_laban_search search_of(const set *s, uint64_t k, double radius)
 {
     affect_laban_search q = {.z = s->z,
@@ -110,8 +117,7 @@ static void test_knn_ties(void **state)
     set s;
     make_set(&s, d, ids, 6);
     double q[N];
-    missing(q);
-    q[0] = 0;
+    query_0(q);
     affect_laban_hit h[16];
     affect_laban_search se = search_of(&s, 3, 0);
     assert_int_equal(affect_laban_search_capacity(&se), 3);
@@ -171,8 +177,7 @@ static void test_radius(void **state)
     set s;
     make_set(&s, d, ids, 4);
     double q[N];
-    missing(q);
-    q[0] = 0;
+    query_0(q);
     affect_laban_hit h[16];
     affect_laban_search se = search_of(&s, 0, 0.5);
     assert_int_equal(affect_laban_search_capacity(&se), 4);
