@@ -53,10 +53,13 @@
  * the rows they see. Distance: Euclidean over the chosen components (default all 27) of the
  * standardized vectors; a component missing in either vector is skipped, and a row that shares no
  * component with the query is not a candidate. Ties are broken by rowid ascending, so results are
- * deterministic. Each connection caches the vectors (raw and standardized) in memory, keyed by the
- * generation in _info: a query re-reads one _info row and reloads the cache only when the index
- * changed (here or in another connection); a rollback drops the cache. Cursors hold a reference to
- * the cache they started with, so a write during a scan cannot pull it from under them.
+ * deterministic. The arithmetic is the core's (affect_laban_standardize, affect_laban_search_run
+ * in core/src/laban_search.c: the distance, the k-nearest heap, the ε-ball, the tie rule); this
+ * file feeds it the cached rows and the constraints. Each connection caches the vectors (raw and
+ * standardized) in memory, keyed by the generation in _info: a query re-reads one _info row and
+ * reloads the cache only when the index changed (here or in another connection); a rollback drops
+ * the cache. Cursors hold a reference to the cache they started with, so a write during a scan
+ * cannot pull it from under them.
  *
  * Queries. xBestIndex uses these equality constraints; idxNum says which are present, and they
  * are passed to xFilter in this order:
@@ -100,6 +103,12 @@
  * names the first rowid or entry that is wrong. Every reader of the vectors (queries, scans,
  * ax_laban_read) refuses a corrupt one: "stored vector of rowid 17 is corrupt (1 bytes,
  * expected 108); run INSERT INTO …('rebuild')".
+ *
+ * Which tables are indexes. Other files read an index only through vt_laban.h (ax_laban_read,
+ * ax_laban_stats_read, ax_laban_label_of, ax_laban_cache_get/put). Those that take an index by
+ * name recognize one by its module: sqlite_schema's statement read token by token
+ * (lab_is_laban_def: CREATE VIRTUAL TABLE <name> USING laban), then _info's format, which must
+ * be '1' ("g_info has format "2"; this version reads format 1 (index "g")").
  *
  * Trust. The table reads another table (of its own database only, so a schema cannot use it
  * to reach an attached database) and writes only its shadow tables. It is not marked
@@ -149,7 +158,7 @@ typedef struct lab_cache {
     int refs;
     sqlite3_int64 generation;
     size_t n, cap;
-    sqlite3_int64 *ids;     /* ascending */
+    int64_t *ids;           /* ascending */
     int32_t *label;         /* per row: index into labels, −1 for a NULL label */
     float *raw;             /* n × LAB_N, NaN where missing */
     double *z;              /* n × LAB_N standardized */
@@ -170,12 +179,6 @@ typedef struct lab_vtab {
     const ax_laban_cache_kind *caches; /* the module's aux: what 'check' validates in _info */
 } lab_vtab;
 
-typedef struct lab_hit {
-    double d;
-    sqlite3_int64 id;
-    size_t row;
-} lab_hit;
-
 typedef struct lab_cursor {
     sqlite3_vtab_cursor base;
     lab_cache *cache;
@@ -184,7 +187,7 @@ typedef struct lab_cursor {
     size_t pos, end;
     unsigned char *label_ok; /* per distinct label; NULL = no label filter */
     /* KNN */
-    lab_hit *hits;
+    affect_laban_hit *hits;
     size_t n_hits, hit;
     sqlite3_value *args[4]; /* query, k, radius, components, for their hidden columns */
 } lab_cursor;
@@ -488,7 +491,7 @@ static int lab_cache_grow(lab_cache *c)
     if (!affect_mul_size(cap, sizeof *c->ids, &b_ids) ||
         !affect_mul_size(cap, LAB_N * sizeof *c->raw, &b_raw))
         return SQLITE_NOMEM;
-    sqlite3_int64 *ids = sqlite3_realloc64(c->ids, b_ids);
+    int64_t *ids = sqlite3_realloc64(c->ids, b_ids);
     if (!ids)
         return SQLITE_NOMEM;
     c->ids = ids;
@@ -542,9 +545,7 @@ static int lab_cache_standardize(lab_cache *c)
     c->z = sqlite3_malloc64(bytes);
     if (!c->z)
         return SQLITE_NOMEM;
-    for (size_t i = 0; i < c->n; i++)
-        for (int j = 0; j < LAB_N; j++)
-            c->z[i * LAB_N + j] = ((double)c->raw[i * LAB_N + j] - c->mean[j]) / c->sd[j];
+    affect_laban_standardize(c->raw, c->n, c->mean, c->sd, c->z);
     return SQLITE_OK;
 }
 
@@ -1704,47 +1705,6 @@ done:
     return rc;
 }
 
-static int lab_hit_cmp(const lab_hit *a, const lab_hit *b)
-{
-    if (a->d != b->d)
-        return a->d < b->d ? -1 : 1;
-    return (a->id > b->id) - (a->id < b->id);
-}
-
-static int lab_hit_qsort(const void *a, const void *b)
-{
-    return lab_hit_cmp(a, b);
-}
-
-/* Keeps the cap smallest hits seen so far in a max-heap h of *n entries. */
-static void lab_heap_offer(lab_hit *h, size_t *n, size_t cap, lab_hit x)
-{
-    size_t i;
-    if (*n < cap) {
-        for (i = (*n)++; i > 0; i = (i - 1) / 2) {
-            if (lab_hit_cmp(&h[(i - 1) / 2], &x) >= 0)
-                break;
-            h[i] = h[(i - 1) / 2];
-        }
-        h[i] = x;
-        return;
-    }
-    if (lab_hit_cmp(&x, &h[0]) >= 0)
-        return;
-    for (i = 0;;) {
-        size_t l = 2 * i + 1, big = l;
-        if (l >= cap)
-            break;
-        if (l + 1 < cap && lab_hit_cmp(&h[l + 1], &h[l]) > 0)
-            big = l + 1;
-        if (lab_hit_cmp(&h[big], &x) <= 0)
-            break;
-        h[i] = h[big];
-        i = big;
-    }
-    h[i] = x;
-}
-
 /* Rows whose label passes the label = ? constraint (NULL: every row). */
 static int lab_label_filter(const lab_cache *ca, sqlite3_value *want, unsigned char **out)
 {
@@ -1790,65 +1750,34 @@ static int lab_query_vector(lab_vtab *vt, const lab_cache *ca, sqlite3_value *q,
     affect_error e;
     if (lab_vector(vt, data, (size_t)n, v, &bad, &e))
         return lab_core_error(err, &e, bad ? "query is not a valid motion: " : "query: ");
-    for (int j = 0; j < LAB_N; j++)
-        zq[j] = ((double)v[j] - ca->mean[j]) / ca->sd[j];
+    affect_laban_standardize(v, 1, ca->mean, ca->sd, zq);
     return SQLITE_OK;
 }
 
-/* Nearest rows: the k smallest distances (k > 0) or the radius ball (k = 0). */
+/* Nearest rows: the k smallest distances (k > 0) or the radius ball (k = 0), by
+ * affect_laban_search_run (core/src/laban_search.c: the distance, the heap and the tie rule). */
 static int lab_knn(lab_cursor *c, const double zq[LAB_N], ptrdiff_t self, size_t lo, size_t hi,
                    sqlite3_int64 k, double radius, const int *comp, int nc)
 {
     const lab_cache *ca = c->cache;
-    size_t cap = hi - lo;
-    if (k > 0 && (sqlite3_uint64)k < cap)
-        cap = (size_t)k;
-    size_t bytes;
-    if (!affect_mul_size(cap ? cap : 1, sizeof(lab_hit), &bytes) ||
+    affect_laban_search s = {
+        .z = ca->z,
+        .ids = ca->ids,
+        .lo = lo,
+        .hi = hi,
+        .self = self < 0 ? SIZE_MAX : (size_t)self,
+        .label = ca->label,
+        .label_ok = c->label_ok,
+        .comp = comp,
+        .n_comp = nc,
+        .k = (uint64_t)k,
+        .radius = radius,
+    };
+    size_t cap = affect_laban_search_capacity(&s), bytes;
+    if (!affect_mul_size(cap ? cap : 1, sizeof *c->hits, &bytes) ||
         !(c->hits = sqlite3_malloc64(bytes)))
         return SQLITE_NOMEM;
-    size_t n = 0;
-    double dmax = 0;
-    lab_hit nearest = {INFINITY, 0, 0};
-    for (size_t i = lo; i < hi; i++) {
-        if ((ptrdiff_t)i == self ||
-            (c->label_ok && (ca->label[i] < 0 || !c->label_ok[ca->label[i]])))
-            continue;
-        const double *zx = ca->z + i * LAB_N;
-        double s = 0;
-        int used = 0;
-        for (int t = 0; t < nc; t++) {
-            double diff = zq[comp[t]] - zx[comp[t]];
-            if (!isnan(diff)) {
-                s += diff * diff;
-                used++;
-            }
-        }
-        if (!used)
-            continue; /* nothing in common with the query */
-        lab_hit h = {sqrt(s), ca->ids[i], i};
-        if (k > 0) {
-            lab_heap_offer(c->hits, &n, cap, h);
-        } else {
-            c->hits[n++] = h;
-            if (h.d > dmax)
-                dmax = h.d;
-            if (lab_hit_cmp(&h, &nearest) < 0)
-                nearest = h;
-        }
-    }
-    if (k == 0 && n > 0) {
-        double limit = radius * dmax;
-        size_t kept = 0;
-        for (size_t i = 0; i < n; i++)
-            if (c->hits[i].d <= limit)
-                c->hits[kept++] = c->hits[i];
-        if (kept == 0)
-            c->hits[kept++] = nearest;
-        n = kept;
-    }
-    qsort(c->hits, n, sizeof *c->hits, lab_hit_qsort);
-    c->n_hits = n;
+    affect_laban_search_run(&s, zq, c->hits, &c->n_hits);
     return SQLITE_OK;
 }
 
@@ -2042,15 +1971,106 @@ void ax_laban_rows_free(ax_laban_rows *r)
     memset(r, 0, sizeof *r);
 }
 
-/* The content table and motion column of a laban table; SQLITE_NOTFOUND if it is not one. */
+/* ---- which tables are laban indexes ---- */
+
+/* p past blanks and SQL comments. */
+static const char *def_skip_blank(const char *p)
+{
+    for (;;) {
+        while (*p == ' ' || *p == '\t' || *p == '\n' || *p == '\r' || *p == '\f')
+            p++;
+        if (p[0] == '-' && p[1] == '-') {
+            while (*p && *p != '\n')
+                p++;
+        } else if (p[0] == '/' && p[1] == '*') {
+            const char *end = strstr(p + 2, "*/");
+            p = end ? end + 2 : p + strlen(p);
+        } else {
+            return p;
+        }
+    }
+}
+
+static bool def_ident_char(char c)
+{
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
+           c == '$' || (unsigned char)c >= 0x80;
+}
+
+/* p past one name ("…", `…`, '…' with doubled quotes, […], or a bare identifier), with its text
+ * (quotes excluded, doubled quotes as they are) in *text and *len; NULL when there is none. */
+static const char *def_name(const char *p, const char **text, size_t *len)
+{
+    char close = *p == '"' ? '"' : *p == '`' ? '`' : *p == '\'' ? '\'' : *p == '[' ? ']' : 0;
+    if (close) {
+        *text = p + 1;
+        for (p++; *p; p++) {
+            if (*p != close)
+                continue;
+            if (close != ']' && p[1] == close) {
+                p++;
+                continue;
+            }
+            *len = (size_t)(p - *text);
+            return p + 1;
+        }
+        return NULL;
+    }
+    *text = p;
+    while (def_ident_char(*p))
+        p++;
+    *len = (size_t)(p - *text);
+    return *len ? p : NULL;
+}
+
+/* Whether def, the sql of a table in sqlite_schema, creates a table of the module "laban". SQLite
+ * stores a virtual table's statement as "CREATE VIRTUAL TABLE " and then its text from the
+ * table's name on: the name (quoted or bare), USING, the module's name (case-insensitive, quoted
+ * or not) and its arguments, with blanks and comments allowed between them. Read token by token,
+ * so that a table whose quoted name contains "USING laban(" is not taken for one. */
+static bool lab_is_laban_def(const char *def)
+{
+    static const char prefix[] = "CREATE VIRTUAL TABLE";
+    const char *text;
+    size_t len;
+    if (!def || sqlite3_strnicmp(def, prefix, (int)sizeof prefix - 1) != 0)
+        return false;
+    const char *p = def_skip_blank(def + sizeof prefix - 1);
+    if (p == def + sizeof prefix - 1 || !(p = def_name(p, &text, &len)))
+        return false;
+    p = def_skip_blank(p);
+    if (sqlite3_strnicmp(p, "USING", 5) != 0 || def_ident_char(p[5]))
+        return false;
+    p = def_name(def_skip_blank(p + 5), &text, &len);
+    return p && len == 5 && sqlite3_strnicmp(text, "laban", 5) == 0 && !def_ident_char(*p);
+}
+
+/* The format of _info (column col of st) as this version reads it: SQLITE_OK for text '1';
+ * SQLITE_NOMEM; else SQLITE_ERROR with *err: "g_info has format "2"; this version reads
+ * format 1 (index "g")" (NULL when the row is missing). */
+static int rows_check_format(sqlite3_stmt *st, int col, const char *name, char **err)
+{
+    const char *format = (const char *)sqlite3_column_text(st, col);
+    if (sqlite3_column_type(st, col) == SQLITE_TEXT && format && !strcmp(format, LAB_FORMAT))
+        return SQLITE_OK;
+    if (!format && sqlite3_column_type(st, col) != SQLITE_NULL)
+        return SQLITE_NOMEM;
+    return rows_error(
+        err, "%s_info has format %s%s%s; this version reads format " LAB_FORMAT " (index \"%w\")",
+        name, format ? "\"" : "", format ? format : "NULL", format ? "\"" : "", name);
+}
+
+/* The content table and motion column of a laban table; SQLITE_NOTFOUND if it is not one
+ * (lab_is_laban_def), SQLITE_ERROR with *err if its _info has another format. */
 static int rows_info(sqlite3 *db, const char *name, ax_laban_rows *r, char **err)
 {
     sqlite3_stmt *st = NULL;
     char *sql = sqlite3_mprintf(
         "SELECT (SELECT sql FROM sqlite_schema WHERE type = 'table' AND name = %Q), "
         "(SELECT value FROM \"%w_info\" WHERE key = 'content'), "
-        "(SELECT value FROM \"%w_info\" WHERE key = 'motion')",
-        name, name, name);
+        "(SELECT value FROM \"%w_info\" WHERE key = 'motion'), "
+        "(SELECT value FROM \"%w_info\" WHERE key = 'format')",
+        name, name, name, name);
     if (!sql)
         return SQLITE_NOMEM;
     int rc = sqlite3_prepare_v2(db, sql, -1, &st, NULL);
@@ -2063,11 +2083,16 @@ static int rows_info(sqlite3 *db, const char *name, ax_laban_rows *r, char **err
         return code == SQLITE_NOMEM || code == SQLITE_INTERRUPT ? code : SQLITE_NOTFOUND;
     }
     const char *def = (const char *)sqlite3_column_text(st, 0);
-    bool is_laban = def && sqlite3_strlike("%USING laban(%", def, 0) == 0 &&
-                    sqlite3_column_type(st, 1) == SQLITE_TEXT &&
-                    sqlite3_column_type(st, 2) == SQLITE_TEXT;
-    rc = SQLITE_NOTFOUND;
-    if (is_laban) {
+    if (!def && sqlite3_column_type(st, 0) != SQLITE_NULL) {
+        sqlite3_finalize(st);
+        return SQLITE_NOMEM;
+    }
+    bool is_laban = lab_is_laban_def(def);
+    rc = is_laban ? rows_check_format(st, 3, name, err) : SQLITE_NOTFOUND;
+    if (rc == SQLITE_OK &&
+        (sqlite3_column_type(st, 1) != SQLITE_TEXT || sqlite3_column_type(st, 2) != SQLITE_TEXT))
+        rc = SQLITE_NOTFOUND;
+    if (rc == SQLITE_OK) {
         const char *content = (const char *)sqlite3_column_text(st, 1);
         const char *motion = (const char *)sqlite3_column_text(st, 2);
         r->content = content ? sqlite3_mprintf("%s", content) : NULL;
@@ -2075,7 +2100,6 @@ static int rows_info(sqlite3 *db, const char *name, ax_laban_rows *r, char **err
         rc = r->content && r->motion ? SQLITE_OK : SQLITE_NOMEM;
     }
     sqlite3_finalize(st);
-    (void)err;
     return rc;
 }
 
@@ -2410,7 +2434,11 @@ int ax_laban_stats_read(sqlite3 *db, const char *name, ax_laban_stats *out, char
         rc = rows_db_error(err, db, rc);
         goto done;
     }
-    if (!def || sqlite3_strlike("%USING laban(%", def, 0) != 0) {
+    if (!def && rc == SQLITE_ROW && sqlite3_column_type(st, 0) != SQLITE_NULL) {
+        rc = SQLITE_NOMEM;
+        goto done;
+    }
+    if (!lab_is_laban_def(def)) {
         rc = SQLITE_NOTFOUND;
         goto done;
     }
@@ -2440,18 +2468,8 @@ int ax_laban_stats_read(sqlite3 *db, const char *name, ax_laban_stats *out, char
                               sqlite3_errmsg(db));
         goto done;
     }
-    const char *format = (const char *)sqlite3_column_text(st, 0);
-    if (sqlite3_column_type(st, 0) != SQLITE_TEXT || !format || strcmp(format, LAB_FORMAT)) {
-        if (!format && sqlite3_column_type(st, 0) != SQLITE_NULL) {
-            rc = SQLITE_NOMEM;
-            goto done;
-        }
-        rc = rows_error(
-            err,
-            "%s_info has format %s%s%s; this version reads format " LAB_FORMAT " (index \"%w\")",
-            name, format ? "\"" : "", format ? format : "NULL", format ? "\"" : "", name);
+    if ((rc = rows_check_format(st, 0, name, err)) != SQLITE_OK)
         goto done;
-    }
     char why[200];
     const char *bad = NULL;
     bool nomem = false;

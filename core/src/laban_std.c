@@ -1,7 +1,8 @@
 /*
  * laban_std.c — standardization of Laban vectors (affect/laban.h, "standardization"): the
  * statistics the laban index keeps (mean and sample standard deviation per component, missing
- * values skipped), their validation when read back, and the float32 z-score vector whose L2
+ * values skipped), the z-scores it searches (affect_laban_standardize; laban_search.c compares
+ * them), their validation when read back, and the float32 z-score vector whose L2
  * distances are the index's distances, for sqlite-vec's vec0 and other L2 searches.
  *
  * Why the L2 vector equals the index's distance: the index computes
@@ -20,6 +21,14 @@
 float affect_laban_f32(double v)
 {
     return fabs(v) <= FLT_MAX ? (float)v : NAN; /* NaN, ±inf and overflow are missing */
+}
+
+void affect_laban_standardize(const float *x, size_t n, const double mean[AFFECT_LABAN_N],
+                              const double sd[AFFECT_LABAN_N], double *z)
+{
+    for (size_t i = 0; i < n; i++)
+        for (int j = 0; j < AFFECT_LABAN_N; j++)
+            z[i * AFFECT_LABAN_N + j] = ((double)x[i * AFFECT_LABAN_N + j] - mean[j]) / sd[j];
 }
 
 void affect_laban_stats(const float *x, size_t n, double mean[AFFECT_LABAN_N],

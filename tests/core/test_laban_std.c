@@ -53,6 +53,34 @@ static void test_stats(void **state)
     assert_int_equal(affect_laban_stats_check(mean, sd, NULL), AFFECT_OK);
 }
 
+static void test_standardize(void **state)
+{
+    (void)state;
+    float x[4 * N];
+    double mean[N], sd[N], z[4 * N];
+    make_rows(x);
+    affect_laban_stats(x, 4, mean, sd);
+    affect_laban_standardize(x, 4, mean, sd, z);
+    for (int i = 0; i < 4; i++)
+        for (int j = 0; j < N; j++) {
+            double want = ((double)x[i * N + j] - mean[j]) / sd[j];
+            if (isnan(want))
+                assert_true(isnan(z[i * N + j]));
+            else
+                assert_true(z[i * N + j] == want);
+        }
+    /* by hand: component 0 of row 3 is (4 − 2.5) / sqrt(5/3) */
+    assert_true(fabs(z[3 * N] - 1.5 / sqrt(5.0 / 3.0)) < 1e-15);
+    assert_true(isnan(z[0 * N + 1]));                      /* missing in the row */
+    assert_true(isnan(z[1 * N + 2]));                      /* missing everywhere */
+    assert_true(z[2 * N + 3] == 0);                        /* constant: sd 1 */
+    assert_true(isnan(z[0 * N + 4]) && z[3 * N + 4] == 0); /* one value: its own mean */
+    /* zero rows write nothing */
+    z[0] = 7;
+    affect_laban_standardize(x, 0, mean, sd, z);
+    assert_true(z[0] == 7);
+}
+
 static void test_stats_check(void **state)
 {
     (void)state;
@@ -154,9 +182,8 @@ static void test_l2_vector(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_stats),
-        cmocka_unit_test(test_stats_check),
-        cmocka_unit_test(test_f32),
+        cmocka_unit_test(test_stats),       cmocka_unit_test(test_standardize),
+        cmocka_unit_test(test_stats_check), cmocka_unit_test(test_f32),
         cmocka_unit_test(test_l2_vector),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -226,6 +226,25 @@ SELECT affect_generate('idx', NULL, 'sad') IS NULL;
 SELECT affect_generate('plain', (SELECT motion FROM motions WHERE id = 1), 'sad');
 -- error: affect_generate: "plain" is not a laban table (CREATE VIRTUAL TABLE plain USING laban(…))
 
+-- the index's format is checked by the one reader of its tables (vt_laban.h), as its queries
+-- check it
+UPDATE idx_info SET value = '2' WHERE key = 'format';
+SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad');
+-- error: affect_generate: index "idx": idx_info has format "2"; this version reads format 1 (index "idx")
+
+UPDATE idx_info SET value = '1' WHERE key = 'format';
+
+-- a table whose name holds "USING laban(" is not an index
+CREATE TABLE "fake USING laban(" (x);
+CREATE TABLE "fake USING laban(_info"(key TEXT PRIMARY KEY, value);
+INSERT INTO "fake USING laban(_info"
+VALUES ('format', '1'), ('content', 'motions'), ('motion', 'motion');
+SELECT affect_generate('fake USING laban(', (SELECT motion FROM motions WHERE id = 1), 'sad');
+-- error: affect_generate: "fake USING laban(" is not a laban table (CREATE VIRTUAL TABLE fake USING laban( USING laban(…))
+
+DROP TABLE "fake USING laban(";
+DROP TABLE "fake USING laban(_info";
+
 SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'happy', '{"components":["TimeAll"]}');
 -- error: affect_generate: target label "happy": no motion of "idx" has this label (labels: angry, neutral, sad)
 

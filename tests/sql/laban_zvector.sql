@@ -143,6 +143,26 @@ SELECT laban_zvector(motion, 'nope') FROM motions WHERE id = 1;
 SELECT laban_zvector(motion, 'motions') FROM motions WHERE id = 1;
 -- error: laban_zvector: "motions" is not a laban table (CREATE VIRTUAL TABLE motions USING laban(…))
 
+-- an index is known by its module (the statement read token by token), however the statement
+-- is written: a quoted name, a comment, the module's name in capitals, a blank before "("
+CREATE VIRTUAL TABLE "odd ""name""" /* a comment */ USING LABAN (content=motions, motion=motion, label=emotion);
+SELECT 'quoted name, comment, module in capitals',
+       laban_zvector(m, 'odd "name"') = laban_zvector(m, 'motion_laban')
+  FROM (SELECT motion AS m FROM motions WHERE id = 1);
+DROP TABLE "odd ""name""";
+
+-- and not by its name: this plain table's name holds "USING laban(", and a table beside it
+-- looks like its _info
+CREATE TABLE "fake USING laban(" (x);
+CREATE TABLE "fake USING laban(_info"(key TEXT PRIMARY KEY, value);
+INSERT INTO "fake USING laban(_info"
+VALUES ('format', '1'), ('content', 'motions'), ('motion', 'motion');
+SELECT laban_zvector(motion, 'fake USING laban(') FROM motions WHERE id = 1;
+-- error: laban_zvector: "fake USING laban(" is not a laban table (CREATE VIRTUAL TABLE fake USING laban( USING laban(…))
+
+DROP TABLE "fake USING laban(";
+DROP TABLE "fake USING laban(_info";
+
 SELECT laban_zvector(motion, 7) FROM motions WHERE id = 1;
 -- error: laban_zvector: "7" is not a laban table (CREATE VIRTUAL TABLE 7 USING laban(…))
 

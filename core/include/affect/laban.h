@@ -157,6 +157,11 @@ float affect_laban_f32(double v);
 void affect_laban_stats(const float *x, size_t n, double mean[AFFECT_LABAN_N],
                         double sd[AFFECT_LABAN_N]);
 
+/* The z-scores of n vectors x (n × AFFECT_LABAN_N, NaN = missing) into z (the same shape):
+ * z = ((double)x − mean) / sd per component, NaN where x or mean is missing. */
+void affect_laban_standardize(const float *x, size_t n, const double mean[AFFECT_LABAN_N],
+                              const double sd[AFFECT_LABAN_N], double *z);
+
 /* Checks statistics read back from storage: every mean finite or NaN (missing everywhere),
  * every sd finite and > 0. AFFECT_ERR_FORMAT naming the first bad one ("sd[3] (WeightLHand) is
  * -1, expected a finite number > 0"). */
@@ -176,6 +181,60 @@ affect_status affect_laban_l2_vector(const float x[AFFECT_LABAN_N],
                                      const double mean[AFFECT_LABAN_N],
                                      const double sd[AFFECT_LABAN_N], const int *comp, int n_comp,
                                      float *out, affect_error *err);
+
+/* ---- search of standardized vectors (laban_search.c) ----
+ *
+ * The laban index's queries as arithmetic over rows of z-scores (n × AFFECT_LABAN_N doubles,
+ * row-major, NaN where a component is missing):
+ *   distance   d(q, x) = sqrt( Σ_{c ∈ C, q_c and x_c present} (q_c − x_c)² ) over the chosen
+ *              components C; a pair with no component of C present in both has no distance
+ *              and is never a hit;
+ *   k nearest  the k smallest distances (all of them when fewer rows qualify), kept in a
+ *              bounded max-heap of k entries while the rows stream by;
+ *   radius     relative: the rows within radius · (the largest distance among the rows that
+ *              qualify) of the query, and at least the nearest row, so a query that qualifies
+ *              any row always answers;
+ * hits in ascending distance, ties by id ascending (the tie rule that makes an answer the same
+ * whatever order the rows are stored in). */
+
+/* The distance over the n_comp components comp[0..n_comp) (each in 0..AFFECT_LABAN_N − 1):
+ * sqrt of the sum of (q_c − x_c)² over those whose difference is a number (both present);
+ * NaN when there is none. */
+double affect_laban_distance(const double *q, const double *x, const int *comp, int n_comp);
+
+typedef struct affect_laban_hit {
+    double d;   /* distance */
+    int64_t id; /* the row's id (the tie rule) */
+    size_t row; /* the row's index in the set */
+} affect_laban_hit;
+
+/* −1, 0, 1: by distance, then by id. */
+int affect_laban_hit_cmp(const affect_laban_hit *a, const affect_laban_hit *b);
+
+/* A search over rows [lo, hi) of a set of z-score rows. */
+typedef struct affect_laban_search {
+    const double *z;    /* the rows, n × AFFECT_LABAN_N */
+    const int64_t *ids; /* their ids */
+    size_t lo, hi;      /* the rows searched */
+    size_t self;        /* a row left out (the query's own row), or SIZE_MAX for none */
+    /* label filter: when label_ok is not NULL only rows i with label[i] ≥ 0 and
+     * label_ok[label[i]] != 0 are searched */
+    const int32_t *label;
+    const unsigned char *label_ok;
+    const int *comp; /* the components C, n_comp of them (1..AFFECT_LABAN_N) */
+    int n_comp;
+    uint64_t k;    /* > 0: the k nearest; 0: the radius ball */
+    double radius; /* for k = 0: a number ≥ 0 (NaN keeps only the nearest) */
+} affect_laban_search;
+
+/* Hits the search can give at most: min(k, hi − lo) for k > 0, hi − lo for the radius; the
+ * caller's hits array holds that many (at least 1). */
+size_t affect_laban_search_capacity(const affect_laban_search *s);
+
+/* Runs the search on query q (AFFECT_LABAN_N z-scores, NaN where missing): *n_hits hits into
+ * hits (sorted as above). Allocates nothing; O((hi − lo) · (n_comp + log k)). */
+void affect_laban_search_run(const affect_laban_search *s, const double *q, affect_laban_hit *hits,
+                             size_t *n_hits);
 
 /* ---- windowed Effort series (laban_series.c) ----
  *
