@@ -6,6 +6,7 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "affect/strbuf.h"
@@ -226,6 +227,32 @@ ax_arg ax_arg_cached_blob(sqlite3_context *ctx, sqlite3_value **argv, ax_blob_ca
     c->obj = obj;
     c->free_obj = free_obj;
     *out = obj;
+    return AX_OK;
+}
+
+static int cmp_text(const void *a, const void *b)
+{
+    return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+ax_arg ax_label_classes(sqlite3_context *ctx, char *const *labels, uint32_t n, char **classes,
+                        uint32_t *n_classes, uint32_t *y)
+{
+    uint32_t k = 0;
+    memcpy(classes, labels, n * sizeof *classes);
+    qsort(classes, n, sizeof *classes, cmp_text);
+    for (uint32_t i = 0; i < n; i++)
+        if (k == 0 || strcmp(classes[i], classes[k - 1]) != 0)
+            classes[k++] = classes[i];
+    *n_classes = k;
+    if (k < 2) {
+        ax_errorf(ctx, "need motions of at least 2 labels, got 1 (\"%s\")", classes[0]);
+        return AX_ERROR;
+    }
+    for (uint32_t i = 0; i < n; i++) {
+        char **hit = bsearch(&labels[i], classes, k, sizeof *classes, cmp_text);
+        y[i] = (uint32_t)(hit - classes);
+    }
     return AX_OK;
 }
 

@@ -87,6 +87,13 @@ typedef struct ax_blob_cache {
 /* Empties the cache. */
 void ax_blob_cache_clear(ax_blob_cache *c);
 
+/* The classes of a training aggregate's n rows: the distinct labels in byte order (classes,
+ * n_classes; pointers into labels) and each row's class (y). classes and y hold n entries
+ * each. AX_ERROR with the message set for fewer than 2 classes ("need motions of at least 2
+ * labels, got 1 ("sad")"). */
+ax_arg ax_label_classes(sqlite3_context *ctx, char *const *labels, uint32_t n, char **classes,
+                        uint32_t *n_classes, uint32_t *y);
+
 /* Argument 1 (argv[0]) decoded by decode, from c when its bytes are the cached ones: AX_NULL
  * for NULL; errors "argument 1 must be a <what> BLOB (from <from>), got text" and "argument 1
  * is not a valid <what>: <decoder's message>", or SQLITE_NOMEM. *out stays owned by c. */

@@ -390,19 +390,8 @@ static void train_final(sqlite3_context *ctx, cls_train *t)
         sqlite3_result_error_nomem(ctx);
         goto done;
     }
-    memcpy(classes, t->labels, n * sizeof *classes);
-    qsort(classes, n, sizeof *classes, cmp_text);
-    for (uint32_t i = 0; i < n; i++)
-        if (n_classes == 0 || strcmp(classes[i], classes[n_classes - 1]) != 0)
-            classes[n_classes++] = classes[i];
-    if (n_classes < 2) {
-        ax_errorf(ctx, "need motions of at least 2 labels, got 1 (\"%s\")", classes[0]);
+    if (ax_label_classes(ctx, t->labels, n, classes, &n_classes, y) != AX_OK)
         goto done;
-    }
-    for (uint32_t i = 0; i < n; i++) {
-        char **hit = bsearch(&t->labels[i], classes, n_classes, sizeof *classes, cmp_text);
-        y[i] = (uint32_t)(hit - classes);
-    }
     t->cfg.hmm = t->s.cfg;
     ax_monitor am;
     if (ax_monitor_begin(&am, ctx, t->s.progress) != AX_OK)

@@ -215,11 +215,6 @@ void ax_fda_train_step(sqlite3_context *ctx, int argc, sqlite3_value **argv)
         t->s.failed = true;
 }
 
-static int cmp_text(const void *a, const void *b)
-{
-    return strcmp(*(char *const *)a, *(char *const *)b);
-}
-
 static void train_final(sqlite3_context *ctx, fda_train *t)
 {
     uint32_t n = t->s.n_seqs, n_classes = 0;
@@ -231,19 +226,8 @@ static void train_final(sqlite3_context *ctx, fda_train *t)
         sqlite3_result_error_nomem(ctx);
         goto done;
     }
-    memcpy(classes, t->labels, n * sizeof *classes);
-    qsort(classes, n, sizeof *classes, cmp_text);
-    for (uint32_t i = 0; i < n; i++)
-        if (n_classes == 0 || strcmp(classes[i], classes[n_classes - 1]) != 0)
-            classes[n_classes++] = classes[i];
-    if (n_classes < 2) {
-        ax_errorf(ctx, "need motions of at least 2 labels, got 1 (\"%s\")", classes[0]);
+    if (ax_label_classes(ctx, t->labels, n, classes, &n_classes, y) != AX_OK)
         goto done;
-    }
-    for (uint32_t i = 0; i < n; i++) {
-        char **hit = bsearch(&t->labels[i], classes, n_classes, sizeof *classes, cmp_text);
-        y[i] = (uint32_t)(hit - classes);
-    }
     ax_monitor am;
     if (ax_monitor_begin(&am, ctx, t->s.progress) != AX_OK)
         goto done;
