@@ -76,10 +76,9 @@
 #include "vt_laban.h"
 
 #define N_COMP AFFECT_LABAN_N
-/* Versions the cached fit's key: a fit stored under another tag is refitted. */
-#define RMLR_CACHE_TAG                                                                             \
-    "affect-rmlr-cache-3" /* 3: the Newton solver (a fit made by the                               \
-                           * coordinate-descent solver is refitted) */
+/* Versions the cached fit's key: a fit stored under another tag is refitted. 3: the Newton
+ * solver (a fit made by the coordinate-descent solver is refitted). */
+#define RMLR_CACHE_TAG "affect-rmlr-cache-3"
 
 /* ---- the per-function cache of RMLR fits ---- */
 
