@@ -36,7 +36,7 @@ TEST_PACKAGES=(blender chromium)
 # finds the laban index's neighbours). If it cannot be installed that test is skipped.
 install_sqlite_vec() {
     [ -f build/npm/node_modules/sqlite-vec-linux-x64/vec0.so ] && return 0
-    install_missing npm || return 1
+    command -v npm >/dev/null 2>&1 || install_missing npm || return 1 # npm may come with nodejs
     mkdir -p build/npm
     npm install --silent --no-audit --no-fund --prefix build/npm sqlite-vec-linux-x64 >/dev/null
 }
