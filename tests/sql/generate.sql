@@ -133,6 +133,7 @@ SELECT 'transfer: toward sad below toward angry (WeightAll), motion by motion',
 SELECT 'transfer: the action stays (closer to its source than to the other action''s source)',
        count(*) = 8 AND sum(motion_dtw(a.s1, a.src) < motion_dtw(a.s1, b.src)) = 8
   FROM tr AS a JOIN tr AS b ON b.action <> a.action;
+-- oom: skip
 
 SELECT 'explain: method, strength, three donor pairs of neutral → angry, the change applied',
        json_extract(e, '$.method') = 'transfer' AND json_extract(e, '$.strength') = 1

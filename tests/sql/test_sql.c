@@ -42,6 +42,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <cmocka.h>
 #include <sqlite3.h>
 
@@ -338,7 +339,9 @@ static int run_spec(const char *path, int oom)
             continue;
         } else if (oom && sqlite3_stmt_readonly(st) && !oom_skip) {
             /* fail the n-th allocation for n = 1, 2, … until a run does not reach it */
-            for (long long k = 1;; k++) {
+            clock_t t0 = clock();
+            long long k = 1;
+            for (;; k++) {
                 sqlite3_reset(st);
                 alloc_count = 0;
                 fail_at = k;
@@ -361,6 +364,10 @@ static int run_spec(const char *path, int oom)
                     break;
                 }
             }
+            /* AFFECT_OOM_PROFILE=1 names the statements that keep fault injection long */
+            if (getenv("AFFECT_OOM_PROFILE"))
+                fprintf(stderr, "%s:%d: %lld runs, %.2f s\n", path, line_of(text, start), k,
+                        (double)(clock() - t0) / CLOCKS_PER_SEC);
         } else {
             run_stmt(db, st, &o);
         }
