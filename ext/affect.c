@@ -39,7 +39,7 @@
 #include "vt_laban.h"
 #include "fn_plot.h"
 #include "fn_preview.h"
-#include "affect/strbuf.h"
+#include "util/strbuf.h"
 
 #include <svm.h>
 

@@ -9,7 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "affect/strbuf.h"
+#include "util/strbuf.h"
 
 void ax_error(sqlite3_context *ctx, const affect_error *err)
 {

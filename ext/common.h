@@ -16,7 +16,7 @@
 SQLITE_EXTENSION_INIT3
 
 #include "affect/base.h"
-#include "affect/json.h"
+#include "util/json.h"
 #include "affect/monitor.h"
 #include "affect/motion.h"
 #include "affect/roles.h"

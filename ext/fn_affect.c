@@ -51,7 +51,7 @@
 
 #include "affect/classifier.h"
 #include "affect/crossval.h"
-#include "affect/strbuf.h"
+#include "util/strbuf.h"
 #include "seqs.h"
 
 /* ---- affect_train ---- */

@@ -49,7 +49,7 @@
 
 #include "affect/fda.h"
 #include "affect/plot.h"
-#include "affect/strbuf.h"
+#include "util/strbuf.h"
 #include "seqs.h"
 
 /* ---- fda_train ---- */

@@ -61,7 +61,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "affect/bytes.h"
+#include "util/bytes.h"
 #include "affect/classifier.h"
 #include "affect/features.h"
 #include "affect/generate.h"
@@ -70,7 +70,7 @@
 #include "affect/laban.h"
 #include "affect/rmlr.h"
 #include "affect/roles.h"
-#include "affect/strbuf.h"
+#include "util/strbuf.h"
 #include "affect/transfer.h"
 #include "seqs.h"
 #include "vt_laban.h"

@@ -57,7 +57,7 @@
 #include "affect/features.h"
 #include "affect/hmm.h"
 #include "affect/hmm_blob.h"
-#include "affect/strbuf.h"
+#include "util/strbuf.h"
 
 static const char *const train_keys[] = {AX_SEQS_KEYS, NULL};
 

@@ -1,5 +1,5 @@
 /*
- * fn_laban.c — SQL wrappers of the Laban Effort and Shape descriptors (core/src/laban.c):
+ * fn_laban.c — SQL wrappers of the Laban Effort and Shape descriptors (core/laban/laban.c):
  * laban_weight, laban_time, laban_flow, laban_space, laban_shape_directional,
  * laban_shape_shaping, laban_shape_flow, laban, laban_names, laban_vector, and laban_zvector
  * (a motion's vector standardized with a laban index's statistics, for sqlite-vec's vec0).
@@ -17,7 +17,7 @@
 
 #include "affect/laban.h"
 #include "affect/summary.h"
-#include "affect/strbuf.h"
+#include "util/strbuf.h"
 
 /* Parsed arguments common to every laban_* function. */
 typedef struct laban_call {

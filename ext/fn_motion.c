@@ -13,7 +13,7 @@
 #include "affect/io.h"
 #include "affect/normalize.h"
 #include "affect/skeleton.h"
-#include "affect/strbuf.h"
+#include "util/strbuf.h"
 #include "affect/synth.h"
 
 /* Sets the result from a core status: the motion on success, the error otherwise; frees it.

@@ -47,7 +47,7 @@
 
 #include "affect/keyframes.h"
 #include "affect/rank.h"
-#include "affect/strbuf.h"
+#include "util/strbuf.h"
 #include "affect/strength.h"
 
 /* ---- the training state shared by both aggregates ---- */

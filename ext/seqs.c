@@ -13,7 +13,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "affect/strbuf.h"
+#include "util/strbuf.h"
 
 /* A whole-number option in [0, max] into *out (unchanged when absent). */
 ax_arg ax_opt_whole(sqlite3_context *ctx, const ax_opts *opts, const char *key, double max,

@@ -28,7 +28,7 @@
 #include <string.h>
 
 #include "affect/classifier.h"
-#include "affect/strbuf.h"
+#include "util/strbuf.h"
 #include "vt_rows.h"
 
 /* ---- affect_crossval ---- */

@@ -46,7 +46,7 @@
  *       index has not committed; ax_laban_stats_read, behind laban_zvector, refuses them then).
  * Standardization: z = (x − mean) / sd per component over the indexed rows, skipping missing
  * values; sd is the sample standard deviation (n − 1), and 1 where it is 0 or undefined (fewer
- * than two values) (affect_laban_stats, core/src/laban_std.c, which also gives laban_zvector
+ * than two values) (affect_laban_stats, core/laban/laban_std.c, which also gives laban_zvector
  * the vectors whose plain L2 distances are these distances, for sqlite-vec's vec0). mean and sd are
  * recomputed when a transaction that changed the index commits (xSync), so a transaction of many
  * per-row 'refresh' commands pays for them once; queries always standardize with the statistics of
@@ -54,7 +54,7 @@
  * standardized vectors; a component missing in either vector is skipped, and a row that shares no
  * component with the query is not a candidate. Ties are broken by rowid ascending, so results are
  * deterministic. The arithmetic is the core's (affect_laban_standardize, affect_laban_search_run
- * in core/src/laban_search.c: the distance, the k-nearest heap, the ε-ball, the tie rule); this
+ * in core/laban/laban_search.c: the distance, the k-nearest heap, the ε-ball, the tie rule); this
  * file feeds it the cached rows and the constraints. Each connection caches the vectors (raw and
  * standardized) in memory, keyed by the generation in _info: a query re-reads one _info row and
  * reloads the cache only when the index changed (here or in another connection); a rollback drops
@@ -125,7 +125,7 @@
 #include "vt_laban.h"
 
 #include "affect/laban.h"
-#include "affect/strbuf.h"
+#include "util/strbuf.h"
 
 #define LAB_N AFFECT_LABAN_N
 #define LAB_VECTOR_BYTES (LAB_N * 4)
@@ -1755,7 +1755,7 @@ static int lab_query_vector(lab_vtab *vt, const lab_cache *ca, sqlite3_value *q,
 }
 
 /* Nearest rows: the k smallest distances (k > 0) or the radius ball (k = 0), by
- * affect_laban_search_run (core/src/laban_search.c: the distance, the heap and the tie rule). */
+ * affect_laban_search_run (core/laban/laban_search.c: the distance, the heap and the tie rule). */
 static int lab_knn(lab_cursor *c, const double zq[LAB_N], ptrdiff_t self, size_t lo, size_t hi,
                    sqlite3_int64 k, double radius, const int *comp, int nc)
 {

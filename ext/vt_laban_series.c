@@ -1,6 +1,6 @@
 /*
  * vt_laban_series.c — laban_series, a table-valued function giving Weight, Time, Space and Flow
- * over a window sliding along a motion (core/src/laban_series.c), to plot an Effort over a take:
+ * over a window sliding along a motion (core/laban/laban_series.c), to plot an Effort over a take:
  *
  *   SELECT frame, seconds, weight FROM laban_series(:motion) WHERE part = 'all';
  *   SELECT part, max(weight) FROM laban_series(:m, '{"window": 0.5, "hop": 0.1}') GROUP BY part;

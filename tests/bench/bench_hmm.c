@@ -73,7 +73,7 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include "affect/hmm.h"
-#include "affect/rng.h"
+#include "util/rng.h"
 
 #include <cblas.h>
 #include <lapacke.h>

@@ -56,6 +56,7 @@
 #include <string.h>
 
 #include "benchutil.h"
+#include "util/bytes.h"
 
 #ifndef AFFECT_BENCH_CORPUS
 #define AFFECT_BENCH_CORPUS "../shared/corpora/bandai-namco-1/data"

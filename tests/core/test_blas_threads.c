@@ -16,7 +16,7 @@
 #include "affect/fisher.h"
 #include "affect/hmm.h"
 #include "affect/laban.h"
-#include "affect/rng.h"
+#include "util/rng.h"
 #include "affect/roles.h"
 #include "affect/spca.h"
 #include "affect/svm.h"

@@ -11,7 +11,7 @@
 #include "testutil.h"
 
 #include "affect/bspline.h"
-#include "affect/rng.h"
+#include "util/rng.h"
 
 static void test_gauss_legendre(void **state)
 {

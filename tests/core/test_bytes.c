@@ -1,5 +1,5 @@
 /*
- * test_bytes.c — the little-endian writer and bounds-checked reader (affect/bytes.h): exact
+ * test_bytes.c — the little-endian writer and bounds-checked reader (util/bytes.h): exact
  * byte layout, round trips, every truncation refused without reading past the end, and the
  * writer's sticky failure under out-of-memory; the header and checksum helpers with their one
  * wording of magic, version and truncation errors.
@@ -12,7 +12,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "affect/bytes.h"
+#include "util/bytes.h"
 #include "affect/hmm_blob.h" /* affect_fnv1a64 */
 #include "testutil.h"
 

@@ -30,7 +30,7 @@
 #include "affect/classifier.h"
 #include "affect/laban.h"
 #include "affect/hmm_blob.h" /* affect_fnv1a64 */
-#include "affect/quant.h"
+#include "util/quant.h"
 #include "affect/synth.h"
 
 #define N_ACTIONS 3

@@ -23,7 +23,7 @@
 #include "testutil.h"
 
 #include "affect/crossval.h"
-#include "affect/rng.h"
+#include "util/rng.h"
 #include "affect/synth.h"
 
 #define N_ACTIONS 2

@@ -1,5 +1,5 @@
 /*
- * test_csv.c — CSV import and export (core/src/csv.c): header styles, header detection, line
+ * test_csv.c — CSV import and export (core/motion/csv.c): header styles, header detection, line
  * ends, byte order mark, quoting, blank lines, delimiters, every error message, exact round
  * trips of awkward floats and names, a 1000-frame × 27-joint round trip, and out-of-memory at
  * every allocation of a parse and a write.
@@ -7,8 +7,8 @@
 #include "testutil.h"
 
 #include "affect/io.h"
-#include "affect/rng.h"
-#include "affect/strbuf.h"
+#include "util/rng.h"
+#include "util/strbuf.h"
 
 #include <float.h>
 #include <math.h>

@@ -13,7 +13,7 @@
 #include "testutil.h"
 
 #include "affect/fda.h"
-#include "affect/rng.h"
+#include "util/rng.h"
 #include "affect/spca.h"
 
 /* ---- synthetic motions ---- */

@@ -21,7 +21,7 @@
 #include "testutil.h"
 #include "affect/fisher.h"
 #include "affect/hmm.h"
-#include "affect/rng.h"
+#include "util/rng.h"
 
 #define PROB_STEP 4e-7
 #define DENS_STEP 1e-5

@@ -1,5 +1,5 @@
 /*
- * test_fixtures.c — every BLOB in tests/fixtures/ through the one codec (affect/bytes.h): each
+ * test_fixtures.c — every BLOB in tests/fixtures/ through the one codec (util/bytes.h): each
  * file decodes with its format's decoder, chosen by its magic, and today's encoder gives back
  * exactly its bytes — or, for the two versions that are upgraded on re-encoding (classifier
  * version 1, the headerless RMLR fit), an encoding that is a fixed point (decoding and
@@ -17,7 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "affect/bytes.h"
+#include "util/bytes.h"
 #include "affect/classifier.h"
 #include "affect/fda.h"
 #include "affect/features.h"

@@ -15,7 +15,7 @@
 
 #include "testutil.h"
 #include "affect/hmm.h"
-#include "affect/rng.h"
+#include "util/rng.h"
 
 #define LOG_2PI 1.83787706640934548356
 

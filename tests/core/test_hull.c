@@ -29,7 +29,7 @@
 #include <string.h>
 
 #include "affect/laban.h"
-#include "affect/rng.h"
+#include "util/rng.h"
 
 #define PI 3.14159265358979323846
 #define MAX_BRUTE 64

@@ -8,8 +8,8 @@
 #include "testutil.h"
 
 #include "affect/io.h"
-#include "affect/json.h"
-#include "affect/strbuf.h"
+#include "util/json.h"
+#include "util/strbuf.h"
 
 #include <float.h>
 #include <math.h>

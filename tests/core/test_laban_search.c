@@ -1,5 +1,5 @@
 /*
- * test_laban_search.c — the laban index's search arithmetic (core/src/laban_search.c): the
+ * test_laban_search.c — the laban index's search arithmetic (core/laban/laban_search.c): the
  * masked distance (components missing in either vector skipped, a chosen subset, none in common
  * → no distance), the k nearest in ascending distance with ties by id whatever the storage
  * order, k larger than the rows, the relative radius ball and its boundary (a distance exactly

@@ -1,5 +1,5 @@
 /*
- * test_laban_series.c — the windowed Effort series (core/src/laban_series.c): a window covering
+ * test_laban_series.c — the windowed Effort series (core/laban/laban_series.c): a window covering
  * the whole motion gives the per-clip laban values (peaks to the bit, sums within
  * AFFECT_LABAN_SERIES_RTOL) with both methods of Weight and Time; every window of a sliding
  * series against a brute-force reduction of the same kinematics over its frames (several

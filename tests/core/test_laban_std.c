@@ -1,5 +1,5 @@
 /*
- * test_laban_std.c — standardization of Laban vectors (core/src/laban_std.c): the statistics on
+ * test_laban_std.c — standardization of Laban vectors (core/laban/laban_std.c): the statistics on
  * a hand-made set (mean, sample sd with the n − 1 divisor, missing values skipped, sd 1 where it
  * is 0 or undefined), their validation, and the L2 vector: its z-scores, a component missing
  * everywhere written as 0, a component missing in the vector refused, chosen components, and

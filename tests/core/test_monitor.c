@@ -48,8 +48,9 @@
 #include "affect/skeleton.h"
 #include "affect/monitor.h"
 #include "affect/rmlr.h"
-#include "affect/rng.h"
+#include "util/rng.h"
 #include "affect/synth.h"
+#include "util/bytes.h"
 
 /* Issue 14's goal: 0.2 s from the interrupt to the return (LATENCY_MAX, on CPU time per thread,
  * see check_stopped; WALL_MAX bounds the wall time on a loaded machine). The sanitizer build

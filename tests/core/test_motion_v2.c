@@ -1,6 +1,6 @@
 /*
  * test_motion_v2.c — the motion BLOB, version 2 (skeleton, local rotations, translations;
- * core/src/motion.c, docs/FORMATS.md): both fixtures decoded field by field and re-encoded
+ * core/motion/motion.c, docs/FORMATS.md): both fixtures decoded field by field and re-encoded
  * byte for byte, version 1 still written for motions without a skeleton, every version-2
  * corruption rejected with its message, and the editing operations (slice, resample, select,
  * clone) on a skeletal motion, with out-of-memory sweeps.

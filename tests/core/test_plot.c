@@ -14,7 +14,7 @@
 #include <string.h>
 
 #include "testutil.h"
-#include "affect/numparse.h"
+#include "util/numparse.h"
 #include "affect/plot.h"
 
 /* ---- helpers ---- */

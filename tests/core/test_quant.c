@@ -1,5 +1,5 @@
 /*
- * test_quant.c — the compact storage of long vectors (affect/quant.h).
+ * test_quant.c — the compact storage of long vectors (util/quant.h).
  *
  * Checked: 24-bit floats round to 12 mantissa bits to nearest, ties to even, carry into the
  * exponent, keep the sign and every exponent (1e-300 .. 1e300, subnormals), give a non-finite
@@ -18,7 +18,7 @@
 
 #include "testutil.h"
 
-#include "affect/quant.h"
+#include "util/quant.h"
 
 static uint64_t bits_of(double v)
 {

@@ -11,7 +11,7 @@
 #include "testutil.h"
 
 #include "affect/rank.h"
-#include "affect/rng.h"
+#include "util/rng.h"
 
 static void random_x(double *X, uint32_t n, uint32_t d, uint64_t seed)
 {

@@ -12,7 +12,8 @@
 
 #include "affect/hmm_blob.h" /* affect_fnv1a64 */
 #include "affect/rmlr.h"
-#include "affect/rng.h"
+#include "util/rng.h"
+#include "util/bytes.h"
 
 #define P 27
 

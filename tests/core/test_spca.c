@@ -13,8 +13,9 @@
 #include "testutil.h"
 
 #include "affect/hmm_blob.h" /* affect_fnv1a64 */
-#include "affect/rng.h"
+#include "util/rng.h"
 #include "affect/spca.h"
+#include "util/bytes.h"
 
 /* ---- helpers ---- */
 

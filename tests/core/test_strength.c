@@ -11,7 +11,7 @@
 #include "testutil.h"
 
 #include "affect/keyframes.h"
-#include "affect/rng.h"
+#include "util/rng.h"
 #include "affect/strength.h"
 #include "affect/synth.h"
 

@@ -14,8 +14,9 @@
 
 #include "testutil.h"
 
-#include "affect/rng.h"
+#include "util/rng.h"
 #include "affect/svm.h"
+#include "util/bytes.h"
 
 enum { D = 2000 };
 

@@ -21,7 +21,7 @@
  * Seed mode: compiled with -DAFFECT_FUZZ_WRITE_SEEDS (and without -fsanitize=fuzzer) this file
  * is instead a small program that writes the valid seed BLOBs of tests/fuzz/corpus/fuzz_blob:
  *     cc -std=c11 -DAFFECT_FUZZ_WRITE_SEEDS -Icore/include -I/usr/include/libsvm
- *        tests/fuzz/fuzz_blob.c core/src/[a-z]*.c -llapacke -lopenblas -lsvm -lm
+ *        -Icore tests/fuzz/fuzz_blob.c $(find core -name '*.c') -llapacke -lopenblas -lsvm -lm
  *        -o /tmp/write_seeds
  *     /tmp/write_seeds tests/fuzz/corpus/fuzz_blob
  * The version-2 seeds are v2_*.blob; fixture_v2.blob is a copy of tests/fixtures/motion-v2.bin

@@ -6,8 +6,8 @@
  *     build-fuzz/tests/fuzz/fuzz_fda -max_total_time=60 <a copy of tests/fuzz/corpus/fuzz_fda>
  *
  * Each input is decoded twice: as is, and as a copy whose last 8 bytes are rewritten to the
- * FNV-1a 64 of the rest (the checksum's place and algorithm, core/src/fda.c), so that mutations
- * reach the header checks, the feature definition, the class names, the labels and the
+ * FNV-1a 64 of the rest (the checksum's place and algorithm, core/functional/fda.c), so that
+ * mutations reach the header checks, the feature definition, the class names, the labels and the
  * arrays. Beyond "no crash, no leak, no undefined behaviour", for each decode:
  *   - on failure: a non-OK status recorded with a non-empty message, and nothing handed out;
  *   - on success: encode(decode(x)) == x byte for byte, and the model embeds a short constant

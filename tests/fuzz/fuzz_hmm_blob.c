@@ -7,7 +7,7 @@
  * tests/fuzz/corpus/fuzz_hmm_blob>
  *
  * Each input is decoded twice: as is, and as a copy whose last 8 bytes are rewritten to the
- * FNV-1a 64 of the rest (the checksum's place and algorithm, core/src/hmm_blob.c). Raw
+ * FNV-1a 64 of the rest (the checksum's place and algorithm, core/hmm/hmm_blob.c). Raw
  * mutations almost never keep the checksum right, so the decoder used to stop them at that
  * check (20 corpus files after 60 s, 22 after 3 minutes); the fixed copy takes them on to the
  * payload: the feature definition, the log-likelihoods, the parameters and

@@ -1,5 +1,5 @@
 /*
- * fuzz_json.c — libFuzzer target for the JSON reader (affect_json_parse, affect/json.h) and
+ * fuzz_json.c — libFuzzer target for the JSON reader (affect_json_parse, util/json.h) and
  * the JSON motion importer built on it (affect_motion_from_json, affect/io.h).
  *
  * Usage (see tests/fuzz/run.sh, or build with -DAFFECT_FUZZ=ON and clang):
@@ -19,7 +19,7 @@
  * A broken invariant calls abort(), which libFuzzer reports as a crash with the input saved.
  */
 #include "affect/io.h"
-#include "affect/json.h"
+#include "util/json.h"
 
 #include <stdlib.h>
 #include <string.h>

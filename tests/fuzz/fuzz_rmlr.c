@@ -31,7 +31,7 @@
  */
 #include "fuzz_sql.h"
 
-#include "affect/bytes.h"
+#include "util/bytes.h"
 #include "affect/hmm_blob.h" /* affect_fnv1a64 */
 #include "affect/rmlr.h"
 

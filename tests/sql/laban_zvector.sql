@@ -1,5 +1,5 @@
 -- laban_zvector.sql — SQL-level specification of laban_zvector (ext/fn_laban.c; core:
--- affect_laban_l2_vector in core/src/laban_std.c): a motion's Laban vector standardized with a
+-- affect_laban_l2_vector in core/laban/laban_std.c): a motion's Laban vector standardized with a
 -- laban index's statistics, as float32, so that plain L2 distances between such vectors are the
 -- index's distances (sqlite-vec's vec0 then finds the index's neighbours: tests/client/
 -- sqlite_vec_test.sh checks that with the real vec0). Here the float32 BLOBs are decoded in SQL

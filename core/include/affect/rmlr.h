@@ -59,7 +59,10 @@
 
 #include "affect/base.h"
 #include "affect/monitor.h"
-#include "affect/bytes.h"
+
+/* the byte writer and reader of the BLOB codec (internal: core/util/bytes.h) */
+typedef struct affect_bw affect_bw;
+typedef struct affect_br affect_br;
 
 #ifdef __cplusplus
 extern "C" {
@@ -189,7 +192,7 @@ uint32_t affect_rmlr_predict(const affect_rmlr *m, const double *x, double *prob
 void affect_impute_column_means(double *x, size_t n, size_t p);
 
 /* ---- serialisation ----
- * Layout, version 2 (little-endian, through affect/bytes.h; docs/FORMATS.md), offsets
+ * Layout, version 2 (little-endian, through util/bytes.h; docs/FORMATS.md), offsets
  * relative to the start:
  *    0  4    magic "AFRL"
  *    4  4    format version (2)

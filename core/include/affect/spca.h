@@ -49,7 +49,10 @@
 #define AFFECT_SPCA_H
 
 #include "affect/base.h"
-#include "affect/bytes.h"
+
+/* the byte writer and reader of the BLOB codec (internal: core/util/bytes.h) */
+typedef struct affect_bw affect_bw;
+typedef struct affect_br affect_br;
 
 #ifdef __cplusplus
 extern "C" {
@@ -162,7 +165,7 @@ const double *affect_spca_eigenvalues(const affect_spca *s);
  *   40  8  sigma (float64; > 0 and finite for rbf, 0 for linear)
  *   48  p × float64      eigenvalues, positive, non-increasing
  *       p × d × float64  axes, row-major (p × d × float32 with flag 1; with flag 2 each axis
- *                        in the 4-bit form of affect/quant.h, canonical)
+ *                        in the 4-bit form of util/quant.h, canonical)
  *       8  FNV-1a 64-bit hash of the record's bytes before it
  */
 #define AFFECT_SPCA_MAGIC "AFSP"
@@ -179,11 +182,11 @@ bool affect_spca_round_axes(affect_spca *s);
 bool affect_spca_compact_fits(const affect_spca *s, const double *factor);
 
 /* Multiplies component t of every axis by factor[t] (d values, or NULL) and rounds each axis to
- * its 4-bit block form (affect/quant.h), so that the record stores the axes with flag 2 and
+ * its 4-bit block form (util/quant.h), so that the record stores the axes with flag 2 and
  * decodes to exactly these axes. The caller has checked affect_spca_compact_fits. */
 void affect_spca_compact_axes(affect_spca *s, const double *factor);
 
-/* Appends the record to w (check w->failed once at the end, see affect/bytes.h). */
+/* Appends the record to w (check w->failed once at the end, see util/bytes.h). */
 void affect_spca_encode(const affect_spca *s, affect_bw *w);
 
 /* Reads one record at r's position; on success *out is a new model and r is just past the

@@ -37,7 +37,10 @@
 
 #include "affect/base.h"
 #include "affect/monitor.h"
-#include "affect/bytes.h"
+
+/* the byte writer and reader of the BLOB codec (internal: core/util/bytes.h) */
+typedef struct affect_bw affect_bw;
+typedef struct affect_br affect_br;
 
 #ifdef __cplusplus
 extern "C" {
@@ -130,7 +133,7 @@ bool affect_svm_round_weights(affect_svm *m);
 bool affect_svm_compact_fits(const affect_svm *m, const double *factor);
 
 /* Multiplies column t of every weight vector by factor[t] (factor: d values, or NULL) and rounds
- * each vector to its 4-bit block form (affect/quant.h), so that the model is encoded with
+ * each vector to its 4-bit block form (util/quant.h), so that the model is encoded with
  * compact weights (format version 3, about 0.56 byte a weight) and decodes to exactly these
  * weights. The caller has checked affect_svm_compact_fits. The recognizer folds the ratio of its
  * stored to its exact normalization scales into the factors (affect/classifier.h). */
@@ -176,7 +179,7 @@ const double *affect_svm_weights(const affect_svm *m, uint32_t p, uint32_t q, do
 
 /* Stratified assignment of n samples (classes y[i] in 0 .. c−1; a class may be absent) to
  * k folds: fold_of[i] in 0 .. k'−1, where k' = min(k, n) (k is clamped to n so that no fold is
- * empty). Deterministic for a seed: one generator (affect/rng.h) seeded with seed shuffles
+ * empty). Deterministic for a seed: one generator (util/rng.h) seeded with seed shuffles
  * each class's samples in turn, class 0 first, by Fisher–Yates (for i = m−1 down to 1, swap
  * i with a uniform j in 0 .. i drawn by rejection, so without bias); then the samples are
  * dealt round-robin to the folds, class 0's shuffled list first, the deal continuing across
@@ -203,7 +206,7 @@ affect_status affect_svm_select_c(const double *X, size_t n, size_t d, const uin
                                   affect_error *err);
 
 /* ---- serialisation ----
- * Layout, version 1 (little-endian, through affect/bytes.h), offsets relative to the start:
+ * Layout, version 1 (little-endian, through util/bytes.h), offsets relative to the start:
  *    0  1      format version (1; 2 when the weights are float32: affect_svm_round_weights;
  *              3 when they are in 4-bit blocks: affect_svm_compact_weights)
  *    1  4      classes c (2 .. 256)
@@ -222,7 +225,7 @@ affect_status affect_svm_select_c(const double *X, size_t n, size_t d, const uin
  *       8P     rho (float64, finite)
  *       4      number of weight vectors (= P)
  *       8Pd    weight vectors w, pair after pair (float64, finite; version 2: 4Pd bytes of
- *              float32, finite; version 3: each vector in the 4-bit form of affect/quant.h,
+ *              float32, finite; version 3: each vector in the 4-bit form of util/quant.h,
  *              canonical)
  * No checksum and no length: the object is embedded in the classifier BLOB, which carries
  * both; decoding stops after the weights. */
