@@ -7,7 +7,7 @@ have, in its top comment, a line " * Usage:" followed by indented lines of C (up
 " *" line or the end of the comment). The block is taken as written, with three rewrites that
 let it show elisions:
     a line that is only "..."    -> /* ... */          (the caller's own code)
-    "= ...;"                     -> = {0};             (an input the caller provides)
+    "= ..." before "," or ";"    -> = {0}              (an input the caller provides)
     any other "..."              -> /* ... */          ("{ ... }": handling left to the caller)
 and compiled as the body of a void function in a file that includes only that header (first,
 so the header is also checked to be self-contained), then <stddef.h> and <stdio.h>, with
@@ -50,7 +50,7 @@ def to_c(body):
         if line.strip() == "...":
             out.append("/* ... */")
             continue
-        line = re.sub(r"=\s*\.\.\.\s*;", "= {0};", line)
+        line = re.sub(r"=\s*\.\.\.(?=\s*[,;])", "= {0}", line)
         line = line.replace("...", "/* ... */")
         out.append(line)
     return out

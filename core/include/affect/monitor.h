@@ -1,6 +1,18 @@
 /*
  * affect/monitor.h — stopping a long call when its caller asks, and reporting how far it got.
  *
+ * Usage:
+ *     bool (*my_stop)(void *ctx) = ...;                // true: stop now (or NULL)
+ *     void (*my_progress)(void *, const char *, uint64_t, uint64_t) = ...;   // or NULL
+ *     void *my_ctx = ...;
+ *     affect_error err;
+ *     affect_monitor mon;
+ *     affect_monitor_init(&mon, my_stop, my_progress, my_ctx);
+ *     // cfg.monitor = &mon (affect_hmm_config, ...); then, in a long loop:
+ *     affect_monitor_report(&mon, "frames", 0, 100);
+ *     if (affect_monitor_check(&mon, &err) != AFFECT_OK)   // AFFECT_ERR_INTERRUPTED, "interrupted"
+ *         puts(err.msg);
+ *
  * A long call of the library (HMM training, classifier training, cross-validation, RMLR fits,
  * DTW, generation) takes an optional monitor in its options (NULL: neither). While it runs it
  *   - polls monitor->stop, at most every AFFECT_MONITOR_POLL_MS milliseconds and only from the
