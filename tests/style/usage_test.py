@@ -2,7 +2,7 @@
 """usage_test.py — every public header's "Usage:" block compiles (issue 18), so it cannot rot:
     usage_test.py SOURCE_DIR [CC]
 
-Each public header of core/include/affect/ (all but the internal ones listed in INTERNAL) must
+Each public header under core/include/affect/ (all but the internal ones listed in INTERNAL) must
 have, in its top comment, a line " * Usage:" followed by indented lines of C (up to the next
 " *" line or the end of the comment). The block is taken as written, with three rewrites that
 let it show elisions:
@@ -61,7 +61,10 @@ def main():
     cc = sys.argv[2] if len(sys.argv) > 2 else "cc"
     inc = os.path.join(src, "core", "include")
     hdir = os.path.join(inc, "affect")
-    headers = sorted(h for h in os.listdir(hdir) if h.endswith(".h") and h not in INTERNAL)
+    # Recursive, so that headers moved into domain folders (affect/motion/io.h) stay checked.
+    headers = sorted(os.path.relpath(os.path.join(d, h), hdir)
+                     for d, _, files in os.walk(hdir)
+                     for h in files if h.endswith(".h") and h not in INTERNAL)
     if not headers:
         print("FAIL: no public headers under %s" % hdir)
         return 1
