@@ -2,6 +2,18 @@
  * affect/base.h — status codes, the error record, and the allocation hook shared by every
  * module of the core library.
  *
+ * Usage:
+ *     size_t n = ...;                                  // a count read from the input
+ *     affect_error err;
+ *     double *v = affect_malloc_array(n, sizeof *v);   // NULL on overflow or out of memory
+ *     if (!v) {
+ *         affect_nomem_of(&err, n, sizeof *v, "%zu values", n);   // "out of memory", or named
+ *         puts(err.msg);
+ *         return;
+ *     }
+ *     ...
+ *     affect_free(v);
+ *
  * Every core function that can fail returns an affect_status and, when given a non-NULL
  * affect_error, writes a one-line message into it ("line 57: expected CHANNELS, found
  * CHANELS"). The SQLite glue prefixes the SQL function name.

@@ -3,6 +3,18 @@
  * exact Gram and roughness-penalty matrices, and penalized least-squares fits of sampled curves
  * (thesis chapter 3, SCIENCE.md §4).
  *
+ * Usage:
+ *     const double *x = ...;  uint32_t T = ...;        // T samples of 1 column, at equal spacing
+ *     affect_error err;
+ *     affect_bspline b = {4, 10};                      // cubic (k = 4), G = 10 functions
+ *     double r[10 * 4], c[10], work[2 * 10 * 4 + 10], f[100];
+ *     if (affect_bspline_check(&b)) { puts(affect_bspline_check(&b)); return; }
+ *     affect_bspline_gram(&b, 2, r);                   // the roughness penalty, band form
+ *     if (affect_bspline_fit(&b, r, NULL, x, T, 1, 1e-4, c, work, &err) != AFFECT_OK)
+ *         puts(err.msg);
+ *     else
+ *         affect_bspline_values(&b, c, 1, NULL, 100, f);   // the fit at 100 equally spaced times
+ *
  * The basis. G functions B_0 .. B_{G−1} of order k (degree k − 1; k = 4 is the cubic spline)
  * on the clamped knot sequence with L = G − k + 1 equal intervals over [0, 1]: k knots at 0,
  * the interior breakpoints 1/L, 2/L, …, (L − 1)/L, k knots at 1. They are non-negative, add up

@@ -5,6 +5,24 @@
  * classification in the projection. Maximum-likelihood recognition (the class HMM with the
  * highest log-likelihood) comes with it.
  *
+ * Usage:
+ *     const affect_features *feat = ...;               // affect_features_create
+ *     const affect_hmm_seq *seqs = ...;  const uint32_t *y = ...;  uint32_t n = ...;
+ *     const char *const labels[4] = {"neutral", "happy", "sad", "angry"};
+ *     affect_error err;
+ *     affect_classifier_config cfg;
+ *     affect_classifier_config_default(&cfg);
+ *     cfg.hmm.dim = affect_features_dim(feat);
+ *     affect_classifier *c = NULL;
+ *     affect_classifier_out o = {0};                   // only the labels wanted
+ *     if (affect_classifier_train(&cfg, feat, seqs, NULL, y, n, labels, 4, &c, &err) != AFFECT_OK
+ *         || affect_classifier_eval(c, seqs[0].x, seqs[0].n_frames, NULL, false, &o, NULL, &err)
+ *                != AFFECT_OK)
+ *         puts(err.msg);
+ *     else
+ *         printf("svm: %s\n", affect_classifier_label(c, o.svm));      // o.knn, o.ml alike
+ *     affect_classifier_free(c);
+ *
  * Training (affect_classifier_train), everything on the training sequences only:
  *   1. one HMM per class (affect_hmm_train, the same configuration and seed for every class);
  *   2. F_i = [F(x_i | Λ_1) … F(x_i | Λ_C)], each part affect_fisher_score with the chosen groups;

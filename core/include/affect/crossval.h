@@ -4,6 +4,21 @@
  * or its performer), with maximum likelihood, Fisher + SVM and Fisher + sPCA + kNN scored on
  * the same folds.
  *
+ * Usage:
+ *     const affect_features *feat = ...;
+ *     const affect_hmm_seq *seqs = ...;  const uint32_t *y = ...;  uint32_t n = ...;
+ *     const char *const labels[4] = {"neutral", "happy", "sad", "angry"};
+ *     affect_error err;
+ *     affect_cv_config cfg;
+ *     affect_cv_config_default(&cfg);                  // 10 folds
+ *     cfg.cls.hmm.dim = affect_features_dim(feat);
+ *     affect_cv_result *r = NULL;                      // group NULL: stratified k-fold
+ *     if (affect_crossval(&cfg, feat, seqs, NULL, y, n, labels, 4, NULL, 0, &r, &err) != AFFECT_OK)
+ *         puts(err.msg);
+ *     else
+ *         printf("svm accuracy %.3f\n", r->mean_accuracy[AFFECT_CV_SVM]);   // over the folds
+ *     affect_cv_result_free(r);
+ *
  * Per fold a classifier is trained on the training motions only (HMMs, normalization, SVM,
  * sPCA, and the optional grid search inside it) and every held-out motion is classified by the
  * three methods. A class missing from a fold's training motions (possible with

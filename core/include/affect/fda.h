@@ -7,13 +7,21 @@
  * and each class gets a prototype motion from the FPCA space (§3.2).
  *
  * Usage:
- *     affect_fda_config cfg;  affect_fda_config_default(&cfg);  cfg.method = AFFECT_FDA_FSPCA;
- *     affect_fda *f;
- *     affect_fda_train(&cfg, feat, seqs, n, m, y, classes, c, &f, &err);   (feat may be NULL)
- *     affect_fda_embed(f, x, T, z, &err);            z: affect_fda_dims(f) values
- *     affect_fda_classify(f, x, T, 1, &label, &err);
- *     affect_fda_prototype(f, label, &motion, &err); (needs feat)
- *     affect_fda_encode / affect_fda_decode;  affect_fda_free(f);
+ *     const affect_hmm_seq *seqs = ...;  uint32_t n = ..., m = ...;   // T × m values each
+ *     const uint32_t *y = ...;  const char *const classes[3] = {"happy", "sad", "angry"};
+ *     affect_error err;
+ *     affect_fda_config cfg;
+ *     affect_fda_config_default(&cfg);
+ *     cfg.method = AFFECT_FDA_FSPCA;
+ *     affect_fda *f = NULL;
+ *     uint32_t label;                                  // feat NULL: no prototype motions
+ *     if (affect_fda_train(&cfg, NULL, seqs, n, m, y, classes, 3, &f, &err) != AFFECT_OK
+ *         || affect_fda_classify(f, seqs[0].x, seqs[0].n_frames, 5, &label, NULL, &err)
+ *                != AFFECT_OK)
+ *         puts(err.msg);
+ *     else
+ *         printf("%s in %u dims\n", affect_fda_class_name(f, label), affect_fda_dims(f));
+ *     affect_fda_free(f);
  *
  * Representation. A motion is T frames × m coordinates (the observation vectors of
  * affect/features.h: body-frame or first-frame-normalized joint positions). Its frames are put

@@ -3,6 +3,20 @@
  * normalized, whether velocities are appended. Every model stores its definition, so scoring
  * a motion applies exactly the transform the model was trained on.
  *
+ * Usage:
+ *     const affect_motion *first = ..., *m = ...;      // the first training motion, any motion
+ *     affect_error err;
+ *     affect_features_options opt;
+ *     affect_features_options_default(&opt);           // every joint of first, by name
+ *     opt.frame = AFFECT_FEATURES_FRAME_BODY;
+ *     affect_features *f = NULL;
+ *     double *x = NULL;                                // n_frames × affect_features_dim(f)
+ *     uint32_t n_frames = 0;
+ *     if (affect_features_create(&opt, first, &f, &err) != AFFECT_OK ||
+ *         affect_features_extract(f, m, &x, &n_frames, NULL, &err) != AFFECT_OK)
+ *         puts(err.msg);
+ *     affect_free(x);  affect_features_free(f);
+ *
  * Joints: a list of entries, each a role name ("left_hand", resolved per motion with
  * affect_roles_resolve) or a joint name (matched exactly); an entry that is a role name is
  * always read as the role. The default is every joint of the first training motion, by name.

@@ -2,6 +2,20 @@
  * affect/fisher.h — Fisher scores of a motion under a Gaussian-mixture HMM (SCIENCE.md §3;
  * thesis §4.1.2): F(x) = ∇_Λ log P(x | Λ), a fixed-length vector for a sequence of any length.
  *
+ * Usage:
+ *     const affect_hmm *h = ...;  const double *x = ...;  uint32_t T = ...;
+ *     affect_error err;
+ *     const affect_hmm_config *cfg = affect_hmm_get_config(h);
+ *     size_t d = affect_fisher_dim(cfg, AFFECT_FISHER_ALL);
+ *     double *score = affect_malloc_array(d, sizeof *score), ll;
+ *     affect_fisher_entry e;
+ *     if (!score)
+ *         affect_nomem(&err);
+ *     else if (affect_fisher_score(h, x, T, AFFECT_FISHER_ALL, score, &ll, NULL, &err) == AFFECT_OK
+ *              && affect_fisher_describe(cfg, AFFECT_FISHER_ALL, 0, &e, &err) == AFFECT_OK)
+ *         printf("%g: %s of state %u\n", score[0], affect_fisher_group_name(e.group), e.state);
+ *     affect_free(score);
+ *
  * The derivatives treat every parameter as free (no sum-to-one constraint), with γ_t(i, j) the
  * posterior of state i and mixture j at frame t and Σ_t ξ_t(i, l) the expected number of
  * transitions i → l (both from affect_hmm_posteriors):

@@ -2,6 +2,16 @@
  * affect/fk.h — forward kinematics for hierarchical skeletons (BVH and the synthetic
  * generator share it).
  *
+ * Usage:
+ *     int32_t parents[2] = {-1, 0};                    // a root and its child (parents[j] < j)
+ *     double trans[2 * 3] = {0, 0, 0, 0, 1, 0};        // local translations (the child 1 up)
+ *     double rot[2 * 9], scratch[2 * 12];
+ *     float pos[2 * 3];
+ *     const int zxy[3] = {2, 0, 1};
+ *     affect_euler_deg_to_matrix(zxy, (const double[3]){90, 0, 0}, rot);   // the root's
+ *     affect_euler_deg_to_matrix(zxy, (const double[3]){0, 0, 0}, rot + 9);
+ *     affect_fk_frame(2, parents, trans, rot, scratch, pos);   // pos + 3: the child at (-1, 0, 0)
+ *
  * Rotations are 3×3 row-major matrices acting on column vectors. A joint's world rotation is
  * its parent's world rotation times its local rotation; its world position is its parent's
  * world position plus the parent's world rotation applied to the joint's local translation.

@@ -4,6 +4,19 @@
  * chosen by the caller (steps 1–4 select them), and the DTW distance used to judge how much of
  * the desired path a generated motion keeps.
  *
+ * Usage:
+ *     const affect_motion *neutral = ..., *neighbours[5] = ...;   // 5 neighbours
+ *     affect_error err;
+ *     affect_generate_options opt;
+ *     affect_generate_options_default(&opt);           // 12 states, n_d = 0, 3 Hz, s = 1
+ *     affect_generate_report rep;
+ *     affect_motion *sad = NULL;
+ *     if (affect_generate(neutral, neighbours, 5, &opt, &sad, &rep, &err) != AFFECT_OK)
+ *         puts(err.msg);
+ *     else
+ *         affect_free(rep.path);                       // rep.path: the Viterbi states
+ *     affect_motion_free(sad);
+ *
  * Observations. Every joint of the desired motion x_d, normalized as the HMM engine's default
  * feature definition does (affect/features.h with normalize = true, scale = auto: the first
  * frame's horizontal root position and heading removed, positions divided by the right arm

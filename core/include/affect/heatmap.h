@@ -5,6 +5,20 @@
  * the cells when they fit, and a tooltip per cell. For the salience of joints per HMM state
  * (affect_salience), or any table of numbers with named rows and columns.
  *
+ * Usage:
+ *     affect_error err;
+ *     affect_heatmap *hm = NULL;
+ *     affect_heatmap_options opt;
+ *     affect_heatmap_options_default(&opt);
+ *     opt.title = "Salience";
+ *     char *svg = NULL;  size_t len = 0;
+ *     if (affect_heatmap_create(&hm, &err) != AFFECT_OK
+ *         || affect_heatmap_add(hm, "sad, state 1", "Hand_L", 0.045, &err) != AFFECT_OK   // a cell
+ *         || affect_heatmap_render(hm, &opt, &svg, &len, &err) != AFFECT_OK)
+ *         puts(err.msg);
+ *     affect_free(svg);
+ *     affect_heatmap_free(hm);
+ *
  * An affect_heatmap is an accumulator: create it, add cells (row, column, value) in any order,
  * render it, free it. Rows and columns are drawn in the order of their first appearance (or
  * sorted by label, opt->sort_rows and opt->sort_columns); a cell

@@ -2,6 +2,20 @@
  * affect/hmm.h — hidden Markov models with Gaussian-mixture outputs (SCIENCE.md §2; thesis
  * §4.1.1, §4.2.2, §5.3.2): training by Baum–Welch, forward log-likelihood, Viterbi, posteriors.
  *
+ * Usage:
+ *     const double *x = ...;  uint32_t T = ...;        // T frames × 63 values, row-major
+ *     affect_error err;
+ *     affect_hmm_config cfg;
+ *     affect_hmm_config_default(&cfg);
+ *     cfg.dim = 63;                                    // the caller sets the dimension
+ *     affect_hmm_seq seqs[1] = {{x, T}};
+ *     affect_hmm *h = NULL;
+ *     double ll;
+ *     if (affect_hmm_train(&cfg, seqs, 1, &h, &err) != AFFECT_OK ||
+ *         affect_hmm_loglik(h, x, T, &ll, NULL, &err) != AFFECT_OK)
+ *         puts(err.msg);
+ *     affect_hmm_free(h);
+ *
  * Λ = (A, B, π): N states, transition matrix A (N × N, row-stochastic), per state i a mixture
  * b_i(x) = Σ_j w_ij N(x; μ_ij, Σ_ij) of M Gaussians in m dimensions with full or diagonal
  * covariances, start probabilities π (fixed to the first state, the thesis's setting, or learned).

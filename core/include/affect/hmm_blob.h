@@ -3,6 +3,19 @@
  * observation definition (affect/features.h) and training report, versioned and checksummed
  * (docs/FORMATS.md).
  *
+ * Usage:
+ *     const affect_hmm *h = ...;  const affect_features *f = ...;   // a model, its features
+ *     affect_error err;
+ *     unsigned char *blob = NULL;  size_t size = 0;
+ *     affect_hmm *h2 = NULL;
+ *     affect_features *f2 = NULL;
+ *     if (affect_hmm_blob_encode(h, f, &blob, &size, &err) != AFFECT_OK ||
+ *         affect_hmm_blob_decode(blob, size, &h2, &f2, &err) != AFFECT_OK)
+ *         puts(err.msg);
+ *     affect_free(blob);
+ *     affect_hmm_free(h2);
+ *     affect_features_free(f2);
+ *
  * Layout, version 1 (little-endian, written byte by byte):
  *    0  4  magic "AFHM"
  *    4  2  format version (1)

@@ -1,6 +1,20 @@
 /*
  * affect/io.h — text formats in and out of the motion model: BVH, CSV and JSON.
  *
+ * Usage:
+ *     const char *text = ...;  size_t len = ...;       // the bytes of a .bvh file
+ *     affect_error err;
+ *     affect_motion *m = NULL;
+ *     if (affect_bvh_parse(text, len, NULL, &m, &err) != AFFECT_OK) {   // opt NULL: the defaults
+ *         puts(err.msg);                                // "line 57: expected CHANNELS, found ..."
+ *         return;
+ *     }
+ *     char *csv = NULL;  size_t csv_len = 0;
+ *     if (affect_csv_write(m, &csv, &csv_len, NULL, &err) == AFFECT_OK)
+ *         fwrite(csv, 1, csv_len, stdout);
+ *     affect_free(csv);
+ *     affect_motion_free(m);
+ *
  * Importers check everything they read and report the line (BVH), row (CSV) or byte offset
  * (JSON) of the first problem. Writers use the shortest decimal form that reads back as the
  * same float32, so text round trips are exact.

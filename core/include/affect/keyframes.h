@@ -3,6 +3,17 @@
  * of a curve (a motion's poses) through which interpolation reconstructs it with the least
  * squared error, chosen exactly by dynamic programming.
  *
+ * Usage:
+ *     const affect_motion *m = ...;
+ *     affect_error err;
+ *     uint32_t frames[AFFECT_KEYFRAMES_DEFAULT], n = 0;    // room for q keyframes
+ *     double rms = 0;
+ *     if (affect_motion_keyframes(m, AFFECT_KEYFRAMES_DEFAULT, frames, &n, &rms, NULL, &err)
+ *         != AFFECT_OK)
+ *         puts(err.msg);
+ *     else
+ *         printf("%u keyframes, last %u, rms %g\n", n, frames[n - 1], rms);
+ *
  * Interpolation: piecewise linear between consecutive keyframes. It is the one for which the
  * choice can be made exactly: the error of a segment depends only on its two end keyframes, so
  *     E(q, b) = min_a E(q − 1, a) + cost(a, b)

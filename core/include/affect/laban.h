@@ -1,6 +1,20 @@
 /*
  * affect/laban.h — Laban Effort and Shape descriptors (SCIENCE.md §1; thesis §5.1–§5.2.1).
  *
+ * Usage:
+ *     const affect_motion *m = ...;
+ *     affect_error err;
+ *     affect_roles roles;
+ *     affect_roles_resolve(m, &roles);
+ *     affect_laban_options opt;
+ *     affect_laban_options_default(&opt);
+ *     opt.missing_null = true;                         // NaN where a role is missing
+ *     double v[AFFECT_LABAN_N];                        // in affect_laban_names order
+ *     if (affect_laban_vector(m, &roles, &opt, v, &err) != AFFECT_OK)
+ *         puts(err.msg);
+ *     else
+ *         printf("%s = %g\n", affect_laban_names[0], v[0]);
+ *
  * Kinematics. For a body part with position p(t) (a joint, or the centroid of several), the
  * velocity, acceleration and jerk are central differences at the motion's fps (one-sided at the
  * two ends), each low-pass filtered by a zero-lag 2nd-order Butterworth filter (cut-off 6 Hz by

@@ -1,6 +1,20 @@
 /*
  * affect/monitor.h — stopping a long call when its caller asks, and reporting how far it got.
  *
+ * Usage:
+ *     bool (*my_stop)(void *ctx) = ...;                // true: stop now (or NULL)
+ *     void (*my_progress)(void *, const char *, uint64_t, uint64_t) = ...;   // or NULL
+ *     void *my_ctx = ...;
+ *     affect_monitor mon;
+ *     affect_monitor_init(&mon, my_stop, my_progress, my_ctx);
+ *     // cfg.monitor = &mon (affect_hmm_config, affect_classifier_config, ...): the long call
+ *     // (affect_hmm_train, ...) returns AFFECT_ERR_INTERRUPTED once my_stop says true.
+ *     // Inside such a call, the library's loops do:
+ *     affect_error err;
+ *     affect_monitor_report(&mon, "frames", 0, 100);
+ *     if (affect_monitor_check(&mon, &err) != AFFECT_OK)   // "interrupted"
+ *         puts(err.msg);
+ *
  * A long call of the library (HMM training, classifier training, cross-validation, RMLR fits,
  * DTW, generation) takes an optional monitor in its options (NULL: neither). While it runs it
  *   - polls monitor->stop, at most every AFFECT_MONITOR_POLL_MS milliseconds and only from the
@@ -12,11 +26,6 @@
  *     milliseconds and whenever a stage starts or ends.
  * The hooks therefore never run concurrently and may call back into the caller's single-threaded
  * world (the SQLite glue runs a statement on the calling connection from them).
- *
- *     affect_monitor mon;
- *     affect_monitor_init(&mon, my_stop, my_progress, my_ctx);
- *     cfg.monitor = &mon;                  (affect_hmm_config, affect_classifier_config, …)
- *     st = affect_hmm_train(&cfg, seqs, n, &model, &err);   (AFFECT_ERR_INTERRUPTED: stopped)
  *
  * A monitor belongs to one call at a time; models keep no pointer to it.
  */

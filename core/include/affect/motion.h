@@ -3,6 +3,19 @@
  * fixed frame rate, with joint names, a parent index per joint (−1 for a root; all −1 when the
  * skeleton is unknown) and the coordinate unit when it is known.
  *
+ * Usage:
+ *     affect_error err;
+ *     affect_motion *m = NULL, *back = NULL;
+ *     unsigned char *blob = NULL;  size_t size = 0;
+ *     if (affect_motion_create(2, 1, 30.0, &m, &err) == AFFECT_OK &&          // 2 frames, 1 joint
+ *         affect_motion_set_name(m, 0, "Hips", 4, &err) == AFFECT_OK) {
+ *         affect_motion_at(m, 1, 0)[1] = 0.9f;                          // y of joint 0, frame 1
+ *         if (affect_motion_encode(m, &blob, &size, &err) == AFFECT_OK &&
+ *             affect_motion_decode(blob, size, &back, &err) == AFFECT_OK)
+ *             printf("%u frames, %g s\n", back->n_frames, affect_motion_duration(back));
+ *     }
+ *     affect_free(blob);  affect_motion_free(back);  affect_motion_free(m);
+ *
  * Positions are a flat row-major float array, frame-major: pos[(t * J + j) * 3 + axis].
  * Every joint name is a NUL-terminated string of valid UTF-8, unique within the motion. Parent
  * indices form a forest (no cycles); they need not precede their children.

@@ -2,6 +2,19 @@
  * affect/normalize.h — pose normalization used by the methods (SCIENCE.md §2, §6): remove the
  * first frame's root translation and heading, and optionally scale by the arm length.
  *
+ * Usage:
+ *     const affect_motion *m = ...;
+ *     affect_error err;
+ *     affect_roles roles;
+ *     affect_roles_resolve(m, &roles);
+ *     affect_normalize_options opt;
+ *     affect_normalize_options_default(&opt);
+ *     opt.scale_arm = true;                            // positions in arm lengths (unit "arm")
+ *     affect_motion *norm = NULL;
+ *     if (affect_motion_normalize(m, &roles, &opt, &norm, &err) != AFFECT_OK)
+ *         puts(err.msg);
+ *     affect_motion_free(norm);
+ *
  * Root: the pelvis role (joint 0 when unresolved). Heading: the horizontal direction of the
  * lateral vector left_hip − right_hip (or left_shoulder − right_shoulder when the hips are not
  * resolved) in the first frame. After normalization the lateral vector points along +x, the

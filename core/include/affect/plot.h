@@ -4,6 +4,20 @@
  * axes (linear or log10) and, optionally, each label's mean ± 1 sd drawn as a cross; or, in
  * time-series mode (lines), each label's points joined by a line in x order.
  *
+ * Usage:
+ *     affect_error err;
+ *     affect_scatter *sc = NULL;
+ *     affect_plot_options opt;
+ *     affect_plot_options_default(&opt);
+ *     opt.title = "Weight vs Time";
+ *     opt.means = true;
+ *     char *svg = NULL;  size_t len = 0;
+ *     if (affect_scatter_create(&sc, &err) != AFFECT_OK
+ *         || affect_scatter_add(sc, 1.5, 2.0, "angry", &err) != AFFECT_OK   // one call per point
+ *         || affect_scatter_render(sc, &opt, &svg, &len, &err) != AFFECT_OK)
+ *         puts(err.msg);
+ *     affect_free(svg);  affect_scatter_free(sc);
+ *
  * An affect_scatter is an accumulator: create it, add points one at a time (x, y, label), then
  * render it as often as wanted with different options, then free it. Rendering depends only
  * on the multiset of points added, never on their order, and is byte-for-byte deterministic.

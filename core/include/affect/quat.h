@@ -2,10 +2,14 @@
  * affect/quat.h — unit quaternions and Euler angles for joint rotations.
  *
  * Usage:
- *   double q[4];                      // (w, x, y, z), w first
- *   int order[3] = {2, 0, 1};         // ZXY: R = Rz(a0) · Rx(a1) · Ry(a2), BVH's convention
- *   affect_quat_from_euler_deg(order, deg, q);
- *   affect_quat_to_euler_deg(q, order, NULL, deg);  // back, in [−180, 180) for a0 and a2
+ *     double deg[3] = {30, 45, 10}, back[3], q[4];     // q: (w, x, y, z), w first
+ *     int order[3];
+ *     affect_euler_order_parse("ZXY", order);          // R = Rz(a0) · Rx(a1) · Ry(a2), BVH's way
+ *     affect_quat_from_euler_deg(order, deg, q);
+ *     affect_quat_to_euler_deg(q, order, NULL, back);  // back, in [-180, 180) for a0 and a2
+ *     double half[4], id[4] = {1, 0, 0, 0};
+ *     affect_quat_slerp(id, q, 0.5, half);             // half the rotation
+ *     printf("%g degrees\n", affect_quat_angle(half) * 180 / 3.141592653589793);
  *
  * Quaternions act on column vectors as the rotation matrices of affect/fk.h: the matrix of
  * affect_quat_to_matrix(q) equals that of the same rotation built from Euler angles there.

@@ -3,6 +3,21 @@
  * paper's eq. 6): a linear ranking function r(x) = wᵀx learned from ordered and similar pairs
  * of vectors, on any vectors (motion features, facial landmarks, embeddings).
  *
+ * Usage:
+ *     const double *X = ...;  uint32_t n = ..., d = ...;   // n samples × d, row-major
+ *     const int32_t *level = ...;                      // per sample: 0 sad < 1 normal < 2 happy
+ *     affect_error err;
+ *     affect_rank_pair *pairs = NULL;  size_t n_pairs = 0;
+ *     affect_rank_options opt;
+ *     affect_rank_options_default(&opt);
+ *     affect_ranker *r = NULL;
+ *     if (affect_rank_pairs(level, NULL, n, true, 1.0, 42, &pairs, &n_pairs, &err) != AFFECT_OK
+ *         || affect_ranker_train(X, n, d, pairs, n_pairs, &opt, &r, &err) != AFFECT_OK)
+ *         puts(err.msg);
+ *     else
+ *         printf("r(x_0) = %g\n", affect_ranker_score(r, X));
+ *     affect_ranker_free(r);  affect_free(pairs);
+ *
  *     min_w ½‖w‖² + C (Σ_O ξ_ij² + Σ_S γ_ij²)
  *     s.t. wᵀ(x_i − x_j) ≥ 1 − ξ_ij on ordered pairs O (x_i ranks above x_j),
  *          |wᵀ(x_i − x_j)| ≤ γ_ij on similar pairs S.

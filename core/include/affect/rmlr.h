@@ -2,6 +2,19 @@
  * affect/rmlr.h — elastic-net regularized multinomial logistic regression (RMLR), the thesis's
  * tool for finding the salient (discriminative) Laban components of each emotion.
  *
+ * Usage:
+ *     const double *x = ...;  size_t n = ..., p = ...;     // n × p, row-major
+ *     const uint32_t *y = ...;                         // classes 0 .. 3
+ *     affect_error err;
+ *     affect_rmlr_options o;
+ *     affect_rmlr_options_default(&o);                 // alpha and lambda by cross-validation
+ *     affect_rmlr *fit = NULL;
+ *     double probs[4];
+ *     if (affect_rmlr_cv(x, n, p, y, 4, &o, &fit, &err) != AFFECT_OK) { puts(err.msg); return; }
+ *     const double *beta = affect_rmlr_beta(fit);      // K × p; beta[k p + j] != 0: salient
+ *     printf("class %u, beta %g\n", affect_rmlr_predict(fit, x, probs), beta[0]);
+ *     affect_rmlr_free(fit);
+ *
  * Model, for K classes and p features:
  *     P(y = k | x) = exp(β0k + βkᵀz) / Σ_l exp(β0l + βlᵀz),
  * where z is x standardized: z_j = (x_j − mean_j) / sd_j with the training data's mean and

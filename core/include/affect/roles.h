@@ -1,6 +1,18 @@
 /*
  * affect/roles.h — body-part roles resolved from joint names.
  *
+ * Usage:
+ *     const affect_motion *m = ...;
+ *     affect_error err;
+ *     affect_roles roles;
+ *     affect_roles_resolve(m, &roles);                 // every role by the joint names, else -1
+ *     if (roles.joint[AFFECT_ROLE_LEFT_HAND] < 0
+ *         && affect_roles_set(m, &roles, "left_hand", "LWrist", &err) != AFFECT_OK)
+ *         puts(err.msg);
+ *     double lat[3];                                   // left - right at frame 0
+ *     if (affect_roles_lateral(m, &roles, 0, lat))
+ *         printf("%s: %d\n", affect_role_name(AFFECT_ROLE_HEAD), roles.joint[AFFECT_ROLE_HEAD]);
+ *
  * A role is an anatomical landmark (pelvis, head, left hand, …). affect_roles_resolve() maps
  * every role to a joint by case-insensitive patterns that cover the common naming conventions:
  *   this corpus (Bandai-Namco):  Hips, Spine, Chest, Neck, Head, UpperArm_L, LowerArm_R, Hand_L,

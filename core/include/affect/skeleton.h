@@ -4,11 +4,18 @@
  * rotations from positions) and joint angles.
  *
  * Usage:
- *   affect_motion *rigid, *skeletal;
- *   affect_rigid_options ro;  affect_rigid_options_default(&ro);
- *   affect_motion_rigid(m, &ro, &rigid, &err);        // bones of constant length
- *   affect_ik_options io;     affect_ik_options_default(&io);
- *   affect_motion_ik(m, &io, &skeletal, &err);        // skeleton + rotations, FK positions
+ *     const affect_motion *m = ...;                    // positions only (CSV, JSON, a BLOB)
+ *     affect_error err;
+ *     affect_motion *rigid = NULL, *skeletal = NULL;
+ *     affect_rigid_options ro;
+ *     affect_rigid_options_default(&ro);
+ *     affect_ik_options io;
+ *     affect_ik_options_default(&io);
+ *     if (affect_motion_rigid(m, &ro, &rigid, &err) != AFFECT_OK ||   // constant bone lengths
+ *         affect_motion_ik(m, &io, &skeletal, &err) != AFFECT_OK)          // skeleton + rotations
+ *         puts(err.msg);
+ *     affect_motion_free(skeletal);
+ *     affect_motion_free(rigid);
  *
  * Bones and free links: the link from a joint to its parent is a bone (constant length) unless
  * it is free: the parent is a reference root (a root whose only child is the pelvis role, such

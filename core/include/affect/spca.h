@@ -3,6 +3,22 @@
  * independence criterion (HSIC), computed in the dual, and k-nearest-neighbour classification
  * in the projection (thesis §3.1.2.3 and §4.2.4; SCIENCE.md §3).
  *
+ * Usage:
+ *     const double *x = ...;  size_t n = ..., d = ...;     // n × d, row-major
+ *     const uint32_t *y = ...;                         // classes 0 .. 2
+ *     affect_error err;
+ *     affect_spca *s = NULL;
+ *     if (affect_spca_fit(x, n, d, y, 3, AFFECT_SPCA_LINEAR, 0, 2, &s, &err) != AFFECT_OK) return;
+ *     uint32_t p = affect_spca_dims(s), label;         // at most c - 1 = 2, maybe fewer
+ *     double *train_z = affect_malloc_array(n, 2 * sizeof *train_z), z[2];
+ *     if (train_z) {
+ *         affect_spca_embed_rows(s, x, n, train_z);    // n × p
+ *         affect_spca_embed(s, x, z);                  // one query
+ *         if (affect_knn_classify(train_z, y, n, p, 3, z, 5, &label, NULL, &err) == AFFECT_OK)
+ *             printf("class %u\n", label);
+ *     }
+ *     affect_free(train_z);  affect_spca_free(s);
+ *
  * The problem. Training data X (n × d, one sample per row, row-major), labels y_i in 0 .. c−1
  * with every class present, a kernel B (n × n) on the labels, H = I − (1/n) e eᵀ. sPCA finds
  * the p orthonormal axes U (p × d, one axis per row) that maximise

@@ -3,6 +3,21 @@
  * emotion-strength paper): measure a continuous strength of a motion, synthesize a motion of a
  * target strength, and edit a motion to a target strength.
  *
+ * Usage:
+ *     const affect_motion *const *motions = ...;  uint32_t n = ...;   // n motions of one skeleton
+ *     const int32_t *level = ...;                      // an index into names, or -1 (left out)
+ *     const char *const names[3] = {"sad", "normal", "happy"};
+ *     affect_error err;
+ *     affect_strength_options opt;
+ *     affect_strength_options_default(&opt);
+ *     affect_strength *s = NULL;
+ *     affect_motion *stronger = NULL;  double r = 0;
+ *     if (affect_strength_train(motions, level, NULL, n, names, 3, &opt, &s, &err) != AFFECT_OK
+ *         || affect_strength_score(s, motions[0], &r, NULL, &err) != AFFECT_OK
+ *         || affect_strength_edit(s, motions[0], r + 1, true, &stronger, NULL, &err) != AFFECT_OK)
+ *         puts(err.msg);
+ *     affect_motion_free(stronger);  affect_strength_free(s);
+ *
  * Training (affect_strength_train), for n motions of one skeleton with levels from a label
  * order (e.g. sad < normal < happy):
  *   1. each motion is normalized (affect/normalize.h: the first frame's root translation and

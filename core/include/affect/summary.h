@@ -4,6 +4,18 @@
  * They are the motion-level descriptors the recognizer can append to its Fisher representation
  * (affect/classifier.h), and what the scikit-learn peer of the evaluation classifies.
  *
+ * Usage:
+ *     const affect_motion *m = ...;
+ *     affect_error err;
+ *     double s[AFFECT_SUMMARY_N];
+ *     if (affect_motion_summary(m, 1, s, NULL, &err) == AFFECT_OK)   // up axis 1 = y
+ *         printf("%s = %g\n", affect_summary_names[0], s[0]);
+ *     uint32_t d = affect_descriptors_dim(AFFECT_DESC_ALL);
+ *     double *desc = affect_malloc_array(d, sizeof *desc);
+ *     if (desc && affect_descriptors(AFFECT_DESC_ALL, m, 1, desc, NULL, &err) != AFFECT_OK)
+ *         puts(err.msg);
+ *     affect_free(desc);
+ *
  * Frames. Lengths are divided by the body size (the right arm's length, shoulder → elbow → hand,
  * in the first frame; 1 when those roles do not resolve), so a summary does not depend on the
  * unit or the performer's size. "Body frame" is that of affect/features.h: relative to the

@@ -3,6 +3,20 @@
  * figures (bones from the parent indices; dots when the skeleton is unknown), with the
  * end-effector trajectories (head, hands, feet when the roles resolve) drawn faintly behind.
  *
+ * Usage:
+ *     const affect_motion *m = ...;
+ *     affect_error err;
+ *     affect_roles roles;
+ *     affect_roles_resolve(m, &roles);
+ *     affect_svg_options opt;
+ *     affect_svg_options_default(&opt);
+ *     opt.view = AFFECT_SVG_SIDE;
+ *     opt.title = "walk, happy";
+ *     char *svg = NULL;  size_t len = 0;
+ *     if (affect_motion_svg(m, &roles, &opt, &svg, &len, &err) == AFFECT_OK)
+ *         fwrite(svg, 1, len, stdout);
+ *     affect_free(svg);
+ *
  * Views: "front" looks along −z at the x–up plane, "side" along +x at the z–up plane, "top"
  * down the up axis at the x–z plane (for y-up data; the axes rotate with opt->up_axis), turned
  * so that a travelling motion goes to the right, with the pelvis's path and a facing mark. All

@@ -2,6 +2,20 @@
  * affect/svm.h — a linear multi-class support vector machine (C-SVC, one-vs-one) for
  * Fisher-score vectors: very high dimension d (10^4 .. 10^6), few samples n (40 .. 400).
  *
+ * Usage:
+ *     const double *X = ...;  size_t n = ..., d = ...;     // n × d, row-major
+ *     const uint32_t *y = ...;                         // classes 0 .. 2
+ *     affect_error err;
+ *     const double cands[3] = {0.1, 1, 10};
+ *     double C = 1, acc = 0, dec[3];                   // dec: the c (c - 1) / 2 decision values
+ *     affect_svm *m = NULL;
+ *     if (affect_svm_select_c(X, n, d, y, 3, cands, 3, 5, 42, &C, &acc, &err) != AFFECT_OK
+ *         || affect_svm_train(X, n, d, y, 3, C, &m, &err) != AFFECT_OK)
+ *         puts(err.msg);
+ *     else
+ *         printf("class %u (C = %g, cv accuracy %g)\n", affect_svm_predict(m, X, dec), C, acc);
+ *     affect_svm_free(m);
+ *
  * Training runs libsvm 3.24 with a precomputed kernel on the n × n Gram matrix G = X Xᵀ, so
  * libsvm never sees the d-dimensional vectors; the trained libsvm model is then turned into
  * the primal one-vs-one weight vectors of the linear kernel and freed, so prediction costs one

@@ -1,6 +1,16 @@
 /*
  * affect/synth.h — procedural affective movements for tests, demos and users without data.
  *
+ * Usage:
+ *     affect_error err;
+ *     affect_synth_options opt;
+ *     affect_synth_options_default(&opt);
+ *     opt.intensity = 0.8;
+ *     affect_motion *m = NULL;
+ *     if (affect_motion_synth("walk", "happy", 42, &opt, &m, &err) != AFFECT_OK)   // seed 42
+ *         puts(err.msg);                               // names: affect_synth_actions, _emotions
+ *     affect_motion_free(m);
+ *
  * Actions: "knock" (knock three times on a door in front with the right hand), "wave" (raise
  * the right hand and wave), "walk" (walk forward), "bow" (bow from the waist), on a named
  * full-body skeleton (y up, metres, facing +z; joint names in the style of the real corpus:

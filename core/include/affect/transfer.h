@@ -6,13 +6,18 @@
  * thesis's HMM_NN is affect/generate.h).
  *
  * Usage:
+ *     const affect_motion *desired = ...;              // e.g. a neutral walk
+ *     const affect_motion *from[1] = ..., *to[1] = ...;    // a donor pair: neutral, happy knock
+ *     affect_error err;
  *     affect_transfer_options opt;
- *     affect_transfer_options_default(&opt);            // strength 1, bands 1 and 3 Hz
- *     uint32_t from[3], to[3], n;                        // the donor pairs, as index rows
- *     affect_transfer_pairs(x, rows, 27, label, NULL, use, dq, source, target, 3, 1, from, to,
- *                           NULL, &n, &err);
- *     affect_motion *out;
- *     affect_transfer(desired, donors_from, donors_to, n, &opt, &out, &rep, &err);
+ *     affect_transfer_options_default(&opt);           // strength 1, bands 1 and 3 Hz
+ *     affect_transfer_report rep;
+ *     affect_motion *out = NULL;
+ *     if (affect_transfer(desired, from, to, 1, &opt, &out, &rep, &err) != AFFECT_OK)
+ *         puts(err.msg);
+ *     else
+ *         printf("%u joints changed\n", rep.joints_changed);
+ *     affect_motion_free(out);
  *
  * What changes. Per joint, in its local rotations (the skeletal form, affect_motion_skeletal:
  * stored rotations, else inverse kinematics), a motion is described by its mean rotation q̄
