@@ -3,16 +3,7 @@
  * affect/generate.h for the definitions, options and every error message), and the DTW
  * distance between two motions of one skeleton.
  *
- * Usage:
- *     affect_generate_options opt;
- *     affect_generate_options_default(&opt);     // 12 states, n_d = 0, 3 Hz, s = 1
- *     affect_generate_report rep;
- *     affect_motion *sad = NULL;
- *     if (affect_generate(neutral, neighbours, 5, &opt, &sad, &rep, &err) == AFFECT_OK) {
- *         ...                                     // rep.path: the Viterbi states
- *         affect_free(rep.path);
- *         affect_motion_free(sad);
- *     }
+ * Usage: see the block at the top of affect/generate.h (compiled by the style/header-usage test).
  *
  * How it works. One feature definition (affect/features.h, every joint of the desired motion
  * by name, normalized, arm scale when it resolves) is built on the desired motion and applied

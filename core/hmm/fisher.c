@@ -3,13 +3,7 @@
  * the gradient of log P(x | Λ) with respect to the start, transition and mixture-weight
  * probabilities, the means and the covariances, in a layout fixed by the configuration.
  *
- * Usage:
- *     size_t d = affect_fisher_dim(affect_hmm_get_config(h), AFFECT_FISHER_ALL);
- *     double *f = affect_malloc_array(d, sizeof *f);
- *     if (f && affect_fisher_score(h, x, n_frames, AFFECT_FISHER_ALL, f, &ll, NULL, &err) ==
- * AFFECT_OK)
- *         ... f[0 .. d) ...; affect_fisher_describe(cfg, AFFECT_FISHER_ALL, e, &entry, &err)
- *     says what entry e is.
+ * Usage: see the block at the top of affect/fisher.h (compiled by the style/header-usage test).
  *
  * How it works. affect_hmm_posteriors gives γ_t(i, j) (T × N × M) and Σ_t ξ_t(i, l); the
  * probability groups are then ratios (γ_0(i)/π_i, Σξ/a, Σ_t γ/w, with 0 for a zero parameter).

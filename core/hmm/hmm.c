@@ -2,15 +2,7 @@
  * hmm.c — hidden Markov models with Gaussian-mixture outputs (see affect/hmm.h): k-means
  * initialisation, Baum–Welch training, forward log-likelihood, Viterbi and posteriors.
  *
- * Usage:
- *     affect_hmm_config cfg;
- *     affect_hmm_config_default(&cfg);
- *     cfg.dim = 63;
- *     affect_hmm *h;
- *     if (affect_hmm_train(&cfg, seqs, n, &h, &err) == AFFECT_OK) {
- *         affect_hmm_loglik(h, x, n_frames, &ll, NULL, &err);
- *         affect_hmm_free(h);
- *     }
+ * Usage: see the block at the top of affect/hmm.h (compiled by the style/header-usage test).
  *
  * How it works.
  *

@@ -2,15 +2,7 @@
  * classifier.c — the hybrid recognizer of affect/classifier.h: class HMMs → Fisher scores →
  * normalization → linear SVM, and sPCA → kNN; maximum likelihood alongside.
  *
- * Usage:
- *     affect_classifier_config cfg;
- *     affect_classifier_config_default(&cfg);
- *     cfg.hmm.dim = affect_features_dim(feat);
- *     affect_classifier *c;
- *     if (affect_classifier_train(&cfg, feat, seqs, NULL, y, n, labels, 4, &c, &err) == AFFECT_OK)
- * { affect_classifier_out o = {0}; affect_classifier_eval(c, x, T, NULL, false, &o, NULL, &err);
- * (o.svm, o.knn, o.ml) affect_classifier_free(c);
- *     }
+ * Usage: see the block at the top of affect/classifier.h (compiled by the style/header-usage test).
  *
  * How it works. Training (train_on) never holds the n × D matrix of representations (D = C ×
  * the per-HMM score dimension + the descriptors): it computes it block by block (one class

@@ -2,16 +2,7 @@
  * crossval.c — k-fold and leave-one-group-out evaluation of the recognizer (see
  * affect/crossval.h).
  *
- * Usage:
- *     affect_cv_config cfg;
- *     affect_cv_config_default(&cfg);
- *     cfg.cls.hmm.dim = affect_features_dim(feat);
- *     affect_cv_result *r;
- *     if (affect_crossval(&cfg, feat, seqs, NULL, y, n, labels, 4, NULL, 0, &r, &err) == AFFECT_OK)
- * {
- *         ... r->mean_accuracy[AFFECT_CV_SVM] ...
- *         affect_cv_result_free(r);
- *     }
+ * Usage: see the block at the top of affect/crossval.h (compiled by the style/header-usage test).
  *
  * How it works: the fold of every motion is fixed first (stratified folds, or its group), then
  * fold by fold the training motions are gathered (classes absent from them removed and the

@@ -2,14 +2,7 @@
  * rmlr.c — elastic-net multinomial logistic regression by coordinate descent (see
  * affect/rmlr.h for the model, the path and the cross-validation).
  *
- * Usage:
- *     affect_rmlr_options o;
- *     affect_rmlr_options_default(&o);
- *     affect_rmlr *m;
- *     if (affect_rmlr_cv(x, n, p, y, K, &o, &m, &err) != AFFECT_OK) ...
- *     const double *beta = affect_rmlr_beta(m);   (K × p; β_kj ≠ 0: feature j salient for k)
- *     uint32_t k = affect_rmlr_predict(m, x_new, probs);
- *     affect_rmlr_free(m);
+ * Usage: see the block at the top of affect/rmlr.h (compiled by the style/header-usage test).
  *
  * How it works (written from the published method, Friedman, Hastie & Tibshirani 2010, §4; no
  * code of glmnet's). A "fitter" holds one training set: its standardized features stored

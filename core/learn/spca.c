@@ -2,15 +2,7 @@
  * spca.c — supervised PCA with the Hilbert–Schmidt independence criterion, computed in the
  * dual, the HSIC itself, and k-nearest-neighbour classification (see affect/spca.h).
  *
- * Usage:
- *     affect_spca *s;
- *     if (affect_spca_fit(x, n, d, y, c, AFFECT_SPCA_RBF, 0.25, 3, &s, &err) == AFFECT_OK) {
- *         uint32_t p = affect_spca_dims(s);               (may be below 3)
- *         affect_spca_embed_rows(s, x, n, train_z);        (n × p)
- *         affect_spca_embed(s, query, z);
- *         affect_knn_classify(train_z, y, n, p, c, z, 14, &label, NULL, &err);
- *         affect_spca_free(s);
- *     }
+ * Usage: see the block at the top of affect/spca.h (compiled by the style/header-usage test).
  *
  * How it works. Notation of the header: X n × d, H = I − eeᵀ/n, B = Δ Δᵀ.
  *   1. The centred Gram matrix K̃ = H X Xᵀ H is built from centred copies of column blocks of X

@@ -1,13 +1,7 @@
 /*
  * svm.c — linear multi-class SVM on libsvm for very long, few vectors (see affect/svm.h).
  *
- * Usage:
- *     affect_svm *m;
- *     affect_svm_select_c(X, n, d, y, c, cands, n_cand, 5, seed, &C, &acc, &err);
- *     affect_svm_train(X, n, d, y, c, C, &m, &err);
- *     uint32_t k = affect_svm_predict(m, x, NULL);
- *     affect_svm_encode(m, &w);  ...  affect_svm_decode(&r, &m2, &err);
- *     affect_svm_free(m);
+ * Usage: see the block at the top of affect/svm.h (compiled by the style/header-usage test).
  *
  * How it works. Training computes G = X Xᵀ once (cblas_dsyrk, mirrored) and gives libsvm a
  * C-SVC problem with kernel_type PRECOMPUTED: problem row r (a sample, the samples grouped by

@@ -1,9 +1,7 @@
 /*
  * bvh.c — Biovision Hierarchy (BVH) import with forward kinematics (see affect/io.h).
  *
- * Usage:
- *   affect_motion *m; affect_error err;
- *   if (affect_bvh_parse(text, len, NULL, &m, &err)) puts(err.msg);  // "line 57: expected …"
+ * Usage: see the block at the top of affect/io.h (compiled by the style/header-usage test).
  *
  * How it works:
  *   1. HIERARCHY: ROOT/JOINT blocks with OFFSET and CHANNELS, End Site blocks with OFFSET, read

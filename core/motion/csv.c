@@ -2,15 +2,7 @@
  * csv.c — motions as CSV text: one row per frame, three columns (x, y, z) per joint
  * (see affect/io.h).
  *
- * Usage:
- *     affect_csv_options opt;
- *     affect_csv_options_default(&opt);          // ',' delimiter, detect the header, no unit
- *     opt.unit = "cm";
- *     affect_motion *m;
- *     affect_error err;
- *     if (affect_csv_parse(text, len, 30.0, &opt, &m, &err)) ... err.msg ...
- *     char *csv; size_t n;
- *     affect_csv_write(m, &csv, &n, NULL, &err);        // "Hips.x,Hips.y,Hips.z,…\n0,91.5,0,…\n"
+ * Usage: see the block at the top of affect/io.h (compiled by the style/header-usage test).
  *
  * What CSV carries: joint names and positions only. It has no place for the skeleton
  * (parents), the frame rate or the unit, so the writer drops them and the reader takes fps

@@ -1,15 +1,7 @@
 /*
  * synth.c — procedural affective movements on a named full-body skeleton (see affect/synth.h).
  *
- * Usage:
- *     affect_synth_options opt;
- *     affect_synth_options_default(&opt);        // 30 fps, intensity 1, noise 0.0003 m
- *     affect_motion *m = NULL;
- *     affect_error err;
- *     if (affect_motion_synth("knock", "sad", 7, &opt, &m, &err) == AFFECT_OK) {
- *         ...                                     // 26 joints, metres, y up, facing +z
- *         affect_motion_free(m);
- *     }
+ * Usage: see the block at the top of affect/synth.h (compiled by the style/header-usage test).
  *
  * Errors (all AFFECT_ERR_INVALID):
  *     unknown action "jump" (expected knock, wave, walk, bow)

@@ -1,14 +1,7 @@
 /*
  * heatmap.c — heat maps as standalone SVG (see affect/heatmap.h).
  *
- * Usage:
- *   affect_heatmap *hm; affect_error err;
- *   affect_heatmap_create(&hm, &err);
- *   affect_heatmap_add(hm, "sad · state 1", "Hand_L", 0.045, &err);   ... one call per cell
- *   affect_heatmap_options opt; affect_heatmap_options_default(&opt); opt.title = "Salience";
- *   char *svg; size_t len;
- *   if (affect_heatmap_render(hm, &opt, &svg, &len, &err) == AFFECT_OK) { ...; affect_free(svg); }
- *   affect_heatmap_free(hm);
+ * Usage: see the block at the top of affect/heatmap.h (compiled by the style/header-usage test).
  *
  * Accumulating: row and column labels are interned in two tables (FNV-1a, open addressing) in
  * the order they first appear; cells are kept as a list (row, column, value) and folded into a

@@ -1,15 +1,7 @@
 /*
  * plot.c — labelled scatter plots as standalone SVG (see affect/plot.h).
  *
- * Usage:
- *   affect_scatter *sc; affect_error err;
- *   affect_scatter_create(&sc, &err);
- *   affect_scatter_add(sc, 1.5, 2.0, "angry", &err);   ... one call per point
- *   affect_plot_options opt; affect_plot_options_default(&opt);
- *   opt.title = "Weight vs Time"; opt.log_x = opt.log_y = true; opt.means = true;
- *   char *svg; size_t len;
- *   if (affect_scatter_render(sc, &opt, &svg, &len, &err) == AFFECT_OK) { ...; affect_free(svg); }
- *   affect_scatter_free(sc);
+ * Usage: see the block at the top of affect/plot.h (compiled by the style/header-usage test).
  *
  * Accumulating. Points are kept as (x, y, label index); labels are interned in a hash table
  * (FNV-1a, open addressing). Points with a non-finite coordinate are only counted.

@@ -1,14 +1,7 @@
 /*
  * svg.c — motion previews as standalone SVG film strips (see affect/svg.h).
  *
- * Usage:
- *   affect_svg_options opt; affect_svg_options_default(&opt);
- *   opt.view = AFFECT_SVG_SIDE; opt.title = "walk, happy";
- *   affect_roles roles; affect_roles_resolve(m, &roles);
- *   char *svg; size_t len; affect_error err;
- *   if (affect_motion_svg(m, &roles, &opt, &svg, &len, &err) == AFFECT_OK) {
- *       ...; affect_free(svg);
- *   }
+ * Usage: see the block at the top of affect/svg.h (compiled by the style/header-usage test).
  *
  * Layout of a strip: an optional title row, then opt->frames square panels of opt->panel_size
  * pixels side by side (frame k of n is round(k (T − 1) / (n − 1)), so the first and last frames are
