@@ -52,6 +52,11 @@
 extern "C" {
 #endif
 
+/* The number of Laban components, in laban_names() order. It is also a storage format: the
+ * Laban vector BLOB (27 float32) that `laban_vector` returns and the `laban` index stores, the
+ * index's `_info` statistics (27 means and sds), the classifier BLOB's descriptor block (D counts
+ * 27 Laban values) and the RMLR fit over the components (p = 27) are all sized by it
+ * (docs/FORMATS.md). Changing it is a format change: bump those formats' versions. */
 #define AFFECT_LABAN_N 27
 
 /* Component names in vector order: WeightAll, WeightTorso, WeightHead, WeightLHand,
