@@ -77,7 +77,7 @@ static void fda_train_free(fda_train *t)
     ax_seqs_free(&t->s);
 }
 
-static ax_arg read_fda_options(sqlite3_context *ctx, const ax_opts *opts, affect_fda_config *cfg)
+ax_arg ax_fda_read_options(sqlite3_context *ctx, const ax_opts *opts, affect_fda_config *cfg)
 {
     static const char *const kernels[] = {"linear", "rbf", NULL};
     int method = (int)cfg->method, kernel = (int)cfg->kernel;
@@ -202,7 +202,7 @@ void ax_fda_train_step(sqlite3_context *ctx, int argc, sqlite3_value **argv)
             t->s.failed = true;
             return;
         }
-        ax_arg r = read_fda_options(ctx, &opts, &t->cfg);
+        ax_arg r = ax_fda_read_options(ctx, &opts, &t->cfg);
         ax_opts_free(&opts);
         if (r != AX_OK) {
             t->s.failed = true;

@@ -168,7 +168,7 @@ static void check_metrics(const affect_cv_result *r, uint32_t n_total)
         const affect_cv_fold *fd = &r->folds[f];
         tested += fd->n_test;
         assert_int_equal(fd->n_train + fd->n_test, n_total);
-        for (int m = 0; m < AFFECT_CV_METHODS; m++) {
+        for (int m = 0; m < AFFECT_CV_RECOGNIZER_METHODS; m++) {
             uint32_t sum = 0;
             for (uint32_t e = 0; e < C * C; e++)
                 sum += fd->confusion[m][e];
@@ -180,14 +180,14 @@ static void check_metrics(const affect_cv_result *r, uint32_t n_total)
         }
         for (uint32_t k = 0; k < C; k++) { /* the methods saw the same motions */
             uint32_t row[AFFECT_CV_METHODS] = {0};
-            for (int m = 0; m < AFFECT_CV_METHODS; m++)
+            for (int m = 0; m < AFFECT_CV_RECOGNIZER_METHODS; m++)
                 for (uint32_t j = 0; j < C; j++)
                     row[m] += fd->confusion[m][k * C + j];
             assert_true(row[0] == row[1] && row[1] == row[2]);
         }
     }
     assert_int_equal(tested, n_total);
-    for (int m = 0; m < AFFECT_CV_METHODS; m++) {
+    for (int m = 0; m < AFFECT_CV_RECOGNIZER_METHODS; m++) {
         double s[3] = {0}, q[3] = {0};
         for (uint32_t f = 0; f < F; f++) {
             s[0] += r->folds[f].accuracy[m];
@@ -236,11 +236,11 @@ static bool same_results(const affect_cv_result *a, const affect_cv_result *b)
             memcmp(&x->spca_sigma, &y->spca_sigma, 8) || x->spca_dims != y->spca_dims ||
             x->knn_k != y->knn_k)
             return false;
-        for (int m = 0; m < AFFECT_CV_METHODS; m++)
+        for (int m = 0; m < AFFECT_CV_RECOGNIZER_METHODS; m++)
             if (memcmp(x->confusion[m], y->confusion[m], cc))
                 return false;
     }
-    for (int m = 0; m < AFFECT_CV_METHODS; m++)
+    for (int m = 0; m < AFFECT_CV_RECOGNIZER_METHODS; m++)
         if (memcmp(a->pooled[m], b->pooled[m], cc))
             return false;
     return memcmp(a->mean_accuracy, b->mean_accuracy, sizeof a->mean_accuracy) == 0 &&
@@ -535,10 +535,10 @@ static void test_no_leakage(void **state)
     uint32_t dims_direct;
     direct_fold(&cfg, d, fold_of, F, d->seqs, cm, &c_direct, &dims_direct);
     assert_true(c_direct == fa->svm_c && dims_direct == fa->spca_dims);
-    for (int m = 0; m < AFFECT_CV_METHODS; m++)
+    for (int m = 0; m < AFFECT_CV_RECOGNIZER_METHODS; m++)
         assert_memory_equal(fa->confusion[m], cm[m], sizeof cm[m]);
     direct_fold(&cfg, d, fold_of, F, bad, cm, &c_direct, &dims_direct);
-    for (int m = 0; m < AFFECT_CV_METHODS; m++)
+    for (int m = 0; m < AFFECT_CV_RECOGNIZER_METHODS; m++)
         assert_memory_equal(fb->confusion[m], cm[m], sizeof cm[m]);
     /* the garbage is recognised as such: the clean run does better on fold F */
     assert_true(fb->accuracy[AFFECT_CV_SVM] < fa->accuracy[AFFECT_CV_SVM] ||
@@ -592,7 +592,7 @@ static void test_leave_one_group_out(void **state)
     assert_int_equal(r->folds[1].n_test, 6);
     /* fold 1's classifier knows two classes: one sPCA axis of the 2 asked */
     assert_int_equal(f0->spca_dims, 1);
-    for (int m = 0; m < AFFECT_CV_METHODS; m++) {
+    for (int m = 0; m < AFFECT_CV_RECOGNIZER_METHODS; m++) {
         const uint32_t *cm = f0->confusion[m];
         /* the sad row: 4 motions, none predicted sad; nothing else predicted sad either */
         assert_int_equal(cm[1 * 3 + 0] + cm[1 * 3 + 2], 4);
