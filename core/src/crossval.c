@@ -16,7 +16,9 @@
  * How it works: the fold of every motion is fixed first (stratified folds, or its group), then
  * fold by fold the training motions are gathered (classes absent from them removed and the
  * others renumbered in order), a classifier is trained on them alone, and each held-out motion
- * is evaluated once (affect_classifier_eval gives all three labels). Nothing of a held-out
+ * is evaluated once (affect_classifier_eval gives all three labels); each functional method asked
+ * trains its own affect_fda model on the same training motions and classifies the held-out
+ * ones by 1-NN (affect_fda_classify). Nothing of a held-out
  * motion reaches training: the only shared inputs are the configuration and the feature
  * definition (tests/core/test_crossval.c checks this by corrupting the held-out motions).
  */
