@@ -783,6 +783,7 @@ static const char *const cv_keys[] = {AX_SEQS_KEYS,
                                       "sigma",
                                       "ffda_reg",
                                       "isomap_k",
+                                      "alignment",
                                       NULL};
 
 typedef struct cv_state {

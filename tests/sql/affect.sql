@@ -517,7 +517,7 @@ SELECT * FROM affect_crossval('cvs', 'm', 'emotion', '{"methods":["fspca"],"dims
 -- error: affect_crossval: affect_crossval_json: dims must be from 1 to 64
 
 SELECT * FROM affect_crossval('cvs', 'm', 'emotion', '{"methods":["fspca"],"method":"fpca"}');
--- error: affect_crossval: affect_crossval_json: unknown option "method" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, frame, root, max_iter, tol, reg, seed, progress, groups, score_normalization, score_clip, svm_c, svm_folds, spca_dims, spca_kernel, spca_sigma, knn_k, grid, folds, descriptors, descriptor_weight, mirror, group, methods, verbose, threads, storage, dims, basis, order, lambda, sigma, ffda_reg, isomap_k)
+-- error: affect_crossval: affect_crossval_json: unknown option "method" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, frame, root, max_iter, tol, reg, seed, progress, groups, score_normalization, score_clip, svm_c, svm_folds, spca_dims, spca_kernel, spca_sigma, knn_k, grid, folds, descriptors, descriptor_weight, mirror, group, methods, verbose, threads, storage, dims, basis, order, lambda, sigma, ffda_reg, isomap_k, alignment)
 
 -- affect_crossval_json itself (the engine): valid JSON, on 2 motions per class
 SELECT 'affect_crossval_json: the rows as JSON', json_valid(j)
@@ -745,7 +745,7 @@ SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"group":1,"covariance":
 -- error: affect_crossval: affect_crossval_json: option "group" must be a column name
 
 SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"fold":3,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}');
--- error: affect_crossval: affect_crossval_json: unknown option "fold" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, frame, root, max_iter, tol, reg, seed, progress, groups, score_normalization, score_clip, svm_c, svm_folds, spca_dims, spca_kernel, spca_sigma, knn_k, grid, folds, descriptors, descriptor_weight, mirror, group, methods, verbose, threads, storage, dims, basis, order, lambda, sigma, ffda_reg, isomap_k)
+-- error: affect_crossval: affect_crossval_json: unknown option "fold" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, frame, root, max_iter, tol, reg, seed, progress, groups, score_normalization, score_clip, svm_c, svm_folds, spca_dims, spca_kernel, spca_sigma, knn_k, grid, folds, descriptors, descriptor_weight, mirror, group, methods, verbose, threads, storage, dims, basis, order, lambda, sigma, ffda_reg, isomap_k, alignment)
 
 SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"knn_k":0,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}');
 -- error: affect_crossval: affect_crossval_json: knn_k must be at least 1

@@ -140,7 +140,7 @@ SELECT fda_train(m, emotion, '{"dims":0}') FROM fs;
 SELECT fda_train(m, emotion, '{"basis":3}') FROM fs;
 -- error: fda_train: the basis size must be from the order to 4096
 SELECT fda_train(m, emotion, '{"states":3}') FROM fs;
--- error: fda_train: unknown option "states" (expected joints, normalize, scale, up, velocity, frame, root, progress, method, basis, order, lambda, dims, kernel, sigma, ffda_reg, isomap_k, proto_dims)
+-- error: fda_train: unknown option "states" (expected joints, normalize, scale, up, velocity, frame, root, progress, method, basis, order, lambda, dims, kernel, sigma, ffda_reg, isomap_k, proto_dims, alignment)
 SELECT fda_train(m, 'sad') FROM fs;
 -- error: fda_train: need motions of at least 2 labels, got 1 ("sad")
 SELECT fda_train(m, x'00') FROM fs;
