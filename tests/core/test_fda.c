@@ -561,6 +561,41 @@ static void test_fixture_v1(void **state)
     affect_fda_free(f);
 }
 
+/* tests/fixtures/fda-v2.bin: fda-v1.bin's motions and options with "alignment":"landmarks"
+ * (version 2: flags 1 and the landmark template). */
+static void test_fixture_v2(void **state)
+{
+    (void)state;
+    size_t len;
+    char *bytes = tu_read_file(AFFECT_FIXTURES_DIR "/fda-v2.bin", &len);
+    assert_non_null(bytes);
+    assert_int_equal(len, 1615);
+    assert_int_equal((unsigned char)bytes[4], 2);
+    affect_fda *f = NULL;
+    affect_error err;
+    if (affect_fda_decode((const unsigned char *)bytes, len, &f, &err))
+        fail_msg("decode: %s", err.msg);
+    const affect_fda_config *cfg = affect_fda_get_config(f);
+    assert_int_equal(cfg->method, AFFECT_FDA_FPCA);
+    assert_int_equal(cfg->alignment, AFFECT_FDA_ALIGN_LANDMARKS);
+    assert_int_equal(affect_fda_train_size(f), 12);
+    uint32_t nt;
+    const affect_fda_landmark *tp = affect_fda_template(f, &nt);
+    assert_int_equal(nt, 6);
+    for (uint32_t k = 0; k < nt; k++) {
+        assert_true(tp[k].t > (k ? tp[k - 1].t : 0.0) && tp[k].t < 1.0);
+        assert_int_equal(tp[k].type, k % 2 == 0 ? 1 : -1);
+    }
+    unsigned char *again;
+    size_t n;
+    assert_int_equal(affect_fda_encode(f, &again, &n, &err), AFFECT_OK);
+    assert_int_equal(n, len);
+    assert_memory_equal(again, bytes, len);
+    free(again);
+    free(bytes);
+    affect_fda_free(f);
+}
+
 static void test_perturbation(void **state)
 {
     (void)state;
@@ -612,6 +647,7 @@ typedef struct oom_ctx {
     data *d;
     affect_fda_method method;
     affect_fda *f;
+    affect_fda_alignment alignment;
 } oom_ctx;
 
 static affect_status oom_op(void *p, affect_error *err)
@@ -620,6 +656,7 @@ static affect_status oom_op(void *p, affect_error *err)
     affect_fda_config cfg;
     small_cfg(&cfg, o->method);
     cfg.n_basis = 6;
+    cfg.alignment = o->alignment;
     affect_status st = affect_fda_train(&cfg, NULL, o->d->seqs, o->d->n, o->d->m, o->d->y, NAMES,
                                         o->d->c, &o->f, err);
     if (st)
@@ -649,10 +686,12 @@ static void test_oom(void **state)
     (void)state;
     data d = make_data(10, 3, 1.0, 4);
     for (int method = 0; method < 4; method++) {
-        oom_ctx o = {&d, (affect_fda_method)method, NULL};
+        oom_ctx o = {&d, (affect_fda_method)method, NULL, AFFECT_FDA_ALIGN_LINEAR};
         long calls = tu_oom_sweep(oom_op, &o, oom_finish, NULL);
         assert_true(calls > 10);
     }
+    oom_ctx o = {&d, AFFECT_FDA_FFDA, NULL, AFFECT_FDA_ALIGN_LANDMARKS};
+    assert_true(tu_oom_sweep(oom_op, &o, oom_finish, NULL) > 10);
     free_data(&d);
 }
 
@@ -848,6 +887,7 @@ int main(void)
         cmocka_unit_test(test_determinism_and_blob),
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_fixture_v1),
+        cmocka_unit_test(test_fixture_v2),
         cmocka_unit_test(test_perturbation),
         cmocka_unit_test(test_oom),
         cmocka_unit_test(test_landmarks_known_warp),
