@@ -5,7 +5,7 @@ real corpora: one query per corpus, protocol and dimension count, every method o
 
 Usage (from the repository root, after a build of build/affect.so):
     OPENBLAS_NUM_THREADS=1 /usr/bin/python3 tests/bench/fda_crossval_eval.py [--db build/fda.db]
-        [--corpora 1,2] [--protocols loco,loo] [--dims 2,3]
+        [--corpora 1,2] [--protocols loco,loo,k10] [--dims 2,3]
         [--methods fpca,ffda,fspca,fspca_rbf,fisomap] [--options '{"sigma":0.5}']
         [--observations default,chosen]
 AFFECT_EXT overrides the extension's path (default build/affect). Python's standard library and
@@ -16,7 +16,8 @@ It imports the corpora of ../shared/corpora into --db once (corpus_import.py), t
       FROM affect_crossval('c1', 'motion', 'style', :options)
 with "group":"content" (loco: leave one content out; bandai-namco-1: the 44 motions of angry,
 happy, normal and sad over the ten contents of every style, 10 folds; bandai-namco-2-dev: 504
-motions of 7 styles, 6 folds) or "group":"id" (loo: leave one motion out; 44 or 504 folds).
+motions of 7 styles, 6 folds), "group":"id" (loo: leave one motion out; 44 or 504 folds) or
+"group":"k10" (k10: the motion's id modulo 10, fda_eval.py's --folds2 10).
 Observations: "default" = affect_crossval's (body frame, every joint, positions), "chosen" =
 docs/EVALUATION.md's set chosen on bandai-namco-1 (body frame, 7 joints, with velocities).
 A method whose training fails (F-Isomap's k-NN graph not connected) is reported as such and the
@@ -43,11 +44,13 @@ OBSERVATIONS = {
 
 def tables(con):
     con.execute("DROP TABLE IF EXISTS temp.c1")
-    con.execute("CREATE TEMP TABLE c1 AS SELECT id, content, style, motion FROM motions WHERE "
+    con.execute("CREATE TEMP TABLE c1 AS SELECT id, id %% 10 AS k10, content, style, motion "
+                "FROM motions WHERE "
                 "source = 'bandai-namco-1' AND style IN (%s) AND content IN (%s) ORDER BY id"
                 % (",".join("'%s'" % e for e in FOUR), ",".join("'%s'" % c for c in TEN)))
     con.execute("DROP TABLE IF EXISTS temp.c2")
-    con.execute("CREATE TEMP TABLE c2 AS SELECT id, content, style, motion FROM motions WHERE "
+    con.execute("CREATE TEMP TABLE c2 AS SELECT id, id % 10 AS k10, content, style, motion "
+                "FROM motions WHERE "
                 "source = 'bandai-namco-2-dev' ORDER BY id")
 
 
@@ -87,8 +90,9 @@ def main():
         table = "c1" if source == "bandai-namco-1" else "c2"
         n = con.execute("SELECT count(*) FROM %s" % table).fetchone()[0]
         for proto in a.protocols.split(","):
-            group = {"loco": "content", "loo": "id"}[proto]
-            name = {"loco": "leave one content out", "loo": "leave one motion out"}[proto]
+            group = {"loco": "content", "loo": "id", "k10": "k10"}[proto]
+            name = {"loco": "leave one content out", "loo": "leave one motion out",
+                    "k10": "10-fold by motion id modulo 10"}[proto]
             print("\n### %s, %d motions, %s, 1-NN (pooled accuracy)\n" % (source, n, name))
             cols = ["%s %s-D" % (o, d) for o in a.observations.split(",")
                     for d in a.dims.split(",")]
