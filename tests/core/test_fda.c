@@ -518,18 +518,38 @@ static void test_errors(void **state)
     free_data(&e);
 }
 
+/* A fixture's bytes (*bytes, *len) and its decoded model. */
+static affect_fda *decode_fixture(const char *path, char **bytes, size_t *len)
+{
+    *bytes = tu_read_file(path, len);
+    assert_non_null(*bytes);
+    affect_fda *f = NULL;
+    affect_error err;
+    if (affect_fda_decode((const unsigned char *)*bytes, *len, &f, &err))
+        fail_msg("decode %s: %s", path, err.msg);
+    return f;
+}
+
+/* Today's encoder writes the fixture's bytes again. */
+static void encodes_to(const affect_fda *f, const char *bytes, size_t len)
+{
+    unsigned char *again;
+    size_t n;
+    affect_error err;
+    assert_int_equal(affect_fda_encode(f, &again, &n, &err), AFFECT_OK);
+    assert_int_equal(n, len);
+    assert_memory_equal(again, bytes, len);
+    free(again);
+}
+
 /* tests/fixtures/fda-v1.bin: the SQL spec's small model (right hand, first-frame
  * observations, 6 B-splines, FPCA 2-D, 12 motion_synth waves of 4 emotions). */
 static void test_fixture_v1(void **state)
 {
     (void)state;
     size_t len;
-    char *bytes = tu_read_file(AFFECT_FIXTURES_DIR "/fda-v1.bin", &len);
-    assert_non_null(bytes);
-    affect_fda *f = NULL;
-    affect_error err;
-    if (affect_fda_decode((const unsigned char *)bytes, len, &f, &err))
-        fail_msg("decode: %s", err.msg);
+    char *bytes;
+    affect_fda *f = decode_fixture(AFFECT_FIXTURES_DIR "/fda-v1.bin", &bytes, &len);
     const affect_fda_config *cfg = affect_fda_get_config(f);
     assert_int_equal(cfg->method, AFFECT_FDA_FPCA);
     assert_int_equal(cfg->n_basis, 6);
@@ -543,11 +563,7 @@ static void test_fixture_v1(void **state)
     assert_string_equal(affect_fda_class_name(f, 3), "sad");
     assert_non_null(affect_fda_features(f));
     assert_int_equal(affect_fda_features(f)->frame, AFFECT_FEATURES_FRAME_FIRST);
-    unsigned char *again;
-    size_t n;
-    assert_int_equal(affect_fda_encode(f, &again, &n, &err), AFFECT_OK);
-    assert_int_equal(n, len);
-    assert_memory_equal(again, bytes, len);
+    encodes_to(f, bytes, len);
     /* the training embedding is the FPCA scores: centred, the first axis the wider */
     const double *z = affect_fda_train_embedding(f);
     double m0 = 0, v0 = 0, v1 = 0;
@@ -556,7 +572,6 @@ static void test_fixture_v1(void **state)
     tu_assert_near(m0, 0.0, 1e-9);
     assert_true(v0 >= v1);
     tu_assert_near(v0 / 11, affect_fda_eigenvalues(f)[0], 1e-9 * v0);
-    free(again);
     free(bytes);
     affect_fda_free(f);
 }
@@ -567,14 +582,10 @@ static void test_fixture_v2(void **state)
 {
     (void)state;
     size_t len;
-    char *bytes = tu_read_file(AFFECT_FIXTURES_DIR "/fda-v2.bin", &len);
-    assert_non_null(bytes);
+    char *bytes;
+    affect_fda *f = decode_fixture(AFFECT_FIXTURES_DIR "/fda-v2.bin", &bytes, &len);
     assert_int_equal(len, 1615);
     assert_int_equal((unsigned char)bytes[4], 2);
-    affect_fda *f = NULL;
-    affect_error err;
-    if (affect_fda_decode((const unsigned char *)bytes, len, &f, &err))
-        fail_msg("decode: %s", err.msg);
     const affect_fda_config *cfg = affect_fda_get_config(f);
     assert_int_equal(cfg->method, AFFECT_FDA_FPCA);
     assert_int_equal(cfg->alignment, AFFECT_FDA_ALIGN_LANDMARKS);
@@ -586,12 +597,7 @@ static void test_fixture_v2(void **state)
         assert_true(tp[k].t > (k ? tp[k - 1].t : 0.0) && tp[k].t < 1.0);
         assert_int_equal(tp[k].type, k % 2 == 0 ? 1 : -1);
     }
-    unsigned char *again;
-    size_t n;
-    assert_int_equal(affect_fda_encode(f, &again, &n, &err), AFFECT_OK);
-    assert_int_equal(n, len);
-    assert_memory_equal(again, bytes, len);
-    free(again);
+    encodes_to(f, bytes, len);
     free(bytes);
     affect_fda_free(f);
 }
