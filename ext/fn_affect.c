@@ -51,6 +51,7 @@
 
 #include "affect/classifier.h"
 #include "affect/crossval.h"
+#include "fn_fda.h"
 #include "util/strbuf.h"
 #include "seqs.h"
 
@@ -775,13 +776,22 @@ static const char *const cv_keys[] = {AX_SEQS_KEYS,
                                       "verbose",
                                       "threads",
                                       "storage",
+                                      "dims",
+                                      "basis",
+                                      "order",
+                                      "lambda",
+                                      "sigma",
+                                      "ffda_reg",
+                                      "isomap_k",
+                                      "alignment",
                                       NULL};
 
 typedef struct cv_state {
     cls_train t;   /* first (freed through cls_train_free) */
     char **groups; /* one per sequence, or NULL entries (k-fold) */
     uint32_t folds;
-    unsigned methods; /* bit m = AFFECT_CV_* */
+    unsigned methods;      /* bit m = AFFECT_CV_* */
+    affect_fda_config fda; /* the functional methods' options */
     bool verbose;
     uint32_t threads;
 } cv_state;
@@ -798,10 +808,12 @@ static void cv_state_free(cv_state *s)
 
 static ax_arg read_cv_options(sqlite3_context *ctx, const ax_opts *opts, cv_state *s)
 {
-    static const char *const names[] = {"ml", "svm", "knn"};
     s->folds = 10;
-    s->methods = 7;
+    s->methods = AFFECT_CV_RECOGNIZER_MASK;
     s->threads = 1;
+    affect_fda_config_default(&s->fda);
+    if (ax_fda_read_options(ctx, opts, &s->fda) != AX_OK)
+        return AX_ERROR;
     if (ax_opt_u32(ctx, opts, "folds", &s->folds) ||
         ax_opt_bool(ctx, opts, "verbose", &s->verbose) ||
         ax_opt_u32(ctx, opts, "threads", &s->threads))
@@ -833,8 +845,8 @@ static ax_arg read_cv_options(sqlite3_context *ctx, const ax_opts *opts, cv_stat
     for (const affect_json_node *e = affect_json_first(opts->doc, m); e;
          e = affect_json_next_sibling(opts->doc, e)) {
         unsigned bit = 0;
-        for (unsigned k = 0; k < 3; k++)
-            if (e->type == AFFECT_JSON_STRING && strcmp(e->str, names[k]) == 0)
+        for (unsigned k = 0; k < AFFECT_CV_METHODS; k++)
+            if (e->type == AFFECT_JSON_STRING && strcmp(e->str, affect_cv_method_name(k)) == 0)
                 bit = 1u << k;
         if (!bit)
             goto bad;
@@ -842,7 +854,8 @@ static ax_arg read_cv_options(sqlite3_context *ctx, const ax_opts *opts, cv_stat
     }
     return AX_OK;
 bad:
-    ax_errorf(ctx, "option \"methods\" must be a non-empty array of \"ml\", \"svm\", \"knn\"");
+    ax_errorf(ctx, "option \"methods\" must be a non-empty array of \"ml\", \"svm\", \"knn\", "
+                   "\"fpca\", \"ffda\", \"fspca\", \"fspca_rbf\", \"fisomap\"");
     return AX_ERROR;
 }
 
@@ -971,7 +984,6 @@ static void put_metric(affect_strbuf *sb, const char *key, double v)
 static void cv_json(affect_strbuf *sb, const cv_state *s, const affect_cv_result *r, char **classes,
                     char **group_names, bool by_group)
 {
-    static const char *const names[] = {"ml", "svm", "knn"};
     uint32_t C = r->n_classes;
     affect_strbuf_puts(sb, "{\"labels\":");
     ax_json_names(sb, classes, C);
@@ -986,7 +998,7 @@ static void cv_json(affect_strbuf *sb, const cv_state *s, const affect_cv_result
             const affect_cv_fold *fd = summary ? NULL : &r->folds[f];
             affect_strbuf_puts(sb, first ? "{" : ",{");
             first = false;
-            affect_strbuf_printf(sb, "\"method\":\"%s\"", names[m]);
+            affect_strbuf_printf(sb, "\"method\":\"%s\"", affect_cv_method_name((unsigned)m));
             if (summary) {
                 uint32_t n = 0;
                 for (uint32_t k = 0; k < r->n_folds; k++)
@@ -1028,6 +1040,10 @@ static void cv_json(affect_strbuf *sb, const cv_state *s, const affect_cv_result
                 affect_strbuf_printf(sb, "{\"spca_dims\":%u,\"spca_sigma\":", fd->spca_dims);
                 affect_strbuf_double(sb, fd->spca_sigma);
                 affect_strbuf_printf(sb, ",\"knn_k\":%u}", fd->knn_k);
+            } else if (m >= AFFECT_CV_FPCA) {
+                affect_strbuf_printf(sb, "{\"dims\":%u,\"lambda\":", fd->fda_dims[m]);
+                affect_strbuf_double(sb, fd->fda_lambda);
+                affect_strbuf_putc(sb, '}');
             } else {
                 affect_strbuf_puts(sb, "null");
             }
@@ -1069,6 +1085,8 @@ static void cv_final(sqlite3_context *ctx, cv_state *s)
     cfg.folds = s->folds;
     cfg.seed = s->t.s.cfg.seed;
     cfg.threads = s->threads;
+    cfg.methods = s->methods;
+    cfg.fda = s->fda;
     if (s->verbose)
         cfg.progress = cv_progress;
     ax_monitor am;

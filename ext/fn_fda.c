@@ -16,6 +16,8 @@
  *   basis       B-spline count G (default 200), order (default 4), lambda (a number ≥ 0,
  *               default 1e-10, or "gcv"), dims (default 3)
  *   kernel      FSPCA label kernel "linear" (default) | "rbf", sigma (default 1)
+ *   alignment   "linear" (default: t_j = j / (T − 1)) | "landmarks" (piecewise-linear
+ *               registration to automatic landmarks, affect/fda.h)
  *   ffda_reg    FFDA regularization γ (default 1e-3); isomap_k (default 7); proto_dims
  *               (FPCA components of the prototypes, default 3)
  *   observations: frame ("body", the default, or "first"), joints, normalize, scale, up,
@@ -55,9 +57,9 @@
 /* ---- fda_train ---- */
 
 static const char *const train_keys[] = {
-    "joints",   "normalize", "scale",    "up",         "velocity", "frame", "root",
-    "progress", "method",    "basis",    "order",      "lambda",   "dims",  "kernel",
-    "sigma",    "ffda_reg",  "isomap_k", "proto_dims", NULL};
+    "joints",   "normalize", "scale",    "up",         "velocity",  "frame", "root",
+    "progress", "method",    "basis",    "order",      "lambda",    "dims",  "kernel",
+    "sigma",    "ffda_reg",  "isomap_k", "proto_dims", "alignment", NULL};
 
 static const char *const method_names[] = {"fpca", "ffda", "fspca", "fisomap", NULL};
 
@@ -77,10 +79,11 @@ static void fda_train_free(fda_train *t)
     ax_seqs_free(&t->s);
 }
 
-static ax_arg read_fda_options(sqlite3_context *ctx, const ax_opts *opts, affect_fda_config *cfg)
+ax_arg ax_fda_read_options(sqlite3_context *ctx, const ax_opts *opts, affect_fda_config *cfg)
 {
     static const char *const kernels[] = {"linear", "rbf", NULL};
-    int method = (int)cfg->method, kernel = (int)cfg->kernel;
+    static const char *const alignments[] = {"linear", "landmarks", NULL};
+    int method = (int)cfg->method, kernel = (int)cfg->kernel, align = (int)cfg->alignment;
     if (ax_opt_enum(ctx, opts, "method", method_names, &method) ||
         ax_opt_u32(ctx, opts, "basis", &cfg->n_basis) ||
         ax_opt_u32(ctx, opts, "order", &cfg->order) || ax_opt_u32(ctx, opts, "dims", &cfg->dims) ||
@@ -88,8 +91,10 @@ static ax_arg read_fda_options(sqlite3_context *ctx, const ax_opts *opts, affect
         ax_opt_number(ctx, opts, "sigma", &cfg->sigma) ||
         ax_opt_number(ctx, opts, "ffda_reg", &cfg->ffda_reg) ||
         ax_opt_u32(ctx, opts, "isomap_k", &cfg->isomap_k) ||
-        ax_opt_u32(ctx, opts, "proto_dims", &cfg->proto_dims))
+        ax_opt_u32(ctx, opts, "proto_dims", &cfg->proto_dims) ||
+        ax_opt_enum(ctx, opts, "alignment", alignments, &align))
         return AX_ERROR;
+    cfg->alignment = (affect_fda_alignment)align;
     cfg->method = (affect_fda_method)method;
     cfg->kernel = (affect_spca_kernel)kernel;
     const affect_json_node *l = ax_opt(opts, "lambda");
@@ -202,7 +207,7 @@ void ax_fda_train_step(sqlite3_context *ctx, int argc, sqlite3_value **argv)
             t->s.failed = true;
             return;
         }
-        ax_arg r = read_fda_options(ctx, &opts, &t->cfg);
+        ax_arg r = ax_fda_read_options(ctx, &opts, &t->cfg);
         ax_opts_free(&opts);
         if (r != AX_OK) {
             t->s.failed = true;
@@ -427,6 +432,16 @@ void ax_fda_info(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     affect_strbuf_double(&sb, cfg->ffda_reg);
     affect_strbuf_printf(&sb, ",\"isomap_k\":%u,\"proto_dims\":%u", cfg->isomap_k,
                          affect_fda_proto_dims(f));
+    uint32_t n_lm;
+    const affect_fda_landmark *lm = affect_fda_template(f, &n_lm);
+    affect_strbuf_printf(&sb, ",\"alignment\":\"%s\",\"landmarks\":[",
+                         cfg->alignment == AFFECT_FDA_ALIGN_LANDMARKS ? "landmarks" : "linear");
+    for (uint32_t k = 0; k < n_lm; k++) {
+        affect_strbuf_puts(&sb, k ? ",{\"t\":" : "{\"t\":");
+        affect_strbuf_double(&sb, lm[k].t);
+        affect_strbuf_printf(&sb, ",\"type\":\"%s\"}", lm[k].type > 0 ? "peak" : "rest");
+    }
+    affect_strbuf_putc(&sb, ']');
     affect_strbuf_puts(&sb, ",\"train_labels\":[");
     for (uint32_t i = 0; i < affect_fda_train_size(f); i++)
         affect_strbuf_printf(&sb, i ? ",%u" : "%u", affect_fda_train_labels(f)[i]);

@@ -21,7 +21,9 @@
  * into table rows; its errors are that statement's (for instance "affect_crossval_json: row 3:
  * …"), prefixed with "affect_crossval: ", except an interrupt: "affect_crossval: interrupted".
  * The options are affect_train's plus folds, group,
- * methods (["ml", "svm", "knn"]) and verbose (progress lines on stderr).
+ * methods (["ml", "svm", "knn"]; also "fpca", "ffda", "fspca", "fspca_rbf", "fisomap", the
+ * functional methods with fda_train's dims, basis, order, lambda, sigma, ffda_reg and isomap_k)
+ * and verbose (progress lines on stderr).
  */
 #include "fn_affect.h"
 

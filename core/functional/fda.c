@@ -33,6 +33,18 @@
 #define GCV_E_MIN (-30)
 #define GCV_E_MAX 0
 
+/* Landmark registration (affect/fda.h): the speed's moving-average half-width as a share of the
+ * frame count, the least rise or fall kept (share of the speed's range), the margin at either
+ * end, the matching's cost of an unmatched landmark and its largest time shift, and the least
+ * gap between consecutive warp knots. */
+#define LM_SMOOTH 0.03
+#define LM_PROMINENCE 0.15
+#define LM_EDGE 0.02
+#define LM_SKIP 0.1
+#define LM_MAX_SHIFT 0.2
+#define LM_MIN_GAP 0.01
+#define LM_MAX AFFECT_FDA_MAX_LANDMARKS
+
 struct affect_fda {
     affect_fda_config cfg;
     affect_bspline b;
@@ -58,6 +70,8 @@ struct affect_fda {
     /* derived from the above */
     double *mband, *rband; /* G × k */
     double *train_norm;    /* n: c̃_jᵀ (M ⊗ I) c̃_j (F-Isomap) */
+    uint32_t n_lm;         /* the landmark template (alignment "landmarks") */
+    affect_fda_landmark lm[LM_MAX];
 };
 
 void affect_fda_config_default(affect_fda_config *cfg)
@@ -74,6 +88,7 @@ void affect_fda_config_default(affect_fda_config *cfg)
     cfg->ffda_reg = 1e-3;
     cfg->isomap_k = 7;
     cfg->proto_dims = 3;
+    cfg->alignment = AFFECT_FDA_ALIGN_LINEAR;
     cfg->monitor = NULL;
 }
 
@@ -101,6 +116,8 @@ const char *affect_fda_config_check(const affect_fda_config *cfg)
         return "isomap_k must be from 1 to 1024";
     if (cfg->proto_dims < 1 || cfg->proto_dims > AFFECT_FDA_MAX_DIMS)
         return "proto_dims must be from 1 to 64";
+    if ((unsigned)cfg->alignment > AFFECT_FDA_ALIGN_LANDMARKS)
+        return "unknown alignment";
     return NULL;
 }
 
@@ -244,9 +261,313 @@ static affect_status make_norms(affect_fda *f, affect_error *err)
 
 /* ---- training ---- */
 
+/* ---- landmark registration ---- */
+
+/* Removes entries k and k + 1 of the extrema (idx, type, val: *n of them). */
+static void drop_pair(uint32_t *idx, int32_t *type, double *val, uint32_t *n, uint32_t k)
+{
+    for (uint32_t j = k; j + 2 < *n; j++) {
+        idx[j] = idx[j + 2];
+        type[j] = type[j + 2];
+        val[j] = val[j + 2];
+    }
+    *n -= 2;
+}
+
+affect_status affect_fda_find_landmarks(const double *x, uint32_t T, uint32_t m,
+                                        affect_fda_landmark *out, uint32_t *count,
+                                        affect_error *err)
+{
+    *count = 0;
+    if (T < 5)
+        return AFFECT_OK;
+    uint32_t S = T - 1; /* speed samples, at times (j + ½) / (T − 1) */
+    double *v = affect_malloc_array((size_t)S, 4 * sizeof *v);
+    if (!v)
+        return affect_nomem(err);
+    double *sm = v + S, *val = v + 2 * (size_t)S;
+    uint32_t *idx = (uint32_t *)(v + 3 * (size_t)S); /* S × 4 bytes fit in S doubles' half */
+    int32_t *type = (int32_t *)(idx + S);
+    for (uint32_t j = 0; j < S; j++) {
+        double q = 0.0;
+        for (uint32_t i = 0; i < m; i++) {
+            double d = x[(size_t)(j + 1) * m + i] - x[(size_t)j * m + i];
+            q += d * d;
+        }
+        v[j] = sqrt(q);
+    }
+    uint32_t w = (uint32_t)lround(LM_SMOOTH * T);
+    if (w < 1)
+        w = 1;
+    double lo = INFINITY, hi = -INFINITY;
+    for (uint32_t j = 0; j < S; j++) {
+        uint32_t a = j > w ? j - w : 0, b = j + w < S ? j + w : S - 1;
+        double q = 0.0;
+        for (uint32_t k = a; k <= b; k++)
+            q += v[k];
+        sm[j] = q / (b - a + 1);
+        lo = sm[j] < lo ? sm[j] : lo;
+        hi = sm[j] > hi ? sm[j] : hi;
+    }
+    double range = hi - lo;
+    uint32_t n = 0;
+    if (!(range > 0) || !isfinite(range))
+        goto done;
+    for (uint32_t j = 1; j + 1 < S; j++) {
+        int32_t ty = 0;
+        if (sm[j] > sm[j - 1] && sm[j] >= sm[j + 1])
+            ty = 1;
+        else if (sm[j] < sm[j - 1] && sm[j] <= sm[j + 1])
+            ty = -1;
+        if (!ty)
+            continue;
+        if (n > 0 && type[n - 1] == ty) { /* two of a kind in a row: keep the more extreme */
+            if ((ty > 0 && sm[j] > val[n - 1]) || (ty < 0 && sm[j] < val[n - 1])) {
+                idx[n - 1] = j;
+                val[n - 1] = sm[j];
+            }
+            continue;
+        }
+        idx[n] = j;
+        type[n] = ty;
+        val[n++] = sm[j];
+    }
+    /* the least pronounced adjacent pair goes first, while below the threshold or too many */
+    while (n >= 2) {
+        uint32_t best = 0;
+        double bd = INFINITY;
+        for (uint32_t k = 0; k + 1 < n; k++) {
+            double d = fabs(val[k] - val[k + 1]);
+            if (d < bd) {
+                bd = d;
+                best = k;
+            }
+        }
+        if (bd >= LM_PROMINENCE * range && n <= LM_MAX)
+            break;
+        drop_pair(idx, type, val, &n, best);
+    }
+    if (n == 1 && fabs(val[0] - sm[0]) < LM_PROMINENCE * range &&
+        fabs(val[0] - sm[S - 1]) < LM_PROMINENCE * range)
+        n = 0; /* one shallow bump */
+done:;
+    uint32_t c = 0;
+    for (uint32_t k = 0; k < n; k++) {
+        double t = (idx[k] + 0.5) / (double)(T - 1);
+        if (t > LM_EDGE && t < 1.0 - LM_EDGE && c < LM_MAX)
+            out[c++] = (affect_fda_landmark){t, type[k]};
+    }
+    *count = c;
+    affect_free(v);
+    return AFFECT_OK;
+}
+
+uint32_t affect_fda_match_landmarks(const affect_fda_landmark *a, uint32_t na,
+                                    const affect_fda_landmark *b, uint32_t nb, uint32_t *ia,
+                                    uint32_t *ib)
+{
+    enum { W = LM_MAX + 1 };
+    double d[W * W];
+    unsigned char how[W * W]; /* 0 match, 1 skip a's, 2 skip b's */
+    na = na < LM_MAX ? na : LM_MAX;
+    nb = nb < LM_MAX ? nb : LM_MAX;
+    for (uint32_t i = 0; i <= na; i++)
+        for (uint32_t k = 0; k <= nb; k++) {
+            double best;
+            unsigned char h = 0;
+            if (i == 0 && k == 0) {
+                best = 0.0;
+            } else {
+                best = INFINITY;
+                if (i > 0 && k > 0 && a[i - 1].type == b[k - 1].type) {
+                    double dt = fabs(a[i - 1].t - b[k - 1].t);
+                    if (dt <= LM_MAX_SHIFT)
+                        best = d[(i - 1) * W + k - 1] + dt;
+                }
+                if (i > 0 && d[(i - 1) * W + k] + LM_SKIP < best) {
+                    best = d[(i - 1) * W + k] + LM_SKIP;
+                    h = 1;
+                }
+                if (k > 0 && d[i * W + k - 1] + LM_SKIP < best) {
+                    best = d[i * W + k - 1] + LM_SKIP;
+                    h = 2;
+                }
+            }
+            d[i * W + k] = best;
+            how[i * W + k] = h;
+        }
+    uint32_t n = 0, i = na, k = nb;
+    uint32_t pa[LM_MAX], pb[LM_MAX];
+    while (i > 0 || k > 0) {
+        unsigned char h = how[i * W + k];
+        if (i > 0 && k > 0 && h == 0) {
+            pa[n] = i - 1;
+            pb[n++] = k - 1;
+            i--;
+            k--;
+        } else if (i > 0 && (h == 1 || k == 0)) {
+            i--;
+        } else {
+            k--;
+        }
+    }
+    for (uint32_t j = 0; j < n; j++) { /* back to time order */
+        ia[j] = pa[n - 1 - j];
+        ib[j] = pb[n - 1 - j];
+    }
+    return n;
+}
+
+void affect_fda_warp_times(const affect_fda_landmark *a, uint32_t na,
+                           const affect_fda_landmark *tmpl, uint32_t nt, uint32_t T, double *times)
+{
+    uint32_t ia[LM_MAX], ib[LM_MAX];
+    uint32_t np = affect_fda_match_landmarks(a, na, tmpl, nt, ia, ib);
+    double u[LM_MAX + 2], h[LM_MAX + 2];
+    uint32_t K = 0;
+    u[K] = 0.0;
+    h[K++] = 0.0;
+    for (uint32_t j = 0; j < np; j++) {
+        double s = a[ia[j]].t, g = tmpl[ib[j]].t;
+        if (s > u[K - 1] + LM_MIN_GAP && g > h[K - 1] + LM_MIN_GAP && s < 1.0 - LM_MIN_GAP &&
+            g < 1.0 - LM_MIN_GAP) {
+            u[K] = s;
+            h[K++] = g;
+        }
+    }
+    u[K] = 1.0;
+    h[K++] = 1.0;
+    uint32_t seg = 0;
+    for (uint32_t j = 0; j < T; j++) {
+        double t = T > 1 ? (double)j / (T - 1) : 0.0;
+        while (seg + 2 < K && t > u[seg + 1])
+            seg++;
+        double r = (t - u[seg]) / (u[seg + 1] - u[seg]);
+        double v = h[seg] + r * (h[seg + 1] - h[seg]);
+        times[j] = v < 0.0 ? 0.0 : v > 1.0 ? 1.0 : v;
+    }
+}
+
+/* The consensus of the landmark sets sets[members[i]] (counts cnt): the reference (the
+ * member with the median count, the first such in member order) keeps the landmarks matched
+ * in at least half of the members, at their mean matched time. */
+static void consensus(const affect_fda_landmark *sets, const uint32_t *cnt, const uint32_t *members,
+                      uint32_t nm, affect_fda_landmark *out, uint32_t *n_out)
+{
+    *n_out = 0;
+    if (nm == 0)
+        return;
+    /* the median count's member: the (nm − 1) / 2-th by (count, order) */
+    uint32_t ref = members[0];
+    uint32_t want = (nm - 1) / 2;
+    for (uint32_t i = 0; i < nm; i++) {
+        uint32_t below = 0, same_before = 0;
+        for (uint32_t j = 0; j < nm; j++) {
+            below += cnt[members[j]] < cnt[members[i]];
+            same_before += j < i && cnt[members[j]] == cnt[members[i]];
+        }
+        if (below + same_before == want) {
+            ref = members[i];
+            break;
+        }
+    }
+    const affect_fda_landmark *r = sets + (size_t)ref * LM_MAX;
+    uint32_t nr = cnt[ref];
+    double sum[LM_MAX] = {0};
+    uint32_t hits[LM_MAX] = {0};
+    for (uint32_t i = 0; i < nm; i++) {
+        uint32_t ia[LM_MAX], ib[LM_MAX];
+        uint32_t np = affect_fda_match_landmarks(sets + (size_t)members[i] * LM_MAX,
+                                                 cnt[members[i]], r, nr, ia, ib);
+        for (uint32_t k = 0; k < np; k++) {
+            sum[ib[k]] += sets[(size_t)members[i] * LM_MAX + ia[k]].t;
+            hits[ib[k]]++;
+        }
+    }
+    uint32_t n = 0;
+    double last = 0.0;
+    for (uint32_t k = 0; k < nr; k++) {
+        if (2 * hits[k] < nm)
+            continue;
+        double t = sum[k] / hits[k];
+        if (t > last + LM_MIN_GAP && t < 1.0 - LM_MIN_GAP) {
+            out[n++] = (affect_fda_landmark){t, r[k].type};
+            last = t;
+        }
+    }
+    *n_out = n;
+}
+
+/* The template of the training motions (f->lm, f->n_lm) and their registered times (one
+ * buffer, motion i's from offset off[i]). */
+static affect_status build_template(affect_fda *f, const affect_hmm_seq *seqs, uint32_t n,
+                                    uint32_t m, const uint32_t *y, uint32_t c,
+                                    const affect_fda_config *cfg, double *times, const size_t *off,
+                                    affect_error *err)
+{
+    affect_fda_landmark *sets = affect_malloc_array((size_t)n + c, LM_MAX * sizeof *sets);
+    uint32_t *cnt = affect_malloc_array((size_t)n + c, sizeof *cnt);
+    uint32_t *members = affect_malloc_array((size_t)n + c, sizeof *members);
+    affect_status st = AFFECT_OK;
+    if (!sets || !cnt || !members) {
+        st = affect_nomem(err);
+        goto done;
+    }
+    for (uint32_t i = 0; i < n; i++) {
+        if ((st = affect_monitor_check(cfg->monitor, err)) != AFFECT_OK)
+            goto done;
+        st = affect_fda_find_landmarks(seqs[i].x, seqs[i].n_frames, m, sets + (size_t)i * LM_MAX,
+                                       &cnt[i], err);
+        if (st)
+            goto done;
+    }
+    for (uint32_t k = 0; k < c; k++) { /* class templates at n + k */
+        uint32_t nm = 0;
+        for (uint32_t i = 0; i < n; i++)
+            if (y[i] == k)
+                members[nm++] = i;
+        consensus(sets, cnt, members, nm, sets + (size_t)(n + k) * LM_MAX, &cnt[n + k]);
+    }
+    for (uint32_t k = 0; k < c; k++)
+        members[k] = n + k;
+    consensus(sets, cnt, members, c, f->lm, &f->n_lm);
+    for (uint32_t i = 0; i < n; i++)
+        affect_fda_warp_times(sets + (size_t)i * LM_MAX, cnt[i], f->lm, f->n_lm, seqs[i].n_frames,
+                              times + off[i]);
+done:
+    affect_free(sets);
+    affect_free(cnt);
+    affect_free(members);
+    return st;
+}
+
+const affect_fda_landmark *affect_fda_template(const affect_fda *f, uint32_t *n)
+{
+    *n = f->n_lm;
+    return f->lm;
+}
+
+affect_status affect_fda_times(const affect_fda *f, const double *x, uint32_t T, double *times,
+                               affect_error *err)
+{
+    if (f->cfg.alignment != AFFECT_FDA_ALIGN_LANDMARKS) {
+        for (uint32_t j = 0; j < T; j++)
+            times[j] = T > 1 ? (double)j / (T - 1) : 0.0;
+        return AFFECT_OK;
+    }
+    affect_fda_landmark lm[LM_MAX];
+    uint32_t n = 0;
+    affect_status st = affect_fda_find_landmarks(x, T, f->m, lm, &n, err);
+    if (st)
+        return st;
+    affect_fda_warp_times(lm, n, f->lm, f->n_lm, T, times);
+    return AFFECT_OK;
+}
+
 static affect_status choose_lambda(const affect_fda_config *cfg, const affect_bspline *b,
                                    const double *rband, const affect_hmm_seq *seqs, uint32_t n,
-                                   uint32_t m, double *lambda, affect_error *err)
+                                   uint32_t m, const double *times, const size_t *off,
+                                   double *lambda, affect_error *err)
 {
     double *work = affect_malloc_array(affect_bspline_gcv_work(b, 0, m), sizeof *work);
     if (!work)
@@ -258,8 +579,8 @@ static affect_status choose_lambda(const affect_fda_config *cfg, const affect_bs
         for (uint32_t i = 0; i < n && isfinite(total); i++) {
             if ((st = affect_monitor_check(cfg->monitor, err)) != AFFECT_OK)
                 goto done;
-            total +=
-                affect_bspline_gcv(b, rband, NULL, seqs[i].x, seqs[i].n_frames, m, lam, NULL, work);
+            total += affect_bspline_gcv(b, rband, times ? times + off[i] : NULL, seqs[i].x,
+                                        seqs[i].n_frames, m, lam, NULL, work);
         }
         affect_monitor_report(cfg->monitor, "GCV", (uint64_t)(e - GCV_E_MIN + 1),
                               (uint64_t)(GCV_E_MAX - GCV_E_MIN + 1));
@@ -780,7 +1101,8 @@ affect_status affect_fda_train(const affect_fda_config *cfg, const affect_featur
         return st;
     train_ctx t;
     memset(&t, 0, sizeof t);
-    double *fit_work = NULL, *kw = NULL;
+    double *fit_work = NULL, *kw = NULL, *times = NULL;
+    size_t *off = NULL;
     affect_fda *f = affect_calloc(1, sizeof *f);
     if (!f)
         return affect_nomem(err);
@@ -806,9 +1128,25 @@ affect_status affect_fda_train(const affect_fda_config *cfg, const affect_featur
         if (!(f->classes[k] = affect_strndup(classes[k], strlen(classes[k]))))
             goto nomem;
     memcpy(f->y, y, n * sizeof *y);
+    /* 0. landmark registration */
+    if (cfg->alignment == AFFECT_FDA_ALIGN_LANDMARKS) {
+        size_t total = 0;
+        if (!(off = affect_malloc_array(n, sizeof *off)))
+            goto nomem;
+        for (uint32_t i = 0; i < n; i++) {
+            off[i] = total;
+            if (total > SIZE_MAX / sizeof(double) - seqs[i].n_frames)
+                goto nomem;
+            total += seqs[i].n_frames;
+        }
+        if (!(times = affect_malloc_array(total ? total : 1, sizeof *times)))
+            goto nomem;
+        if ((st = build_template(f, seqs, n, m, y, c, cfg, times, off, err)) != AFFECT_OK)
+            goto fail;
+    }
     /* 1. λ */
-    if (cfg->gcv &&
-        (st = choose_lambda(cfg, &f->b, f->rband, seqs, n, m, &f->cfg.lambda, err)) != AFFECT_OK)
+    if (cfg->gcv && (st = choose_lambda(cfg, &f->b, f->rband, seqs, n, m, times, off,
+                                        &f->cfg.lambda, err)) != AFFECT_OK)
         goto fail;
     f->cfg.gcv = cfg->gcv;
     /* 2. coefficients */
@@ -822,8 +1160,9 @@ affect_status affect_fda_train(const affect_fda_config *cfg, const affect_featur
         if ((st = affect_monitor_check(cfg->monitor, err)) != AFFECT_OK)
             goto fail;
         affect_monitor_report(cfg->monitor, "B-spline fits", i, n);
-        st = affect_bspline_fit(&f->b, f->rband, NULL, seqs[i].x, seqs[i].n_frames, m,
-                                f->cfg.lambda, t.cc + (size_t)i * h, fit_work, err);
+        st = affect_bspline_fit(&f->b, f->rband, times ? times + off[i] : NULL, seqs[i].x,
+                                seqs[i].n_frames, m, f->cfg.lambda, t.cc + (size_t)i * h, fit_work,
+                                err);
         if (st) {
             affect_prefix(err, "motion %u", i);
             goto fail;
@@ -993,6 +1332,8 @@ fail:
 done:
     affect_free(fit_work);
     affect_free(kw);
+    affect_free(times);
+    affect_free(off);
     affect_free(t.cc);
     affect_free(t.w);
     affect_free(t.k);
@@ -1008,12 +1349,19 @@ affect_status affect_fda_coefficients(const affect_fda *f, const double *x, uint
                                       double *coef, affect_error *err)
 {
     size_t G = f->b.n, kb = f->b.order;
+    bool warp = f->cfg.alignment == AFFECT_FDA_ALIGN_LANDMARKS;
     double *work = affect_malloc_array(2 * G * kb + G, sizeof *work);
-    if (!work)
+    double *times = warp ? affect_malloc_array(T ? T : 1, sizeof *times) : NULL;
+    if (!work || (warp && !times)) {
+        affect_free(work);
+        affect_free(times);
         return affect_nomem(err);
-    affect_status st =
-        affect_bspline_fit(&f->b, f->rband, NULL, x, T, f->m, f->cfg.lambda, coef, work, err);
+    }
+    affect_status st = warp ? affect_fda_times(f, x, T, times, err) : AFFECT_OK;
+    if (st == AFFECT_OK)
+        st = affect_bspline_fit(&f->b, f->rband, times, x, T, f->m, f->cfg.lambda, coef, work, err);
     affect_free(work);
+    affect_free(times);
     return st;
 }
 
@@ -1298,7 +1646,8 @@ affect_status affect_fda_encode(const affect_fda *f, unsigned char **out, size_t
     affect_bw w;
     affect_bw_init(&w);
     const affect_fda_config *cfg = &f->cfg;
-    affect_bw_header(&w, AFFECT_FDA_MAGIC, AFFECT_FDA_VERSION, 0);
+    bool lm = cfg->alignment == AFFECT_FDA_ALIGN_LANDMARKS;
+    affect_bw_header(&w, AFFECT_FDA_MAGIC, lm ? 2u : 1u, lm ? 1u : 0u);
     affect_bw_u32(&w, (uint32_t)cfg->method);
     affect_bw_u32(&w, f->b.order);
     affect_bw_u32(&w, f->b.n);
@@ -1354,6 +1703,13 @@ affect_status affect_fda_encode(const affect_fda *f, unsigned char **out, size_t
         affect_bw_f64s(&w, f->mds_v, n * p);
         affect_bw_f64s(&w, f->d2mean, n);
         affect_bw_f64s(&w, f->geo, n * n);
+    }
+    if (lm) { /* version 2: the landmark template */
+        affect_bw_u32(&w, f->n_lm);
+        for (uint32_t k = 0; k < f->n_lm; k++) {
+            affect_bw_f64(&w, f->lm[k].t);
+            affect_bw_u32(&w, f->lm[k].type > 0 ? 1u : 0u);
+        }
     }
     if (!w.failed)
         affect_bw_checksum(&w, 0);
@@ -1428,7 +1784,7 @@ static affect_status decode_head(affect_br *r, affect_fda *f, affect_error *err)
     affect_br_f64(r, &cfg->sigma);
     affect_br_f64(r, &cfg->ffda_reg);
     affect_br_f64(r, &f->total_var);
-    if (flags != 0)
+    if (flags > (version >= 2 ? 1u : 0u))
         return out_of_range(err, "flags", flags, 8);
     if (method > AFFECT_FDA_FISOMAP)
         return out_of_range(err, "method", method, 12);
@@ -1480,6 +1836,7 @@ static affect_status decode_head(affect_br *r, affect_fda *f, affect_error *err)
     cfg->kernel = (affect_spca_kernel)kernel;
     cfg->gcv = gcv == 1;
     cfg->proto_dims = P;
+    cfg->alignment = (flags & 1u) ? AFFECT_FDA_ALIGN_LANDMARKS : AFFECT_FDA_ALIGN_LINEAR;
     f->b.order = order;
     f->b.n = G;
     f->m = m;
@@ -1566,13 +1923,36 @@ static affect_status decode_body(affect_br *r, affect_fda *f, affect_error *err)
         if (f->cfg.method != AFFECT_FDA_FFDA && f->cfg.method != AFFECT_FDA_FSPCA &&
             !(f->eig[i] > 0))
             return affect_fail(err, AFFECT_ERR_FORMAT, "eigenvalue %u is not positive", i);
-    if (is_linear(f->cfg.method))
-        return read_f64s(r, p * h, "the axes", &f->axes, err);
-    if ((st = read_f64s(r, n * h, "the training functions", &f->train_c, err)) ||
-        (st = read_f64s(r, n * p, "the MDS eigenvectors", &f->mds_v, err)) ||
-        (st = read_f64s(r, n, "the squared geodesic means", &f->d2mean, err)) ||
-        (st = read_f64s(r, n * n, "the geodesic distances", &f->geo, err)))
+    if (is_linear(f->cfg.method)) {
+        if ((st = read_f64s(r, p * h, "the axes", &f->axes, err)))
+            return st;
+    } else if ((st = read_f64s(r, n * h, "the training functions", &f->train_c, err)) ||
+               (st = read_f64s(r, n * p, "the MDS eigenvectors", &f->mds_v, err)) ||
+               (st = read_f64s(r, n, "the squared geodesic means", &f->d2mean, err)) ||
+               (st = read_f64s(r, n * n, "the geodesic distances", &f->geo, err))) {
         return st;
+    }
+    if (f->cfg.alignment != AFFECT_FDA_ALIGN_LANDMARKS)
+        return AFFECT_OK;
+    size_t lat = r->off;
+    if (!affect_br_u32(r, &f->n_lm))
+        return truncated(err, r, "the landmark template");
+    if (f->n_lm > LM_MAX)
+        return out_of_range(err, "landmark count", f->n_lm, lat);
+    double last = 0.0;
+    for (uint32_t k = 0; k < f->n_lm; k++) {
+        uint32_t ty;
+        lat = r->off;
+        if (!affect_br_f64(r, &f->lm[k].t) || !affect_br_u32(r, &ty))
+            return truncated(err, r, "the landmark template");
+        if (!(f->lm[k].t > last) || !(f->lm[k].t < 1.0) || ty > 1)
+            return affect_fail(err, AFFECT_ERR_FORMAT,
+                               "landmark %u is not increasing in (0, 1) or has an unknown type "
+                               "(offset %zu)",
+                               k, lat);
+        f->lm[k].type = ty ? 1 : -1;
+        last = f->lm[k].t;
+    }
     return AFFECT_OK;
 }
 

@@ -7,7 +7,9 @@
  * How it works: the fold of every motion is fixed first (stratified folds, or its group), then
  * fold by fold the training motions are gathered (classes absent from them removed and the
  * others renumbered in order), a classifier is trained on them alone, and each held-out motion
- * is evaluated once (affect_classifier_eval gives all three labels). Nothing of a held-out
+ * is evaluated once (affect_classifier_eval gives all three labels); each functional method asked
+ * trains its own affect_fda model on the same training motions and classifies the held-out
+ * ones by 1-NN (affect_fda_classify). Nothing of a held-out
  * motion reaches training: the only shared inputs are the configuration and the feature
  * definition (tests/core/test_crossval.c checks this by corrupting the held-out motions).
  */
@@ -27,6 +29,16 @@ void affect_cv_config_default(affect_cv_config *cfg)
     cfg->folds = 10;
     cfg->seed = 1;
     cfg->threads = 1;
+    cfg->methods = AFFECT_CV_RECOGNIZER_MASK;
+    affect_fda_config_default(&cfg->fda);
+}
+
+static const char *const method_names[AFFECT_CV_METHODS] = {
+    "ml", "svm", "knn", "fpca", "ffda", "fspca", "fspca_rbf", "fisomap"};
+
+const char *affect_cv_method_name(unsigned m)
+{
+    return m < AFFECT_CV_METHODS ? method_names[m] : NULL;
 }
 
 void affect_cv_result_free(affect_cv_result *r)
@@ -101,10 +113,16 @@ static void progress(const affect_cv_config *cfg, const affect_cv_fold *f, uint3
 {
     if (!cfg->progress)
         return;
-    char line[256];
-    snprintf(line, sizeof line, "fold %u/%u: %u training, %u held out, svm %.3f, knn %.3f, ml %.3f",
-             f->fold + 1, n_folds, f->n_train, f->n_test, f->accuracy[AFFECT_CV_SVM],
-             f->accuracy[AFFECT_CV_KNN], f->accuracy[AFFECT_CV_ML]);
+    char line[512];
+    int len = snprintf(line, sizeof line, "fold %u/%u: %u training, %u held out", f->fold + 1,
+                       n_folds, f->n_train, f->n_test);
+    static const unsigned order[AFFECT_CV_METHODS] = {
+        AFFECT_CV_SVM,  AFFECT_CV_KNN,   AFFECT_CV_ML,        AFFECT_CV_FPCA,
+        AFFECT_CV_FFDA, AFFECT_CV_FSPCA, AFFECT_CV_FSPCA_RBF, AFFECT_CV_FISOMAP};
+    for (unsigned k = 0; k < AFFECT_CV_METHODS && len > 0 && (size_t)len < sizeof line; k++)
+        if (cfg->methods & (1u << order[k]))
+            len += snprintf(line + len, sizeof line - (size_t)len, ", %s %.3f",
+                            method_names[order[k]], f->accuracy[order[k]]);
     cfg->progress(cfg->progress_ctx, line);
 }
 
@@ -113,6 +131,7 @@ typedef struct run_ctx {
     const affect_cv_config *cfg;
     const affect_classifier_config *cls; /* cfg->cls with a silent child of its monitor */
     const affect_features *feat;
+    uint32_t m; /* coordinates per frame (affect_features_dim) */
     const affect_hmm_seq *seqs;
     const double *desc;
     uint32_t ddim;
@@ -125,11 +144,114 @@ typedef struct run_ctx {
     affect_cv_result *r;
 } run_ctx;
 
+/* Prefixes err's message with "fold 3: " (or "fold 3, motion 7: "), except out of memory. */
+static affect_status fold_fail(affect_status st, uint32_t fold, uint32_t motion, const char *what,
+                               affect_error *err)
+{
+    if (st == AFFECT_ERR_NOMEM)
+        return st;
+    char msg[AFFECT_ERROR_MSG_MAX];
+    memcpy(msg, err->msg, sizeof msg);
+    msg[sizeof msg - 1] = '\0';
+    if (motion == UINT32_MAX)
+        return affect_fail(err, st, "fold %u: %s%s", fold + 1, what, msg);
+    return affect_fail(err, st, "fold %u, motion %u: %s%s", fold + 1, motion, what, msg);
+}
+
+/* Functional method m on the fold's training motions (w, n_tr, present classes), each held-out
+ * motion classified by 1-NN in the embedding. */
+static affect_status run_functional(const run_ctx *rc, uint32_t fold, const fold_ws *w,
+                                    uint32_t n_tr, uint32_t present, unsigned m, affect_cv_fold *f,
+                                    affect_error *err)
+{
+    affect_fda_config fc = rc->cfg->fda;
+    fc.monitor = rc->cls->hmm.monitor;
+    fc.kernel = AFFECT_SPCA_LINEAR;
+    switch (m) {
+    case AFFECT_CV_FPCA:
+        fc.method = AFFECT_FDA_FPCA;
+        break;
+    case AFFECT_CV_FFDA:
+        fc.method = AFFECT_FDA_FFDA;
+        break;
+    case AFFECT_CV_FSPCA_RBF:
+        fc.kernel = AFFECT_SPCA_RBF;
+        fc.method = AFFECT_FDA_FSPCA;
+        break;
+    case AFFECT_CV_FSPCA:
+        fc.method = AFFECT_FDA_FSPCA;
+        break;
+    default:
+        fc.method = AFFECT_FDA_FISOMAP;
+        break;
+    }
+    char what[32];
+    snprintf(what, sizeof what, "%s: ", method_names[m]);
+    affect_fda *model = NULL;
+    affect_status st = affect_fda_train(&fc, rc->feat, w->seqs, n_tr, rc->m, w->y, w->labels,
+                                        present, &model, err);
+    if (st)
+        return fold_fail(st, fold, UINT32_MAX, what, err);
+    f->fda_dims[m] = affect_fda_dims(model);
+    f->fda_lambda = affect_fda_get_config(model)->lambda;
+    for (uint32_t i = 0; i < rc->n && st == AFFECT_OK; i++) {
+        if (rc->fold_of[i] != fold)
+            continue;
+        uint32_t label = 0;
+        st = affect_fda_classify(model, rc->seqs[i].x, rc->seqs[i].n_frames, 1, &label, NULL, err);
+        if (st)
+            st = fold_fail(st, fold, i, what, err);
+        else
+            f->confusion[m][(size_t)rc->y[i] * rc->C + w->back[label]]++;
+    }
+    affect_fda_free(model);
+    return st;
+}
+
+/* The recognizer (ML, Fisher + SVM, Fisher + sPCA + kNN) on the fold's training motions. */
+static affect_status run_recognizer(const run_ctx *rc, uint32_t fold, const fold_ws *w,
+                                    uint32_t n_tr, uint32_t present, affect_cv_fold *f,
+                                    affect_error *err)
+{
+    const affect_features *feat = rc->feat;
+    const affect_hmm_seq *seqs = rc->seqs;
+    const uint32_t *y = rc->y, *fold_of = rc->fold_of;
+    uint32_t n = rc->n, C = rc->C;
+    size_t dd = rc->ddim;
+    affect_classifier *c = NULL;
+    affect_status st = affect_classifier_train(rc->cls, feat, w->seqs, w->desc, w->y, n_tr,
+                                               w->labels, present, &c, err);
+    if (st)
+        return fold_fail(st, fold, UINT32_MAX, "", err);
+    const affect_classifier_config *cc = affect_classifier_get_config(c);
+    affect_classifier_report rep;
+    affect_classifier_get_report(c, &rep);
+    f->svm_c = rep.svm_c;
+    f->spca_dims = affect_spca_dims(affect_classifier_spca(c));
+    f->spca_sigma = cc->spca_sigma;
+    f->knn_k = cc->knn_k;
+    for (uint32_t i = 0; i < n && st == AFFECT_OK; i++) {
+        if (fold_of[i] != fold)
+            continue;
+        affect_classifier_out o = {0};
+        st = affect_classifier_eval(c, seqs[i].x, seqs[i].n_frames, dd ? rc->desc + i * dd : NULL,
+                                    false, &o, rc->cls->hmm.monitor, err);
+        if (st) {
+            st = fold_fail(st, fold, i, "", err);
+            break;
+        }
+        uint32_t pred[3] = {o.ml, o.svm, o.knn};
+        for (int m = 0; m < 3; m++)
+            f->confusion[m][(size_t)y[i] * C + w->back[pred[m]]]++;
+    }
+    affect_classifier_free(c);
+    return st;
+}
+
 /* Trains on the motions outside fold `fold` and scores the ones in it into f. */
 static affect_status run_fold(const run_ctx *rc, uint32_t fold, fold_ws *w, affect_cv_fold *f,
                               affect_error *err)
 {
-    const affect_features *feat = rc->feat;
     const affect_hmm_seq *seqs = rc->seqs;
     const uint32_t *y = rc->y, *fold_of = rc->fold_of;
     const char *const *labels = rc->labels;
@@ -159,48 +281,15 @@ static affect_status run_fold(const run_ctx *rc, uint32_t fold, fold_ws *w, affe
     if (present < 2)
         return affect_fail(err, AFFECT_ERR_INVALID,
                            "fold %u: the training motions have fewer than 2 classes", fold + 1);
-    affect_classifier *c = NULL;
-    affect_status st = affect_classifier_train(rc->cls, feat, w->seqs, w->desc, w->y, n_tr,
-                                               w->labels, present, &c, err);
-    if (st) {
-        if (st != AFFECT_ERR_NOMEM) {
-            char msg[AFFECT_ERROR_MSG_MAX];
-            memcpy(msg, err->msg, sizeof msg);
-            msg[sizeof msg - 1] = '\0';
-            st = affect_fail(err, st, "fold %u: %s", fold + 1, msg);
-        }
-        return st;
-    }
-    const affect_classifier_config *cc = affect_classifier_get_config(c);
-    affect_classifier_report rep;
-    affect_classifier_get_report(c, &rep);
-    f->svm_c = rep.svm_c;
-    f->spca_dims = affect_spca_dims(affect_classifier_spca(c));
-    f->spca_sigma = cc->spca_sigma;
-    f->knn_k = cc->knn_k;
-    for (uint32_t i = 0; i < n && st == AFFECT_OK; i++) {
-        if (fold_of[i] != fold)
-            continue;
-        affect_classifier_out o = {0};
-        st = affect_classifier_eval(c, seqs[i].x, seqs[i].n_frames, dd ? rc->desc + i * dd : NULL,
-                                    false, &o, rc->cls->hmm.monitor, err);
-        if (st) {
-            if (st != AFFECT_ERR_NOMEM) {
-                char msg[AFFECT_ERROR_MSG_MAX];
-                memcpy(msg, err->msg, sizeof msg);
-                msg[sizeof msg - 1] = '\0';
-                st = affect_fail(err, st, "fold %u, motion %u: %s", fold + 1, i, msg);
-            }
-            break;
-        }
-        uint32_t pred[AFFECT_CV_METHODS] = {o.ml, o.svm, o.knn};
-        for (int m = 0; m < AFFECT_CV_METHODS; m++)
-            f->confusion[m][(size_t)y[i] * C + w->back[pred[m]]]++;
-    }
-    affect_classifier_free(c);
+    affect_status st = AFFECT_OK;
+    for (unsigned m = AFFECT_CV_FPCA; m < AFFECT_CV_METHODS && st == AFFECT_OK; m++)
+        if (rc->cfg->methods & (1u << m))
+            st = run_functional(rc, fold, w, n_tr, present, m, f, err);
+    if (st == AFFECT_OK && (rc->cfg->methods & AFFECT_CV_RECOGNIZER_MASK))
+        st = run_recognizer(rc, fold, w, n_tr, present, f, err);
     if (st)
         return st;
-    for (int m = 0; m < AFFECT_CV_METHODS; m++)
+    for (unsigned m = 0; m < AFFECT_CV_METHODS; m++) /* not asked: NaN (no motion counted) */
         metrics(f->confusion[m], C, &f->accuracy[m], &f->balanced[m], &f->f1[m]);
     return AFFECT_OK;
 }
@@ -364,6 +453,16 @@ affect_status affect_crossval(const affect_cv_config *cfg, const affect_features
     if (n_classes < 2 || n_classes > AFFECT_CLASSIFIER_MAX_CLASSES)
         return affect_fail(err, AFFECT_ERR_INVALID, "need 2 to %u classes, got %u",
                            AFFECT_CLASSIFIER_MAX_CLASSES, n_classes);
+    if (!(cfg->methods & AFFECT_CV_ALL_MASK))
+        return affect_fail(err, AFFECT_ERR_INVALID, "no method asked");
+    if (cfg->methods & ~AFFECT_CV_ALL_MASK)
+        return affect_fail(err, AFFECT_ERR_INVALID, "unknown method bits 0x%x",
+                           cfg->methods & ~AFFECT_CV_ALL_MASK);
+    if (cfg->methods & ~AFFECT_CV_RECOGNIZER_MASK) {
+        const char *msg = affect_fda_config_check(&cfg->fda);
+        if (msg)
+            return affect_fail(err, AFFECT_ERR_INVALID, "%s", msg);
+    }
     if (cfg->threads < 1 || cfg->threads > 64)
         return affect_fail(err, AFFECT_ERR_INVALID, "threads must be from 1 to 64, got %u",
                            cfg->threads);
@@ -405,7 +504,10 @@ affect_status affect_crossval(const affect_cv_config *cfg, const affect_features
     r->folds = affect_calloc(k ? k : 1, sizeof *r->folds);
     for (int m = 0; m < AFFECT_CV_METHODS; m++)
         r->pooled[m] = affect_calloc((size_t)n_classes * n_classes, sizeof(uint32_t));
-    if (!r->folds || !r->pooled[0] || !r->pooled[1] || !r->pooled[2]) {
+    bool pooled = true;
+    for (int m = 0; m < AFFECT_CV_METHODS; m++)
+        pooled = pooled && r->pooled[m];
+    if (!r->folds || !pooled) {
         st = affect_nomem(err);
         goto done;
     }
@@ -429,7 +531,10 @@ affect_status affect_crossval(const affect_cv_config *cfg, const affect_features
     affect_classifier_config cls = cfg->cls;
     affect_monitor child;
     cls.hmm.monitor = affect_monitor_child(&child, cfg->cls.hmm.monitor);
-    run_ctx rc = {cfg, &cls, feat, seqs, desc, ddim, y, n, labels, n_classes, fold_of, k, r};
+    run_ctx rc = {cfg,  &cls,   feat,      feat ? affect_features_dim(feat) : cfg->cls.hmm.dim,
+                  seqs, desc,   ddim,      y,
+                  n,    labels, n_classes, fold_of,
+                  k,    r};
     affect_monitor_report(cfg->cls.hmm.monitor, "folds", 0, r->n_folds);
     if (cfg->threads > 1 && r->n_folds > 1) {
         st = run_parallel(&rc, err);

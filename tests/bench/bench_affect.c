@@ -569,7 +569,7 @@ static int bench_crossval(const dataset *d, uint32_t runs, uint32_t threads, cv_
     s->cpu = cpu[mr];
     memcpy(s->fold_s, folds[mr], sizeof s->fold_s);
     const affect_cv_result *r = res[mr];
-    for (int m = 0; m < AFFECT_CV_METHODS; m++) {
+    for (int m = 0; m < AFFECT_CV_RECOGNIZER_METHODS; m++) {
         s->mean_acc[m] = r->mean_accuracy[m];
         s->pooled_acc[m] = r->pooled_accuracy[m];
     }
@@ -1110,7 +1110,7 @@ int main(int argc, char **argv)
     printf("BENCH affect_crossval_10fold_slowest %.2f s\n", cs.max);
     printf("BENCH affect_crossval_10fold_cpu %.2f s\n", cs.cpu);
     static const char *const methods[AFFECT_CV_METHODS] = {"ml", "svm", "knn"};
-    for (int m = 0; m < AFFECT_CV_METHODS; m++)
+    for (int m = 0; m < AFFECT_CV_RECOGNIZER_METHODS; m++)
         printf("BENCH affect_crossval_accuracy_%s %.4f ratio\n", methods[m], cs.mean_acc[m]);
     for (int k = 0; k < P_COUNT; k++)
         printf("BENCH fold_%s %.3f s\n", piece_keys[k], fs.piece[k]);

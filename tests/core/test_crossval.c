@@ -159,8 +159,8 @@ static metric3 metrics_of(const uint32_t *cm, uint32_t C)
     return m;
 }
 
-/* Every fold's metrics from its matrices, and the summaries. */
-static void check_metrics(const affect_cv_result *r, uint32_t n_total)
+/* Every fold's metrics from its matrices, and the summaries, of the methods in mask. */
+static void check_metrics_of(const affect_cv_result *r, uint32_t n_total, unsigned mask)
 {
     uint32_t C = r->n_classes, F = r->n_folds;
     uint32_t tested = 0;
@@ -169,6 +169,8 @@ static void check_metrics(const affect_cv_result *r, uint32_t n_total)
         tested += fd->n_test;
         assert_int_equal(fd->n_train + fd->n_test, n_total);
         for (int m = 0; m < AFFECT_CV_METHODS; m++) {
+            if (!(mask & (1u << m)))
+                continue;
             uint32_t sum = 0;
             for (uint32_t e = 0; e < C * C; e++)
                 sum += fd->confusion[m][e];
@@ -179,15 +181,22 @@ static void check_metrics(const affect_cv_result *r, uint32_t n_total)
             tu_assert_near(fd->f1[m], want.f1, 1e-15);
         }
         for (uint32_t k = 0; k < C; k++) { /* the methods saw the same motions */
-            uint32_t row[AFFECT_CV_METHODS] = {0};
-            for (int m = 0; m < AFFECT_CV_METHODS; m++)
+            uint32_t row[AFFECT_CV_METHODS] = {0}, first = UINT32_MAX;
+            for (int m = 0; m < AFFECT_CV_METHODS; m++) {
+                if (!(mask & (1u << m)))
+                    continue;
                 for (uint32_t j = 0; j < C; j++)
                     row[m] += fd->confusion[m][k * C + j];
-            assert_true(row[0] == row[1] && row[1] == row[2]);
+                if (first == UINT32_MAX)
+                    first = row[m];
+                assert_int_equal(row[m], first);
+            }
         }
     }
     assert_int_equal(tested, n_total);
     for (int m = 0; m < AFFECT_CV_METHODS; m++) {
+        if (!(mask & (1u << m)))
+            continue;
         double s[3] = {0}, q[3] = {0};
         for (uint32_t f = 0; f < F; f++) {
             s[0] += r->folds[f].accuracy[m];
@@ -221,6 +230,11 @@ static void check_metrics(const affect_cv_result *r, uint32_t n_total)
     }
 }
 
+static void check_metrics(const affect_cv_result *r, uint32_t n_total)
+{
+    check_metrics_of(r, n_total, AFFECT_CV_RECOGNIZER_MASK);
+}
+
 /* Whether two results are bit-identical (folds, matrices, summaries). */
 static bool same_results(const affect_cv_result *a, const affect_cv_result *b)
 {
@@ -239,6 +253,9 @@ static bool same_results(const affect_cv_result *a, const affect_cv_result *b)
         for (int m = 0; m < AFFECT_CV_METHODS; m++)
             if (memcmp(x->confusion[m], y->confusion[m], cc))
                 return false;
+        if (memcmp(x->fda_dims, y->fda_dims, sizeof x->fda_dims) ||
+            memcmp(&x->fda_lambda, &y->fda_lambda, 8))
+            return false;
     }
     for (int m = 0; m < AFFECT_CV_METHODS; m++)
         if (memcmp(a->pooled[m], b->pooled[m], cc))
@@ -535,10 +552,10 @@ static void test_no_leakage(void **state)
     uint32_t dims_direct;
     direct_fold(&cfg, d, fold_of, F, d->seqs, cm, &c_direct, &dims_direct);
     assert_true(c_direct == fa->svm_c && dims_direct == fa->spca_dims);
-    for (int m = 0; m < AFFECT_CV_METHODS; m++)
+    for (int m = 0; m < AFFECT_CV_RECOGNIZER_METHODS; m++)
         assert_memory_equal(fa->confusion[m], cm[m], sizeof cm[m]);
     direct_fold(&cfg, d, fold_of, F, bad, cm, &c_direct, &dims_direct);
-    for (int m = 0; m < AFFECT_CV_METHODS; m++)
+    for (int m = 0; m < AFFECT_CV_RECOGNIZER_METHODS; m++)
         assert_memory_equal(fb->confusion[m], cm[m], sizeof cm[m]);
     /* the garbage is recognised as such: the clean run does better on fold F */
     assert_true(fb->accuracy[AFFECT_CV_SVM] < fa->accuracy[AFFECT_CV_SVM] ||
@@ -592,7 +609,7 @@ static void test_leave_one_group_out(void **state)
     assert_int_equal(r->folds[1].n_test, 6);
     /* fold 1's classifier knows two classes: one sPCA axis of the 2 asked */
     assert_int_equal(f0->spca_dims, 1);
-    for (int m = 0; m < AFFECT_CV_METHODS; m++) {
+    for (int m = 0; m < AFFECT_CV_RECOGNIZER_METHODS; m++) {
         const uint32_t *cm = f0->confusion[m];
         /* the sad row: 4 motions, none predicted sad; nothing else predicted sad either */
         assert_int_equal(cm[1 * 3 + 0] + cm[1 * 3 + 2], 4);
@@ -698,13 +715,14 @@ typedef struct oom_ctx {
     const uint32_t *y, *g;
     uint32_t n, n_groups;
     affect_cv_result *r;
+    uint32_t classes; /* 0: 2 */
 } oom_ctx;
 
 static affect_status oom_cv(void *ctx, affect_error *err)
 {
     oom_ctx *o = ctx;
-    return affect_crossval(o->cfg, o->d->feat, o->seqs, NULL, o->y, o->n, EMOTIONS, 2, o->g,
-                           o->n_groups, &o->r, err);
+    return affect_crossval(o->cfg, o->d->feat, o->seqs, NULL, o->y, o->n, EMOTIONS,
+                           o->classes ? o->classes : 2, o->g, o->n_groups, &o->r, err);
 }
 
 static void oom_finish(void *ctx, affect_status st)
@@ -747,7 +765,7 @@ static void test_small_and_out_of_memory(void **state)
     check_metrics(r, n);
     affect_cv_result_free(r);
 
-    oom_ctx o = {&cfg, d, seqs, y, NULL, n, 0, NULL};
+    oom_ctx o = {&cfg, d, seqs, y, NULL, n, 0, NULL, 0};
     cfg.folds = 2;
     long k_fold = tu_oom_sweep(oom_cv, &o, oom_finish, NULL);
     o.g = g;
@@ -757,13 +775,151 @@ static void test_small_and_out_of_memory(void **state)
     assert_true(k_fold > 50 && by_group > 50);
 }
 
+/* ---- the functional methods (affect/fda.h) ---- */
+
+static affect_fda_method fda_method_of(unsigned m, affect_spca_kernel *kernel)
+{
+    *kernel = m == AFFECT_CV_FSPCA_RBF ? AFFECT_SPCA_RBF : AFFECT_SPCA_LINEAR;
+    return m == AFFECT_CV_FPCA                                ? AFFECT_FDA_FPCA
+           : m == AFFECT_CV_FFDA                              ? AFFECT_FDA_FFDA
+           : m == AFFECT_CV_FSPCA || m == AFFECT_CV_FSPCA_RBF ? AFFECT_FDA_FSPCA
+                                                              : AFFECT_FDA_FISOMAP;
+}
+
+static void fda_cv_config(affect_cv_config *cfg, const affect_features *f)
+{
+    cv_config(cfg, f);
+    cfg->methods = AFFECT_CV_ALL_MASK & ~AFFECT_CV_RECOGNIZER_MASK;
+    cfg->fda.n_basis = 20;
+    cfg->fda.dims = 2;
+    cfg->fda.sigma = 0.5;
+    cfg->fda.isomap_k = 5;
+}
+
+static void test_functional(void **state)
+{
+    dataset *d = *state;
+    affect_cv_config cfg;
+    fda_cv_config(&cfg, d->feat);
+    uint32_t g[N_MOTIONS];
+    for (uint32_t i = 0; i < d->n; i++)
+        g[i] = d->seed[i] - 1;
+    affect_cv_result *r = run_ok(&cfg, d->feat, d->seqs, d->y, d->n, EMOTIONS, 4, g, N_SEEDS);
+    assert_int_equal(r->n_folds, N_SEEDS);
+    /* each fold, each method: affect_fda_train on the other performers, 1-NN classification */
+    for (uint32_t f = 0; f < r->n_folds; f++) {
+        const affect_cv_fold *fd = &r->folds[f];
+        affect_hmm_seq tr[N_MOTIONS];
+        uint32_t ytr[N_MOTIONS], n_tr = 0;
+        for (uint32_t i = 0; i < d->n; i++)
+            if (g[i] != fd->fold) {
+                tr[n_tr] = d->seqs[i];
+                ytr[n_tr++] = d->y[i];
+            }
+        assert_int_equal(fd->n_train, n_tr);
+        for (unsigned m = 0; m < AFFECT_CV_METHODS; m++) {
+            uint32_t want[N_EMOTIONS * N_EMOTIONS] = {0}, sum = 0;
+            for (uint32_t e = 0; e < N_EMOTIONS * N_EMOTIONS; e++)
+                sum += fd->confusion[m][e];
+            if (m < AFFECT_CV_RECOGNIZER_METHODS) { /* not asked: nothing counted */
+                assert_int_equal(sum, 0);
+                assert_true(isnan(fd->accuracy[m]));
+                continue;
+            }
+            affect_fda_config fc = cfg.fda;
+            fc.method = fda_method_of(m, &fc.kernel);
+            affect_fda *model = NULL;
+            affect_error err;
+            if (affect_fda_train(&fc, d->feat, tr, n_tr, d->dim, ytr, EMOTIONS, N_EMOTIONS, &model,
+                                 &err))
+                fail_msg("fda_train: %s", err.msg);
+            assert_int_equal(fd->fda_dims[m], affect_fda_dims(model));
+            for (uint32_t i = 0; i < d->n; i++) {
+                if (g[i] != fd->fold)
+                    continue;
+                uint32_t label;
+                assert_int_equal(affect_fda_classify(model, d->seqs[i].x, d->seqs[i].n_frames, 1,
+                                                     &label, NULL, &err),
+                                 AFFECT_OK);
+                want[d->y[i] * N_EMOTIONS + label]++;
+            }
+            affect_fda_free(model);
+            assert_memory_equal(fd->confusion[m], want, sizeof want);
+            assert_int_equal(sum, fd->n_test);
+        }
+    }
+    check_metrics_of(r, d->n, cfg.methods);
+    /* two threads: the same bits */
+    cfg.threads = 2;
+    affect_cv_result *r2 = run_ok(&cfg, d->feat, d->seqs, d->y, d->n, EMOTIONS, 4, g, N_SEEDS);
+    assert_true(same_results(r, r2));
+    affect_cv_result_free(r2);
+    affect_cv_result_free(r);
+
+    /* errors */
+    cfg.threads = 1;
+    cfg.methods = 0;
+    run_fails(&cfg, d->feat, d->seqs, d->y, d->n, EMOTIONS, 4, g, N_SEEDS, "no method asked");
+    cfg.methods = 0x1ff;
+    run_fails(&cfg, d->feat, d->seqs, d->y, d->n, EMOTIONS, 4, g, N_SEEDS,
+              "unknown method bits 0x100");
+    cfg.methods = 1u << AFFECT_CV_FFDA;
+    cfg.fda.dims = 0;
+    run_fails(&cfg, d->feat, d->seqs, d->y, d->n, EMOTIONS, 4, g, N_SEEDS,
+              "dims must be from 1 to 64");
+    cfg.fda.dims = 2;
+    cfg.methods = 1u << AFFECT_CV_FISOMAP;
+    cfg.fda.isomap_k = 1;
+    affect_error err;
+    r = NULL;
+    assert_int_equal(affect_crossval(&cfg, d->feat, d->seqs, NULL, d->y, d->n, EMOTIONS, 4, g,
+                                     N_SEEDS, &r, &err),
+                     AFFECT_ERR_INVALID);
+    assert_null(r);
+    const char *prefix = "fold 1: fisomap: the 1-nearest-neighbour graph is not connected";
+    if (strncmp(err.msg, prefix, strlen(prefix)) != 0)
+        fail_msg("\"%s\" does not start with \"%s\"", err.msg, prefix);
+    /* the recognizer's methods are still unchanged by the functional ones next to them */
+    affect_cv_config both;
+    cv_config(&both, d->feat);
+    both.cls.svm_c = 1.0;
+    both.folds = 4;
+    affect_cv_result *a = run_ok(&both, d->feat, d->seqs, d->y, d->n, EMOTIONS, 4, NULL, 0);
+    both.methods |= 1u << AFFECT_CV_FFDA;
+    both.fda.n_basis = 20;
+    affect_cv_result *b = run_ok(&both, d->feat, d->seqs, d->y, d->n, EMOTIONS, 4, NULL, 0);
+    for (unsigned m = 0; m < AFFECT_CV_RECOGNIZER_METHODS; m++)
+        assert_memory_equal(a->pooled[m], b->pooled[m], 16 * sizeof(uint32_t));
+    assert_false(isnan(b->mean_accuracy[AFFECT_CV_FFDA]));
+    assert_true(isnan(a->mean_accuracy[AFFECT_CV_FFDA]));
+    affect_cv_result_free(a);
+    affect_cv_result_free(b);
+
+    /* out of memory: FPCA and FFDA, leave one performer out on 3 performers' waves */
+    affect_hmm_seq seqs[24];
+    uint32_t y[24], g3[24], n = 0;
+    for (uint32_t i = 0; i < d->n; i++)
+        if (d->action[i] == 1 && d->seed[i] <= 3) {
+            seqs[n] = d->seqs[i];
+            y[n] = d->y[i];
+            g3[n++] = d->seed[i] - 1;
+        }
+    fda_cv_config(&cfg, d->feat);
+    cfg.methods = (1u << AFFECT_CV_FPCA) | (1u << AFFECT_CV_FFDA);
+    cfg.fda.n_basis = 8;
+    oom_ctx o = {&cfg, d, seqs, y, g3, n, 3, NULL, 4};
+    long allocs = tu_oom_sweep(oom_cv, &o, oom_finish, NULL);
+    printf("allocations: functional, 3 groups %ld\n", allocs);
+    assert_true(allocs > 50);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_stratified_folds), cmocka_unit_test(test_kfold),
         cmocka_unit_test(test_no_leakage),       cmocka_unit_test(test_leave_one_group_out),
         cmocka_unit_test(test_errors),           cmocka_unit_test(test_small_and_out_of_memory),
-        cmocka_unit_test(test_threads),
+        cmocka_unit_test(test_threads),          cmocka_unit_test(test_functional),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

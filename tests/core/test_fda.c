@@ -13,6 +13,7 @@
 #include "testutil.h"
 
 #include "affect/fda.h"
+#include "affect/hmm_blob.h" /* affect_fnv1a64 */
 #include "util/rng.h"
 #include "affect/spca.h"
 
@@ -517,18 +518,38 @@ static void test_errors(void **state)
     free_data(&e);
 }
 
+/* A fixture's bytes (*bytes, *len) and its decoded model. */
+static affect_fda *decode_fixture(const char *path, char **bytes, size_t *len)
+{
+    *bytes = tu_read_file(path, len);
+    assert_non_null(*bytes);
+    affect_fda *f = NULL;
+    affect_error err;
+    if (affect_fda_decode((const unsigned char *)*bytes, *len, &f, &err))
+        fail_msg("decode %s: %s", path, err.msg);
+    return f;
+}
+
+/* Today's encoder writes the fixture's bytes again. */
+static void encodes_to(const affect_fda *f, const char *bytes, size_t len)
+{
+    unsigned char *again;
+    size_t n;
+    affect_error err;
+    assert_int_equal(affect_fda_encode(f, &again, &n, &err), AFFECT_OK);
+    assert_int_equal(n, len);
+    assert_memory_equal(again, bytes, len);
+    free(again);
+}
+
 /* tests/fixtures/fda-v1.bin: the SQL spec's small model (right hand, first-frame
  * observations, 6 B-splines, FPCA 2-D, 12 motion_synth waves of 4 emotions). */
 static void test_fixture_v1(void **state)
 {
     (void)state;
     size_t len;
-    char *bytes = tu_read_file(AFFECT_FIXTURES_DIR "/fda-v1.bin", &len);
-    assert_non_null(bytes);
-    affect_fda *f = NULL;
-    affect_error err;
-    if (affect_fda_decode((const unsigned char *)bytes, len, &f, &err))
-        fail_msg("decode: %s", err.msg);
+    char *bytes;
+    affect_fda *f = decode_fixture(AFFECT_FIXTURES_DIR "/fda-v1.bin", &bytes, &len);
     const affect_fda_config *cfg = affect_fda_get_config(f);
     assert_int_equal(cfg->method, AFFECT_FDA_FPCA);
     assert_int_equal(cfg->n_basis, 6);
@@ -542,11 +563,7 @@ static void test_fixture_v1(void **state)
     assert_string_equal(affect_fda_class_name(f, 3), "sad");
     assert_non_null(affect_fda_features(f));
     assert_int_equal(affect_fda_features(f)->frame, AFFECT_FEATURES_FRAME_FIRST);
-    unsigned char *again;
-    size_t n;
-    assert_int_equal(affect_fda_encode(f, &again, &n, &err), AFFECT_OK);
-    assert_int_equal(n, len);
-    assert_memory_equal(again, bytes, len);
+    encodes_to(f, bytes, len);
     /* the training embedding is the FPCA scores: centred, the first axis the wider */
     const double *z = affect_fda_train_embedding(f);
     double m0 = 0, v0 = 0, v1 = 0;
@@ -555,7 +572,32 @@ static void test_fixture_v1(void **state)
     tu_assert_near(m0, 0.0, 1e-9);
     assert_true(v0 >= v1);
     tu_assert_near(v0 / 11, affect_fda_eigenvalues(f)[0], 1e-9 * v0);
-    free(again);
+    free(bytes);
+    affect_fda_free(f);
+}
+
+/* tests/fixtures/fda-v2.bin: fda-v1.bin's motions and options with "alignment":"landmarks"
+ * (version 2: flags 1 and the landmark template). */
+static void test_fixture_v2(void **state)
+{
+    (void)state;
+    size_t len;
+    char *bytes;
+    affect_fda *f = decode_fixture(AFFECT_FIXTURES_DIR "/fda-v2.bin", &bytes, &len);
+    assert_int_equal(len, 1615);
+    assert_int_equal((unsigned char)bytes[4], 2);
+    const affect_fda_config *cfg = affect_fda_get_config(f);
+    assert_int_equal(cfg->method, AFFECT_FDA_FPCA);
+    assert_int_equal(cfg->alignment, AFFECT_FDA_ALIGN_LANDMARKS);
+    assert_int_equal(affect_fda_train_size(f), 12);
+    uint32_t nt;
+    const affect_fda_landmark *tp = affect_fda_template(f, &nt);
+    assert_int_equal(nt, 6);
+    for (uint32_t k = 0; k < nt; k++) {
+        assert_true(tp[k].t > (k ? tp[k - 1].t : 0.0) && tp[k].t < 1.0);
+        assert_int_equal(tp[k].type, k % 2 == 0 ? 1 : -1);
+    }
+    encodes_to(f, bytes, len);
     free(bytes);
     affect_fda_free(f);
 }
@@ -611,6 +653,7 @@ typedef struct oom_ctx {
     data *d;
     affect_fda_method method;
     affect_fda *f;
+    affect_fda_alignment alignment;
 } oom_ctx;
 
 static affect_status oom_op(void *p, affect_error *err)
@@ -619,6 +662,7 @@ static affect_status oom_op(void *p, affect_error *err)
     affect_fda_config cfg;
     small_cfg(&cfg, o->method);
     cfg.n_basis = 6;
+    cfg.alignment = o->alignment;
     affect_status st = affect_fda_train(&cfg, NULL, o->d->seqs, o->d->n, o->d->m, o->d->y, NAMES,
                                         o->d->c, &o->f, err);
     if (st)
@@ -648,10 +692,191 @@ static void test_oom(void **state)
     (void)state;
     data d = make_data(10, 3, 1.0, 4);
     for (int method = 0; method < 4; method++) {
-        oom_ctx o = {&d, (affect_fda_method)method, NULL};
+        oom_ctx o = {&d, (affect_fda_method)method, NULL, AFFECT_FDA_ALIGN_LINEAR};
         long calls = tu_oom_sweep(oom_op, &o, oom_finish, NULL);
         assert_true(calls > 10);
     }
+    oom_ctx o = {&d, AFFECT_FDA_FFDA, NULL, AFFECT_FDA_ALIGN_LANDMARKS};
+    assert_true(tu_oom_sweep(oom_op, &o, oom_finish, NULL) > 10);
+    free_data(&d);
+}
+
+/* ---- landmark registration ---- */
+
+#define PI 3.141592653589793
+
+/* A known warp g of [0, 1] (piecewise linear through (0, 0), (0.35, 0.45), (0.75, 0.8), (1, 1))
+ * and its inverse. Its kinks lie between landmarks: a kink at a rest makes the smoothed speed
+ * lopsided there and moves the found rest by up to 0.02. */
+static const double WARP_U[] = {0.0, 0.35, 0.75, 1.0}, WARP_S[] = {0.0, 0.45, 0.8, 1.0};
+
+static double pwl(const double *from, const double *to, double t)
+{
+    int k = 0;
+    while (k < 2 && t > from[k + 1])
+        k++;
+    return to[k] + (t - from[k]) * (to[k + 1] - to[k]) / (from[k + 1] - from[k]);
+}
+
+/* The base movement at canonical time u: amplitude a × (sin 5πu, ½ sin 5πu); its speed peaks
+ * at u = 0.2, 0.4, 0.6, 0.8 and rests (zero speed) at u = 0.1, 0.3, …, 0.9. A motion of T
+ * frames shows it at u = inverse warp of j / (T − 1) (warped) or at j / (T − 1). */
+static double *warped_motion(uint32_t T, double a, const double *wu, const double *ws)
+{
+    double *x = malloc((size_t)T * 2 * sizeof *x);
+    assert_non_null(x);
+    for (uint32_t j = 0; j < T; j++) {
+        double s = j / (double)(T - 1), u = wu ? pwl(ws, wu, s) : s;
+        x[2 * j] = a * sin(5 * PI * u);
+        x[2 * j + 1] = 0.5 * a * sin(5 * PI * u);
+    }
+    return x;
+}
+
+static void test_landmarks_known_warp(void **state)
+{
+    (void)state;
+    const uint32_t T = 301;
+    double *base = warped_motion(T, 1.0, NULL, NULL);
+    double *warp = warped_motion(T, 1.0, WARP_U, WARP_S);
+    affect_fda_landmark lb[AFFECT_FDA_MAX_LANDMARKS], lw[AFFECT_FDA_MAX_LANDMARKS];
+    uint32_t nb = 0, nw = 0;
+    affect_error err;
+    assert_int_equal(affect_fda_find_landmarks(base, T, 2, lb, &nb, &err), AFFECT_OK);
+    assert_int_equal(affect_fda_find_landmarks(warp, T, 2, lw, &nw, &err), AFFECT_OK);
+    /* the base: rests at 0.1 .. 0.9 and peaks at 0.2 .. 0.8, alternating */
+    assert_int_equal(nb, 9);
+    for (uint32_t k = 0; k < nb; k++) {
+        tu_assert_near(lb[k].t, 0.1 * (k + 1), 0.01);
+        assert_int_equal(lb[k].type, k % 2 == 0 ? -1 : 1);
+    }
+    /* the warped motion's landmarks are the base's moved by g */
+    assert_int_equal(nw, 9);
+    uint32_t ia[AFFECT_FDA_MAX_LANDMARKS], ib[AFFECT_FDA_MAX_LANDMARKS];
+    assert_int_equal(affect_fda_match_landmarks(lw, nw, lb, nb, ia, ib), 9);
+    for (uint32_t k = 0; k < 9; k++) {
+        assert_int_equal(ia[k], k);
+        assert_int_equal(ib[k], k);
+        tu_assert_near(lw[k].t, pwl(WARP_U, WARP_S, lb[k].t), 0.012);
+    }
+    /* and the registration recovers the warp: frame j goes back to u = g⁻¹(j / (T − 1)) */
+    double times[301];
+    affect_fda_warp_times(lw, nw, lb, nb, T, times);
+    assert_true(times[0] == 0.0 && times[T - 1] == 1.0);
+    for (uint32_t j = 0; j < T; j++) {
+        tu_assert_near(times[j], pwl(WARP_S, WARP_U, j / (double)(T - 1)), 0.012);
+        if (j)
+            assert_true(times[j] > times[j - 1]);
+    }
+    /* matching skips what has no partner: the base against its first half */
+    assert_int_equal(affect_fda_match_landmarks(lb, 4, lb, nb, ia, ib), 4);
+    assert_int_equal(ib[3], 3);
+    /* no movement, or too few frames: no landmarks */
+    double still[20] = {0};
+    assert_int_equal(affect_fda_find_landmarks(still, 10, 2, lb, &nb, &err), AFFECT_OK);
+    assert_int_equal(nb, 0);
+    assert_int_equal(affect_fda_find_landmarks(base, 4, 2, lb, &nb, &err), AFFECT_OK);
+    assert_int_equal(nb, 0);
+    free(base);
+    free(warp);
+}
+
+/* 12 motions of 2 classes (amplitudes 1 and 1.6), each the base movement under its own warp
+ * (interior knots moved by up to ±0.12) and of 90 .. 200 frames. */
+static data warped_data(void)
+{
+    data d = {12, 2, 2, NULL, NULL, NULL};
+    d.seqs = calloc(d.n, sizeof *d.seqs);
+    d.x = calloc(d.n, sizeof *d.x);
+    d.y = calloc(d.n, sizeof *d.y);
+    assert_true(d.seqs && d.x && d.y);
+    for (uint32_t i = 0; i < d.n; i++) {
+        double a = (double)(i % 6) / 5.0 - 0.5; /* −0.5 .. 0.5 */
+        double wu[] = {0.0, 0.3, 0.7, 1.0};
+        double ws[] = {0.0, 0.3 + 0.24 * a, 0.7 - 0.2 * a, 1.0};
+        uint32_t T = 90 + 10 * i;
+        d.y[i] = i % 2;
+        d.x[i] = warped_motion(T, d.y[i] ? 1.6 : 1.0, wu, ws);
+        d.seqs[i].x = d.x[i];
+        d.seqs[i].n_frames = T;
+    }
+    return d;
+}
+
+static void test_landmarks_model(void **state)
+{
+    (void)state;
+    data d = warped_data();
+    affect_fda_config cfg;
+    small_cfg(&cfg, AFFECT_FDA_FPCA);
+    cfg.n_basis = 40;
+    cfg.lambda = 1e-8;
+    affect_fda *lin = train_ok(&cfg, &d);
+    cfg.alignment = AFFECT_FDA_ALIGN_LANDMARKS;
+    affect_fda *lm = train_ok(&cfg, &d);
+    /* the template is the base's landmarks; registered, the curves differ by amplitude only:
+     * far less variance, and the first FPCA axis carries nearly all of it */
+    uint32_t nt;
+    const affect_fda_landmark *tp = affect_fda_template(lm, &nt);
+    assert_int_equal(nt, 9);
+    for (uint32_t k = 0; k < nt; k++)
+        tu_assert_near(tp[k].t, 0.1 * (k + 1), 0.05);
+    double v_lin = affect_fda_total_variance(lin), v_lm = affect_fda_total_variance(lm);
+    /* measured: 0.431 linear, 0.069 registered (amplitude alone: 0.061); first FPCA share
+     * 0.79 linear, 0.90 registered */
+    assert_true(v_lm < 0.2 * v_lin);
+    assert_true(v_lm < 1.25 * 0.09 * 0.625 * 12 / 11); /* amplitude ± 0.3 of ‖f‖² = 0.625 */
+    assert_true(affect_fda_fpca_eigenvalues(lm)[0] / v_lm >
+                affect_fda_fpca_eigenvalues(lin)[0] / v_lin + 0.05);
+    uint32_t n0;
+    affect_fda_template(lin, &n0);
+    assert_int_equal(n0, 0);
+    /* unseen motions are registered the same way: a training motion embeds to its training
+     * coordinates */
+    const double *tz = affect_fda_train_embedding(lm);
+    uint32_t p = affect_fda_dims(lm);
+    for (uint32_t i = 0; i < d.n; i++) {
+        double z[3];
+        affect_error err;
+        assert_int_equal(affect_fda_embed(lm, d.x[i], d.seqs[i].n_frames, z, &err), AFFECT_OK);
+        for (uint32_t r = 0; r < p; r++)
+            tu_assert_near(z[r], tz[i * p + r], 1e-9 * (1 + fabs(tz[i * p + r])));
+    }
+    /* the BLOB: version 2 with flags 1, the template back; linear models stay version 1 */
+    unsigned char *b1, *b2, *b3;
+    size_t n1, n2, n3;
+    affect_error err;
+    assert_int_equal(affect_fda_encode(lin, &b1, &n1, &err), AFFECT_OK);
+    assert_int_equal(affect_fda_encode(lm, &b2, &n2, &err), AFFECT_OK);
+    assert_int_equal(b1[4], 1);
+    assert_int_equal(b2[4], 2);
+    assert_int_equal(b2[8], 1);
+    affect_fda *back = NULL;
+    if (affect_fda_decode(b2, n2, &back, &err))
+        fail_msg("decode: %s", err.msg);
+    assert_int_equal(affect_fda_get_config(back)->alignment, AFFECT_FDA_ALIGN_LANDMARKS);
+    uint32_t nb;
+    const affect_fda_landmark *bt = affect_fda_template(back, &nb);
+    assert_int_equal(nb, nt);
+    for (uint32_t k = 0; k < nb; k++)
+        assert_true(bt[k].t == tp[k].t && bt[k].type == tp[k].type);
+    assert_int_equal(affect_fda_encode(back, &b3, &n3, &err), AFFECT_OK);
+    assert_int_equal(n3, n2);
+    assert_memory_equal(b3, b2, n2);
+    /* a version-1 BLOB with flags 1 is out of range */
+    b1[8] = 1;
+    affect_fda *bad = NULL;
+    uint64_t sum = affect_fnv1a64(b1, n1 - 8);
+    for (int k = 0; k < 8; k++)
+        b1[n1 - 8 + k] = (unsigned char)(sum >> (8 * k));
+    assert_int_equal(affect_fda_decode(b1, n1, &bad, &err), AFFECT_ERR_FORMAT);
+    assert_string_equal(err.msg, "flags 1 is out of range (offset 8)");
+    free(b1);
+    free(b2);
+    free(b3);
+    affect_fda_free(back);
+    affect_fda_free(lin);
+    affect_fda_free(lm);
     free_data(&d);
 }
 
@@ -668,8 +893,11 @@ int main(void)
         cmocka_unit_test(test_determinism_and_blob),
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_fixture_v1),
+        cmocka_unit_test(test_fixture_v2),
         cmocka_unit_test(test_perturbation),
         cmocka_unit_test(test_oom),
+        cmocka_unit_test(test_landmarks_known_warp),
+        cmocka_unit_test(test_landmarks_model),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

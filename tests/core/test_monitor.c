@@ -852,7 +852,7 @@ static void assert_cv_equal(const affect_cv_result *a, const affect_cv_result *b
     assert_int_equal(a->n_classes, b->n_classes);
     assert_int_equal(a->n_folds, b->n_folds);
     size_t C = a->n_classes;
-    for (int k = 0; k < AFFECT_CV_METHODS; k++) {
+    for (int k = 0; k < AFFECT_CV_RECOGNIZER_METHODS; k++) {
         assert_memory_equal(&a->mean_accuracy[k], &b->mean_accuracy[k], sizeof(double));
         assert_memory_equal(&a->sd_accuracy[k], &b->sd_accuracy[k], sizeof(double));
         assert_memory_equal(&a->mean_balanced[k], &b->mean_balanced[k], sizeof(double));
@@ -866,7 +866,7 @@ static void assert_cv_equal(const affect_cv_result *a, const affect_cv_result *b
         assert_int_equal(x->n_test, y->n_test);
         assert_memory_equal(x->accuracy, y->accuracy, sizeof x->accuracy);
         assert_memory_equal(&x->svm_c, &y->svm_c, sizeof(double));
-        for (int k = 0; k < AFFECT_CV_METHODS; k++)
+        for (int k = 0; k < AFFECT_CV_RECOGNIZER_METHODS; k++)
             assert_memory_equal(x->confusion[k], y->confusion[k], C * C * sizeof(uint32_t));
     }
 }

@@ -457,6 +457,68 @@ SELECT 'leave-one-group-out: one fold per performer, only the methods asked', co
 SELECT 'leave-one-performer-out accuracy of ' || method || ': ' || accuracy, accuracy >= 0.9 AND n_test = 32
   FROM cvg WHERE fold IS NULL;
 
+-- ---- affect_crossval: the functional methods (affect/fda.h), 1-NN in the embedding ----
+-- leave one performer out and leave one motion out (the group = the row), against the same
+-- folds done by hand with fda_train and fda_classify
+CREATE TABLE cvfm(method TEXT, opts TEXT);
+INSERT INTO cvfm VALUES ('fpca', '{"method":"fpca"}'), ('ffda', '{"method":"ffda"}'),
+  ('fspca', '{"method":"fspca"}'), ('fspca_rbf', '{"method":"fspca","kernel":"rbf","sigma":0.5}'),
+  ('fisomap', '{"method":"fisomap","isomap_k":5}');
+CREATE TABLE cvf AS SELECT * FROM affect_crossval('cvs', 'm', 'emotion', '{"group":"seed","methods":["fpca","ffda","fspca","fspca_rbf","fisomap"],"dims":2,"basis":20,"sigma":0.5,"isomap_k":5,"joints":["right_hand","head"],"frame":"first","velocity":false}');
+CREATE TABLE cvf_hand AS
+SELECT x.method, f.s AS fold, count(*) AS n_test,
+       avg(fda_classify(f.model, c.m) = c.emotion) AS accuracy, fda_info(f.model) AS info
+  FROM cvfm AS x,
+       (SELECT x2.method, k.s, (SELECT fda_train(m, emotion, json_patch('{"dims":2,"basis":20,"joints":["right_hand","head"],"frame":"first","velocity":false}', x2.opts)) FROM cvs WHERE seed <> k.s) AS model
+          FROM cvfm AS x2, (SELECT DISTINCT seed AS s FROM cvs) AS k) AS f,
+       cvs AS c
+ WHERE f.method = x.method AND c.seed = f.s
+ GROUP BY x.method, f.s;
+
+SELECT 'functional methods: 5 methods × (4 performers + a summary), in method order',
+       count(*) = 25 AND group_concat(DISTINCT method) = 'fpca,ffda,fspca,fspca_rbf,fisomap'
+  FROM cvf;
+
+SELECT 'functional methods: each fold equals fda_train on the other performers and 1-NN fda_classify: ' || v.method || ' ' || v.fold,
+       h.n_test = v.n_test AND v.n_train = 24 AND abs(h.accuracy - v.accuracy) < 1e-12
+   AND json_extract(v.params, '$.dims') = json_extract(h.info, '$.dims')
+  FROM cvf AS v JOIN cvf_hand AS h ON h.method = v.method AND h.fold = v.fold
+ WHERE v.fold IS NOT NULL;
+
+SELECT 'functional methods: the comparison by hand covers every fold of every method', count(*) = 20
+  FROM cvf AS v JOIN cvf_hand AS h ON h.method = v.method AND h.fold = v.fold;
+
+SELECT 'functional methods: the supervised ones beat FPCA on this synthetic set (leave one performer out)',
+       (SELECT accuracy FROM cvf WHERE method = 'fspca' AND fold IS NULL) >=
+       (SELECT accuracy FROM cvf WHERE method = 'fpca' AND fold IS NULL)
+   AND (SELECT accuracy FROM cvf WHERE method = 'ffda' AND fold IS NULL) >= 0.5;
+
+-- leave one out: the row as the group; the recognizer's kNN on the same folds
+CREATE TABLE cvs1 AS SELECT rowid AS id, * FROM cvs WHERE action = 'wave';
+CREATE TABLE cvl AS SELECT * FROM affect_crossval('cvs1', 'm', 'emotion', '{"group":"id","methods":["ml","fspca","ffda"],"dims":3,"basis":20,"states":2,"mixtures":1,"max_iter":2,"joints":["right_hand","head"],"frame":"first","velocity":false,"covariance":"full","descriptors":"none","mirror":false}');
+
+SELECT 'leave one out: one fold per motion for each method, the recognizer''s ml next to the functional ones',
+       count(*) = 3 * 17 AND group_concat(DISTINCT method) = 'ml,ffda,fspca'
+   AND sum(fold IS NOT NULL AND n_test = 1 AND n_train = 15) = 48
+  FROM cvl;
+
+SELECT 'leave one out by hand: ' || v.method || ' ' || v.held_out,
+       v.accuracy = (SELECT fda_classify(
+                                (SELECT fda_train(m, emotion, json_object('method', v.method, 'dims', 3, 'basis', 20, 'joints', json('["right_hand","head"]'), 'frame', 'first', 'velocity', json('false'))) FROM cvs1 WHERE id <> CAST(v.held_out AS INTEGER)),
+                                m) = emotion
+                       FROM cvs1 WHERE id = CAST(v.held_out AS INTEGER))
+  FROM cvl AS v WHERE v.method IN ('fspca', 'ffda') AND v.fold IS NOT NULL;
+-- oom: skip
+
+SELECT * FROM affect_crossval('cvs', 'm', 'emotion', '{"methods":["fspca","fpls"]}');
+-- error: affect_crossval: affect_crossval_json: option "methods" must be a non-empty array of "ml", "svm", "knn", "fpca", "ffda", "fspca", "fspca_rbf", "fisomap"
+
+SELECT * FROM affect_crossval('cvs', 'm', 'emotion', '{"methods":["fspca"],"dims":0}');
+-- error: affect_crossval: affect_crossval_json: dims must be from 1 to 64
+
+SELECT * FROM affect_crossval('cvs', 'm', 'emotion', '{"methods":["fspca"],"method":"fpca"}');
+-- error: affect_crossval: affect_crossval_json: unknown option "method" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, frame, root, max_iter, tol, reg, seed, progress, groups, score_normalization, score_clip, svm_c, svm_folds, spca_dims, spca_kernel, spca_sigma, knn_k, grid, folds, descriptors, descriptor_weight, mirror, group, methods, verbose, threads, storage, dims, basis, order, lambda, sigma, ffda_reg, isomap_k, alignment)
+
 -- affect_crossval_json itself (the engine): valid JSON, on 2 motions per class
 SELECT 'affect_crossval_json: the rows as JSON', json_valid(j)
    AND json_extract(j, '$.labels') = '["angry","sad"]'
@@ -677,13 +739,13 @@ SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"folds":1,"covariance":
 -- error: affect_crossval: affect_crossval_json: option "folds" must be from 2 to 1024, got 1
 
 SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"methods":["svm","lda"],"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}');
--- error: affect_crossval: affect_crossval_json: option "methods" must be a non-empty array of "ml", "svm", "knn"
+-- error: affect_crossval: affect_crossval_json: option "methods" must be a non-empty array of "ml", "svm", "knn", "fpca", "ffda", "fspca", "fspca_rbf", "fisomap"
 
 SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"group":1,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}');
 -- error: affect_crossval: affect_crossval_json: option "group" must be a column name
 
 SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"fold":3,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}');
--- error: affect_crossval: affect_crossval_json: unknown option "fold" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, frame, root, max_iter, tol, reg, seed, progress, groups, score_normalization, score_clip, svm_c, svm_folds, spca_dims, spca_kernel, spca_sigma, knn_k, grid, folds, descriptors, descriptor_weight, mirror, group, methods, verbose, threads, storage)
+-- error: affect_crossval: affect_crossval_json: unknown option "fold" (expected states, mixtures, covariance, topology, max_jump, start, joints, normalize, scale, up, velocity, frame, root, max_iter, tol, reg, seed, progress, groups, score_normalization, score_clip, svm_c, svm_folds, spca_dims, spca_kernel, spca_sigma, knn_k, grid, folds, descriptors, descriptor_weight, mirror, group, methods, verbose, threads, storage, dims, basis, order, lambda, sigma, ffda_reg, isomap_k, alignment)
 
 SELECT * FROM affect_crossval('probe', 'm', 'emotion', '{"knn_k":0,"covariance":"full","frame":"first","velocity":false,"descriptors":"none","mirror":false,"states":7,"mixtures":4,"max_iter":50}');
 -- error: affect_crossval: affect_crossval_json: knn_k must be at least 1

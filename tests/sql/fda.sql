@@ -93,6 +93,39 @@ SELECT 'held-out waves (seeds 7, 8) of the FSPCA model: 7 of 8 or better',
 SELECT 'fda_classify on the small model', fda_classify(model, m) IN ('angry', 'happy', 'neutral', 'sad')
   FROM fm, fs WHERE method = 'small' AND seed = 2 AND emotion = 'sad';
 
+-- ---- landmark registration ("alignment":"landmarks") ----
+CREATE TABLE flm AS
+SELECT fda_train(m, emotion, '{"basis":20,"method":"ffda","alignment":"landmarks"}') AS model,
+       fda_train(m, emotion, '{"basis":20,"method":"ffda"}') AS linear FROM fs;
+
+SELECT 'landmarks: a version-2 BLOB, the template in fda_info (times increasing in (0, 1), rests and peaks)',
+       substr(hex(model), 9, 8) = '02000000' AND substr(hex(model), 17, 8) = '01000000'
+   AND substr(hex(linear), 9, 8) = '01000000'
+   AND json_extract(fda_info(model), '$.alignment') = 'landmarks'
+   AND json_extract(fda_info(linear), '$.alignment') = 'linear'
+   AND json_array_length(fda_info(linear), '$.landmarks') = 0
+   AND json_array_length(fda_info(model), '$.landmarks') >= 1
+   AND NOT EXISTS (SELECT 1 FROM json_each(fda_info(model), '$.landmarks') AS a
+                    WHERE json_extract(a.value, '$.t') <= 0 OR json_extract(a.value, '$.t') >= 1
+                       OR json_extract(a.value, '$.type') NOT IN ('rest', 'peak')
+                       OR (a.key > 0 AND json_extract(a.value, '$.t') <=
+                           json_extract(fda_info(model), '$.landmarks[' || (a.key - 1) || '].t')))
+  FROM flm;
+
+SELECT 'landmarks: a training wave registered as an unseen one gets its training class (1-NN on the training set)',
+       avg(fda_classify(model, m) = emotion) >= 0.9
+  FROM flm, fs;
+-- oom: skip
+
+SELECT fda_train(m, emotion, '{"alignment":"dtw"}') FROM fs;
+-- error: fda_train: option "alignment" must be one of "linear", "landmarks", got "dtw"
+
+SELECT 'affect_crossval takes the alignment too: the same fold as by hand',
+       (SELECT accuracy FROM affect_crossval('fs', 'm', 'emotion', '{"group":"seed","methods":["ffda"],"basis":20,"alignment":"landmarks"}') WHERE fold = 1)
+     = (SELECT avg(fda_classify((SELECT fda_train(m, emotion, '{"basis":20,"method":"ffda","alignment":"landmarks"}') FROM fs WHERE seed <> 1), m) = emotion)
+          FROM fs WHERE seed = 1);
+-- oom: skip
+
 SELECT 'fda_prototype: the class''s mean length, on the model''s skeleton, exportable',
        motion_frames(fda_prototype(model, 'sad')) = (SELECT round(avg(motion_frames(m))) FROM fs WHERE emotion = 'sad')
    AND motion_joints(fda_prototype(model, 'sad')) = 26
@@ -140,7 +173,7 @@ SELECT fda_train(m, emotion, '{"dims":0}') FROM fs;
 SELECT fda_train(m, emotion, '{"basis":3}') FROM fs;
 -- error: fda_train: the basis size must be from the order to 4096
 SELECT fda_train(m, emotion, '{"states":3}') FROM fs;
--- error: fda_train: unknown option "states" (expected joints, normalize, scale, up, velocity, frame, root, progress, method, basis, order, lambda, dims, kernel, sigma, ffda_reg, isomap_k, proto_dims)
+-- error: fda_train: unknown option "states" (expected joints, normalize, scale, up, velocity, frame, root, progress, method, basis, order, lambda, dims, kernel, sigma, ffda_reg, isomap_k, proto_dims, alignment)
 SELECT fda_train(m, 'sad') FROM fs;
 -- error: fda_train: need motions of at least 2 labels, got 1 ("sad")
 SELECT fda_train(m, x'00') FROM fs;

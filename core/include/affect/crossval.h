@@ -27,6 +27,13 @@
  * the motions of group g (groups numbered by the caller, 0 .. n_groups − 1; an empty group
  * gives no fold).
  *
+ * Functional methods (cfg.methods bits AFFECT_CV_FPCA .. AFFECT_CV_FISOMAP): per fold a
+ * functional model (affect_fda_train, cfg.fda with the method's own method and label kernel) is
+ * trained on the same training motions (the same observation sequences; descriptors and the
+ * recognizer's options play no part) and each held-out motion is classified by 1-NN in its
+ * embedding (affect_fda_classify, k = 1) — the thesis's protocol (chapter 3). With no
+ * recognizer method asked, no classifier is trained.
+ *
  * Metrics per method and fold, over the fold's held-out motions: accuracy; balanced accuracy
  * = the mean recall over the classes present among them; macro-F1 = the mean of
  * F1 = 2 TP / (2 TP + FP + FN) over the classes present among them or predicted for them; the
@@ -41,25 +48,47 @@
  * OpenBLAS's are); libsvm's print function is set once per process (affect/svm.h).
  *
  * progress (may be NULL) receives one line per fold (with threads: in completion order, one
- * call at a time) ("fold 3/10: 40 training, 4 held out,
- * svm 0.75, knn 0.75, ml 0.5").
+ * call at a time) ("fold 3/10: 40 training, 4 held out, svm 0.75, knn 0.75, ml 0.5, ffda 0.5":
+ * the methods asked, the recognizer's first, then the functional ones in method order).
  */
 #ifndef AFFECT_CROSSVAL_H
 #define AFFECT_CROSSVAL_H
 
 #include "affect/classifier.h"
+#include "affect/fda.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-enum { AFFECT_CV_ML = 0, AFFECT_CV_SVM = 1, AFFECT_CV_KNN = 2, AFFECT_CV_METHODS = 3 };
+/* The methods: the recognizer's three (affect/classifier.h) and the functional ones
+ * (affect/fda.h: FSPCA with the linear and with the Gaussian-RBF label kernel), each scored by
+ * 1-NN in its embedding. */
+enum {
+    AFFECT_CV_ML = 0,
+    AFFECT_CV_SVM = 1,
+    AFFECT_CV_KNN = 2,
+    AFFECT_CV_FPCA = 3,
+    AFFECT_CV_FFDA = 4,
+    AFFECT_CV_FSPCA = 5,
+    AFFECT_CV_FSPCA_RBF = 6,
+    AFFECT_CV_FISOMAP = 7,
+    AFFECT_CV_METHODS = 8,
+    AFFECT_CV_RECOGNIZER_METHODS = 3 /* methods 0 .. 2 */
+};
+/* The recognizer's methods (a classifier is trained per fold only when one of them is asked). */
+#define AFFECT_CV_RECOGNIZER_MASK 0x7u
+#define AFFECT_CV_ALL_MASK 0xffu
 
 typedef struct affect_cv_config {
     affect_classifier_config cls;
     uint32_t folds;   /* k of the stratified k-fold (default 10; ignored with groups) */
     uint64_t seed;    /* fold assignment (default 1) */
     uint32_t threads; /* folds run at once, each in its own thread (default 1, at most 64) */
+    unsigned methods; /* bit m = method m (default AFFECT_CV_RECOGNIZER_MASK) */
+    /* The functional methods' settings (affect_fda_config_default); method and kernel are
+     * set per method, the monitor is cls.hmm.monitor's. */
+    affect_fda_config fda;
     void (*progress)(void *ctx, const char *line);
     void *progress_ctx;
 } affect_cv_config;
@@ -74,6 +103,8 @@ typedef struct affect_cv_fold {
     uint32_t *confusion[AFFECT_CV_METHODS]; /* n_classes × n_classes each */
     double svm_c, spca_sigma;               /* what the fold's classifier used */
     uint32_t spca_dims, knn_k;
+    uint32_t fda_dims[AFFECT_CV_METHODS]; /* a functional method's embedding dimensions */
+    double fda_lambda;                    /* the functional fits' λ (the first method's) */
 } affect_cv_fold;
 
 typedef struct affect_cv_result {
@@ -86,8 +117,16 @@ typedef struct affect_cv_result {
     uint32_t *pooled[AFFECT_CV_METHODS]; /* n_classes × n_classes */
 } affect_cv_result;
 
+/* The name of method m ("ml", "svm", "knn", "fpca", "ffda", "fspca", "fspca_rbf", "fisomap"),
+ * or NULL when m is out of range. */
+const char *affect_cv_method_name(unsigned m);
+
 /* Runs the protocol on n sequences (class y[i] in 0 .. n_classes − 1 named labels[k]); group
- * NULL = stratified k-fold, else leave-one-group-out over group[i] in 0 .. n_groups − 1. */
+ * NULL = stratified k-fold, else leave-one-group-out over group[i] in 0 .. n_groups − 1.
+ * Errors (AFFECT_ERR_INVALID unless said): "need 2 to 64 classes, got 1", "no method asked",
+ * "unknown method bits 0x100", the functional configuration's (affect_fda_config_check), "fold
+ * 3: fisomap: <affect_fda_train's error>", "fold 3, motion 7: ffda: <its error>", the
+ * classifier's, AFFECT_ERR_INTERRUPTED, AFFECT_ERR_NOMEM. */
 affect_status affect_crossval(const affect_cv_config *cfg, const affect_features *feat,
                               const affect_hmm_seq *seqs, const double *desc, const uint32_t *y,
                               uint32_t n, const char *const *labels, uint32_t n_classes,

@@ -59,6 +59,23 @@
  * positive (FSPCA: affect/spca.h's rule). The embedding of the FPCA, FSPCA and FFDA models is
  * linear in the motion's coefficients, y = B (c − c̄).
  *
+ * Landmark registration (alignment "landmarks"). Instead of t_j = j / (T − 1), each motion's
+ * frames are put at registered times h(t_j), h a piecewise-linear warp of [0, 1] that takes
+ * its landmarks to the model's template. Landmarks (affect_fda_find_landmarks): the start and
+ * end (h(0) = 0, h(1) = 1) and the extrema of the joint trajectories, found on the overall
+ * speed ‖x_{j+1} − x_j‖ (all coordinates) smoothed by a moving average of ± 3 % of T: its
+ * minima (the joints at rest, where the trajectories turn) and maxima (peaks of the movement),
+ * keeping those whose rise or fall to the next extremum is at least 15 % of the speed's range
+ * (the least pronounced pair removed first) and at most 32, none within 2 % of either end.
+ * The template: per class, the class's motion with the median landmark count is the
+ * reference, every motion of the class is matched to it by dynamic programming
+ * (affect_fda_match_landmarks), and the reference landmarks matched in at least half of the
+ * class's motions are kept at the mean of their matched times; the class templates are merged
+ * the same way (reference: the class template with the median count, kept when matched in at
+ * least half of the classes). Every motion, training or unseen, is then matched to that one
+ * template and warped (affect_fda_warp_times), so a training motion embeds to its training
+ * coordinates. λ by GCV uses the registered times too. The prototypes are in template time.
+ *
  * Prototypes (§3.2): the class centroid of the training scores on the first P FPCA
  * components (proto_dims, default 3), mapped back by the inverse transform c̄ + Σ q_r e_r,
  * evaluated at the class's mean frame count (rounded, ≥ 2), its positions put on the feature
@@ -89,6 +106,13 @@ typedef enum affect_fda_method {
     AFFECT_FDA_FISOMAP = 3
 } affect_fda_method;
 
+/* Time alignment of the motions before the fits (see "Landmark registration" above). */
+typedef enum affect_fda_alignment {
+    AFFECT_FDA_ALIGN_LINEAR = 0,   /* t_j = j / (T − 1) */
+    AFFECT_FDA_ALIGN_LANDMARKS = 1 /* piecewise-linear warp to the model's landmark template */
+} affect_fda_alignment;
+
+#define AFFECT_FDA_MAX_LANDMARKS 32u
 #define AFFECT_FDA_MAX_DIMS 64u
 #define AFFECT_FDA_MAX_ISOMAP_K 1024u
 /* Eigenvalues at or below this fraction of the largest are treated as zero (rank). */
@@ -97,26 +121,27 @@ typedef enum affect_fda_method {
 #define AFFECT_FDA_NOVAR_TOL 1e-20
 
 typedef struct affect_fda_config {
-    affect_fda_method method;  /* default FFDA, the measured best (docs/EVALUATION.md) */
-    uint32_t order;            /* B-spline order k (default 4: cubic) */
-    uint32_t n_basis;          /* G (default 200, the thesis's for recognition) */
-    double lambda;             /* roughness penalty (default 1e-10; ignored with gcv) */
-    bool gcv;                  /* choose λ by GCV (default false) */
-    uint32_t dims;             /* embedding dimensions (default 3; 1 .. 64) */
-    affect_spca_kernel kernel; /* FSPCA label kernel (default linear) */
-    double sigma;              /* FSPCA RBF σ (default 1) */
-    double ffda_reg;           /* FFDA γ (default 1e-3; ≥ 0) */
-    uint32_t isomap_k;         /* F-Isomap neighbours (default 7) */
-    uint32_t proto_dims;       /* P FPCA components of the prototype space (default 3) */
-    affect_monitor *monitor;   /* may be NULL */
+    affect_fda_method method;       /* default FFDA, the measured best (docs/EVALUATION.md) */
+    uint32_t order;                 /* B-spline order k (default 4: cubic) */
+    uint32_t n_basis;               /* G (default 200, the thesis's for recognition) */
+    double lambda;                  /* roughness penalty (default 1e-10; ignored with gcv) */
+    bool gcv;                       /* choose λ by GCV (default false) */
+    uint32_t dims;                  /* embedding dimensions (default 3; 1 .. 64) */
+    affect_spca_kernel kernel;      /* FSPCA label kernel (default linear) */
+    double sigma;                   /* FSPCA RBF σ (default 1) */
+    double ffda_reg;                /* FFDA γ (default 1e-3; ≥ 0) */
+    uint32_t isomap_k;              /* F-Isomap neighbours (default 7) */
+    uint32_t proto_dims;            /* P FPCA components of the prototype space (default 3) */
+    affect_fda_alignment alignment; /* default linear (the measured best, docs/EVALUATION.md) */
+    affect_monitor *monitor;        /* may be NULL */
 } affect_fda_config;
 
 void affect_fda_config_default(affect_fda_config *cfg);
 /* NULL, or a message: "unknown method", "order must be at least 3 for the roughness penalty",
  * "dims must be from 1 to 64", "lambda must be a finite number, 0 or more", "unknown label
  * kernel", "sigma must be a positive finite number", "ffda_reg must be a finite number, 0 or
- * more", "isomap_k must be from 1 to 1024", "proto_dims must be from 1 to 64", and
- * affect_bspline_check's. */
+ * more", "isomap_k must be from 1 to 1024", "proto_dims must be from 1 to 64", "unknown
+ * alignment", and affect_bspline_check's. */
 const char *affect_fda_config_check(const affect_fda_config *cfg);
 
 typedef struct affect_fda affect_fda;
@@ -205,9 +230,43 @@ affect_status affect_fda_gram_sqrt(const affect_bspline *b, double *out, affect_
 affect_status affect_fda_coefficients(const affect_fda *f, const double *x, uint32_t T,
                                       double *coef, affect_error *err);
 
+/* ---- landmark registration ---- */
+
+/* A landmark: a time in (0, 1) of the motion's normalized time and its type (+1: a peak of
+ * the smoothed overall speed; −1: a rest, the speed's minimum, where the joints turn). */
+typedef struct affect_fda_landmark {
+    double t;
+    int32_t type;
+} affect_fda_landmark;
+
+/* The landmarks of x (T × m), at most AFFECT_FDA_MAX_LANDMARKS, in time order (none when
+ * T < 5 or the motion does not move). */
+affect_status affect_fda_find_landmarks(const double *x, uint32_t T, uint32_t m,
+                                        affect_fda_landmark *out, uint32_t *count,
+                                        affect_error *err);
+/* Monotone matching of a (na) to b (nb) (each ≤ AFFECT_FDA_MAX_LANDMARKS, in time order) by
+ * dynamic programming: the least total |Δt| of the matched pairs (same type, |Δt| ≤ 0.2)
+ * plus 0.1 per landmark left unmatched. The pairs (a[ia[k]], b[ib[k]]) in order; returns
+ * their count. */
+uint32_t affect_fda_match_landmarks(const affect_fda_landmark *a, uint32_t na,
+                                    const affect_fda_landmark *b, uint32_t nb, uint32_t *ia,
+                                    uint32_t *ib);
+/* The registered times of a T-frame motion with landmarks a (na) matched to the template
+ * (nt): times[j] = h(j / (T − 1)), h piecewise linear through (0, 0), the matched pairs
+ * (a.t, template.t) that keep h increasing, and (1, 1). */
+void affect_fda_warp_times(const affect_fda_landmark *a, uint32_t na,
+                           const affect_fda_landmark *tmpl, uint32_t nt, uint32_t T, double *times);
+/* The model's landmark template (count in *n; none with linear alignment). */
+const affect_fda_landmark *affect_fda_template(const affect_fda *f, uint32_t *n);
+/* The times at which the model fits motion x (T values): j / (T − 1), or registered. */
+affect_status affect_fda_times(const affect_fda *f, const double *x, uint32_t T, double *times,
+                               affect_error *err);
+
 /* ---- BLOB (docs/FORMATS.md "Functional model") ---- */
 #define AFFECT_FDA_MAGIC "AFFD"
-#define AFFECT_FDA_VERSION 1u
+/* Version 2 adds the landmark template (flags bit 0); models with linear alignment are still
+ * written as version 1, byte for byte as before. */
+#define AFFECT_FDA_VERSION 2u
 #define AFFECT_FDA_HEADER_SIZE 96u
 affect_status affect_fda_encode(const affect_fda *f, unsigned char **out, size_t *size,
                                 affect_error *err);
