@@ -26,6 +26,14 @@ test normal motion of that content is edited to the same 5 strengths; the Spearm
 between the strength asked and the strength affect_strength measures on the result, and the
 correlation of laban_time and laban_weight with it. Output: Markdown tables (mean ± sd over the
 seeds), and the wall and CPU time of the runs.
+
+--recognizer (about 7 minutes) runs only the recognizer check, for every task of --tasks: per
+seed, a PCA-40 model and affect_train's recognizer (its defaults) trained on the training half,
+strength_synthesize at 5 strengths from the lowest to the highest level's training mean and
+strength_edit of every test motion to each; per result affect_strength (the Spearman
+correlation with the strength asked), affect_classify (recognized as the label whose training
+mean strength is nearest the strength asked?), laban_time and laban_weight (their Pearson
+correlation with it).
 """
 import argparse
 import json
