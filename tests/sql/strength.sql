@@ -41,8 +41,10 @@ SELECT 'every model trained', count(*) = 4 AND min(length(r)) > 100 FROM models;
 -- affect_strength keeps its last model per connection: calls that alternate two models (one
 -- function, so one cache) score as each model alone
 SELECT 'alternating models score as each alone', count(*) = 8 AND sum(alt = own) = 8
+       AND sum(alt <> other) = 8
   FROM (SELECT affect_strength(CASE WHEN k % 2 THEN b ELSE c END, m) AS alt,
-               CASE WHEN k % 2 THEN affect_strength(b, m) ELSE affect_strength(c, m) END AS own
+               CASE WHEN k % 2 THEN affect_strength(b, m) ELSE affect_strength(c, m) END AS own,
+               CASE WHEN k % 2 THEN affect_strength(c, m) ELSE affect_strength(b, m) END AS other
           FROM (SELECT rowid AS k, m FROM s WHERE seed > 4 LIMIT 8),
                (SELECT r AS b FROM models WHERE name = 'both'),
                (SELECT r AS c FROM models WHERE name = 'small'));
