@@ -122,6 +122,11 @@ static void *fda_cache_new(const char *name)
     return ax_fda_fn_new(name);
 }
 
+static void *strength_cache_new(const char *name)
+{
+    return ax_str_fn_new(name);
+}
+
 static void *generation_cache_new(const char *name)
 {
     return ax_gen_fn_new(name);
@@ -131,6 +136,8 @@ static void *generation_cache_new(const char *name)
 static const ax_user_data classifier_cache = {classifier_cache_new, ax_cls_fn_free};
 /* the functions on a functional model BLOB: a one-model cache (fn_fda.c) */
 static const ax_user_data fda_cache = {fda_cache_new, ax_fda_fn_free};
+/* affect_strength: a one-model cache (fn_strength.c) */
+static const ax_user_data strength_cache = {strength_cache_new, ax_str_fn_free};
 /* generation: the RMLR fit of the last laban index used (fn_generate.c) */
 static const ax_user_data generation_cache = {generation_cache_new, ax_gen_fn_free};
 
@@ -261,7 +268,7 @@ static const ax_function functions[] = {
     /* emotion strength (fn_strength.c) */
     {"strength_train", 2, PURE, .step = ax_strength_train_step, .final = ax_strength_train_final},
     {"strength_train", 3, PURE, .step = ax_strength_train_step, .final = ax_strength_train_final},
-    {"affect_strength", 2, PURE, .func = ax_affect_strength},
+    {"affect_strength", 2, PURE, .func = ax_affect_strength, .user = &strength_cache},
     {"strength_synthesize", 2, PURE, .func = ax_strength_synthesize},
     {"strength_synthesize", 3, PURE, .func = ax_strength_synthesize},
     {"strength_edit", 3, PURE, .func = ax_strength_edit},

@@ -29,7 +29,9 @@
  * levels, trains, encodes and frees. NULL motions, vectors or labels are skipped; no row gives
  * NULL.
  *
- * Models given as a constant argument are decoded once and kept as auxiliary data.
+ * Models given as a constant argument are decoded once and kept as auxiliary data;
+ * affect_strength keeps its last model per connection (decoded again only when the BLOB's
+ * bytes change), so one call per statement does not decode it each time.
  *
  * Errors: "strength_train: row 3: 19 joints, the model has 22", "strength_train: option
  * \"order\" must be an array of at least 2 distinct labels", "strength_train: labels must be
@@ -779,14 +781,52 @@ static void model_done(sqlite3_context *ctx, void *model, bool cached, bool rank
         sqlite3_set_auxdata(ctx, 0, model, ranker ? ranker_aux_free : strength_aux_free);
 }
 
+/* ---- affect_strength: the model kept per function and connection ---- */
+
+struct ax_str_fn {
+    char name[32]; /* first: AX_NAME(ctx) reads it */
+    ax_blob_cache cache;
+};
+
+ax_str_fn *ax_str_fn_new(const char *name)
+{
+    ax_str_fn *fn = sqlite3_malloc64(sizeof *fn);
+    if (!fn)
+        return NULL;
+    memset(fn, 0, sizeof *fn);
+    ax_copy_name(fn->name, sizeof fn->name, name);
+    return fn;
+}
+
+void ax_str_fn_free(void *p)
+{
+    ax_str_fn *fn = p;
+    if (fn) {
+        ax_blob_cache_clear(&fn->cache);
+        sqlite3_free(fn);
+    }
+}
+
+static affect_status decode_strength(const unsigned char *data, size_t size, void **out,
+                                     affect_error *err)
+{
+    affect_strength *s = NULL;
+    affect_status st = affect_strength_decode(data, size, &s, err);
+    *out = s;
+    return st;
+}
+
+/* The model is decoded again only when the argument's bytes change, so one call per statement
+ * (an application scoring motions one at a time) does not decode and checksum it each time. */
 AX_FN(ax_affect_strength)
 {
     (void)argc;
-    void *mv;
-    bool cached;
-    if (arg_model(ctx, argv, false, &mv, &cached) != AX_OK)
+    ax_str_fn *fn = sqlite3_user_data(ctx);
+    const void *mv;
+    if (ax_arg_cached_blob(ctx, argv, &fn->cache, decode_strength, strength_aux_free,
+                           "strength model", "strength_train", &mv) != AX_OK)
         return;
-    affect_strength *s = mv;
+    const affect_strength *s = mv;
     affect_motion *m = NULL;
     ax_monitor am;
     if (ax_arg_motion(ctx, argv, 1, &m) == AX_OK && ax_monitor_begin(&am, ctx, NULL) == AX_OK) {
@@ -800,7 +840,6 @@ AX_FN(ax_affect_strength)
             sqlite3_result_double(ctx, v);
     }
     affect_motion_free(m);
-    model_done(ctx, s, cached, false);
 }
 
 /* A strength argument: a number, or a label of the model's order (its mean strength). */

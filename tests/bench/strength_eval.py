@@ -26,6 +26,14 @@ test normal motion of that content is edited to the same 5 strengths; the Spearm
 between the strength asked and the strength affect_strength measures on the result, and the
 correlation of laban_time and laban_weight with it. Output: Markdown tables (mean ± sd over the
 seeds), and the wall and CPU time of the runs.
+
+--recognizer (about 7 minutes) runs only the recognizer check, for every task of --tasks: per
+seed, a PCA-40 model and affect_train's recognizer (its defaults) trained on the training half,
+strength_synthesize at 5 strengths from the lowest to the highest level's training mean and
+strength_edit of every test motion to each; per result affect_strength (the Spearman
+correlation with the strength asked), affect_classify (recognized as the label whose training
+mean strength is nearest the strength asked?), laban_time and laban_weight (their Pearson
+correlation with it).
 """
 import argparse
 import json
@@ -228,6 +236,108 @@ def synthesis(con, task, seeds):
     print("| **all** | %.2f | %.2f | | |" % (mean_sd(allsyn)[0], mean_sd(alledit)[0]))
 
 
+def nearest_level(levels, s):
+    """The label whose training mean strength is nearest s; None at a tie (the midpoint)."""
+    d = sorted((abs(s - lv["strength"]), lv["label"]) for lv in levels)
+    if len(d) > 1 and abs(d[0][0] - d[1][0]) <= 1e-9 * (1 + abs(s)):
+        return None
+    return d[0][1]
+
+
+def recognizer_check(con, task, seeds, npoints=5):
+    """Synthesized and edited motions checked by the ranker, affect_train's recognizer and Laban.
+
+    Per seed: the half split of protocol(); a PCA-40 strength model and affect_train's recognizer
+    (its defaults, the task's labels) trained on the training half only; npoints strengths evenly
+    from the lowest to the highest level's training mean; strength_synthesize at each, and every
+    test motion edited (strength_edit) to each. Per result: affect_strength, affect_classify
+    (svm), laban_time, laban_weight. The label a strength carries is the level whose training
+    mean strength is nearest (the midpoint of two levels carries none and is not counted)."""
+    rows = task_rows(con, task)
+    order = TASKS[task][1]
+    acc = {k: [0, 0] for k in ("test", "syn", "edit", "edit_changed", "syn_ends", "edit_ends")}
+    conf = {}  # (kind, carried label) -> {recognized label: count}
+    rho = {"syn": [], "edit": []}
+    lab = {"syn_t": [], "syn_w": [], "edit_t": [], "edit_w": []}
+    for seed in seeds:
+        tr, te = split_half(rows, seed)
+        model, _, _ = train(con, task, tr, {"pca_dims": 40, "seed": seed})
+        rec = con.execute("SELECT affect_train(motion, style) FROM motions JOIN tr USING (id)"
+                          ).fetchone()[0]
+        info = json.loads(con.execute("SELECT strength_info(?)", (model,)).fetchone()[0])
+        levels = info["levels"]
+        lo, hi = levels[0]["strength"], levels[-1]["strength"]
+        targets = [lo + (hi - lo) * k / (npoints - 1) for k in range(npoints)]
+        carried = [nearest_level(levels, t) for t in targets]
+        for r in te:  # the recognizer on the unseen motions as recorded: its own accuracy here
+            got = con.execute("SELECT affect_classify(?, motion) FROM motions WHERE id = ?",
+                              (rec, r["id"])).fetchone()[0]
+            acc["test"][0] += got == r["style"]
+            acc["test"][1] += 1
+
+        def measure(kind, blob, k):
+            s, lt, lw, label = con.execute(
+                "SELECT affect_strength(?1, ?2), laban_time(?2), laban_weight(?2), "
+                "affect_classify(?3, ?2)", (model, blob, rec)).fetchone()
+            if carried[k] is not None:
+                acc[kind][0] += label == carried[k]
+                acc[kind][1] += 1
+                c = conf.setdefault((kind, carried[k]), {})
+                c[label] = c.get(label, 0) + 1
+                if k in (0, npoints - 1):
+                    acc[kind + "_ends"][0] += label == carried[k]
+                    acc[kind + "_ends"][1] += 1
+            return s, lt, lw, label
+
+        res = [measure("syn", con.execute("SELECT strength_synthesize(?, ?)",
+                                          (model, t)).fetchone()[0], k)
+               for k, t in enumerate(targets)]
+        rho["syn"].append(spearman(targets, [x[0] for x in res]))
+        lab["syn_t"].append(pearson(targets, [x[1] for x in res]))
+        lab["syn_w"].append(pearson(targets, [x[2] for x in res]))
+        for r in te:
+            res = []
+            for k, t in enumerate(targets):
+                e = con.execute("SELECT strength_edit(?1, motion, ?2) FROM motions WHERE id = ?3",
+                                (model, t, r["id"])).fetchone()[0]
+                res.append(measure("edit", e, k))
+                if carried[k] is not None and carried[k] != r["style"]:
+                    acc["edit_changed"][0] += res[-1][3] == carried[k]
+                    acc["edit_changed"][1] += 1
+            rho["edit"].append(spearman(targets, [x[0] for x in res]))
+            lab["edit_t"].append(pearson(targets, [x[1] for x in res]))
+            lab["edit_w"].append(pearson(targets, [x[2] for x in res]))
+
+    def pct(k):
+        return "%.1f %% (%d/%d)" % (100.0 * acc[k][0] / acc[k][1] if acc[k][1] else float("nan"),
+                                    acc[k][0], acc[k][1])
+
+    def msd(v):
+        v = [x for x in v if not math.isnan(x)]
+        return "%+.2f ± %.2f" % mean_sd(v) if v else "n/a"
+    print("\n### Recognizer check, %s: %s (%s; seeds %s; %d strengths from the lowest to the "
+          "highest level's training mean)\n" % (task, " < ".join(order), TASKS[task][0],
+                                                 ",".join(map(str, seeds)), npoints))
+    print("| | synthesized | edited (every test motion) |")
+    print("|---|---:|---:|")
+    print("| Spearman(s asked, affect_strength), mean ± sd | %s | %s |" % (msd(rho["syn"]),
+                                                                          msd(rho["edit"])))
+    print("| recognized as the label s carries | %s | %s |" % (pct("syn"), pct("edit")))
+    print("| … at the two ends (lowest, highest level mean) | %s | %s |" % (pct("syn_ends"),
+                                                                            pct("edit_ends")))
+    print("| … edits to a label other than the motion's own | | %s |" % pct("edit_changed"))
+    print("| Pearson(s, laban_time), mean ± sd | %s | %s |" % (msd(lab["syn_t"]),
+                                                               msd(lab["edit_t"])))
+    print("| Pearson(s, laban_weight), mean ± sd | %s | %s |" % (msd(lab["syn_w"]),
+                                                                 msd(lab["edit_w"])))
+    print("\nThe recognizer on the unseen test motions as recorded: %s." % pct("test"))
+    print("\nRecognized labels by the label carried:\n")
+    print("| kind | carried | " + " | ".join(order) + " |")
+    print("|---|---|" + "---:|" * len(order))
+    for (kind, c), d in sorted(conf.items(), key=lambda kv: (kv[0][0], order.index(kv[0][1]))):
+        print("| %s | %s | %s |" % (kind, c, " | ".join(str(d.get(x, 0)) for x in order)))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--db", default=os.path.join(ROOT, "build", "strength.db"))
@@ -238,6 +348,9 @@ def main():
     ap.add_argument("--no-synthesis", action="store_true")
     ap.add_argument("--synthesis-only", action="store_true",
                     help="only the synthesis and editing table (exhausted)")
+    ap.add_argument("--recognizer", action="store_true",
+                    help="only the recognizer check of synthesized and edited motions, for every "
+                    "task of --tasks")
     a = ap.parse_args()
     if not os.path.isdir(CORPORA):
         print("strength_eval: ../shared/corpora is absent; nothing to measure")
@@ -249,6 +362,12 @@ def main():
     con = connect(a.db)
     t0, c0 = time.perf_counter(), time.process_time()
     import_corpora(con)
+    if a.recognizer:
+        for task in a.tasks.split(","):
+            recognizer_check(con, task, seeds)
+        print("\n(total: %.0f s wall, %.0f s CPU)" % (time.perf_counter() - t0,
+                                                      time.process_time() - c0))
+        return 0
     for task in ([] if a.synthesis_only else a.tasks.split(",")):
         protocol(con, task, seeds, fractions, configs)
         leave_one_content_out(con, task, configs)

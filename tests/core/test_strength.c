@@ -67,6 +67,71 @@ static void test_keyframes_optimal(void **state)
     }
 }
 
+/* The least error by a plain DP over directly computed segment errors (no prefix sums, no
+ * pruning): the reference for curves too long for brute force. */
+static double plain_dp_best(const double *Y, uint32_t T, uint32_t D, uint32_t q)
+{
+    double *cost = malloc(sizeof(double) * T * T), *E = malloc(sizeof(double) * q * T);
+    assert_non_null(cost);
+    assert_non_null(E);
+    for (uint32_t a = 0; a < T; a++)
+        for (uint32_t b = a + 1; b < T; b++) {
+            uint32_t fr[2] = {a, b};
+            cost[a * T + b] = affect_keyframes_error(Y, T, D, fr, 2);
+        }
+    for (uint32_t b = 0; b < T; b++)
+        E[b] = b == 0 ? 0 : INFINITY;
+    for (uint32_t k = 1; k < q; k++)
+        for (uint32_t b = 0; b < T; b++) {
+            double best = INFINITY;
+            for (uint32_t a = 0; a < b; a++)
+                if (E[(k - 1) * T + a] + cost[a * T + b] < best)
+                    best = E[(k - 1) * T + a] + cost[a * T + b];
+            E[k * T + b] = best;
+        }
+    double v = E[(q - 1) * T + T - 1];
+    free(cost);
+    free(E);
+    return v;
+}
+
+/* Longer curves, where the pruning of the DP (rows and ends that cannot be on the optimal
+ * path) cuts most of the cost table: smooth motions with noise, a drifting random walk and
+ * integer steps (many ties); the DP's error must be the plain DP's optimum. */
+static void test_keyframes_pruned_optimal(void **state)
+{
+    (void)state;
+    affect_rng r;
+    affect_rng_seed(&r, 11);
+    for (int trial = 0; trial < 12; trial++) {
+        uint32_t T = 40 + (uint32_t)(affect_rng_uniform(&r) * 110); /* 40 .. 149 */
+        uint32_t D = 1 + (uint32_t)(affect_rng_uniform(&r) * 6);
+        uint32_t q = 2 + (uint32_t)(affect_rng_uniform(&r) * 20);
+        double *Y = malloc(sizeof(double) * T * D);
+        assert_non_null(Y);
+        for (uint32_t t = 0; t < T; t++)
+            for (uint32_t c = 0; c < D; c++) {
+                double v;
+                if (trial % 3 == 0)
+                    v = 30 * sin(0.07 * t + c) + 0.5 * t + 0.1 * affect_rng_normal(&r);
+                else if (trial % 3 == 1)
+                    v = (t ? Y[(t - 1) * D + c] : 100) + affect_rng_normal(&r) + 0.2;
+                else
+                    v = (double)((t / 7 + c) % 4);
+                Y[t * D + c] = v;
+            }
+        uint32_t fr[32], n;
+        double sse;
+        affect_error err;
+        assert_int_equal(affect_keyframes_select(Y, T, D, q, fr, &n, &sse, NULL, &err), AFFECT_OK);
+        assert_int_equal(n, q);
+        double bv = plain_dp_best(Y, T, D, q);
+        if (!(fabs(sse - bv) <= 1e-9 * (1 + bv)))
+            fail_msg("T %u D %u q %u: DP %.12g, plain DP %.12g", T, D, q, sse, bv);
+        free(Y);
+    }
+}
+
 static void test_keyframes_exact(void **state)
 {
     (void)state;
@@ -510,10 +575,15 @@ static void test_fixture_v1(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_keyframes_optimal),     cmocka_unit_test(test_keyframes_exact),
-        cmocka_unit_test(test_regression_smooth_map), cmocka_unit_test(test_model),
-        cmocka_unit_test(test_no_pca_and_options),    cmocka_unit_test(test_errors),
-        cmocka_unit_test(test_out_of_memory),         cmocka_unit_test(test_fixture_v1),
+        cmocka_unit_test(test_keyframes_optimal),
+        cmocka_unit_test(test_keyframes_pruned_optimal),
+        cmocka_unit_test(test_keyframes_exact),
+        cmocka_unit_test(test_regression_smooth_map),
+        cmocka_unit_test(test_model),
+        cmocka_unit_test(test_no_pca_and_options),
+        cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_out_of_memory),
+        cmocka_unit_test(test_fixture_v1),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -38,6 +38,17 @@ SELECT 'small', strength_train(m, lvl, '{"pca_dims":3,"keyframes":4,"fraction":0
 
 SELECT 'every model trained', count(*) = 4 AND min(length(r)) > 100 FROM models;
 
+-- affect_strength keeps its last model per connection: calls that alternate two models (one
+-- function, so one cache) score as each model alone
+SELECT 'alternating models score as each alone', count(*) = 8 AND sum(alt = own) = 8
+       AND sum(alt <> other) = 8
+  FROM (SELECT affect_strength(CASE WHEN k % 2 THEN b ELSE c END, m) AS alt,
+               CASE WHEN k % 2 THEN affect_strength(b, m) ELSE affect_strength(c, m) END AS own,
+               CASE WHEN k % 2 THEN affect_strength(c, m) ELSE affect_strength(b, m) END AS other
+          FROM (SELECT rowid AS k, m FROM s WHERE seed > 4 LIMIT 8),
+               (SELECT r AS b FROM models WHERE name = 'both'),
+               (SELECT r AS c FROM models WHERE name = 'small'));
+
 -- ranking accuracy on the held-out motions' pairs of one action
 SELECT 'held-out pair accuracy ' || avg(a.sc > b.sc), avg(a.sc > b.sc) >= 0.9
   FROM (SELECT action, lvl, affect_strength((SELECT r FROM models WHERE name = 'both'), m) AS sc FROM s WHERE seed > 4) AS a
