@@ -72,19 +72,34 @@ char *ax_mprintf(const char *fmt, ...)
     return escape_message(raw);
 }
 
-int ax_vtab_error(sqlite3_vtab *vt, const affect_error *err, const char *fmt, ...)
+static int error_into(char **dst, const affect_error *err, const char *fmt, va_list ap)
 {
     if (err && err->status == AFFECT_ERR_NOMEM)
         return SQLITE_NOMEM;
     if (err && err->status == AFFECT_ERR_INTERRUPTED)
         return SQLITE_INTERRUPT;
+    char *raw = sqlite3_vmprintf(fmt, ap);
+    sqlite3_free(*dst);
+    *dst = escape_message(raw);
+    return *dst ? SQLITE_ERROR : SQLITE_NOMEM;
+}
+
+int ax_vtab_error(sqlite3_vtab *vt, const affect_error *err, const char *fmt, ...)
+{
     va_list ap;
     va_start(ap, fmt);
-    char *raw = sqlite3_vmprintf(fmt, ap);
+    int rc = error_into(&vt->zErrMsg, err, fmt, ap);
     va_end(ap);
-    sqlite3_free(vt->zErrMsg);
-    vt->zErrMsg = escape_message(raw);
-    return vt->zErrMsg ? SQLITE_ERROR : SQLITE_NOMEM;
+    return rc;
+}
+
+int ax_error_into(char **dst, const affect_error *err, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    int rc = error_into(dst, err, fmt, ap);
+    va_end(ap);
+    return rc;
 }
 
 const char *ax_type_name(sqlite3_value *v)

@@ -65,6 +65,9 @@ int ax_vtab_error(sqlite3_vtab *vt, const affect_error *err, const char *fmt, ..
     __attribute__((format(printf, 3, 4)))
 #endif
     ;
+/* The same into *dst, for a method with no vtab yet (xCreate's and xConnect's pzErr) or a
+ * message that the caller hands on (ax_laban_read's *err). */
+int ax_error_into(char **dst, const affect_error *err, const char *fmt, ...); /* (takes %q, %w) */
 /* Name of a value's type for messages: "integer", "real", "text", "blob", "null". */
 const char *ax_type_name(sqlite3_value *v);
 

@@ -192,31 +192,14 @@ typedef struct lab_cursor {
     sqlite3_value *args[4]; /* query, k, radius, components, for their hidden columns */
 } lab_cursor;
 
-/* ---- errors: the one helper ---- */
-
-/* Sets *dst to "laban: " + the message (replacing what was there); SQLITE_ERROR, or
- * SQLITE_NOMEM when the message cannot be allocated. */
-static int lab_error(char **dst, const char *fmt, ...)
-{
-    sqlite3_str *s = sqlite3_str_new(NULL);
-    sqlite3_str_appendall(s, "laban: ");
-    va_list ap;
-    va_start(ap, fmt);
-    sqlite3_str_vappendf(s, fmt, ap);
-    va_end(ap);
-    char *raw = sqlite3_str_finish(s);
-    sqlite3_free(*dst);
-    *dst = raw ? ax_mprintf("%s", raw) : NULL; /* valid UTF-8 whatever it quotes */
-    sqlite3_free(raw);
-    return *dst ? SQLITE_ERROR : SQLITE_NOMEM;
-}
+/* ---- errors: every message through ax_error_into (common.c), prefixed "laban: " ---- */
 
 /* The error of a failed SQLite call on db (out of memory stays SQLITE_NOMEM). */
 static int lab_db_error(char **dst, sqlite3 *db, int rc)
 {
     if ((rc & 0xff) == SQLITE_NOMEM)
         return SQLITE_NOMEM;
-    int code = lab_error(dst, "%s", sqlite3_errmsg(db));
+    int code = ax_error_into(dst, NULL, "laban: %s", sqlite3_errmsg(db));
     return code != SQLITE_NOMEM && (rc & 0xff) == SQLITE_INTERRUPT ? SQLITE_INTERRUPT : code;
 }
 
@@ -224,7 +207,7 @@ static int lab_db_error(char **dst, sqlite3 *db, int rc)
  * of the index. */
 static int lab_interrupted(char **dst)
 {
-    int code = lab_error(dst, "interrupted");
+    int code = ax_error_into(dst, NULL, "laban: interrupted");
     return code == SQLITE_NOMEM ? code : SQLITE_INTERRUPT;
 }
 
@@ -236,7 +219,7 @@ static int lab_core_error(char **dst, const affect_error *err, const char *prefi
         return SQLITE_NOMEM;
     if (err->status == AFFECT_ERR_INTERRUPTED)
         return lab_interrupted(dst);
-    return lab_error(dst, "%s%s", prefix, err->msg);
+    return ax_error_into(dst, NULL, "laban: %s%s", prefix, err->msg);
 }
 
 /* A value for a message: the number itself, or the name of its type. */
@@ -581,7 +564,7 @@ static int lab_cache_load(lab_vtab *vt, sqlite3_int64 generation, char **err, la
         char why[160];
         if (lab_vector_corrupt(type, vec, bytes, why, sizeof why)) {
             char *msg = lab_corrupt_message("", vt->name, id, why, 0);
-            rc = msg ? lab_error(err, "%s", msg) : SQLITE_NOMEM;
+            rc = msg ? ax_error_into(err, NULL, "laban: %s", msg) : SQLITE_NOMEM;
             sqlite3_free(msg);
             goto done;
         }
@@ -627,9 +610,10 @@ static int lab_generation(lab_vtab *vt, char **err, sqlite3_int64 *out)
         if (!format && sqlite3_column_type(st, 0) != SQLITE_NULL)
             rc = SQLITE_NOMEM;
         else if (!format || strcmp((const char *)format, LAB_FORMAT) != 0)
-            rc = lab_error(err, "%s_info has format %s%s%s; this version reads format " LAB_FORMAT,
-                           vt->name, format ? "\"" : "", format ? (const char *)format : "NULL",
-                           format ? "\"" : "");
+            rc = ax_error_into(
+                err, NULL,
+                "laban: %s_info has format %s%s%s; this version reads format " LAB_FORMAT, vt->name,
+                format ? "\"" : "", format ? (const char *)format : "NULL", format ? "\"" : "");
         else {
             *out = sqlite3_column_int64(st, 1);
             rc = SQLITE_OK;
@@ -695,7 +679,7 @@ static int lab_parse_arg(const char *arg, lab_args *a, char **err)
 {
     const char *eq = strchr(arg, '=');
     if (!eq)
-        return lab_error(err, "expected key=value, got \"%s\"", arg);
+        return ax_error_into(err, NULL, "laban: expected key=value, got \"%s\"", arg);
     const char *k0 = arg, *k1 = eq;
     while (k0 < k1 && lab_space(*k0))
         k0++;
@@ -707,19 +691,19 @@ static int lab_parse_arg(const char *arg, lab_args *a, char **err)
             sqlite3_strnicmp(lab_keys[i], k0, (int)(k1 - k0)) == 0)
             key = i;
     if (key < 0)
-        return lab_error(err,
-                         "unknown argument \"%.*s\" (expected content, motion, label, "
-                         "options)",
-                         (int)(k1 - k0), k0);
+        return ax_error_into(err, NULL,
+                             "laban: unknown argument \"%.*s\" (expected content, motion, label, "
+                             "options)",
+                             (int)(k1 - k0), k0);
     if (a->value[key])
-        return lab_error(err, "duplicate argument \"%s\"", lab_keys[key]);
+        return ax_error_into(err, NULL, "laban: duplicate argument \"%s\"", lab_keys[key]);
     const char *v0 = eq + 1, *v1 = eq + strlen(eq);
     while (v0 < v1 && lab_space(*v0))
         v0++;
     while (v1 > v0 && lab_space(v1[-1]))
         v1--;
     if (v0 == v1)
-        return lab_error(err, "argument \"%s\" needs a value", lab_keys[key]);
+        return ax_error_into(err, NULL, "laban: argument \"%s\" needs a value", lab_keys[key]);
     char *out = sqlite3_malloc64((sqlite3_uint64)(v1 - v0) + 1);
     if (!out)
         return SQLITE_NOMEM;
@@ -730,7 +714,8 @@ static int lab_parse_arg(const char *arg, lab_args *a, char **err)
         for (;;) {
             if (p >= v1) {
                 sqlite3_free(out);
-                return lab_error(err, "argument \"%s\": unterminated quote", lab_keys[key]);
+                return ax_error_into(err, NULL, "laban: argument \"%s\": unterminated quote",
+                                     lab_keys[key]);
             }
             if (*p == q) {
                 if (p + 1 < v1 && p[1] == q) {
@@ -744,8 +729,9 @@ static int lab_parse_arg(const char *arg, lab_args *a, char **err)
         }
         if (p + 1 != v1) {
             sqlite3_free(out);
-            return lab_error(err, "argument \"%s\": unexpected text after the closing quote",
-                             lab_keys[key]);
+            return ax_error_into(err, NULL,
+                                 "laban: argument \"%s\": unexpected text after the closing quote",
+                                 lab_keys[key]);
         }
     } else {
         memcpy(out, v0, (size_t)(v1 - v0));
@@ -754,7 +740,7 @@ static int lab_parse_arg(const char *arg, lab_args *a, char **err)
     out[n] = '\0';
     if (n == 0 || (key != ARG_OPTIONS && strlen(out) != n)) {
         sqlite3_free(out);
-        return lab_error(err, "argument \"%s\" needs a value", lab_keys[key]);
+        return ax_error_into(err, NULL, "laban: argument \"%s\" needs a value", lab_keys[key]);
     }
     a->value[key] = out;
     return SQLITE_OK;
@@ -781,11 +767,11 @@ static int lab_parse_options(lab_vtab *vt, const char *text, char **err)
         if (affect_json_parse(text, strlen(text), &doc, NULL, &e))
             return e.status == AFFECT_ERR_NOMEM
                        ? SQLITE_NOMEM
-                       : lab_error(err, "options are not valid JSON: %s", e.msg);
+                       : ax_error_into(err, NULL, "laban: options are not valid JSON: %s", e.msg);
         const affect_json_node *root = affect_json_root(doc);
         if (root->type != AFFECT_JSON_OBJECT) {
-            rc = lab_error(err, "options must be a JSON object, got %s",
-                           affect_json_type_name(root->type));
+            rc = ax_error_into(err, NULL, "laban: options must be a JSON object, got %s",
+                               affect_json_type_name(root->type));
             goto done;
         }
         for (const affect_json_node *m = affect_json_first(doc, root); m;
@@ -794,18 +780,21 @@ static int lab_parse_options(lab_vtab *vt, const char *text, char **err)
             bool number = m->type == AFFECT_JSON_NUMBER;
             if (!strcmp(k, "cutoff_hz") || !strcmp(k, "speed_floor") || !strcmp(k, "max_ratio")) {
                 if (!number) {
-                    rc = lab_error(err, "option \"%s\" must be a number, got %s", k,
-                                   affect_json_type_name(m->type));
+                    rc = ax_error_into(err, NULL, "laban: option \"%s\" must be a number, got %s",
+                                       k, affect_json_type_name(m->type));
                     goto done;
                 }
                 double v = m->num;
                 if (!strcmp(k, "cutoff_hz") && !(v > 0 && isfinite(v)))
-                    rc = lab_error(err, "option \"cutoff_hz\" must be a positive number, got %.15g",
-                                   v);
+                    rc = ax_error_into(
+                        err, NULL,
+                        "laban: option \"cutoff_hz\" must be a positive number, got %.15g", v);
                 else if (!strcmp(k, "speed_floor") && !(v >= 0 && v < 1))
-                    rc = lab_error(err, "option \"speed_floor\" must be in [0, 1), got %.15g", v);
+                    rc = ax_error_into(
+                        err, NULL, "laban: option \"speed_floor\" must be in [0, 1), got %.15g", v);
                 else if (!strcmp(k, "max_ratio") && !(v >= 1 && isfinite(v)))
-                    rc = lab_error(err, "option \"max_ratio\" must be at least 1, got %.15g", v);
+                    rc = ax_error_into(
+                        err, NULL, "laban: option \"max_ratio\" must be at least 1, got %.15g", v);
                 if (rc)
                     goto done;
                 *(!strcmp(k, "cutoff_hz")     ? &o->cutoff_hz
@@ -819,9 +808,9 @@ static int lab_parse_options(lab_vtab *vt, const char *text, char **err)
                 else {
                     if (m->type == AFFECT_JSON_STRING)
                         affect_json_quote(q, sizeof q, m->str, m->str_len);
-                    rc = lab_error(err, "option \"hull\" must be \"convex\" or \"box\", got %s",
-                                   m->type == AFFECT_JSON_STRING ? q
-                                                                 : affect_json_type_name(m->type));
+                    rc = ax_error_into(
+                        err, NULL, "laban: option \"hull\" must be \"convex\" or \"box\", got %s",
+                        m->type == AFFECT_JSON_STRING ? q : affect_json_type_name(m->type));
                     goto done;
                 }
             } else if (!strcmp(k, "up")) {
@@ -833,24 +822,26 @@ static int lab_parse_options(lab_vtab *vt, const char *text, char **err)
                 if (axis < 0) {
                     if (m->type == AFFECT_JSON_STRING)
                         affect_json_quote(q, sizeof q, m->str, m->str_len);
-                    rc = lab_error(err, "option \"up\" must be \"x\", \"y\" or \"z\", got %s",
-                                   m->type == AFFECT_JSON_STRING ? q
-                                                                 : affect_json_type_name(m->type));
+                    rc = ax_error_into(
+                        err, NULL, "laban: option \"up\" must be \"x\", \"y\" or \"z\", got %s",
+                        m->type == AFFECT_JSON_STRING ? q : affect_json_type_name(m->type));
                     goto done;
                 }
                 o->up_axis = axis;
             } else if (!strcmp(k, "per_second")) {
                 if (m->type != AFFECT_JSON_TRUE && m->type != AFFECT_JSON_FALSE) {
-                    rc = lab_error(err, "option \"per_second\" must be true or false, got %s",
-                                   affect_json_type_name(m->type));
+                    rc = ax_error_into(err, NULL,
+                                       "laban: option \"per_second\" must be true or false, got %s",
+                                       affect_json_type_name(m->type));
                     goto done;
                 }
                 o->time_per_second = m->type == AFFECT_JSON_TRUE;
             } else {
-                rc = lab_error(err,
-                               "unknown option %s (expected cutoff_hz, hull, speed_floor, "
-                               "max_ratio, up, per_second)",
-                               lab_quote_key(m, q, sizeof q));
+                rc = ax_error_into(
+                    err, NULL,
+                    "laban: unknown option %s (expected cutoff_hz, hull, speed_floor, "
+                    "max_ratio, up, per_second)",
+                    lab_quote_key(m, q, sizeof q));
                 goto done;
             }
         }
@@ -926,15 +917,16 @@ static int lab_init(sqlite3 *db, void *aux, int argc, const char *const *argv, l
         if ((rc = lab_parse_arg(argv[i], &a, err)) != SQLITE_OK)
             goto done;
     if (!a.value[ARG_CONTENT]) {
-        rc = lab_error(err,
-                       "the content argument is required, as in CREATE VIRTUAL TABLE %s "
-                       "USING laban(content=motions, motion=motion, label=emotion)",
-                       argv[2]);
+        rc = ax_error_into(err, NULL,
+                           "laban: the content argument is required, as in CREATE VIRTUAL TABLE %s "
+                           "USING laban(content=motions, motion=motion, label=emotion)",
+                           argv[2]);
         goto done;
     }
     if (lab_is_column_name(argv[2])) {
-        rc = lab_error(err, "a laban table cannot be named \"%s\": that is one of its columns",
-                       argv[2]);
+        rc = ax_error_into(
+            err, NULL, "laban: a laban table cannot be named \"%s\": that is one of its columns",
+            argv[2]);
         goto done;
     }
     rc = SQLITE_NOMEM;
@@ -985,8 +977,9 @@ static int lab_check_content(lab_vtab *vt, char **err)
         if (strlen(vt->content) == n + strlen(suffixes[i]) &&
             !sqlite3_strnicmp(vt->content, vt->name, (int)n) &&
             !sqlite3_stricmp(vt->content + n, suffixes[i]))
-            return lab_error(err, "the content table cannot be %s itself or its shadow tables",
-                             vt->name);
+            return ax_error_into(
+                err, NULL, "laban: the content table cannot be %s itself or its shadow tables",
+                vt->name);
     sqlite3_stmt *st = NULL;
     int rc =
         lab_prepare(vt->db, err, &st, "PRAGMA \"%w\".table_xinfo(%Q)", vt->schema, vt->content);
@@ -1008,10 +1001,10 @@ static int lab_check_content(lab_vtab *vt, char **err)
         goto done;
     }
     if (!any)
-        rc = lab_error(err, "no such table: %s", vt->content);
+        rc = ax_error_into(err, NULL, "laban: no such table: %s", vt->content);
     else if (!motion || !label)
-        rc = lab_error(err, "no column \"%s\" in table %s", motion ? vt->label : vt->motion,
-                       vt->content);
+        rc = ax_error_into(err, NULL, "laban: no column \"%s\" in table %s",
+                           motion ? vt->label : vt->motion, vt->content);
     else
         rc = SQLITE_OK;
 done:
@@ -1091,8 +1084,8 @@ static int lab_store_row(lab_vtab *vt, sqlite3_stmt *ins, sqlite3_int64 id, sqli
     if (type == SQLITE_NULL)
         return SQLITE_OK;
     if (type != SQLITE_BLOB)
-        return lab_error(err, "row %lld of %s: the motion must be a BLOB, got %s", id, vt->content,
-                         ax_type_name(motion));
+        return ax_error_into(err, NULL, "laban: row %lld of %s: the motion must be a BLOB, got %s",
+                             id, vt->content, ax_type_name(motion));
     const unsigned char *data = sqlite3_value_blob(motion);
     int n = sqlite3_value_bytes(motion);
     if (!data && n > 0)
@@ -1105,8 +1098,8 @@ static int lab_store_row(lab_vtab *vt, sqlite3_stmt *ins, sqlite3_int64 id, sqli
             return SQLITE_NOMEM;
         if (e.status == AFFECT_ERR_INTERRUPTED)
             return lab_interrupted(err);
-        return lab_error(err, "row %lld of %s: %s%s", id, vt->content,
-                         bad ? "not a valid motion: " : "", e.msg);
+        return ax_error_into(err, NULL, "laban: row %lld of %s: %s%s", id, vt->content,
+                             bad ? "not a valid motion: " : "", e.msg);
     }
     unsigned char blob[LAB_VECTOR_BYTES];
     for (int j = 0; j < LAB_N; j++)
@@ -1317,7 +1310,7 @@ static int lab_check(lab_vtab *vt, char **err)
     }
     if (corrupt) {
         char *msg = lab_corrupt_message("", vt->name, first_corrupt, why, corrupt - 1);
-        rc = msg ? lab_error(err, "%s", msg) : SQLITE_NOMEM;
+        rc = msg ? ax_error_into(err, NULL, "laban: %s", msg) : SQLITE_NOMEM;
         sqlite3_free(msg);
     } else if (stale) {
         char *ident = lab_ident(vt->name);
@@ -1325,10 +1318,10 @@ static int lab_check(lab_vtab *vt, char **err)
             rc = SQLITE_NOMEM;
             goto done;
         }
-        rc = lab_error(err,
-                       "%lld %s stale (first: rowid %lld); run INSERT INTO %s(%s) "
-                       "VALUES('rebuild')",
-                       stale, stale == 1 ? "row is" : "rows are", first, ident, ident);
+        rc = ax_error_into(err, NULL,
+                           "laban: %lld %s stale (first: rowid %lld); run INSERT INTO %s(%s) "
+                           "VALUES('rebuild')",
+                           stale, stale == 1 ? "row is" : "rows are", first, ident, ident);
         sqlite3_free(ident);
     } else {
         rc = lab_check_caches(vt, err);
@@ -1420,10 +1413,10 @@ static int lab_rename(sqlite3_vtab *tab, const char *name)
     lab_vtab *vt = (lab_vtab *)tab;
     static const char *const suffix[] = {"_data", "_info"};
     if (lab_is_column_name(name)) /* it would not reconnect */
-        return lab_error(&tab->zErrMsg,
-                         "a laban table cannot be named \"%s\": that is one of "
-                         "its columns",
-                         name);
+        return ax_vtab_error(tab, NULL,
+                             "laban: a laban table cannot be named \"%s\": that is one of "
+                             "its columns",
+                             name);
     char *copy = sqlite3_mprintf("%s", name);
     if (!copy)
         return SQLITE_NOMEM;
@@ -1490,8 +1483,9 @@ static int lab_update(sqlite3_vtab *tab, int argc, sqlite3_value **argv, sqlite3
     char **err = &tab->zErrMsg;
     if (argc == 1 || sqlite3_value_type(argv[0]) != SQLITE_NULL ||
         sqlite3_value_type(argv[2 + COL_COMMAND]) == SQLITE_NULL)
-        return lab_error(err, "the index is read-only: change the content table and run "
-                              "'rebuild', or install the triggers of sql/laban_triggers.sql");
+        return ax_error_into(err, NULL,
+                             "laban: the index is read-only: change the content table and run "
+                             "'rebuild', or install the triggers of sql/laban_triggers.sql");
     const char *cmd = (const char *)sqlite3_value_text(argv[2 + COL_COMMAND]);
     if (!cmd)
         return SQLITE_NOMEM;
@@ -1503,19 +1497,20 @@ static int lab_update(sqlite3_vtab *tab, int argc, sqlite3_value **argv, sqlite3
     if (refresh || !strcmp(cmd, "delete")) {
         sqlite3_value *id = argv[1];
         if (sqlite3_value_type(id) == SQLITE_NULL)
-            return lab_error(err,
-                             "'%s' needs a rowid, as in INSERT INTO %s(%s, rowid) "
-                             "VALUES('%s', 12)",
-                             cmd, vt->name, vt->name, cmd);
+            return ax_error_into(err, NULL,
+                                 "laban: '%s' needs a rowid, as in INSERT INTO %s(%s, rowid) "
+                                 "VALUES('%s', 12)",
+                                 cmd, vt->name, vt->name, cmd);
         if (sqlite3_value_type(id) != SQLITE_INTEGER) {
             char buf[40];
-            return lab_error(err, "the rowid of '%s' must be an integer, got %s", cmd,
-                             lab_value_desc(id, buf, sizeof buf));
+            return ax_error_into(err, NULL, "laban: the rowid of '%s' must be an integer, got %s",
+                                 cmd, lab_value_desc(id, buf, sizeof buf));
         }
         return lab_refresh(vt, sqlite3_value_int64(id), !refresh, err);
     }
-    return lab_error(err, "unknown command \"%.40s\" (expected rebuild, refresh, delete, check)",
-                     cmd);
+    return ax_error_into(
+        err, NULL, "laban: unknown command \"%.40s\" (expected rebuild, refresh, delete, check)",
+        cmd);
 }
 
 /* ---- planning ---- */
@@ -1547,11 +1542,11 @@ static int lab_best_index(sqlite3_vtab *tab, sqlite3_index_info *info)
             return SQLITE_CONSTRAINT;
     bool q = use[0] >= 0, k = use[2] >= 0, r = use[3] >= 0, comp = use[4] >= 0;
     if (!q && (k || r || comp))
-        return lab_error(&tab->zErrMsg, "k, radius and components need a query constraint");
+        return ax_vtab_error(tab, NULL, "laban: k, radius and components need a query constraint");
     if (q && k && r)
-        return lab_error(&tab->zErrMsg, "use either k or radius, not both");
+        return ax_vtab_error(tab, NULL, "laban: use either k or radius, not both");
     if (q && !k && !r)
-        return lab_error(&tab->zErrMsg, "a k or radius constraint is required for a query");
+        return ax_vtab_error(tab, NULL, "laban: a k or radius constraint is required for a query");
     int idx = 0, argi = 0;
     for (int b = 0; b < IDX_BITS; b++)
         if (use[b] >= 0) {
@@ -1626,8 +1621,8 @@ static int lab_arg_k(sqlite3_value *v, sqlite3_int64 *k, char **err)
     if (*k >= 1)
         return SQLITE_OK;
     char buf[40];
-    return lab_error(err, "k must be a positive integer, got %s",
-                     lab_value_desc(v, buf, sizeof buf));
+    return ax_error_into(err, NULL, "laban: k must be a positive integer, got %s",
+                         lab_value_desc(v, buf, sizeof buf));
 }
 
 static int lab_arg_radius(sqlite3_value *v, double *r, char **err)
@@ -1637,7 +1632,8 @@ static int lab_arg_radius(sqlite3_value *v, double *r, char **err)
     if ((t == SQLITE_INTEGER || t == SQLITE_FLOAT) && *r > 0 && *r <= 1)
         return SQLITE_OK;
     char buf[40];
-    return lab_error(err, "radius must be in (0, 1], got %s", lab_value_desc(v, buf, sizeof buf));
+    return ax_error_into(err, NULL, "laban: radius must be in (0, 1], got %s",
+                         lab_value_desc(v, buf, sizeof buf));
 }
 
 /* components: a JSON array of distinct component names, or NULL (or absent) for all; out in
@@ -1652,8 +1648,9 @@ static int lab_arg_components(sqlite3_value *v, int out[LAB_N], int *n, char **e
         return SQLITE_OK;
     }
     if (sqlite3_value_type(v) != SQLITE_TEXT)
-        return lab_error(err, "components must be a JSON array of component names, got %s",
-                         ax_type_name(v));
+        return ax_error_into(err, NULL,
+                             "laban: components must be a JSON array of component names, got %s",
+                             ax_type_name(v));
     const char *text = (const char *)sqlite3_value_text(v);
     if (!text)
         return SQLITE_NOMEM;
@@ -1662,37 +1659,39 @@ static int lab_arg_components(sqlite3_value *v, int out[LAB_N], int *n, char **e
     if (affect_json_parse(text, (size_t)sqlite3_value_bytes(v), &doc, NULL, &e))
         return e.status == AFFECT_ERR_NOMEM
                    ? SQLITE_NOMEM
-                   : lab_error(err, "components must be a JSON array of component names: %s",
-                               e.msg);
+                   : ax_error_into(err, NULL,
+                                   "laban: components must be a JSON array of component names: %s",
+                                   e.msg);
     int rc = SQLITE_OK;
     char q[80];
     const affect_json_node *root = affect_json_root(doc);
     if (root->type != AFFECT_JSON_ARRAY) {
-        rc = lab_error(err, "components must be a JSON array of component names, got %s",
-                       affect_json_type_name(root->type));
+        rc = ax_error_into(err, NULL,
+                           "laban: components must be a JSON array of component names, got %s",
+                           affect_json_type_name(root->type));
         goto done;
     }
     if (root->count == 0) {
-        rc = lab_error(err, "components must name at least one component");
+        rc = ax_error_into(err, NULL, "laban: components must name at least one component");
         goto done;
     }
     for (const affect_json_node *m = affect_json_first(doc, root); m;
          m = affect_json_next_sibling(doc, m)) {
         if (m->type != AFFECT_JSON_STRING) {
-            rc = lab_error(err,
-                           "components must be a JSON array of component names, got %s "
-                           "in it",
-                           affect_json_type_name(m->type));
+            rc = ax_error_into(err, NULL,
+                               "laban: components must be a JSON array of component names, got %s "
+                               "in it",
+                               affect_json_type_name(m->type));
             goto done;
         }
         int j = strlen(m->str) == m->str_len ? affect_laban_index(m->str) : -1;
         affect_json_quote(q, sizeof q, m->str, m->str_len);
         if (j < 0) {
-            rc = lab_error(err, "unknown component %s (see laban_names())", q);
+            rc = ax_error_into(err, NULL, "laban: unknown component %s (see laban_names())", q);
             goto done;
         }
         if (on[j]) {
-            rc = lab_error(err, "component %s is listed twice", q);
+            rc = ax_error_into(err, NULL, "laban: component %s is listed twice", q);
             goto done;
         }
         on[j] = true;
@@ -1732,15 +1731,15 @@ static int lab_query_vector(lab_vtab *vt, const lab_cache *ca, sqlite3_value *q,
         sqlite3_int64 id = t == SQLITE_INTEGER ? sqlite3_value_int64(q) : (sqlite3_int64)d;
         *self = lab_cache_find(ca, id);
         if (*self < 0)
-            return lab_error(err, "no row %lld in the index", id);
+            return ax_error_into(err, NULL, "laban: no row %lld in the index", id);
         memcpy(zq, ca->z + (size_t)*self * LAB_N, sizeof(double) * LAB_N);
         return SQLITE_OK;
     }
     if (t != SQLITE_BLOB)
-        return lab_error(err,
-                         "query must be a motion BLOB or a rowid of the content table, "
-                         "got %s",
-                         ax_type_name(q));
+        return ax_error_into(err, NULL,
+                             "laban: query must be a motion BLOB or a rowid of the content table, "
+                             "got %s",
+                             ax_type_name(q));
     const unsigned char *data = sqlite3_value_blob(q);
     int n = sqlite3_value_bytes(q);
     if (!data && n > 0)
@@ -1941,22 +1940,11 @@ int ax_register_laban(sqlite3 *db, const ax_laban_cache_kind *caches)
 
 /* ---- what the rest of the extension reads of an index (vt_laban.h) ---- */
 
-/* *err = the message (replacing what was there); SQLITE_ERROR, or SQLITE_NOMEM. */
-static int rows_error(char **err, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    sqlite3_free(*err);
-    *err = sqlite3_vmprintf(fmt, ap);
-    va_end(ap);
-    return *err ? SQLITE_ERROR : SQLITE_NOMEM;
-}
-
 static int rows_db_error(char **err, sqlite3 *db, int rc)
 {
     if ((rc & 0xff) == SQLITE_NOMEM)
         return SQLITE_NOMEM;
-    return rows_error(err, "%s", sqlite3_errmsg(db));
+    return ax_error_into(err, NULL, "%s", sqlite3_errmsg(db));
 }
 
 void ax_laban_rows_free(ax_laban_rows *r)
@@ -2055,9 +2043,10 @@ static int rows_check_format(sqlite3_stmt *st, int col, const char *name, char *
         return SQLITE_OK;
     if (!format && sqlite3_column_type(st, col) != SQLITE_NULL)
         return SQLITE_NOMEM;
-    return rows_error(
-        err, "%s_info has format %s%s%s; this version reads format " LAB_FORMAT " (index \"%w\")",
-        name, format ? "\"" : "", format ? format : "NULL", format ? "\"" : "", name);
+    return ax_error_into(
+        err, NULL,
+        "%s_info has format %s%s%s; this version reads format " LAB_FORMAT " (index \"%w\")", name,
+        format ? "\"" : "", format ? format : "NULL", format ? "\"" : "", name);
 }
 
 /* The content table and motion column of a laban table; SQLITE_NOTFOUND if it is not one
@@ -2138,14 +2127,14 @@ static int rows_load(sqlite3 *db, const char *schema, const char *name, ax_laban
         }
         if (lab_vector_corrupt(type, v, bytes, why, sizeof why)) {
             char *msg = lab_corrupt_message("", name, id, why, 0);
-            rc = msg ? rows_error(err, "%s", msg) : SQLITE_NOMEM;
+            rc = msg ? ax_error_into(err, NULL, "%s", msg) : SQLITE_NOMEM;
             sqlite3_free(msg);
             goto done;
         }
         if (sqlite3_column_int(st, 1))
             continue; /* no label */
         if (out->n == UINT32_MAX / 2) {
-            rc = rows_error(err, "the index has too many rows");
+            rc = ax_error_into(err, NULL, "the index has too many rows");
             goto done;
         }
         if (out->n == cap) {
@@ -2226,20 +2215,21 @@ static int lab_check_caches(lab_vtab *vt, char **err)
         if (!has_value && !has_tag)
             continue;
         if (!has_value || !has_tag) {
-            rc = lab_error(err,
-                           "cache entry '%s' is corrupt: %s_info has its row '%s%s' but "
-                           "not '%s%s'",
-                           k->key, vt->name, k->key, has_value ? "" : "_key", k->key,
-                           has_value ? "_key" : "");
+            rc = ax_error_into(err, NULL,
+                               "laban: cache entry '%s' is corrupt: %s_info has its row '%s%s' but "
+                               "not '%s%s'",
+                               k->key, vt->name, k->key, has_value ? "" : "_key", k->key,
+                               has_value ? "_key" : "");
             break;
         }
         int vtype = sqlite3_column_type(st, 0), ttype = sqlite3_column_type(st, 1);
         if (vtype != SQLITE_BLOB || ttype != SQLITE_TEXT) {
-            rc = lab_error(err,
-                           "cache entry '%s' is corrupt: its value is %s and its key %s, "
-                           "expected a blob and text",
-                           k->key, ax_type_name(sqlite3_column_value(st, 0)),
-                           ax_type_name(sqlite3_column_value(st, 1)));
+            rc =
+                ax_error_into(err, NULL,
+                              "laban: cache entry '%s' is corrupt: its value is %s and its key %s, "
+                              "expected a blob and text",
+                              k->key, ax_type_name(sqlite3_column_value(st, 0)),
+                              ax_type_name(sqlite3_column_value(st, 1)));
             break;
         }
         const void *blob = sqlite3_column_blob(st, 0);
@@ -2253,7 +2243,7 @@ static int lab_check_caches(lab_vtab *vt, char **err)
             char *msg = NULL;
             rc = rows_load(vt->db, vt->schema, vt->name, &rows, &msg);
             if (rc == SQLITE_ERROR)
-                rc = lab_error(err, "%s", msg);
+                rc = ax_error_into(err, NULL, "laban: %s", msg);
             sqlite3_free(msg);
             if (rc)
                 break;
@@ -2261,8 +2251,9 @@ static int lab_check_caches(lab_vtab *vt, char **err)
         }
         rc = k->check(&rows, tag, blob, size, &why);
         if (rc == SQLITE_ERROR)
-            rc =
-                why ? lab_error(err, "cache entry '%s' is corrupt: %s", k->key, why) : SQLITE_NOMEM;
+            rc = why ? ax_error_into(err, NULL, "laban: cache entry '%s' is corrupt: %s", k->key,
+                                     why)
+                     : SQLITE_NOMEM;
     }
     sqlite3_finalize(st);
     sqlite3_free(why);
@@ -2464,8 +2455,8 @@ int ax_laban_stats_read(sqlite3 *db, const char *name, ax_laban_stats *out, char
     if (rc != SQLITE_OK) {
         rc = (rc & 0xff) == SQLITE_NOMEM
                  ? SQLITE_NOMEM
-                 : rows_error(err, "cannot read the statistics of index \"%w\": %s", name,
-                              sqlite3_errmsg(db));
+                 : ax_error_into(err, NULL, "cannot read the statistics of index \"%w\": %s", name,
+                                 sqlite3_errmsg(db));
         goto done;
     }
     if ((rc = rows_check_format(st, 0, name, err)) != SQLITE_OK)
@@ -2535,21 +2526,21 @@ int ax_laban_stats_read(sqlite3 *db, const char *name, ax_laban_stats *out, char
         bad = why;
     }
     if (bad) {
-        rc = rows_error(err,
-                        "corrupt statistics: %s (index \"%w\", %s_info row '%s'); run "
-                        "INSERT INTO %s(%s) VALUES('rebuild')",
-                        bad, name, name, row, ident, ident);
+        rc = ax_error_into(err, NULL,
+                           "corrupt statistics: %s (index \"%w\", %s_info row '%s'); run "
+                           "INSERT INTO %s(%s) VALUES('rebuild')",
+                           bad, name, name, row, ident, ident);
         goto done;
     }
     out->generation = sqlite3_column_int64(st, 4);
     out->rows = sqlite3_column_int64(st, 6);
     if (sqlite3_column_type(st, 5) == SQLITE_INTEGER &&
         sqlite3_column_int64(st, 5) != out->generation) {
-        rc = rows_error(err,
-                        "the statistics of index \"%w\" are out of date until the "
-                        "transaction that changed it commits (generation %lld, statistics of "
-                        "generation %lld)",
-                        name, out->generation, sqlite3_column_int64(st, 5));
+        rc = ax_error_into(err, NULL,
+                           "the statistics of index \"%w\" are out of date until the "
+                           "transaction that changed it commits (generation %lld, statistics of "
+                           "generation %lld)",
+                           name, out->generation, sqlite3_column_int64(st, 5));
         goto done;
     }
     out->opt = tmp.opt;
