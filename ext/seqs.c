@@ -54,7 +54,7 @@ void ax_seqs_free(ax_seqs *ts)
         affect_free(ts->joints[i]);
     affect_free(ts->joints);
     affect_features_free(ts->feat);
-    sqlite3_free(ts->opts_text);
+    sqlite3_free(ts->opts_text.text);
     sqlite3_free(ts->progress);
     if (ts->probing)
         ax_monitor_end(&ts->probe);
@@ -160,51 +160,13 @@ ax_arg ax_seqs_options(sqlite3_context *ctx, int argc, sqlite3_value **argv, int
         ax_errorf(ctx, "%s", msg);
         goto done;
     }
-    if (argc > opt_i && sqlite3_value_type(argv[opt_i]) == SQLITE_TEXT) {
-        const unsigned char *text = sqlite3_value_text(argv[opt_i]);
-        int n = sqlite3_value_bytes(argv[opt_i]);
-        ts->opts_text = sqlite3_malloc64((sqlite3_uint64)n + 1);
-        if (!text || !ts->opts_text) {
-            sqlite3_result_error_nomem(ctx);
-            goto done;
-        }
-        memcpy(ts->opts_text, text, (size_t)n);
-        ts->opts_text[n] = '\0';
-        ts->opts_len = (size_t)n;
-    }
+    if (ax_opts_text_keep(ctx, argc, argv, opt_i, &ts->opts_text) != AX_OK)
+        goto done;
     r = AX_OK;
 done:
     if (r != AX_OK)
         ax_opts_free(opts);
     return r;
-}
-
-/* Whether a later row's options are the first row's (the same text, or both absent). */
-static ax_arg same_options(sqlite3_context *ctx, int argc, sqlite3_value **argv, const ax_seqs *ts)
-{
-    int i = ts->opt_i;
-    if (argc <= i)
-        return AX_OK;
-    int type = sqlite3_value_type(argv[i]);
-    bool same;
-    if (type == SQLITE_NULL) {
-        same = ts->opts_text == NULL;
-    } else if (type != SQLITE_TEXT || ts->opts_text == NULL) {
-        same = false;
-    } else {
-        const unsigned char *text = sqlite3_value_text(argv[i]);
-        if (!text) {
-            sqlite3_result_error_nomem(ctx);
-            return AX_ERROR;
-        }
-        same = (size_t)sqlite3_value_bytes(argv[i]) == ts->opts_len &&
-               memcmp(text, ts->opts_text, ts->opts_len) == 0;
-    }
-    if (!same) {
-        ax_errorf(ctx, "options must be the same on every row");
-        return AX_ERROR;
-    }
-    return AX_OK;
 }
 
 /* Reports a core error met on a row: "row 3: …" (out of memory as SQLITE_NOMEM). */
@@ -244,7 +206,7 @@ static ax_arg first_motion(sqlite3_context *ctx, ax_seqs *ts, const affect_motio
 
 ax_arg ax_seqs_add(sqlite3_context *ctx, int argc, sqlite3_value **argv, ax_seqs *ts)
 {
-    if (same_options(ctx, argc, argv, ts) != AX_OK)
+    if (ax_opts_text_same(ctx, argc, argv, ts->opt_i, &ts->opts_text) != AX_OK)
         return AX_ERROR;
     affect_motion *m = NULL;
     ax_arg r = ax_arg_motion(ctx, argv, 0, &m);

@@ -19,10 +19,9 @@
 #include "affect/hmm.h"
 
 typedef struct ax_seqs {
-    bool failed;     /* an error was reported: xFinal only frees */
-    int opt_i;       /* the options' argument index */
-    char *opts_text; /* the first row's options text, NULL when none */
-    size_t opts_len;
+    bool failed;            /* an error was reported: xFinal only frees */
+    int opt_i;              /* the options' argument index */
+    ax_opts_text opts_text; /* the first row's options text (NULL when none) */
     affect_hmm_config cfg;
     affect_features_options fo;
     char **joints; /* fo.joints storage: copies of the "joints" option's names */
