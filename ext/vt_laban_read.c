@@ -110,8 +110,9 @@ static bool lab_is_laban_def(const char *def)
 
 /* The format of _info (column col of st) as this version reads it: SQLITE_OK for text '1';
  * SQLITE_NOMEM; else SQLITE_ERROR with *err: "g_info has format "2"; this version reads
- * format 1 (index "g")" (NULL when the row is missing). */
-static int rows_check_format(sqlite3_stmt *st, int col, const char *name, char **err)
+ * format 1", followed by " (index "g")" when name_it (NULL when the row is missing). The reader
+ * of rows leaves the index's name to its caller, as for its other messages. */
+static int rows_check_format(sqlite3_stmt *st, int col, const char *name, bool name_it, char **err)
 {
     const char *format = (const char *)sqlite3_column_text(st, col);
     if (sqlite3_column_type(st, col) == SQLITE_TEXT && format && !strcmp(format, LAB_FORMAT))
@@ -119,9 +120,9 @@ static int rows_check_format(sqlite3_stmt *st, int col, const char *name, char *
     if (!format && sqlite3_column_type(st, col) != SQLITE_NULL)
         return SQLITE_NOMEM;
     return ax_error_into(
-        err, NULL,
-        "%s_info has format %s%s%s; this version reads format " LAB_FORMAT " (index \"%w\")", name,
-        format ? "\"" : "", format ? format : "NULL", format ? "\"" : "", name);
+        err, NULL, "%s_info has format %s%s%s; this version reads format " LAB_FORMAT "%s%w%s",
+        name, format ? "\"" : "", format ? format : "NULL", format ? "\"" : "",
+        name_it ? " (index \"" : "", name_it ? name : "", name_it ? "\")" : "");
 }
 
 /* The content table and motion column of a laban table; SQLITE_NOTFOUND if it is not one
@@ -152,7 +153,7 @@ static int rows_info(sqlite3 *db, const char *name, ax_laban_rows *r, char **err
         return SQLITE_NOMEM;
     }
     bool is_laban = lab_is_laban_def(def);
-    rc = is_laban ? rows_check_format(st, 3, name, err) : SQLITE_NOTFOUND;
+    rc = is_laban ? rows_check_format(st, 3, name, false, err) : SQLITE_NOTFOUND;
     if (rc == SQLITE_OK &&
         (sqlite3_column_type(st, 1) != SQLITE_TEXT || sqlite3_column_type(st, 2) != SQLITE_TEXT))
         rc = SQLITE_NOTFOUND;
@@ -459,7 +460,7 @@ int ax_laban_stats_read(sqlite3 *db, const char *name, ax_laban_stats *out, char
                                  sqlite3_errmsg(db));
         goto done;
     }
-    if ((rc = rows_check_format(st, 0, name, err)) != SQLITE_OK)
+    if ((rc = rows_check_format(st, 0, name, true, err)) != SQLITE_OK)
         goto done;
     char why[200];
     const char *bad = NULL;
