@@ -705,6 +705,37 @@ int ax_motion_tvf_best_index(sqlite3_vtab *vt, sqlite3_index_info *info, int col
     return SQLITE_OK;
 }
 
+int ax_tvf_connect(sqlite3 *db, const char *schema, sqlite3_vtab **out)
+{
+    int rc = sqlite3_declare_vtab(db, schema);
+    if (rc != SQLITE_OK)
+        return rc;
+    ax_tvf_vtab *vt = sqlite3_malloc(sizeof *vt);
+    if (!vt)
+        return SQLITE_NOMEM;
+    memset(vt, 0, sizeof *vt);
+    vt->db = db;
+    sqlite3_vtab_config(db, SQLITE_VTAB_INNOCUOUS);
+    *out = &vt->base;
+    return SQLITE_OK;
+}
+
+int ax_tvf_disconnect(sqlite3_vtab *vt)
+{
+    sqlite3_free(vt);
+    return SQLITE_OK;
+}
+
+int ax_tvf_open(size_t size, sqlite3_vtab_cursor **out)
+{
+    sqlite3_vtab_cursor *c = sqlite3_malloc64(size);
+    if (!c)
+        return SQLITE_NOMEM;
+    memset(c, 0, size);
+    *out = c;
+    return SQLITE_OK;
+}
+
 affect_status ax_motion_tvf_args(int idx_num, int argc, sqlite3_value **argv, affect_monitor *mon,
                                  affect_motion **m, const char **text, size_t *len,
                                  affect_error *err)
