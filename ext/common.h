@@ -212,7 +212,7 @@ int ax_motion_tvf_best_index(sqlite3_vtab *vt, sqlite3_index_info *info, int col
 /* The methods every such table shares. Its table is an ax_tvf_vtab (the connection, for the
  * monitor of a long call); ax_tvf_connect declares the schema (CREATE TABLE x(…)) and marks the
  * table innocuous; ax_tvf_disconnect frees it; ax_tvf_open allocates a cursor of size bytes,
- * zeroed. Usage:
+ * zeroed (the cursor of any virtual table: laban's and vt_rows.c's use it too). Usage:
  *     static int points_connect(sqlite3 *db, void *aux, int argc, const char *const *argv,
  *                               sqlite3_vtab **out, char **err)
  *     { return ax_tvf_connect(db, "CREATE TABLE x(frame INTEGER, …, motion HIDDEN)", out); }

@@ -410,12 +410,7 @@ static int lab_best_index(sqlite3_vtab *tab, sqlite3_index_info *info)
 
 static int lab_open(sqlite3_vtab *tab, sqlite3_vtab_cursor **out)
 {
-    lab_cursor *c = sqlite3_malloc(sizeof *c);
-    if (!c)
-        return SQLITE_NOMEM;
-    memset(c, 0, sizeof *c);
-    *out = &c->base;
-    return SQLITE_OK;
+    return ax_tvf_open(sizeof(lab_cursor), out);
 }
 
 static void lab_cursor_reset(lab_cursor *c)
