@@ -47,6 +47,7 @@ typedef struct lab_vtab {
 
 /* ---- vt_laban_store.c ---- */
 int lab_db_error(char **dst, sqlite3 *db, int rc);
+int lab_interrupted(char **dst);
 int lab_core_error(char **dst, const affect_error *err, const char *prefix);
 const char *lab_value_desc(sqlite3_value *v, char *buf, int size);
 int lab_prepare(sqlite3 *db, char **err, sqlite3_stmt **st, const char *fmt, ...);

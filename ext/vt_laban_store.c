@@ -26,7 +26,7 @@ int lab_db_error(char **dst, sqlite3 *db, int rc)
 
 /* "laban: interrupted" with SQLITE_INTERRUPT, as lab_db_error reports an interrupted statement
  * of the index. */
-static int lab_interrupted(char **dst)
+int lab_interrupted(char **dst)
 {
     int code = ax_error_into(dst, NULL, "laban: interrupted");
     return code == SQLITE_NOMEM ? code : SQLITE_INTERRUPT;
