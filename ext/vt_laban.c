@@ -588,6 +588,57 @@ static int hit_order(const void *a, const void *b)
     return affect_laban_hit_cmp(a, b);
 }
 
+/* The radius ball from the candidates of every part, hits[run[i] .. run[i + 1]) sorted for
+ * each part i < n_runs: those within limit, or the nearest alone when there is none, as
+ * affect_laban_search_run selects them, sorted by merging the parts' runs. */
+static int lab_ball(lab_cursor *c, size_t *run, size_t n_runs, double limit, size_t *n)
+{
+    affect_laban_hit *a = c->hits, nearest = {INFINITY, 0, 0};
+    size_t kept = 0;
+    bool any = false;
+    for (size_t r = 0; r < n_runs; r++) {
+        size_t from = run[r];
+        run[r] = kept;
+        if (from < run[r + 1] && (!any || affect_laban_hit_cmp(&a[from], &nearest) < 0))
+            nearest = a[from]; /* a run's first is its nearest */
+        any = any || from < run[r + 1];
+        for (size_t i = from; i < run[r + 1]; i++)
+            if (a[i].d <= limit)
+                a[kept++] = a[i];
+    }
+    run[n_runs] = kept;
+    if (kept == 0 && any)
+        a[kept++] = nearest;
+    *n = kept;
+    if (kept <= 1)
+        return SQLITE_OK;
+    affect_laban_hit *b = sqlite3_malloc64(kept * sizeof *b);
+    if (!b)
+        return SQLITE_NOMEM;
+    while (n_runs > 1) { /* merge neighbouring runs, a into b, until one is left */
+        size_t out = 0;
+        for (size_t r = 0; r < n_runs; r += 2) {
+            size_t p = run[r], pe = run[r + 1], q = pe, qe = r + 1 < n_runs ? run[r + 2] : pe;
+            size_t o = p;
+            while (p < pe && q < qe)
+                b[o++] = affect_laban_hit_cmp(&a[q], &a[p]) < 0 ? a[q++] : a[p++];
+            while (p < pe)
+                b[o++] = a[p++];
+            while (q < qe)
+                b[o++] = a[q++];
+            run[out++] = run[r];
+        }
+        run[out] = kept;
+        n_runs = out;
+        affect_laban_hit *t = a;
+        a = b;
+        b = t;
+    }
+    sqlite3_free(b);
+    c->hits = a;
+    return SQLITE_OK;
+}
+
 /* Nearest rows: the k smallest distances (k > 0) or the radius ball (k = 0), by
  * affect_laban_search_run (core/src/laban_search.c: the distance, the heap and the tie rule).
  * More than LAB_POLL_ROWS rows are searched LAB_POLL_ROWS at a time, polling the interrupt
@@ -630,10 +681,15 @@ static int lab_knn(lab_cursor *c, sqlite3 *db, const double zq[LAB_N], ptrdiff_t
         return SQLITE_NOMEM;
     }
     int rc = SQLITE_OK;
-    size_t n = 0;
+    size_t n = 0, n_runs = 0, *run = NULL; /* the radius: where each part's hits start */
     double dmax = 0;
-    if (k == 0)
+    if (k == 0) {
         s.radius = 1; /* every candidate of the part */
+        if (!(run = sqlite3_malloc64(((hi - lo) / LAB_POLL_ROWS + 2) * sizeof *run))) {
+            ax_monitor_end(&am);
+            return SQLITE_NOMEM;
+        }
+    }
     for (size_t at = lo; at < hi; at += LAB_POLL_ROWS) {
         if (at > lo && ax_monitor_interrupted(&am)) {
             rc = lab_interrupted(err);
@@ -643,6 +699,8 @@ static int lab_knn(lab_cursor *c, sqlite3 *db, const double zq[LAB_N], ptrdiff_t
         s.lo = at;
         s.hi = hi - at > LAB_POLL_ROWS ? at + LAB_POLL_ROWS : hi;
         affect_laban_search_run(&s, zq, c->hits + n, &got);
+        if (run)
+            run[n_runs++] = n;
         if (k == 0 && got > 0 && c->hits[n + got - 1].d > dmax)
             dmax = c->hits[n + got - 1].d; /* sorted: the part's largest is its last */
         n += got;
@@ -652,21 +710,11 @@ static int lab_knn(lab_cursor *c, sqlite3 *db, const double zq[LAB_N], ptrdiff_t
         }
     }
     ax_monitor_end(&am);
-    if (rc == SQLITE_OK && k == 0 && n > 0) {
-        double limit = radius * dmax;
-        affect_laban_hit nearest = c->hits[0];
-        size_t kept = 0;
-        for (size_t i = 0; i < n; i++) {
-            if (affect_laban_hit_cmp(&c->hits[i], &nearest) < 0)
-                nearest = c->hits[i];
-            if (c->hits[i].d <= limit)
-                c->hits[kept++] = c->hits[i];
-        }
-        if (kept == 0)
-            c->hits[kept++] = nearest;
-        n = kept;
-        qsort(c->hits, n, sizeof *c->hits, hit_order);
+    if (rc == SQLITE_OK && run) {
+        run[n_runs] = n;
+        rc = lab_ball(c, run, n_runs, radius * dmax, &n);
     }
+    sqlite3_free(run);
     c->n_hits = rc == SQLITE_OK ? n : 0;
     return rc;
 }
