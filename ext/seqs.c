@@ -377,3 +377,126 @@ void ax_json_features(affect_strbuf *sb, const affect_features *f)
         affect_strbuf_puts(sb, "null");
     affect_strbuf_printf(sb, ",\"dim\":%u}", affect_features_dim(f));
 }
+
+/* ---- labelled training aggregates ---- */
+
+/* The label of the current row (argument 1): its text, or AX_NULL for SQL NULL. */
+static ax_arg row_label(sqlite3_context *ctx, sqlite3_value **argv, const ax_seqs *ts,
+                        const char **text)
+{
+    int type = sqlite3_value_type(argv[1]);
+    *text = NULL;
+    if (type == SQLITE_NULL)
+        return AX_NULL;
+    if (type == SQLITE_BLOB) {
+        ax_errorf(ctx, "row %" PRIu64 ": label must be text or a number, got a BLOB", ts->rows);
+        return AX_ERROR;
+    }
+    *text = (const char *)sqlite3_value_text(argv[1]);
+    if (!*text) {
+        sqlite3_result_error_nomem(ctx);
+        return AX_ERROR;
+    }
+    if (**text == '\0' || strlen(*text) != (size_t)sqlite3_value_bytes(argv[1])) {
+        ax_errorf(ctx, "row %" PRIu64 ": label must not be empty or contain NUL", ts->rows);
+        return AX_ERROR;
+    }
+    size_t len = strlen(*text), bad = affect_utf8_invalid_at(*text, len);
+    if (bad < len) { /* the model BLOBs keep labels as UTF-8 */
+        ax_errorf(ctx, "row %" PRIu64 ": label is not valid UTF-8 (byte 0x%02x at offset %zu)",
+                  ts->rows, (unsigned char)(*text)[bad], bad);
+        return AX_ERROR;
+    }
+    return AX_OK;
+}
+
+ax_arg ax_labelled_add(sqlite3_context *ctx, int argc, sqlite3_value **argv, ax_labelled *t)
+{
+    const char *label;
+    ax_arg r = row_label(ctx, argv, &t->s, &label);
+    if (r != AX_OK)
+        return r == AX_NULL ? AX_OK : AX_ERROR;
+    uint32_t before = t->s.n_seqs;
+    if (ax_seqs_add(ctx, argc, argv, &t->s) != AX_OK)
+        return AX_ERROR;
+    if (t->s.n_seqs == before)
+        return AX_OK;
+    /* labels grow with the sequences (their capacity) */
+    char **labels = affect_realloc(t->labels, (size_t)t->s.cap * sizeof *labels);
+    if (labels) {
+        t->labels = labels;
+        t->labels[before] = affect_strndup(label, strlen(label));
+    }
+    if (!labels || !t->labels[before]) {
+        affect_free((void *)t->s.seqs[before].x); /* keep labels and sequences paired */
+        t->s.n_seqs = before;
+        sqlite3_result_error_nomem(ctx);
+        return AX_ERROR;
+    }
+    return AX_OK;
+}
+
+void ax_labelled_free(ax_labelled *t)
+{
+    if (!t)
+        return;
+    for (uint32_t i = 0; i < t->s.n_seqs; i++)
+        affect_free(t->labels[i]);
+    affect_free(t->labels);
+    ax_seqs_free(&t->s); /* frees t itself (s is its first member) */
+}
+
+void ax_labelled_step(sqlite3_context *ctx, int argc, sqlite3_value **argv,
+                      const ax_labelled_kind *kind)
+{
+    ax_labelled **slot = sqlite3_aggregate_context(ctx, (int)sizeof *slot);
+    if (!slot) {
+        sqlite3_result_error_nomem(ctx);
+        return;
+    }
+    ax_labelled *t = *slot;
+    if (t && t->s.failed)
+        return;
+    if (!t) {
+        t = sqlite3_malloc64(kind->size);
+        if (!t) {
+            sqlite3_result_error_nomem(ctx);
+            return;
+        }
+        memset(t, 0, kind->size);
+        *slot = t;
+        t->s.rows++;
+        if (kind->first(ctx, argc, argv, t) != AX_OK) {
+            t->s.failed = true;
+            return;
+        }
+    } else {
+        t->s.rows++;
+    }
+    if (ax_labelled_add(ctx, argc, argv, t) != AX_OK)
+        t->s.failed = true;
+}
+
+void ax_labelled_final(sqlite3_context *ctx, const ax_labelled_kind *kind)
+{
+    ax_labelled **slot = sqlite3_aggregate_context(ctx, 0);
+    ax_labelled *t = slot ? *slot : NULL;
+    if (!t || t->s.failed || t->s.n_seqs == 0) {
+        if (!t || !t->s.failed)
+            sqlite3_result_null(ctx);
+        goto done;
+    }
+    uint32_t n = t->s.n_seqs, n_classes = 0;
+    char **classes = affect_malloc_array(n, sizeof *classes);
+    uint32_t *y = affect_malloc_array(n, sizeof *y);
+    if (!classes || !y)
+        sqlite3_result_error_nomem(ctx);
+    else if (ax_label_classes(ctx, t->labels, n, classes, &n_classes, y) == AX_OK)
+        kind->train(ctx, t, classes, n_classes, y);
+    affect_free(classes);
+    affect_free(y);
+done:
+    ax_labelled_free(t);
+    if (slot)
+        *slot = NULL;
+}
