@@ -72,19 +72,34 @@ char *ax_mprintf(const char *fmt, ...)
     return escape_message(raw);
 }
 
-int ax_vtab_error(sqlite3_vtab *vt, const affect_error *err, const char *fmt, ...)
+static int error_into(char **dst, const affect_error *err, const char *fmt, va_list ap)
 {
     if (err && err->status == AFFECT_ERR_NOMEM)
         return SQLITE_NOMEM;
     if (err && err->status == AFFECT_ERR_INTERRUPTED)
         return SQLITE_INTERRUPT;
+    char *raw = sqlite3_vmprintf(fmt, ap);
+    sqlite3_free(*dst);
+    *dst = escape_message(raw);
+    return *dst ? SQLITE_ERROR : SQLITE_NOMEM;
+}
+
+int ax_vtab_error(sqlite3_vtab *vt, const affect_error *err, const char *fmt, ...)
+{
     va_list ap;
     va_start(ap, fmt);
-    char *raw = sqlite3_vmprintf(fmt, ap);
+    int rc = error_into(&vt->zErrMsg, err, fmt, ap);
     va_end(ap);
-    sqlite3_free(vt->zErrMsg);
-    vt->zErrMsg = escape_message(raw);
-    return vt->zErrMsg ? SQLITE_ERROR : SQLITE_NOMEM;
+    return rc;
+}
+
+int ax_error_into(char **dst, const affect_error *err, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    int rc = error_into(dst, err, fmt, ap);
+    va_end(ap);
+    return rc;
 }
 
 const char *ax_type_name(sqlite3_value *v)
@@ -687,6 +702,37 @@ int ax_motion_tvf_best_index(sqlite3_vtab *vt, sqlite3_index_info *info, int col
     }
     info->estimatedCost = 1000.0;
     info->estimatedRows = 10000;
+    return SQLITE_OK;
+}
+
+int ax_tvf_connect(sqlite3 *db, const char *schema, sqlite3_vtab **out)
+{
+    int rc = sqlite3_declare_vtab(db, schema);
+    if (rc != SQLITE_OK)
+        return rc;
+    ax_tvf_vtab *vt = sqlite3_malloc(sizeof *vt);
+    if (!vt)
+        return SQLITE_NOMEM;
+    memset(vt, 0, sizeof *vt);
+    vt->db = db;
+    sqlite3_vtab_config(db, SQLITE_VTAB_INNOCUOUS);
+    *out = &vt->base;
+    return SQLITE_OK;
+}
+
+int ax_tvf_disconnect(sqlite3_vtab *vt)
+{
+    sqlite3_free(vt);
+    return SQLITE_OK;
+}
+
+int ax_tvf_open(size_t size, sqlite3_vtab_cursor **out)
+{
+    sqlite3_vtab_cursor *c = sqlite3_malloc64(size);
+    if (!c)
+        return SQLITE_NOMEM;
+    memset(c, 0, size);
+    *out = c;
     return SQLITE_OK;
 }
 

@@ -65,6 +65,9 @@ int ax_vtab_error(sqlite3_vtab *vt, const affect_error *err, const char *fmt, ..
     __attribute__((format(printf, 3, 4)))
 #endif
     ;
+/* The same into *dst, for a method with no vtab yet (xCreate's and xConnect's pzErr) or a
+ * message that the caller hands on (ax_laban_read's *err). */
+int ax_error_into(char **dst, const affect_error *err, const char *fmt, ...); /* (takes %q, %w) */
 /* Name of a value's type for messages: "integer", "real", "text", "blob", "null". */
 const char *ax_type_name(sqlite3_value *v);
 
@@ -206,6 +209,21 @@ bool ax_monitor_interrupted(ax_monitor *am);
  * "<name>: a motion argument is required, as in SELECT * FROM <name>(:motion)". */
 int ax_motion_tvf_best_index(sqlite3_vtab *vt, sqlite3_index_info *info, int col_motion,
                              int col_options, const char *name);
+/* The methods every such table shares. Its table is an ax_tvf_vtab (the connection, for the
+ * monitor of a long call); ax_tvf_connect declares the schema (CREATE TABLE x(…)) and marks the
+ * table innocuous; ax_tvf_disconnect frees it; ax_tvf_open allocates a cursor of size bytes,
+ * zeroed (the cursor of any virtual table: laban's and vt_rows.c's use it too). Usage:
+ *     static int points_connect(sqlite3 *db, void *aux, int argc, const char *const *argv,
+ *                               sqlite3_vtab **out, char **err)
+ *     { return ax_tvf_connect(db, "CREATE TABLE x(frame INTEGER, …, motion HIDDEN)", out); }
+ *     … .xDisconnect = ax_tvf_disconnect, … */
+typedef struct ax_tvf_vtab {
+    sqlite3_vtab base;
+    sqlite3 *db;
+} ax_tvf_vtab;
+int ax_tvf_connect(sqlite3 *db, const char *schema, sqlite3_vtab **out);
+int ax_tvf_disconnect(sqlite3_vtab *vt);
+int ax_tvf_open(size_t size, sqlite3_vtab_cursor **out);
 /* xFilter's arguments under that plan: argv[0] a motion BLOB, decoded into *m polling mon (a
  * NULL motion leaves *m NULL: no rows), and, when idx_num has bit 2, argv[1] the options as text
  * (*text, *len; NULL or absent: *text = NULL). Errors into err (the caller prefixes its name):

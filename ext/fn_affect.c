@@ -64,21 +64,15 @@ static const char *const train_keys[] = {
     "storage",    NULL};
 
 typedef struct cls_train {
-    ax_seqs s; /* first: freed by ax_seqs_free's sqlite3_free … see cls_train_free */
+    ax_labelled l; /* first: the sequences and their labels (seqs.h) */
     affect_classifier_config cfg;
-    char **labels; /* one per sequence */
     double grid_dims[AFFECT_CLASSIFIER_GRID_MAX], grid_sigma[AFFECT_CLASSIFIER_GRID_MAX],
         grid_k[AFFECT_CLASSIFIER_GRID_MAX];
 } cls_train;
 
 static void cls_train_free(cls_train *t)
 {
-    if (!t)
-        return;
-    for (uint32_t i = 0; i < t->s.n_seqs; i++)
-        affect_free(t->labels[i]);
-    affect_free(t->labels);
-    ax_seqs_free(&t->s); /* frees t itself (s is its first member) */
+    ax_labelled_free(t ? &t->l : NULL); /* frees t itself */
 }
 
 /* The "groups" option into a mask. */
@@ -255,10 +249,10 @@ static ax_arg read_classifier_options(sqlite3_context *ctx, const ax_opts *opts,
         return AX_ERROR;
     cfg->storage = (affect_classifier_storage)storage; /* the list's order is the enum's */
     cfg->descriptors = (unsigned)desc;                 /* the list's order is the mask's */
-    t->s.desc_mask = cfg->descriptors;
+    t->l.s.desc_mask = cfg->descriptors;
     cfg->zscore = norm == 0;
     cfg->spca_kernel = kernel ? AFFECT_SPCA_RBF : AFFECT_SPCA_LINEAR;
-    cfg->hmm = t->s.cfg;
+    cfg->hmm = t->l.s.cfg;
     const char *msg = affect_classifier_config_check(cfg);
     if (msg) {
         ax_errorf(ctx, "%s", msg);
@@ -267,111 +261,26 @@ static ax_arg read_classifier_options(sqlite3_context *ctx, const ax_opts *opts,
     return AX_OK;
 }
 
-/* The label of the current row (argument 1): its text, or NULL for SQL NULL. */
-static ax_arg row_label(sqlite3_context *ctx, sqlite3_value **argv, const cls_train *t,
-                        const char **text)
+/* The first row: the recognizer's defaults and the options. */
+static ax_arg train_first(sqlite3_context *ctx, int argc, sqlite3_value **argv, ax_labelled *l)
 {
-    int type = sqlite3_value_type(argv[1]);
-    *text = NULL;
-    if (type == SQLITE_NULL)
-        return AX_NULL;
-    if (type == SQLITE_BLOB) {
-        ax_errorf(ctx, "row %" PRIu64 ": label must be text or a number, got a BLOB", t->s.rows);
+    cls_train *t = (cls_train *)l;
+    affect_classifier_config_default(&t->cfg);
+    t->l.s.cfg = t->cfg.hmm; /* the recognizer's defaults, not the HMM's own */
+    affect_classifier_features_default(&t->l.s.fo);
+    t->l.s.preset = true;
+    ax_opts opts;
+    if (ax_seqs_options(ctx, argc, argv, 2, train_keys, &t->l.s, &opts) != AX_OK)
         return AX_ERROR;
+    ax_arg r = read_classifier_options(ctx, &opts, t);
+    if (r == AX_OK) /* affect_train's own: affect_crossval's threads run folds */
+        r = ax_opt_u32(ctx, &opts, "threads", &t->cfg.threads);
+    if (r == AX_OK && (t->cfg.threads < 1 || t->cfg.threads > 64)) {
+        ax_errorf(ctx, "option \"threads\" must be from 1 to 64, got %u", t->cfg.threads);
+        r = AX_ERROR;
     }
-    *text = (const char *)sqlite3_value_text(argv[1]);
-    if (!*text) {
-        sqlite3_result_error_nomem(ctx);
-        return AX_ERROR;
-    }
-    if (**text == '\0' || strlen(*text) != (size_t)sqlite3_value_bytes(argv[1])) {
-        ax_errorf(ctx, "row %" PRIu64 ": label must not be empty or contain NUL", t->s.rows);
-        return AX_ERROR;
-    }
-    size_t len = strlen(*text), bad = affect_utf8_invalid_at(*text, len);
-    if (bad < len) { /* the classifier BLOB keeps labels as UTF-8 */
-        ax_errorf(ctx, "row %" PRIu64 ": label is not valid UTF-8 (byte 0x%02x at offset %zu)",
-                  t->s.rows, (unsigned char)(*text)[bad], bad);
-        return AX_ERROR;
-    }
-    return AX_OK;
-}
-
-static ax_arg train_row(sqlite3_context *ctx, int argc, sqlite3_value **argv, cls_train *t)
-{
-    const char *label;
-    ax_arg r = row_label(ctx, argv, t, &label);
-    if (r != AX_OK)
-        return r == AX_NULL ? AX_OK : AX_ERROR;
-    uint32_t before = t->s.n_seqs;
-    if (ax_seqs_add(ctx, argc, argv, &t->s) != AX_OK)
-        return AX_ERROR;
-    if (t->s.n_seqs == before)
-        return AX_OK;
-    /* labels grow with the sequences (their capacity) */
-    char **labels = affect_realloc(t->labels, (size_t)t->s.cap * sizeof *labels);
-    if (!labels) {
-        affect_free((void *)t->s.seqs[before].x); /* keep labels and sequences paired */
-        t->s.n_seqs = before;
-        sqlite3_result_error_nomem(ctx);
-        return AX_ERROR;
-    }
-    t->labels = labels;
-    t->labels[before] = affect_strndup(label, strlen(label));
-    if (!t->labels[before]) {
-        affect_free((void *)t->s.seqs[before].x); /* keep labels and sequences paired */
-        t->s.n_seqs = before;
-        sqlite3_result_error_nomem(ctx);
-        return AX_ERROR;
-    }
-    return AX_OK;
-}
-
-void ax_affect_train_step(sqlite3_context *ctx, int argc, sqlite3_value **argv)
-{
-    cls_train **slot = sqlite3_aggregate_context(ctx, (int)sizeof *slot);
-    if (!slot) {
-        sqlite3_result_error_nomem(ctx);
-        return;
-    }
-    cls_train *t = *slot;
-    if (t && t->s.failed)
-        return;
-    if (!t) {
-        t = sqlite3_malloc64(sizeof *t);
-        if (!t) {
-            sqlite3_result_error_nomem(ctx);
-            return;
-        }
-        memset(t, 0, sizeof *t);
-        *slot = t;
-        t->s.rows++;
-        affect_classifier_config_default(&t->cfg);
-        t->s.cfg = t->cfg.hmm; /* the recognizer's defaults, not the HMM's own */
-        affect_classifier_features_default(&t->s.fo);
-        t->s.preset = true;
-        ax_opts opts;
-        if (ax_seqs_options(ctx, argc, argv, 2, train_keys, &t->s, &opts) != AX_OK) {
-            t->s.failed = true;
-            return;
-        }
-        ax_arg r = read_classifier_options(ctx, &opts, t);
-        if (r == AX_OK) /* affect_train's own: affect_crossval's threads run folds */
-            r = ax_opt_u32(ctx, &opts, "threads", &t->cfg.threads);
-        if (r == AX_OK && (t->cfg.threads < 1 || t->cfg.threads > 64)) {
-            ax_errorf(ctx, "option \"threads\" must be from 1 to 64, got %u", t->cfg.threads);
-            r = AX_ERROR;
-        }
-        ax_opts_free(&opts);
-        if (r != AX_OK) {
-            t->s.failed = true;
-            return;
-        }
-    } else {
-        t->s.rows++;
-    }
-    if (train_row(ctx, argc, argv, t) != AX_OK)
-        t->s.failed = true;
+    ax_opts_free(&opts);
+    return r;
 }
 
 static int cmp_text(const void *a, const void *b)
@@ -379,57 +288,41 @@ static int cmp_text(const void *a, const void *b)
     return strcmp(*(char *const *)a, *(char *const *)b);
 }
 
-/* Trains and encodes; the classes are the distinct labels in byte order. */
-static void train_final(sqlite3_context *ctx, cls_train *t)
+/* Trains on the rows and sets the encoded classifier as the result. */
+static void train_model(sqlite3_context *ctx, ax_labelled *l, char *const *classes,
+                        uint32_t n_classes, const uint32_t *y)
 {
-    uint32_t n = t->s.n_seqs, n_classes = 0;
-    char **classes = affect_malloc_array(n, sizeof *classes);
-    uint32_t *y = affect_malloc_array(n, sizeof *y);
+    cls_train *t = (cls_train *)l;
     affect_classifier *c = NULL;
     affect_error err;
-    if (!classes || !y) {
-        sqlite3_result_error_nomem(ctx);
-        goto done;
-    }
-    if (ax_label_classes(ctx, t->labels, n, classes, &n_classes, y) != AX_OK)
-        goto done;
-    t->cfg.hmm = t->s.cfg;
+    t->cfg.hmm = t->l.s.cfg;
     ax_monitor am;
-    if (ax_monitor_begin(&am, ctx, t->s.progress) != AX_OK)
-        goto done;
+    if (ax_monitor_begin(&am, ctx, t->l.s.progress) != AX_OK)
+        return;
     t->cfg.hmm.monitor = &am.mon;
-    affect_status st = affect_classifier_train(&t->cfg, t->s.feat, t->s.seqs, t->s.desc, y, n,
-                                               (const char *const *)classes, n_classes, &c, &err);
+    affect_status st =
+        affect_classifier_train(&t->cfg, t->l.s.feat, t->l.s.seqs, t->l.s.desc, y, t->l.s.n_seqs,
+                                (const char *const *)classes, n_classes, &c, &err);
     ax_monitor_end(&am);
-    if (st) {
-        ax_error(ctx, &err);
-        goto done;
-    }
     unsigned char *blob;
     size_t size;
-    if (affect_classifier_encode(c, &blob, &size, &err))
+    if (st || affect_classifier_encode(c, &blob, &size, &err))
         ax_error(ctx, &err);
     else
         sqlite3_result_blob64(ctx, blob, size, sqlite3_free);
-done:
     affect_classifier_free(c);
-    affect_free(classes);
-    affect_free(y);
+}
+
+static const ax_labelled_kind train_kind = {sizeof(cls_train), train_first, train_model};
+
+void ax_affect_train_step(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    ax_labelled_step(ctx, argc, argv, &train_kind);
 }
 
 void ax_affect_train_final(sqlite3_context *ctx)
 {
-    cls_train **slot = sqlite3_aggregate_context(ctx, 0);
-    cls_train *t = slot ? *slot : NULL;
-    if (!t || t->s.failed || t->s.n_seqs == 0) {
-        if (!t || !t->s.failed)
-            sqlite3_result_null(ctx);
-    } else {
-        train_final(ctx, t);
-    }
-    cls_train_free(t);
-    if (slot)
-        *slot = NULL;
+    ax_labelled_final(ctx, &train_kind);
 }
 
 /* ---- the classifier argument, with the per-function cache ---- */
@@ -800,7 +693,7 @@ static void cv_state_free(cv_state *s)
 {
     if (!s)
         return;
-    for (uint32_t i = 0; s->groups && i < s->t.s.n_seqs; i++)
+    for (uint32_t i = 0; s->groups && i < s->t.l.s.n_seqs; i++)
         affect_free(s->groups[i]);
     affect_free(s->groups);
     cls_train_free(&s->t); /* frees s */
@@ -867,7 +760,7 @@ void ax_affect_crossval_step(sqlite3_context *ctx, int argc, sqlite3_value **arg
         return;
     }
     cv_state *s = *slot;
-    if (s && s->t.s.failed)
+    if (s && s->t.l.s.failed)
         return;
     if (!s) {
         s = sqlite3_malloc64(sizeof *s);
@@ -877,14 +770,14 @@ void ax_affect_crossval_step(sqlite3_context *ctx, int argc, sqlite3_value **arg
         }
         memset(s, 0, sizeof *s);
         *slot = s;
-        s->t.s.rows++;
+        s->t.l.s.rows++;
         affect_classifier_config_default(&s->t.cfg);
-        s->t.s.cfg = s->t.cfg.hmm; /* the recognizer's defaults, not the HMM's own */
-        affect_classifier_features_default(&s->t.s.fo);
-        s->t.s.preset = true;
+        s->t.l.s.cfg = s->t.cfg.hmm; /* the recognizer's defaults, not the HMM's own */
+        affect_classifier_features_default(&s->t.l.s.fo);
+        s->t.l.s.preset = true;
         ax_opts opts;
-        if (ax_seqs_options(ctx, argc, argv, 3, cv_keys, &s->t.s, &opts) != AX_OK) {
-            s->t.s.failed = true;
+        if (ax_seqs_options(ctx, argc, argv, 3, cv_keys, &s->t.l.s, &opts) != AX_OK) {
+            s->t.l.s.failed = true;
             return;
         }
         ax_arg r = read_classifier_options(ctx, &opts, &s->t);
@@ -892,33 +785,34 @@ void ax_affect_crossval_step(sqlite3_context *ctx, int argc, sqlite3_value **arg
             r = read_cv_options(ctx, &opts, s);
         ax_opts_free(&opts);
         if (r != AX_OK) {
-            s->t.s.failed = true;
+            s->t.l.s.failed = true;
             return;
         }
     } else {
-        s->t.s.rows++;
+        s->t.l.s.rows++;
     }
-    uint32_t before = s->t.s.n_seqs;
-    if (train_row(ctx, argc, argv, &s->t) != AX_OK) {
-        s->t.s.failed = true;
+    uint32_t before = s->t.l.s.n_seqs;
+    if (ax_labelled_add(ctx, argc, argv, &s->t.l) != AX_OK) {
+        s->t.l.s.failed = true;
         return;
     }
-    if (s->t.s.n_seqs == before)
+    if (s->t.l.s.n_seqs == before)
         return;
-    char **groups = affect_realloc(s->groups, (size_t)s->t.s.cap * sizeof *groups);
+    char **groups = affect_realloc(s->groups, (size_t)s->t.l.s.cap * sizeof *groups);
     if (!groups) { /* keep groups, labels and sequences paired */
-        affect_free(s->t.labels[before]);
-        affect_free((void *)s->t.s.seqs[before].x);
-        s->t.s.n_seqs = before;
+        affect_free(s->t.l.labels[before]);
+        affect_free((void *)s->t.l.s.seqs[before].x);
+        s->t.l.s.n_seqs = before;
         sqlite3_result_error_nomem(ctx);
-        s->t.s.failed = true;
+        s->t.l.s.failed = true;
         return;
     }
     s->groups = groups;
     s->groups[before] = NULL;
     if (sqlite3_value_type(argv[2]) == SQLITE_BLOB) { /* the group names go into the JSON */
-        ax_errorf(ctx, "row %" PRIu64 ": group must be text or a number, got a BLOB", s->t.s.rows);
-        s->t.s.failed = true;
+        ax_errorf(ctx, "row %" PRIu64 ": group must be text or a number, got a BLOB",
+                  s->t.l.s.rows);
+        s->t.l.s.failed = true;
         return;
     }
     if (sqlite3_value_type(argv[2]) != SQLITE_NULL) {
@@ -928,16 +822,16 @@ void ax_affect_crossval_step(sqlite3_context *ctx, int argc, sqlite3_value **arg
             if (bad < len)
                 ax_errorf(ctx,
                           "row %" PRIu64 ": group is not valid UTF-8 (byte 0x%02x at offset %zu)",
-                          s->t.s.rows, (unsigned char)g[bad], bad);
+                          s->t.l.s.rows, (unsigned char)g[bad], bad);
             else
-                ax_errorf(ctx, "row %" PRIu64 ": group must not contain NUL", s->t.s.rows);
-            s->t.s.failed = true;
+                ax_errorf(ctx, "row %" PRIu64 ": group must not contain NUL", s->t.l.s.rows);
+            s->t.l.s.failed = true;
             return;
         }
         s->groups[before] = g ? affect_strndup(g, len) : NULL;
         if (!s->groups[before]) {
             sqlite3_result_error_nomem(ctx);
-            s->t.s.failed = true;
+            s->t.l.s.failed = true;
         }
     }
 }
@@ -1055,7 +949,7 @@ static void cv_json(affect_strbuf *sb, const cv_state *s, const affect_cv_result
 
 static void cv_final(sqlite3_context *ctx, cv_state *s)
 {
-    uint32_t n = s->t.s.n_seqs, n_classes = 0, n_groups = 0, with_group = 0;
+    uint32_t n = s->t.l.s.n_seqs, n_classes = 0, n_groups = 0, with_group = 0;
     char **classes = affect_malloc_array(n, sizeof *classes);
     char **gnames = affect_malloc_array(n, sizeof *gnames);
     uint32_t *y = affect_malloc_array(n, sizeof *y), *g = affect_malloc_array(n, sizeof *g);
@@ -1071,7 +965,7 @@ static void cv_final(sqlite3_context *ctx, cv_state *s)
         ax_errorf(ctx, "the group is NULL for %u of %u motions", n - with_group, n);
         goto done;
     }
-    distinct(s->t.labels, n, classes, &n_classes, y);
+    distinct(s->t.l.labels, n, classes, &n_classes, y);
     if (n_classes < 2) {
         ax_errorf(ctx, "need motions of at least 2 labels, got 1 (\"%s\")", classes[0]);
         goto done;
@@ -1080,20 +974,20 @@ static void cv_final(sqlite3_context *ctx, cv_state *s)
         distinct(s->groups, n, gnames, &n_groups, g);
     affect_cv_config cfg;
     affect_cv_config_default(&cfg);
-    s->t.cfg.hmm = s->t.s.cfg;
+    s->t.cfg.hmm = s->t.l.s.cfg;
     cfg.cls = s->t.cfg;
     cfg.folds = s->folds;
-    cfg.seed = s->t.s.cfg.seed;
+    cfg.seed = s->t.l.s.cfg.seed;
     cfg.threads = s->threads;
     cfg.methods = s->methods;
     cfg.fda = s->fda;
     if (s->verbose)
         cfg.progress = cv_progress;
     ax_monitor am;
-    if (ax_monitor_begin(&am, ctx, s->t.s.progress) != AX_OK)
+    if (ax_monitor_begin(&am, ctx, s->t.l.s.progress) != AX_OK)
         goto done;
     cfg.cls.hmm.monitor = &am.mon;
-    affect_status st = affect_crossval(&cfg, s->t.s.feat, s->t.s.seqs, s->t.s.desc, y, n,
+    affect_status st = affect_crossval(&cfg, s->t.l.s.feat, s->t.l.s.seqs, s->t.l.s.desc, y, n,
                                        (const char *const *)classes, n_classes,
                                        with_group ? g : NULL, n_groups, &r, &err);
     ax_monitor_end(&am);
@@ -1117,8 +1011,8 @@ void ax_affect_crossval_final(sqlite3_context *ctx)
 {
     cv_state **slot = sqlite3_aggregate_context(ctx, 0);
     cv_state *s = slot ? *slot : NULL;
-    if (!s || s->t.s.failed || s->t.s.n_seqs == 0) {
-        if (!s || !s->t.s.failed)
+    if (!s || s->t.l.s.failed || s->t.l.s.n_seqs == 0) {
+        if (!s || !s->t.l.s.failed)
             sqlite3_result_null(ctx);
     } else {
         cv_final(ctx, s);

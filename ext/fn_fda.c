@@ -64,20 +64,9 @@ static const char *const train_keys[] = {
 static const char *const method_names[] = {"fpca", "ffda", "fspca", "fisomap", NULL};
 
 typedef struct fda_train {
-    ax_seqs s; /* first: ax_seqs_free frees the whole struct */
+    ax_labelled l; /* first: the sequences and their labels (seqs.h) */
     affect_fda_config cfg;
-    char **labels; /* one per sequence */
 } fda_train;
-
-static void fda_train_free(fda_train *t)
-{
-    if (!t)
-        return;
-    for (uint32_t i = 0; i < t->s.n_seqs; i++)
-        affect_free(t->labels[i]);
-    affect_free(t->labels);
-    ax_seqs_free(&t->s);
-}
 
 ax_arg ax_fda_read_options(sqlite3_context *ctx, const ax_opts *opts, affect_fda_config *cfg)
 {
@@ -117,159 +106,59 @@ ax_arg ax_fda_read_options(sqlite3_context *ctx, const ax_opts *opts, affect_fda
     return AX_OK;
 }
 
-/* The label of the current row (argument 1): its text, or NULL for SQL NULL. */
-static ax_arg row_label(sqlite3_context *ctx, sqlite3_value **argv, const fda_train *t,
-                        const char **text)
+/* The first row: the defaults (observations as the recognizer's, no HMM) and the options. */
+static ax_arg train_first(sqlite3_context *ctx, int argc, sqlite3_value **argv, ax_labelled *l)
 {
-    int type = sqlite3_value_type(argv[1]);
-    *text = NULL;
-    if (type == SQLITE_NULL)
-        return AX_NULL;
-    if (type == SQLITE_BLOB) {
-        ax_errorf(ctx, "row %" PRIu64 ": label must be text or a number, got a BLOB", t->s.rows);
+    fda_train *t = (fda_train *)l;
+    affect_fda_config_default(&t->cfg);
+    affect_hmm_config_default(&t->l.s.cfg);
+    t->l.s.cfg.n_states = 1; /* no HMM: a motion needs 1 frame */
+    t->l.s.cfg.max_jump = 0;
+    affect_features_options_default(&t->l.s.fo);
+    t->l.s.fo.frame = AFFECT_FEATURES_FRAME_BODY; /* the recognizer's observations */
+    t->l.s.preset = true;
+    ax_opts opts;
+    if (ax_seqs_options(ctx, argc, argv, 2, train_keys, &t->l.s, &opts) != AX_OK)
         return AX_ERROR;
-    }
-    *text = (const char *)sqlite3_value_text(argv[1]);
-    if (!*text) {
-        sqlite3_result_error_nomem(ctx);
-        return AX_ERROR;
-    }
-    if (**text == '\0' || strlen(*text) != (size_t)sqlite3_value_bytes(argv[1])) {
-        ax_errorf(ctx, "row %" PRIu64 ": label must not be empty or contain NUL", t->s.rows);
-        return AX_ERROR;
-    }
-    size_t len = strlen(*text), bad = affect_utf8_invalid_at(*text, len);
-    if (bad < len) {
-        ax_errorf(ctx, "row %" PRIu64 ": label is not valid UTF-8 (byte 0x%02x at offset %zu)",
-                  t->s.rows, (unsigned char)(*text)[bad], bad);
-        return AX_ERROR;
-    }
-    return AX_OK;
+    ax_arg r = ax_fda_read_options(ctx, &opts, &t->cfg);
+    ax_opts_free(&opts);
+    return r;
 }
 
-static ax_arg train_row(sqlite3_context *ctx, int argc, sqlite3_value **argv, fda_train *t)
+/* Trains on the rows and sets the encoded model as the result. */
+static void train_model(sqlite3_context *ctx, ax_labelled *l, char *const *classes,
+                        uint32_t n_classes, const uint32_t *y)
 {
-    const char *label;
-    ax_arg r = row_label(ctx, argv, t, &label);
-    if (r != AX_OK)
-        return r == AX_NULL ? AX_OK : AX_ERROR;
-    uint32_t before = t->s.n_seqs;
-    if (ax_seqs_add(ctx, argc, argv, &t->s) != AX_OK)
-        return AX_ERROR;
-    if (t->s.n_seqs == before)
-        return AX_OK;
-    char **labels = affect_realloc(t->labels, (size_t)t->s.cap * sizeof *labels);
-    if (!labels) {
-        affect_free((void *)t->s.seqs[before].x); /* keep labels and sequences paired */
-        t->s.n_seqs = before;
-        sqlite3_result_error_nomem(ctx);
-        return AX_ERROR;
-    }
-    t->labels = labels;
-    t->labels[before] = affect_strndup(label, strlen(label));
-    if (!t->labels[before]) {
-        affect_free((void *)t->s.seqs[before].x);
-        t->s.n_seqs = before;
-        sqlite3_result_error_nomem(ctx);
-        return AX_ERROR;
-    }
-    return AX_OK;
-}
-
-void ax_fda_train_step(sqlite3_context *ctx, int argc, sqlite3_value **argv)
-{
-    fda_train **slot = sqlite3_aggregate_context(ctx, (int)sizeof *slot);
-    if (!slot) {
-        sqlite3_result_error_nomem(ctx);
-        return;
-    }
-    fda_train *t = *slot;
-    if (t && t->s.failed)
-        return;
-    if (!t) {
-        t = sqlite3_malloc64(sizeof *t);
-        if (!t) {
-            sqlite3_result_error_nomem(ctx);
-            return;
-        }
-        memset(t, 0, sizeof *t);
-        *slot = t;
-        t->s.rows++;
-        affect_fda_config_default(&t->cfg);
-        affect_hmm_config_default(&t->s.cfg);
-        t->s.cfg.n_states = 1; /* no HMM: a motion needs 1 frame */
-        t->s.cfg.max_jump = 0;
-        affect_features_options_default(&t->s.fo);
-        t->s.fo.frame = AFFECT_FEATURES_FRAME_BODY; /* the recognizer's observations */
-        t->s.preset = true;
-        ax_opts opts;
-        if (ax_seqs_options(ctx, argc, argv, 2, train_keys, &t->s, &opts) != AX_OK) {
-            t->s.failed = true;
-            return;
-        }
-        ax_arg r = ax_fda_read_options(ctx, &opts, &t->cfg);
-        ax_opts_free(&opts);
-        if (r != AX_OK) {
-            t->s.failed = true;
-            return;
-        }
-    } else {
-        t->s.rows++;
-    }
-    if (train_row(ctx, argc, argv, t) != AX_OK)
-        t->s.failed = true;
-}
-
-static void train_final(sqlite3_context *ctx, fda_train *t)
-{
-    uint32_t n = t->s.n_seqs, n_classes = 0;
-    char **classes = affect_malloc_array(n, sizeof *classes);
-    uint32_t *y = affect_malloc_array(n, sizeof *y);
+    fda_train *t = (fda_train *)l;
     affect_fda *f = NULL;
     affect_error err;
-    if (!classes || !y) {
-        sqlite3_result_error_nomem(ctx);
-        goto done;
-    }
-    if (ax_label_classes(ctx, t->labels, n, classes, &n_classes, y) != AX_OK)
-        goto done;
     ax_monitor am;
-    if (ax_monitor_begin(&am, ctx, t->s.progress) != AX_OK)
-        goto done;
+    if (ax_monitor_begin(&am, ctx, t->l.s.progress) != AX_OK)
+        return;
     t->cfg.monitor = &am.mon;
-    affect_status st =
-        affect_fda_train(&t->cfg, t->s.feat, t->s.seqs, n, affect_features_dim(t->s.feat), y,
-                         (const char *const *)classes, n_classes, &f, &err);
+    affect_status st = affect_fda_train(&t->cfg, t->l.s.feat, t->l.s.seqs, t->l.s.n_seqs,
+                                        affect_features_dim(t->l.s.feat), y,
+                                        (const char *const *)classes, n_classes, &f, &err);
     ax_monitor_end(&am);
-    if (st) {
-        ax_error(ctx, &err);
-        goto done;
-    }
     unsigned char *blob;
     size_t size;
-    if (affect_fda_encode(f, &blob, &size, &err))
+    if (st || affect_fda_encode(f, &blob, &size, &err))
         ax_error(ctx, &err);
     else
         sqlite3_result_blob64(ctx, blob, size, sqlite3_free);
-done:
     affect_fda_free(f);
-    affect_free(classes);
-    affect_free(y);
+}
+
+static const ax_labelled_kind train_kind = {sizeof(fda_train), train_first, train_model};
+
+void ax_fda_train_step(sqlite3_context *ctx, int argc, sqlite3_value **argv)
+{
+    ax_labelled_step(ctx, argc, argv, &train_kind);
 }
 
 void ax_fda_train_final(sqlite3_context *ctx)
 {
-    fda_train **slot = sqlite3_aggregate_context(ctx, 0);
-    fda_train *t = slot ? *slot : NULL;
-    if (!t || t->s.failed || t->s.n_seqs == 0) {
-        if (!t || !t->s.failed)
-            sqlite3_result_null(ctx);
-    } else {
-        train_final(ctx, t);
-    }
-    fda_train_free(t);
-    if (slot)
-        *slot = NULL;
+    ax_labelled_final(ctx, &train_kind);
 }
 
 /* ---- the model argument, with the per-function cache ---- */

@@ -1128,57 +1128,22 @@ static ax_arg find_neighbours(sqlite3_context *ctx, const gen_index *ix, const g
     return rank_by_action(ctx, ix, m, want, nb);
 }
 
-/* The motions of content rows ids[0 .. n) from the content table. */
-static ax_arg load_motions(sqlite3_context *ctx, const gen_index *ix, const sqlite3_int64 *ids,
-                           uint32_t n, affect_motion **out)
-{
-    sqlite3_stmt *st =
-        prepare(ctx, "reading the content table", "SELECT \"%w\" FROM \"%w\" WHERE rowid = ?1",
-                ix->motion, ix->content);
-    if (!st)
-        return AX_ERROR;
-    ax_arg r = AX_OK;
-    for (uint32_t i = 0; i < n && r == AX_OK; i++) {
-        sqlite3_reset(st);
-        sqlite3_bind_int64(st, 1, ids[i]);
-        if (sqlite3_step(st) != SQLITE_ROW || sqlite3_column_type(st, 0) != SQLITE_BLOB) {
-            ax_errorf(ctx,
-                      "content row %" PRId64 " of \"%s\" has no motion (run the index's "
-                      "'check' command)",
-                      (int64_t)ids[i], ix->name);
-            r = AX_ERROR;
-            break;
-        }
-        affect_error err;
-        if (affect_motion_decode(sqlite3_column_blob(st, 0), (size_t)sqlite3_column_bytes(st, 0),
-                                 &out[i], &err)) {
-            if (err.status == AFFECT_ERR_NOMEM)
-                sqlite3_result_error_nomem(ctx);
-            else
-                ax_errorf(ctx, "content row %" PRId64 ": %s", (int64_t)ids[i], err.msg);
-            r = AX_ERROR;
-        }
-    }
-    sqlite3_finalize(st);
-    return r;
-}
+/* What is made of one content row's motion BLOB (a decoded motion into *out); a status with
+ * err on failure. */
+typedef affect_status (*motion_row_fn)(void *arg, sqlite3_int64 id, const unsigned char *blob,
+                                       size_t size, affect_motion **out, affect_error *err);
 
-/* load_motions for the transfer's donors: each in its skeletal form, from fn's cache when the
- * row's BLOB is the one cached, else decoded and given joint rotations (affect_motion_skeletal,
- * as affect_transfer would: the same motion, bit for bit) and cached. A motion that has no
- * skeletal form is returned as decoded, uncached: affect_transfer then says what is wrong. */
-static ax_arg load_donors(sqlite3_context *ctx, ax_gen_fn *fn, const gen_index *ix,
-                          const sqlite3_int64 *ids, uint32_t n, affect_monitor *mon,
-                          affect_motion **out)
+/* Reads the motion BLOB of content rows ids[0 .. n) and makes out[i] of each with row. Errors:
+ * "content row 7 of "g" has no motion (run the index's 'check' command)", SQLITE_NOMEM, the
+ * interrupt, or "content row 7: <row's message>". */
+static ax_arg read_motions(sqlite3_context *ctx, const gen_index *ix, const sqlite3_int64 *ids,
+                           uint32_t n, motion_row_fn row, void *arg, affect_motion **out)
 {
     sqlite3_stmt *st =
         prepare(ctx, "reading the content table", "SELECT \"%w\" FROM \"%w\" WHERE rowid = ?1",
                 ix->motion, ix->content);
     if (!st)
         return AX_ERROR;
-    affect_ik_options io;
-    affect_ik_options_default(&io);
-    io.rigid.monitor = mon;
     ax_arg r = AX_OK;
     for (uint32_t i = 0; i < n && r == AX_OK; i++) {
         sqlite3_reset(st);
@@ -1191,33 +1156,9 @@ static ax_arg load_donors(sqlite3_context *ctx, ax_gen_fn *fn, const gen_index *
             r = AX_ERROR;
             break;
         }
-        const unsigned char *blob = sqlite3_column_blob(st, 0);
-        size_t size = (size_t)sqlite3_column_bytes(st, 0);
-        uint64_t hash = affect_fnv1a64(blob, size) | 1u; /* never 0, the empty entry's */
-        donor_entry *hit = NULL;
-        for (uint32_t e = 0; e < DONOR_CACHE && !hit; e++)
-            if (fn->donors[e].hash == hash && fn->donors[e].rowid == ids[i])
-                hit = &fn->donors[e];
         affect_error err;
-        affect_status s = hit ? affect_motion_clone(hit->skeletal, &out[i], &err)
-                              : affect_motion_decode(blob, size, &out[i], &err);
-        if (!s && !hit) {
-            affect_motion *made = NULL, *keep = NULL;
-            affect_status k =
-                affect_motion_skeletal(out[i], AFFECT_ROTATIONS_AUTO, &io, &made, &err);
-            if (k == AFFECT_ERR_INTERRUPTED || k == AFFECT_ERR_NOMEM)
-                s = k;
-            else if (!k && made) {
-                affect_motion_free(out[i]);
-                out[i] = made;
-            }
-            if (!k && affect_motion_clone(out[i], &keep, &err) == AFFECT_OK) {
-                donor_entry *slot = &fn->donors[fn->donor_next];
-                affect_motion_free(slot->skeletal);
-                *slot = (donor_entry){ids[i], hash, keep};
-                fn->donor_next = (fn->donor_next + 1) % DONOR_CACHE;
-            }
-        }
+        affect_status s = row(arg, ids[i], sqlite3_column_blob(st, 0),
+                              (size_t)sqlite3_column_bytes(st, 0), &out[i], &err);
         if (s) {
             if (s == AFFECT_ERR_NOMEM)
                 sqlite3_result_error_nomem(ctx);
@@ -1230,6 +1171,73 @@ static ax_arg load_donors(sqlite3_context *ctx, ax_gen_fn *fn, const gen_index *
     }
     sqlite3_finalize(st);
     return r;
+}
+
+static affect_status decode_row(void *arg, sqlite3_int64 id, const unsigned char *blob, size_t size,
+                                affect_motion **out, affect_error *err)
+{
+    (void)arg;
+    (void)id;
+    return affect_motion_decode(blob, size, out, err);
+}
+
+/* The motions of content rows ids[0 .. n) from the content table. */
+static ax_arg load_motions(sqlite3_context *ctx, const gen_index *ix, const sqlite3_int64 *ids,
+                           uint32_t n, affect_motion **out)
+{
+    return read_motions(ctx, ix, ids, n, decode_row, NULL, out);
+}
+
+typedef struct donor_reader {
+    ax_gen_fn *fn;
+    affect_ik_options io;
+} donor_reader;
+
+/* A donor in its skeletal form, from the cache when the row's BLOB is the one cached, else
+ * decoded and given joint rotations (affect_motion_skeletal, as affect_transfer would: the same
+ * motion, bit for bit) and cached. A motion that has no skeletal form is returned as decoded,
+ * uncached: affect_transfer then says what is wrong. */
+static affect_status donor_row(void *arg, sqlite3_int64 id, const unsigned char *blob, size_t size,
+                               affect_motion **out, affect_error *err)
+{
+    donor_reader *dr = arg;
+    ax_gen_fn *fn = dr->fn;
+    uint64_t hash = affect_fnv1a64(blob, size) | 1u; /* never 0, the empty entry's */
+    donor_entry *hit = NULL;
+    for (uint32_t e = 0; e < DONOR_CACHE && !hit; e++)
+        if (fn->donors[e].hash == hash && fn->donors[e].rowid == id)
+            hit = &fn->donors[e];
+    if (hit)
+        return affect_motion_clone(hit->skeletal, out, err);
+    affect_status s = affect_motion_decode(blob, size, out, err);
+    if (s)
+        return s;
+    affect_motion *made = NULL, *keep = NULL;
+    affect_status k = affect_motion_skeletal(*out, AFFECT_ROTATIONS_AUTO, &dr->io, &made, err);
+    if (k == AFFECT_ERR_INTERRUPTED || k == AFFECT_ERR_NOMEM)
+        return k;
+    if (!k && made) {
+        affect_motion_free(*out);
+        *out = made;
+    }
+    if (!k && affect_motion_clone(*out, &keep, err) == AFFECT_OK) {
+        donor_entry *slot = &fn->donors[fn->donor_next];
+        affect_motion_free(slot->skeletal);
+        *slot = (donor_entry){id, hash, keep};
+        fn->donor_next = (fn->donor_next + 1) % DONOR_CACHE;
+    }
+    return AFFECT_OK;
+}
+
+/* load_motions for the transfer's donors (donor_row), from fn's cache when it can. */
+static ax_arg load_donors(sqlite3_context *ctx, ax_gen_fn *fn, const gen_index *ix,
+                          const sqlite3_int64 *ids, uint32_t n, affect_monitor *mon,
+                          affect_motion **out)
+{
+    donor_reader dr = {.fn = fn};
+    affect_ik_options_default(&dr.io);
+    dr.io.rigid.monitor = mon;
+    return read_motions(ctx, ix, ids, n, donor_row, &dr, out);
 }
 
 /* The explanation's common head: index, method, target, source and components (the object

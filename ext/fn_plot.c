@@ -43,9 +43,8 @@ typedef struct plot_state {
     affect_scatter *sc;
     ax_opts opts; /* the first row's options; owns the strings in po */
     affect_plot_options po;
-    char *opts_text; /* copy of the first row's options text, NULL when none */
-    size_t opts_len;
-    bool failed; /* an error was reported: xFinal only frees */
+    ax_opts_text opts_text; /* copy of the first row's options text (NULL when none) */
+    bool failed;            /* an error was reported: xFinal only frees */
 } plot_state;
 
 static void state_free(plot_state *ps)
@@ -54,7 +53,7 @@ static void state_free(plot_state *ps)
         return;
     affect_scatter_free(ps->sc);
     ax_opts_free(&ps->opts);
-    sqlite3_free(ps->opts_text);
+    sqlite3_free(ps->opts_text.text);
     sqlite3_free(ps);
 }
 
@@ -83,47 +82,7 @@ static ax_arg read_options(sqlite3_context *ctx, int argc, sqlite3_value **argv,
         ax_error(ctx, &err);
         return AX_ERROR;
     }
-    if (argc > 3 && sqlite3_value_type(argv[3]) == SQLITE_TEXT) {
-        const unsigned char *text = sqlite3_value_text(argv[3]);
-        int n = sqlite3_value_bytes(argv[3]);
-        ps->opts_text = sqlite3_malloc64((sqlite3_uint64)n + 1);
-        if (!text || !ps->opts_text) {
-            sqlite3_result_error_nomem(ctx);
-            return AX_ERROR;
-        }
-        memcpy(ps->opts_text, text, (size_t)n);
-        ps->opts_text[n] = '\0';
-        ps->opts_len = (size_t)n;
-    }
-    return AX_OK;
-}
-
-/* Whether a later row's options are the first row's (the same text, or both absent). */
-static ax_arg same_options(sqlite3_context *ctx, int argc, sqlite3_value **argv,
-                           const plot_state *ps)
-{
-    if (argc <= 3)
-        return AX_OK;
-    int type = sqlite3_value_type(argv[3]);
-    bool same;
-    if (type == SQLITE_NULL) {
-        same = ps->opts_text == NULL;
-    } else if (type != SQLITE_TEXT || ps->opts_text == NULL) {
-        same = false;
-    } else {
-        const unsigned char *text = sqlite3_value_text(argv[3]);
-        if (!text) {
-            sqlite3_result_error_nomem(ctx);
-            return AX_ERROR;
-        }
-        same = (size_t)sqlite3_value_bytes(argv[3]) == ps->opts_len &&
-               memcmp(text, ps->opts_text, ps->opts_len) == 0;
-    }
-    if (!same) {
-        ax_errorf(ctx, "options must be the same on every row");
-        return AX_ERROR;
-    }
-    return AX_OK;
+    return ax_opts_text_keep(ctx, argc, argv, 3, &ps->opts_text);
 }
 
 /* Argument i as a number into *out (AX_NULL for NULL). */
@@ -165,7 +124,7 @@ static ax_arg add_row(sqlite3_context *ctx, int argc, sqlite3_value **argv, plot
 {
     double x = 0, y = 0;
     const char *label;
-    if (same_options(ctx, argc, argv, ps) != AX_OK)
+    if (ax_opts_text_same(ctx, argc, argv, 3, &ps->opts_text) != AX_OK)
         return AX_ERROR;
     ax_arg ax = coordinate(ctx, argv, 0, "x", &x);
     if (ax == AX_ERROR)

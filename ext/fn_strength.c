@@ -63,8 +63,7 @@ typedef struct row_label {
 typedef struct train_state {
     bool failed, vectors;
     uint64_t rows;
-    char *opts_text;
-    size_t opts_len;
+    ax_opts_text opts_text; /* the first row's options text (NULL when none) */
     bool have_opts;
     /* options */
     affect_strength_options so;
@@ -104,7 +103,7 @@ static void state_free(train_state *ts)
     sqlite3_free(ts->label_key);
     sqlite3_free(ts->content_key);
     sqlite3_free(ts->progress);
-    sqlite3_free(ts->opts_text);
+    sqlite3_free(ts->opts_text.text);
     sqlite3_free(ts);
 }
 
@@ -130,15 +129,8 @@ static ax_arg read_options(sqlite3_context *ctx, int argc, sqlite3_value **argv,
 {
     affect_strength_options_default(&ts->so);
     ts->clusters = 1;
-    if (opt_i < argc && sqlite3_value_type(argv[opt_i]) == SQLITE_TEXT) {
-        const char *t = (const char *)sqlite3_value_text(argv[opt_i]);
-        int len = sqlite3_value_bytes(argv[opt_i]);
-        if (!t || !(ts->opts_text = dup_text(t, (size_t)len))) {
-            sqlite3_result_error_nomem(ctx);
-            return AX_ERROR;
-        }
-        ts->opts_len = (size_t)len;
-    }
+    if (ax_opts_text_keep(ctx, argc, argv, opt_i, &ts->opts_text) != AX_OK)
+        return AX_ERROR;
     ts->have_opts = true;
     ax_opts opts;
     if (ax_opts_parse(ctx, argc, argv, opt_i, ts->vectors ? rank_keys : strength_keys, &opts) !=
@@ -242,31 +234,6 @@ static ax_arg read_options(sqlite3_context *ctx, int argc, sqlite3_value **argv,
 done:
     ax_opts_free(&opts);
     return r;
-}
-
-static ax_arg same_options(sqlite3_context *ctx, int argc, sqlite3_value **argv, int opt_i,
-                           const train_state *ts)
-{
-    const char *t = NULL;
-    size_t len = 0;
-    if (opt_i < argc && sqlite3_value_type(argv[opt_i]) == SQLITE_TEXT) {
-        t = (const char *)sqlite3_value_text(argv[opt_i]);
-        len = (size_t)sqlite3_value_bytes(argv[opt_i]);
-        if (!t) {
-            sqlite3_result_error_nomem(ctx);
-            return AX_ERROR;
-        }
-    } else if (opt_i < argc && sqlite3_value_type(argv[opt_i]) != SQLITE_NULL) {
-        t = "";
-        len = SIZE_MAX; /* not text: never the same */
-    }
-    bool same = (!t && !ts->opts_text) ||
-                (t && ts->opts_text && len == ts->opts_len && memcmp(t, ts->opts_text, len) == 0);
-    if (!same) {
-        ax_errorf(ctx, "options must be the same on every row");
-        return AX_ERROR;
-    }
-    return AX_OK;
 }
 
 /* The content index of text s (added when new). */
@@ -475,7 +442,7 @@ static void train_step(sqlite3_context *ctx, int argc, sqlite3_value **argv, boo
             ts->failed = true;
             return;
         }
-    } else if (same_options(ctx, argc, argv, 2, ts) != AX_OK) {
+    } else if (ax_opts_text_same(ctx, argc, argv, 2, &ts->opts_text) != AX_OK) {
         ts->failed = true;
         return;
     }

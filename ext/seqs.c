@@ -54,7 +54,7 @@ void ax_seqs_free(ax_seqs *ts)
         affect_free(ts->joints[i]);
     affect_free(ts->joints);
     affect_features_free(ts->feat);
-    sqlite3_free(ts->opts_text);
+    sqlite3_free(ts->opts_text.text);
     sqlite3_free(ts->progress);
     if (ts->probing)
         ax_monitor_end(&ts->probe);
@@ -160,51 +160,13 @@ ax_arg ax_seqs_options(sqlite3_context *ctx, int argc, sqlite3_value **argv, int
         ax_errorf(ctx, "%s", msg);
         goto done;
     }
-    if (argc > opt_i && sqlite3_value_type(argv[opt_i]) == SQLITE_TEXT) {
-        const unsigned char *text = sqlite3_value_text(argv[opt_i]);
-        int n = sqlite3_value_bytes(argv[opt_i]);
-        ts->opts_text = sqlite3_malloc64((sqlite3_uint64)n + 1);
-        if (!text || !ts->opts_text) {
-            sqlite3_result_error_nomem(ctx);
-            goto done;
-        }
-        memcpy(ts->opts_text, text, (size_t)n);
-        ts->opts_text[n] = '\0';
-        ts->opts_len = (size_t)n;
-    }
+    if (ax_opts_text_keep(ctx, argc, argv, opt_i, &ts->opts_text) != AX_OK)
+        goto done;
     r = AX_OK;
 done:
     if (r != AX_OK)
         ax_opts_free(opts);
     return r;
-}
-
-/* Whether a later row's options are the first row's (the same text, or both absent). */
-static ax_arg same_options(sqlite3_context *ctx, int argc, sqlite3_value **argv, const ax_seqs *ts)
-{
-    int i = ts->opt_i;
-    if (argc <= i)
-        return AX_OK;
-    int type = sqlite3_value_type(argv[i]);
-    bool same;
-    if (type == SQLITE_NULL) {
-        same = ts->opts_text == NULL;
-    } else if (type != SQLITE_TEXT || ts->opts_text == NULL) {
-        same = false;
-    } else {
-        const unsigned char *text = sqlite3_value_text(argv[i]);
-        if (!text) {
-            sqlite3_result_error_nomem(ctx);
-            return AX_ERROR;
-        }
-        same = (size_t)sqlite3_value_bytes(argv[i]) == ts->opts_len &&
-               memcmp(text, ts->opts_text, ts->opts_len) == 0;
-    }
-    if (!same) {
-        ax_errorf(ctx, "options must be the same on every row");
-        return AX_ERROR;
-    }
-    return AX_OK;
 }
 
 /* Reports a core error met on a row: "row 3: …" (out of memory as SQLITE_NOMEM). */
@@ -244,7 +206,7 @@ static ax_arg first_motion(sqlite3_context *ctx, ax_seqs *ts, const affect_motio
 
 ax_arg ax_seqs_add(sqlite3_context *ctx, int argc, sqlite3_value **argv, ax_seqs *ts)
 {
-    if (same_options(ctx, argc, argv, ts) != AX_OK)
+    if (ax_opts_text_same(ctx, argc, argv, ts->opt_i, &ts->opts_text) != AX_OK)
         return AX_ERROR;
     affect_motion *m = NULL;
     ax_arg r = ax_arg_motion(ctx, argv, 0, &m);
@@ -414,4 +376,127 @@ void ax_json_features(affect_strbuf *sb, const affect_features *f)
     else
         affect_strbuf_puts(sb, "null");
     affect_strbuf_printf(sb, ",\"dim\":%u}", affect_features_dim(f));
+}
+
+/* ---- labelled training aggregates ---- */
+
+/* The label of the current row (argument 1): its text, or AX_NULL for SQL NULL. */
+static ax_arg row_label(sqlite3_context *ctx, sqlite3_value **argv, const ax_seqs *ts,
+                        const char **text)
+{
+    int type = sqlite3_value_type(argv[1]);
+    *text = NULL;
+    if (type == SQLITE_NULL)
+        return AX_NULL;
+    if (type == SQLITE_BLOB) {
+        ax_errorf(ctx, "row %" PRIu64 ": label must be text or a number, got a BLOB", ts->rows);
+        return AX_ERROR;
+    }
+    *text = (const char *)sqlite3_value_text(argv[1]);
+    if (!*text) {
+        sqlite3_result_error_nomem(ctx);
+        return AX_ERROR;
+    }
+    if (**text == '\0' || strlen(*text) != (size_t)sqlite3_value_bytes(argv[1])) {
+        ax_errorf(ctx, "row %" PRIu64 ": label must not be empty or contain NUL", ts->rows);
+        return AX_ERROR;
+    }
+    size_t len = strlen(*text), bad = affect_utf8_invalid_at(*text, len);
+    if (bad < len) { /* the model BLOBs keep labels as UTF-8 */
+        ax_errorf(ctx, "row %" PRIu64 ": label is not valid UTF-8 (byte 0x%02x at offset %zu)",
+                  ts->rows, (unsigned char)(*text)[bad], bad);
+        return AX_ERROR;
+    }
+    return AX_OK;
+}
+
+ax_arg ax_labelled_add(sqlite3_context *ctx, int argc, sqlite3_value **argv, ax_labelled *t)
+{
+    const char *label;
+    ax_arg r = row_label(ctx, argv, &t->s, &label);
+    if (r != AX_OK)
+        return r == AX_NULL ? AX_OK : AX_ERROR;
+    uint32_t before = t->s.n_seqs;
+    if (ax_seqs_add(ctx, argc, argv, &t->s) != AX_OK)
+        return AX_ERROR;
+    if (t->s.n_seqs == before)
+        return AX_OK;
+    /* labels grow with the sequences (their capacity) */
+    char **labels = affect_realloc(t->labels, (size_t)t->s.cap * sizeof *labels);
+    if (labels) {
+        t->labels = labels;
+        t->labels[before] = affect_strndup(label, strlen(label));
+    }
+    if (!labels || !t->labels[before]) {
+        affect_free((void *)t->s.seqs[before].x); /* keep labels and sequences paired */
+        t->s.n_seqs = before;
+        sqlite3_result_error_nomem(ctx);
+        return AX_ERROR;
+    }
+    return AX_OK;
+}
+
+void ax_labelled_free(ax_labelled *t)
+{
+    if (!t)
+        return;
+    for (uint32_t i = 0; i < t->s.n_seqs; i++)
+        affect_free(t->labels[i]);
+    affect_free(t->labels);
+    ax_seqs_free(&t->s); /* frees t itself (s is its first member) */
+}
+
+void ax_labelled_step(sqlite3_context *ctx, int argc, sqlite3_value **argv,
+                      const ax_labelled_kind *kind)
+{
+    ax_labelled **slot = sqlite3_aggregate_context(ctx, (int)sizeof *slot);
+    if (!slot) {
+        sqlite3_result_error_nomem(ctx);
+        return;
+    }
+    ax_labelled *t = *slot;
+    if (t && t->s.failed)
+        return;
+    if (!t) {
+        t = sqlite3_malloc64(kind->size);
+        if (!t) {
+            sqlite3_result_error_nomem(ctx);
+            return;
+        }
+        memset(t, 0, kind->size);
+        *slot = t;
+        t->s.rows++;
+        if (kind->first(ctx, argc, argv, t) != AX_OK) {
+            t->s.failed = true;
+            return;
+        }
+    } else {
+        t->s.rows++;
+    }
+    if (ax_labelled_add(ctx, argc, argv, t) != AX_OK)
+        t->s.failed = true;
+}
+
+void ax_labelled_final(sqlite3_context *ctx, const ax_labelled_kind *kind)
+{
+    ax_labelled **slot = sqlite3_aggregate_context(ctx, 0);
+    ax_labelled *t = slot ? *slot : NULL;
+    if (!t || t->s.failed || t->s.n_seqs == 0) {
+        if (!t || !t->s.failed)
+            sqlite3_result_null(ctx);
+        goto done;
+    }
+    uint32_t n = t->s.n_seqs, n_classes = 0;
+    char **classes = affect_malloc_array(n, sizeof *classes);
+    uint32_t *y = affect_malloc_array(n, sizeof *y);
+    if (!classes || !y)
+        sqlite3_result_error_nomem(ctx);
+    else if (ax_label_classes(ctx, t->labels, n, classes, &n_classes, y) == AX_OK)
+        kind->train(ctx, t, classes, n_classes, y);
+    affect_free(classes);
+    affect_free(y);
+done:
+    ax_labelled_free(t);
+    if (slot)
+        *slot = NULL;
 }

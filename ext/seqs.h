@@ -19,10 +19,9 @@
 #include "affect/hmm.h"
 
 typedef struct ax_seqs {
-    bool failed;     /* an error was reported: xFinal only frees */
-    int opt_i;       /* the options' argument index */
-    char *opts_text; /* the first row's options text, NULL when none */
-    size_t opts_len;
+    bool failed;            /* an error was reported: xFinal only frees */
+    int opt_i;              /* the options' argument index */
+    ax_opts_text opts_text; /* the first row's options text (NULL when none) */
     affect_hmm_config cfg;
     affect_features_options fo;
     char **joints; /* fo.joints storage: copies of the "joints" option's names */
@@ -56,6 +55,36 @@ ax_arg ax_seqs_add(sqlite3_context *ctx, int argc, sqlite3_value **argv, ax_seqs
 void ax_seqs_row_error(sqlite3_context *ctx, const ax_seqs *ts, const affect_error *err);
 /* Frees ts and everything it holds (sqlite3_free for ts itself); NULL is fine. */
 void ax_seqs_free(ax_seqs *ts);
+
+/* ---- labelled training aggregates: fn(motion, label [, options]) ----
+ * affect_train, fda_train (and affect_crossval's rows): the sequences and, paired with them,
+ * each row's label. A function's state starts with an ax_labelled. */
+typedef struct ax_labelled {
+    ax_seqs s;     /* first: ax_seqs_free frees the whole state */
+    char **labels; /* one per sequence */
+} ax_labelled;
+
+/* The row's label (argument 1) kept with the row's sequence (ax_seqs_add); a NULL label skips
+ * the row. Errors: "row 3: label must be text or a number, got a BLOB", "row 3: label must not
+ * be empty or contain NUL", "row 3: label is not valid UTF-8 (byte 0xff at offset 2)". */
+ax_arg ax_labelled_add(sqlite3_context *ctx, int argc, sqlite3_value **argv, ax_labelled *t);
+/* Frees the labels, then the whole state (ax_seqs_free); NULL is fine. */
+void ax_labelled_free(ax_labelled *t);
+
+/* xStep and xFinal of such a function. The state (size bytes, zeroed) is made at the first
+ * row, where first() sets the defaults and reads the options (AX_ERROR: reported, the
+ * aggregate fails); every row then goes through ax_labelled_add. xFinal gives NULL without
+ * rows, else calls train() with the distinct labels (ax_label_classes) to set the result, and
+ * frees the state. */
+typedef struct ax_labelled_kind {
+    size_t size;
+    ax_arg (*first)(sqlite3_context *ctx, int argc, sqlite3_value **argv, ax_labelled *state);
+    void (*train)(sqlite3_context *ctx, ax_labelled *state, char *const *classes,
+                  uint32_t n_classes, const uint32_t *y);
+} ax_labelled_kind;
+void ax_labelled_step(sqlite3_context *ctx, int argc, sqlite3_value **argv,
+                      const ax_labelled_kind *kind);
+void ax_labelled_final(sqlite3_context *ctx, const ax_labelled_kind *kind);
 
 /* A whole-number option in [0, max] (unchanged when absent): "option \"states\" must be a
  * whole number from 0 to 256, got 2.5". */

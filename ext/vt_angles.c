@@ -42,11 +42,6 @@ enum {
     COL_OPTIONS
 };
 
-typedef struct angles_vtab {
-    sqlite3_vtab base;
-    sqlite3 *db; /* for the monitor of inverse kinematics (ax_monitor) */
-} angles_vtab;
-
 typedef struct angles_cursor {
     sqlite3_vtab_cursor base;
     affect_motion *m, *sk; /* the argument and its skeletal form (may be the same) */
@@ -59,36 +54,16 @@ typedef struct angles_cursor {
 static int angles_connect(sqlite3 *db, void *aux, int argc, const char *const *argv,
                           sqlite3_vtab **out, char **err)
 {
-    int rc =
-        sqlite3_declare_vtab(db, "CREATE TABLE x(frame INTEGER, joint INTEGER, name TEXT, "
-                                 "qw REAL, qx REAL, qy REAL, qz REAL, \"order\" TEXT, rx REAL, "
-                                 "ry REAL, rz REAL, speed REAL, motion HIDDEN, options HIDDEN)");
-    if (rc != SQLITE_OK)
-        return rc;
-    angles_vtab *vt = sqlite3_malloc(sizeof *vt);
-    if (!vt)
-        return SQLITE_NOMEM;
-    memset(vt, 0, sizeof *vt);
-    vt->db = db;
-    sqlite3_vtab_config(db, SQLITE_VTAB_INNOCUOUS);
-    *out = &vt->base;
-    return SQLITE_OK;
-}
-
-static int angles_disconnect(sqlite3_vtab *vt)
-{
-    sqlite3_free(vt);
-    return SQLITE_OK;
+    return ax_tvf_connect(db,
+                          "CREATE TABLE x(frame INTEGER, joint INTEGER, name TEXT, "
+                          "qw REAL, qx REAL, qy REAL, qz REAL, \"order\" TEXT, rx REAL, "
+                          "ry REAL, rz REAL, speed REAL, motion HIDDEN, options HIDDEN)",
+                          out);
 }
 
 static int angles_open(sqlite3_vtab *vt, sqlite3_vtab_cursor **out)
 {
-    angles_cursor *c = sqlite3_malloc(sizeof *c);
-    if (!c)
-        return SQLITE_NOMEM;
-    memset(c, 0, sizeof *c);
-    *out = &c->base;
-    return SQLITE_OK;
+    return ax_tvf_open(sizeof(angles_cursor), out);
 }
 
 static void angles_reset(angles_cursor *c)
@@ -154,7 +129,7 @@ static int angles_filter(sqlite3_vtab_cursor *cur, int idx_num, const char *idx_
     size_t len;
     ax_monitor am; /* the decoding and inverse kinematics of a long motion stop when asked */
     char *msg = NULL;
-    if (ax_monitor_begin_db(&am, ((angles_vtab *)cur->pVtab)->db, NULL, &msg) != SQLITE_OK) {
+    if (ax_monitor_begin_db(&am, ((ax_tvf_vtab *)cur->pVtab)->db, NULL, &msg) != SQLITE_OK) {
         sqlite3_free(msg); /* no progress function: cannot fail */
         return SQLITE_NOMEM;
     }
@@ -263,7 +238,7 @@ static sqlite3_module angles_module = {
     .iVersion = 0,
     .xConnect = angles_connect,
     .xBestIndex = angles_best_index,
-    .xDisconnect = angles_disconnect,
+    .xDisconnect = ax_tvf_disconnect,
     .xOpen = angles_open,
     .xClose = angles_close,
     .xFilter = angles_filter,

@@ -37,8 +37,9 @@ int ax_register_laban(sqlite3 *db, const ax_laban_cache_kind *caches);
 /* Reads index `name` of the main schema: SQLITE_OK; SQLITE_NOTFOUND when it is not a laban
  * table; SQLITE_NOMEM; SQLITE_ERROR with *err (sqlite3_malloc'd) saying what is wrong
  * ("stored vector of rowid 4 is corrupt (1 bytes, expected 108); run INSERT INTO g(g)
- * VALUES('rebuild')", or the database's message). Every stored vector is validated, those of
- * unlabelled rows too. */
+ * VALUES('rebuild')", "g_info has format "2"; this version reads format 1", or the database's
+ * message: the caller names the index). Every stored vector is validated, those of unlabelled
+ * rows too. */
 int ax_laban_read(sqlite3 *db, const char *name, ax_laban_rows *out, char **err);
 void ax_laban_rows_free(ax_laban_rows *r);
 

@@ -69,11 +69,6 @@ enum {
 static const char *const standard_parts[6] = {"torso",      "head",      "left_hand",
                                               "right_hand", "left_foot", "right_foot"};
 
-typedef struct series_vtab {
-    sqlite3_vtab base;
-    sqlite3 *db; /* for the monitor */
-} series_vtab;
-
 typedef struct series_cursor {
     sqlite3_vtab_cursor base;
     affect_motion *m;
@@ -96,37 +91,20 @@ typedef struct series_cursor {
 static int series_connect(sqlite3 *db, void *aux, int argc, const char *const *argv,
                           sqlite3_vtab **out, char **err)
 {
-    int rc = sqlite3_declare_vtab(db, "CREATE TABLE x(frame INTEGER, seconds REAL, "
-                                      "first_frame INTEGER, last_frame INTEGER, part TEXT, "
-                                      "weight REAL, time REAL, space REAL, flow REAL, "
-                                      "motion HIDDEN, options HIDDEN)");
-    if (rc != SQLITE_OK)
-        return rc;
-    series_vtab *vt = sqlite3_malloc(sizeof *vt);
-    if (!vt)
-        return SQLITE_NOMEM;
-    memset(vt, 0, sizeof *vt);
-    vt->db = db;
-    sqlite3_vtab_config(db, SQLITE_VTAB_INNOCUOUS);
-    *out = &vt->base;
-    return SQLITE_OK;
-}
-
-static int series_disconnect(sqlite3_vtab *vt)
-{
-    sqlite3_free(vt);
-    return SQLITE_OK;
+    return ax_tvf_connect(db,
+                          "CREATE TABLE x(frame INTEGER, seconds REAL, "
+                          "first_frame INTEGER, last_frame INTEGER, part TEXT, "
+                          "weight REAL, time REAL, space REAL, flow REAL, "
+                          "motion HIDDEN, options HIDDEN)",
+                          out);
 }
 
 static int series_open(sqlite3_vtab *vt, sqlite3_vtab_cursor **out)
 {
-    series_cursor *c = sqlite3_malloc(sizeof *c);
-    if (!c)
-        return SQLITE_NOMEM;
-    memset(c, 0, sizeof *c);
-    c->eof = true;
-    *out = &c->base;
-    return SQLITE_OK;
+    int rc = ax_tvf_open(sizeof(series_cursor), out);
+    if (rc == SQLITE_OK)
+        ((series_cursor *)*out)->eof = true;
+    return rc;
 }
 
 static void series_reset(series_cursor *c)
@@ -474,7 +452,7 @@ static int series_filter(sqlite3_vtab_cursor *cur, int idx_num, const char *idx_
     const char *text;
     size_t len;
     char *msg = NULL;
-    if (ax_monitor_begin_db(&c->am, ((series_vtab *)cur->pVtab)->db, NULL, &msg) != SQLITE_OK) {
+    if (ax_monitor_begin_db(&c->am, ((ax_tvf_vtab *)cur->pVtab)->db, NULL, &msg) != SQLITE_OK) {
         sqlite3_free(msg); /* no progress function: cannot fail */
         return SQLITE_NOMEM;
     }
@@ -618,7 +596,7 @@ static sqlite3_module series_module = {
     .iVersion = 0,
     .xConnect = series_connect,
     .xBestIndex = series_best_index,
-    .xDisconnect = series_disconnect,
+    .xDisconnect = ax_tvf_disconnect,
     .xOpen = series_open,
     .xClose = series_close,
     .xFilter = series_filter,

@@ -32,33 +32,15 @@ typedef struct points_cursor {
 static int points_connect(sqlite3 *db, void *aux, int argc, const char *const *argv,
                           sqlite3_vtab **out, char **err)
 {
-    int rc = sqlite3_declare_vtab(db, "CREATE TABLE x(frame INTEGER, joint INTEGER, name TEXT, "
-                                      "x REAL, y REAL, z REAL, motion HIDDEN)");
-    if (rc != SQLITE_OK)
-        return rc;
-    sqlite3_vtab *vt = sqlite3_malloc(sizeof *vt);
-    if (!vt)
-        return SQLITE_NOMEM;
-    memset(vt, 0, sizeof *vt);
-    sqlite3_vtab_config(db, SQLITE_VTAB_INNOCUOUS);
-    *out = vt;
-    return SQLITE_OK;
-}
-
-static int points_disconnect(sqlite3_vtab *vt)
-{
-    sqlite3_free(vt);
-    return SQLITE_OK;
+    return ax_tvf_connect(db,
+                          "CREATE TABLE x(frame INTEGER, joint INTEGER, name TEXT, "
+                          "x REAL, y REAL, z REAL, motion HIDDEN)",
+                          out);
 }
 
 static int points_open(sqlite3_vtab *vt, sqlite3_vtab_cursor **out)
 {
-    points_cursor *c = sqlite3_malloc(sizeof *c);
-    if (!c)
-        return SQLITE_NOMEM;
-    memset(c, 0, sizeof *c);
-    *out = &c->base;
-    return SQLITE_OK;
+    return ax_tvf_open(sizeof(points_cursor), out);
 }
 
 static int points_close(sqlite3_vtab_cursor *cur)
@@ -153,7 +135,7 @@ static sqlite3_module points_module = {
     .iVersion = 0,
     .xConnect = points_connect,
     .xBestIndex = points_best_index,
-    .xDisconnect = points_disconnect,
+    .xDisconnect = ax_tvf_disconnect,
     .xOpen = points_open,
     .xClose = points_close,
     .xFilter = points_filter,

@@ -162,13 +162,10 @@ static int rows_disconnect(sqlite3_vtab *vt)
 
 static int rows_open(sqlite3_vtab *vtab, sqlite3_vtab_cursor **out)
 {
-    rows_cursor *c = sqlite3_malloc(sizeof *c);
-    if (!c)
-        return SQLITE_NOMEM;
-    memset(c, 0, sizeof *c);
-    c->rows.n_cols = ((rows_vtab *)vtab)->spec->n_visible;
-    *out = &c->base;
-    return SQLITE_OK;
+    int rc = ax_tvf_open(sizeof(rows_cursor), out);
+    if (rc == SQLITE_OK)
+        ((rows_cursor *)*out)->rows.n_cols = ((rows_vtab *)vtab)->spec->n_visible;
+    return rc;
 }
 
 static int rows_close(sqlite3_vtab_cursor *cur)

@@ -231,7 +231,7 @@ SELECT affect_generate('plain', (SELECT motion FROM motions WHERE id = 1), 'sad'
 -- check it
 UPDATE idx_info SET value = '2' WHERE key = 'format';
 SELECT affect_generate('idx', (SELECT motion FROM motions WHERE id = 1), 'sad');
--- error: affect_generate: index "idx": idx_info has format "2"; this version reads format 1 (index "idx")
+-- error: affect_generate: index "idx": idx_info has format "2"; this version reads format 1
 
 UPDATE idx_info SET value = '1' WHERE key = 'format';
 

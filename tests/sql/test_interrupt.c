@@ -179,6 +179,112 @@ static void error_case(const char *name, const char *sql, const char *want)
     sqlite3_free(err);
 }
 
+/* ---- the laban index's search polls (ext/vt_laban.c, LAB_POLL_ROWS) ----
+ * A k-nearest search over a few hundred thousand rows takes milliseconds, too short for an
+ * interrupt from a clock; its polls are seen instead: each steps the monitor's probe, a statement
+ * whose start SQLITE_TRACE_STMT reports. The index gets 300,000 copies of its 3 vectors written
+ * straight into its _data table. A search of one row (rowid = 2) starts the statements a search
+ * without polls starts; the whole search starts more (its polls); an interrupt at its first poll
+ * stops it with "laban: interrupted", and the connection then answers again. The nearest row
+ * to row 1 is its first copy, row 12 (distance 0; row 1 itself is left out). */
+static struct {
+    int events;    /* statements started */
+    int interrupt; /* call sqlite3_interrupt at this event (0: never) */
+} poll_trace;
+
+static int poll_trace_fn(unsigned type, void *ctx, void *p, void *x)
+{
+    (void)type;
+    (void)ctx;
+    (void)p;
+    (void)x;
+    if (++poll_trace.events == poll_trace.interrupt)
+        sqlite3_interrupt(ir_db);
+    return 0;
+}
+
+/* Runs sql (one row of one integer) counting the statements it starts; rc and *value. */
+static int poll_run(const char *sql, int interrupt_at, sqlite3_int64 *value, char **err)
+{
+    poll_trace.events = 0;
+    poll_trace.interrupt = interrupt_at;
+    sqlite3_trace_v2(ir_db, SQLITE_TRACE_STMT, poll_trace_fn, NULL);
+    sqlite3_stmt *st = NULL;
+    int rc = sqlite3_prepare_v2(ir_db, sql, -1, &st, NULL);
+    if (rc == SQLITE_OK && (rc = sqlite3_step(st)) == SQLITE_ROW) {
+        *value = sqlite3_column_int64(st, 0);
+        rc = SQLITE_OK;
+    }
+    *err = rc == SQLITE_OK ? NULL : sqlite3_mprintf("%s", sqlite3_errmsg(ir_db));
+    sqlite3_finalize(st);
+    sqlite3_trace_v2(ir_db, 0, NULL, NULL);
+    return rc;
+}
+
+static void search_poll_case(void)
+{
+    const char *name = "laban search polls";
+    if (!selected(name))
+        return;
+    char *err = NULL;
+    if (sqlite3_exec(ir_db,
+                     "CREATE TABLE pm(id INTEGER PRIMARY KEY, emotion TEXT, motion BLOB);"
+                     "INSERT INTO pm VALUES (1, 'sad', motion_synth('walk', 'sad', 1)),"
+                     " (2, 'angry', motion_synth('walk', 'angry', 1)),"
+                     " (3, 'happy', motion_synth('knock', 'happy', 2));"
+                     "CREATE VIRTUAL TABLE pm_laban USING laban(content=pm, label=emotion);"
+                     "WITH RECURSIVE n(i) AS (SELECT 10 UNION ALL SELECT i + 1 FROM n"
+                     " WHERE i < 300009)"
+                     " INSERT INTO pm_laban_data(id, label, vector, msize, mhash)"
+                     " SELECT n.i, d.label, d.vector, 0, 0 FROM n JOIN pm_laban_data d"
+                     " ON d.id = 1 + n.i % 3;"
+                     "UPDATE pm_laban_info SET value = value + 1 WHERE key = 'generation';"
+                     "SELECT count(*) FROM pm_laban WHERE query = 1 AND k = 1;", /* the cache */
+                     NULL, NULL, &err) != SQLITE_OK) {
+        fail("%s: cannot build the index: %s", name, err ? err : "?");
+        sqlite3_free(err);
+        return;
+    }
+    static const char whole[] = "SELECT rowid FROM pm_laban WHERE query = 1 AND k = 1";
+    static const char one[] = "SELECT rowid FROM pm_laban WHERE query = 1 AND k = 1 AND rowid = 2";
+    sqlite3_int64 v = 0, v1 = 0;
+    int rc = poll_run(one, 0, &v1, &err);
+    int base = poll_trace.events;
+    checks++;
+    if (rc != SQLITE_OK || v1 != 2) {
+        fail("%s: the search of one row: %s, row %lld", name, err ? err : "ok", v1);
+        goto done;
+    }
+    sqlite3_free(err);
+    rc = poll_run(whole, 0, &v, &err);
+    int polls = poll_trace.events - base;
+    checks++;
+    if (rc != SQLITE_OK || v != 12 || polls < 2) {
+        fail("%s: the whole search: %s, row %lld, %d polls (expected 2 or more)", name,
+             err ? err : "ok", v, polls);
+        goto done;
+    }
+    sqlite3_free(err);
+    rc = poll_run(whole, base + 1, &v, &err);
+    checks++;
+    if (rc != SQLITE_INTERRUPT || !err || strcmp(err, "laban: interrupted") != 0) {
+        fail("%s: interrupted at the first poll: rc %d, \"%s\"", name, rc, err ? err : "");
+        goto done;
+    }
+    sqlite3_free(err);
+    rc = poll_run(whole, 0, &v, &err);
+    checks++;
+    if (rc != SQLITE_OK || v != 12) {
+        fail("%s: after the interrupt: %s", name, err ? err : "ok");
+        goto done;
+    }
+    printf("  %-48s %d polls over 300,003 rows; interrupted at the first: laban: interrupted\n",
+           name, polls);
+done:
+    sqlite3_free(err);
+    sqlite3_exec(ir_db, "DROP TABLE pm_laban; DROP TABLE pm", NULL, NULL, NULL);
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 2) {
@@ -202,6 +308,7 @@ int main(int argc, char **argv)
            LATENCY_MAX);
     for (size_t i = 0; i < IR_N_CASES; i++)
         interrupt_case(&IR_CASES[i]);
+    search_poll_case();
 
     printf("progress (option \"progress\": note(stage, done, total)):\n");
     progress_case("hmm_train progress",
