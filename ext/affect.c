@@ -112,19 +112,9 @@ typedef struct ax_user_data {
     void (*destroy)(void *);
 } ax_user_data;
 
-static void *classifier_cache_new(const char *name)
+static void *blob_cache_new(const char *name)
 {
-    return ax_cls_fn_new(name);
-}
-
-static void *fda_cache_new(const char *name)
-{
-    return ax_fda_fn_new(name);
-}
-
-static void *strength_cache_new(const char *name)
-{
-    return ax_str_fn_new(name);
+    return ax_cached_fn_new(name);
 }
 
 static void *generation_cache_new(const char *name)
@@ -132,12 +122,9 @@ static void *generation_cache_new(const char *name)
     return ax_gen_fn_new(name);
 }
 
-/* the functions on a classifier BLOB: a one-classifier cache (fn_affect.c) */
-static const ax_user_data classifier_cache = {classifier_cache_new, ax_cls_fn_free};
-/* the functions on a functional model BLOB: a one-model cache (fn_fda.c) */
-static const ax_user_data fda_cache = {fda_cache_new, ax_fda_fn_free};
-/* affect_strength: a one-model cache (fn_strength.c) */
-static const ax_user_data strength_cache = {strength_cache_new, ax_str_fn_free};
+/* the functions on a classifier, functional model or strength model BLOB: their last decoded
+ * model (ax_cached_fn, common.h) */
+static const ax_user_data blob_cache = {blob_cache_new, ax_cached_fn_free};
 /* generation: the RMLR fit of the last laban index used (fn_generate.c) */
 static const ax_user_data generation_cache = {generation_cache_new, ax_gen_fn_free};
 
@@ -237,24 +224,24 @@ static const ax_function functions[] = {
     /* recognition */
     {"affect_train", 2, PURE, .step = ax_affect_train_step, .final = ax_affect_train_final},
     {"affect_train", 3, PURE, .step = ax_affect_train_step, .final = ax_affect_train_final},
-    {"affect_classify", 2, PURE, .func = ax_affect_classify, .user = &classifier_cache},
-    {"affect_classify", 3, PURE, .func = ax_affect_classify, .user = &classifier_cache},
-    {"affect_scores", 2, PURE | JSON, .func = ax_affect_scores, .user = &classifier_cache},
-    {"fisher_score", 2, PURE, .func = ax_fisher_score, .user = &classifier_cache},
-    {"affect_embed", 2, PURE, .func = ax_affect_embed, .user = &classifier_cache},
-    {"affect_info", 1, PURE | JSON, .func = ax_affect_info, .user = &classifier_cache},
+    {"affect_classify", 2, PURE, .func = ax_affect_classify, .user = &blob_cache},
+    {"affect_classify", 3, PURE, .func = ax_affect_classify, .user = &blob_cache},
+    {"affect_scores", 2, PURE | JSON, .func = ax_affect_scores, .user = &blob_cache},
+    {"fisher_score", 2, PURE, .func = ax_fisher_score, .user = &blob_cache},
+    {"affect_embed", 2, PURE, .func = ax_affect_embed, .user = &blob_cache},
+    {"affect_info", 1, PURE | JSON, .func = ax_affect_info, .user = &blob_cache},
     {"affect_crossval_json", 4, PURE, .step = ax_affect_crossval_step,
      .final = ax_affect_crossval_final},
     /* functional analysis */
     {"fda_train", 2, PURE, .step = ax_fda_train_step, .final = ax_fda_train_final},
     {"fda_train", 3, PURE, .step = ax_fda_train_step, .final = ax_fda_train_final},
-    {"fda_embed", 2, PURE, .func = ax_fda_embed, .user = &fda_cache},
-    {"fda_classify", 2, PURE, .func = ax_fda_classify, .user = &fda_cache},
-    {"fda_classify", 3, PURE, .func = ax_fda_classify, .user = &fda_cache},
-    {"fda_info", 1, PURE | JSON, .func = ax_fda_info, .user = &fda_cache},
-    {"fda_prototype", 2, PURE, .func = ax_fda_prototype, .user = &fda_cache},
-    {"fda_plot", 1, PURE, .func = ax_fda_plot, .user = &fda_cache},
-    {"fda_plot", 2, PURE, .func = ax_fda_plot, .user = &fda_cache},
+    {"fda_embed", 2, PURE, .func = ax_fda_embed, .user = &blob_cache},
+    {"fda_classify", 2, PURE, .func = ax_fda_classify, .user = &blob_cache},
+    {"fda_classify", 3, PURE, .func = ax_fda_classify, .user = &blob_cache},
+    {"fda_info", 1, PURE | JSON, .func = ax_fda_info, .user = &blob_cache},
+    {"fda_prototype", 2, PURE, .func = ax_fda_prototype, .user = &blob_cache},
+    {"fda_plot", 1, PURE, .func = ax_fda_plot, .user = &blob_cache},
+    {"fda_plot", 2, PURE, .func = ax_fda_plot, .user = &blob_cache},
     /* generation */
     {"laban_salient", 1, READS | JSON, .func = ax_laban_salient, .user = &generation_cache},
     {"laban_salient", 2, READS | JSON, .func = ax_laban_salient, .user = &generation_cache},
@@ -268,7 +255,7 @@ static const ax_function functions[] = {
     /* emotion strength (fn_strength.c) */
     {"strength_train", 2, PURE, .step = ax_strength_train_step, .final = ax_strength_train_final},
     {"strength_train", 3, PURE, .step = ax_strength_train_step, .final = ax_strength_train_final},
-    {"affect_strength", 2, PURE, .func = ax_affect_strength, .user = &strength_cache},
+    {"affect_strength", 2, PURE, .func = ax_affect_strength, .user = &blob_cache},
     {"strength_synthesize", 2, PURE, .func = ax_strength_synthesize},
     {"strength_synthesize", 3, PURE, .func = ax_strength_synthesize},
     {"strength_edit", 3, PURE, .func = ax_strength_edit},

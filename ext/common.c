@@ -197,6 +197,25 @@ void ax_blob_cache_clear(ax_blob_cache *c)
     c->size = 0;
 }
 
+ax_cached_fn *ax_cached_fn_new(const char *name)
+{
+    ax_cached_fn *fn = sqlite3_malloc64(sizeof *fn);
+    if (!fn)
+        return NULL;
+    memset(fn, 0, sizeof *fn);
+    ax_copy_name(fn->name, sizeof fn->name, name);
+    return fn;
+}
+
+void ax_cached_fn_free(void *p)
+{
+    ax_cached_fn *fn = p;
+    if (fn) {
+        ax_blob_cache_clear(&fn->cache);
+        sqlite3_free(fn);
+    }
+}
+
 ax_arg ax_arg_cached_blob(sqlite3_context *ctx, sqlite3_value **argv, ax_blob_cache *c,
                           ax_decode_fn decode, void (*free_obj)(void *), const char *what,
                           const char *from, const void **out)

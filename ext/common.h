@@ -90,6 +90,16 @@ typedef struct ax_blob_cache {
 /* Empties the cache. */
 void ax_blob_cache_clear(ax_blob_cache *c);
 
+/* The user data of a function that keeps its last decoded BLOB argument (the classifier, the
+ * functional model, the strength model): its name first, as AX_NAME reads it, then the cache;
+ * one per registration, freed with the connection. */
+typedef struct ax_cached_fn {
+    char name[32];
+    ax_blob_cache cache;
+} ax_cached_fn;
+ax_cached_fn *ax_cached_fn_new(const char *name); /* NULL when out of memory */
+void ax_cached_fn_free(void *fn);
+
 /* The classes of a training aggregate's n rows: the distinct labels in byte order (classes,
  * n_classes; pointers into labels) and each row's class (y). classes and y hold n entries
  * each. AX_ERROR with the message set for fewer than 2 classes ("need motions of at least 2

@@ -327,11 +327,6 @@ void ax_affect_train_final(sqlite3_context *ctx)
 
 /* ---- the classifier argument, with the per-function cache ---- */
 
-struct ax_cls_fn {
-    char name[32]; /* first: AX_NAME(ctx) reads it */
-    ax_blob_cache cache;
-};
-
 static affect_status decode_model(const unsigned char *data, size_t size, void **out,
                                   affect_error *err)
 {
@@ -346,31 +341,12 @@ static void free_model(void *m)
     affect_classifier_free(m);
 }
 
-void ax_cls_fn_free(void *p)
-{
-    ax_cls_fn *fn = p;
-    if (fn) {
-        ax_blob_cache_clear(&fn->cache);
-        sqlite3_free(fn);
-    }
-}
-
-ax_cls_fn *ax_cls_fn_new(const char *name)
-{
-    ax_cls_fn *fn = sqlite3_malloc64(sizeof *fn);
-    if (!fn)
-        return NULL;
-    memset(fn, 0, sizeof *fn);
-    ax_copy_name(fn->name, sizeof fn->name, name);
-    return fn;
-}
-
 /* The classifier of argument 0: the cached one when the bytes are the same, else decoded
  * (and cached). */
 static ax_arg arg_classifier(sqlite3_context *ctx, sqlite3_value **argv,
                              const affect_classifier **out)
 {
-    ax_cls_fn *fn = sqlite3_user_data(ctx);
+    ax_cached_fn *fn = sqlite3_user_data(ctx);
     const void *m;
     ax_arg r = ax_arg_cached_blob(ctx, argv, &fn->cache, decode_model, free_model, "classifier",
                                   "affect_train", &m);

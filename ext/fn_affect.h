@@ -1,16 +1,12 @@
 /*
  * fn_affect.h — the emotion recognizer's SQL functions (registered in affect.c): the
  * affect_train aggregate and the scalar functions on a classifier BLOB. The scalar functions
- * take an ax_cls_fn as user data (their name first, then a one-classifier cache).
+ * take an ax_cached_fn (common.h) as user data (their name first, then a one-classifier cache).
  */
 #ifndef AFFECT_EXT_FN_AFFECT_H
 #define AFFECT_EXT_FN_AFFECT_H
 
 #include "fn_motion.h"
-
-typedef struct ax_cls_fn ax_cls_fn;
-ax_cls_fn *ax_cls_fn_new(const char *name);
-void ax_cls_fn_free(void *fn);
 
 void ax_affect_train_step(sqlite3_context *ctx, int argc, sqlite3_value **argv);
 void ax_affect_train_final(sqlite3_context *ctx);

@@ -163,11 +163,6 @@ void ax_fda_train_final(sqlite3_context *ctx)
 
 /* ---- the model argument, with the per-function cache ---- */
 
-struct ax_fda_fn {
-    char name[32]; /* first: AX_NAME(ctx) reads it */
-    ax_blob_cache cache;
-};
-
 static affect_status decode_model(const unsigned char *data, size_t size, void **out,
                                   affect_error *err)
 {
@@ -182,28 +177,9 @@ static void free_model(void *m)
     affect_fda_free(m);
 }
 
-void ax_fda_fn_free(void *p)
-{
-    ax_fda_fn *fn = p;
-    if (fn) {
-        ax_blob_cache_clear(&fn->cache);
-        sqlite3_free(fn);
-    }
-}
-
-ax_fda_fn *ax_fda_fn_new(const char *name)
-{
-    ax_fda_fn *fn = sqlite3_malloc64(sizeof *fn);
-    if (!fn)
-        return NULL;
-    memset(fn, 0, sizeof *fn);
-    ax_copy_name(fn->name, sizeof fn->name, name);
-    return fn;
-}
-
 static ax_arg arg_model(sqlite3_context *ctx, sqlite3_value **argv, const affect_fda **out)
 {
-    ax_fda_fn *fn = sqlite3_user_data(ctx);
+    ax_cached_fn *fn = sqlite3_user_data(ctx);
     const void *m;
     ax_arg r = ax_arg_cached_blob(ctx, argv, &fn->cache, decode_model, free_model,
                                   "functional model", "fda_train", &m);

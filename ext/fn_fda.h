@@ -1,17 +1,13 @@
 /*
  * fn_fda.h — the functional analysis's SQL functions (registered in affect.c): the fda_train
- * aggregate and the scalar functions on a functional model BLOB, which take an ax_fda_fn as
- * user data (their name first, then a one-model cache).
+ * aggregate and the scalar functions on a functional model BLOB, which take an ax_cached_fn
+ * (common.h) as user data (their name first, then a one-model cache).
  */
 #ifndef AFFECT_EXT_FN_FDA_H
 #define AFFECT_EXT_FN_FDA_H
 
 #include "affect/fda.h"
 #include "fn_motion.h"
-
-typedef struct ax_fda_fn ax_fda_fn;
-ax_fda_fn *ax_fda_fn_new(const char *name);
-void ax_fda_fn_free(void *fn);
 
 /* fda_train's model options (method, basis, order, lambda, dims, kernel, sigma, ffda_reg,
  * isomap_k, proto_dims: those present in opts) into cfg, then affect_fda_config_check; also

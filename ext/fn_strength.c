@@ -750,30 +750,6 @@ static void model_done(sqlite3_context *ctx, void *model, bool cached, bool rank
 
 /* ---- affect_strength: the model kept per function and connection ---- */
 
-struct ax_str_fn {
-    char name[32]; /* first: AX_NAME(ctx) reads it */
-    ax_blob_cache cache;
-};
-
-ax_str_fn *ax_str_fn_new(const char *name)
-{
-    ax_str_fn *fn = sqlite3_malloc64(sizeof *fn);
-    if (!fn)
-        return NULL;
-    memset(fn, 0, sizeof *fn);
-    ax_copy_name(fn->name, sizeof fn->name, name);
-    return fn;
-}
-
-void ax_str_fn_free(void *p)
-{
-    ax_str_fn *fn = p;
-    if (fn) {
-        ax_blob_cache_clear(&fn->cache);
-        sqlite3_free(fn);
-    }
-}
-
 static affect_status decode_strength(const unsigned char *data, size_t size, void **out,
                                      affect_error *err)
 {
@@ -788,7 +764,7 @@ static affect_status decode_strength(const unsigned char *data, size_t size, voi
 AX_FN(ax_affect_strength)
 {
     (void)argc;
-    ax_str_fn *fn = sqlite3_user_data(ctx);
+    ax_cached_fn *fn = sqlite3_user_data(ctx);
     const void *mv;
     if (ax_arg_cached_blob(ctx, argv, &fn->cache, decode_strength, strength_aux_free,
                            "strength model", "strength_train", &mv) != AX_OK)

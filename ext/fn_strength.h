@@ -12,10 +12,8 @@ void ax_strength_train_step(sqlite3_context *ctx, int argc, sqlite3_value **argv
 void ax_strength_train_final(sqlite3_context *ctx);
 void ax_rank_train_step(sqlite3_context *ctx, int argc, sqlite3_value **argv);
 void ax_rank_train_final(sqlite3_context *ctx);
-/* affect_strength takes an ax_str_fn as user data (its name first, then a one-model cache). */
-typedef struct ax_str_fn ax_str_fn;
-ax_str_fn *ax_str_fn_new(const char *name);
-void ax_str_fn_free(void *fn);
+/* affect_strength takes an ax_cached_fn (common.h) as user data (its name first, then a one-model
+ * cache). */
 AX_FN(ax_affect_strength);
 AX_FN(ax_strength_synthesize);
 AX_FN(ax_strength_edit);
