@@ -1465,16 +1465,7 @@ static ax_arg choose_by_action(sqlite3_context *ctx, const gen_index *ix, uint32
             ax_error(ctx, &err);
             r = AX_ERROR;
         } else {
-            uint32_t pick = order[0];
-            for (uint32_t c = 0; c < m; c++) {
-                bool used = false;
-                for (uint32_t e = 0; e < k; e++)
-                    used = used || dn->to[e] == rows[order[c]];
-                if (!used) {
-                    pick = order[c];
-                    break;
-                }
-            }
+            uint32_t pick = affect_transfer_pick_target(order, rows, m, dn->to, k);
             dn->to[k] = rows[pick];
             for (uint32_t c = 0; c < nc; c++)
                 if (dn->cand[(size_t)k * nc + c] == rows[pick])

@@ -629,3 +629,16 @@ affect_status affect_transfer_pairs(const double *x, uint32_t n, uint32_t p, con
     affect_free(taken);
     return AFFECT_OK;
 }
+
+uint32_t affect_transfer_pick_target(const uint32_t *order, const uint32_t *rows, uint32_t m,
+                                     const uint32_t *to, uint32_t k)
+{
+    for (uint32_t c = 0; c < m; c++) {
+        bool used = false;
+        for (uint32_t e = 0; e < k && !used; e++)
+            used = to[e] == rows[order[c]];
+        if (!used)
+            return order[c];
+    }
+    return order[0];
+}

@@ -364,12 +364,26 @@ static void test_out_of_memory(void **state)
     affect_motion_free(b);
 }
 
+/* A pair's target: the best-ranked candidate that no earlier pair took, else the best. */
+static void test_pick_target(void **state)
+{
+    (void)state;
+    const uint32_t rows[3] = {40, 41, 42};
+    const uint32_t order[3] = {2, 0, 1}; /* ranked: row 42, then 40, then 41 */
+    const uint32_t none[1] = {0}, took42[2] = {42, 7}, took_all[3] = {42, 40, 41};
+    assert_int_equal(affect_transfer_pick_target(order, rows, 3, none, 0), 2);
+    assert_int_equal(affect_transfer_pick_target(order, rows, 3, took42, 2), 0);
+    assert_int_equal(affect_transfer_pick_target(order, rows, 3, took_all, 2), 1);
+    assert_int_equal(affect_transfer_pick_target(order, rows, 3, took_all, 3), 2);
+    assert_int_equal(affect_transfer_pick_target(order, rows, 1, took42, 1), 2);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_known_change),  cmocka_unit_test(test_synthetic_corpus),
         cmocka_unit_test(test_pairs),         cmocka_unit_test(test_errors),
-        cmocka_unit_test(test_out_of_memory),
+        cmocka_unit_test(test_out_of_memory), cmocka_unit_test(test_pick_target),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -151,6 +151,14 @@ affect_status affect_transfer_pairs(const double *x, uint32_t n, uint32_t p, con
 bool affect_transfer_components(const bool *salient, uint32_t p, int32_t source, int32_t target,
                                 bool *use);
 
+/* The target row of donor pair k among its m candidates rows[0 .. m), ranked best first by
+ * order (order[c] indexes rows; affect_generate ranks them by DTW to the pair's source row):
+ * the best one that is not already the target of an earlier pair (to[0 .. k)), so that pairs
+ * donate different recordings when they can; the best one when all are taken. Returns its
+ * index into rows (m ≥ 1). */
+uint32_t affect_transfer_pick_target(const uint32_t *order, const uint32_t *rows, uint32_t m,
+                                     const uint32_t *to, uint32_t k);
+
 #ifdef __cplusplus
 }
 #endif
