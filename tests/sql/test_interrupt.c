@@ -129,7 +129,7 @@ static void interrupt_case(const ir_case *c)
         sqlite3_int64 used = sqlite3_memory_used();
         if (r == 0)
             used_first = used;
-        else if (used != used_first) {
+        else if (used > used_first) { /* less is no leak: SQLite may release a cache lazily */
             checks++;
             fail("%s: %lld bytes in use after run %d, %lld after the first (a leak?)", c->name,
                  (long long)used, r + 1, (long long)used_first);
