@@ -64,6 +64,7 @@
 #define AFFECT_STRENGTH_H
 
 #include "affect/base.h"
+#include "affect/laban.h"
 #include "affect/monitor.h"
 #include "affect/motion.h"
 #include "affect/rank.h"
@@ -73,7 +74,7 @@ extern "C" {
 #endif
 
 #define AFFECT_STRENGTH_MAGIC "AFST"
-#define AFFECT_STRENGTH_VERSION 1u
+#define AFFECT_STRENGTH_VERSION 2u /* 2: Laban features (keyframe-only models still write 1) */
 #define AFFECT_STRENGTH_MAX_LEVELS 64u
 #define AFFECT_STRENGTH_MAX_PCA 4096u
 #define AFFECT_STRENGTH_MAX_DIM 16777216u /* D = 6 J q */
@@ -90,10 +91,19 @@ typedef enum affect_strength_regression {
     AFFECT_STRENGTH_REG_LOCAL_LINEAR
 } affect_strength_regression;
 
+/* What the ranker sees (the regression and synthesis always use the keyframe features). */
+typedef enum affect_strength_feature_kind {
+    AFFECT_STRENGTH_FEAT_KEYFRAMES, /* the (PCA) keyframe features z */
+    AFFECT_STRENGTH_FEAT_LABAN,     /* the standardized Laban vector (default) */
+    AFFECT_STRENGTH_FEAT_BOTH       /* both blocks, weighted to equal total training variance */
+} affect_strength_feature_kind;
+
 typedef struct affect_strength_options {
-    uint32_t keyframes; /* default 13 */
+    affect_strength_feature_kind features; /* default AFFECT_STRENGTH_FEAT_LABAN */
+    uint32_t keyframes;                /* default 13 */
     uint32_t pca_dims;  /* default 40; 0 = no PCA */
-    double C;           /* ranker C (default 1) */
+    double C;           /* ranker C (default 1); with Laban features it multiplies the MEAN
+                           pair loss (the ranker gets C / number of pairs) */
     double fraction;    /* of the pairs kept, (0, 1] (default 1) */
     bool similar;       /* use similar pairs (same label) too (default true) */
     bool relative;      /* poses relative to the root joint (the pelvis role, else joint 0),
@@ -128,9 +138,15 @@ typedef struct affect_strength {
     double *comps;       /* pdim × D, orthonormal rows (PCA only) */
     double pca_variance; /* fraction of the training variance kept (1 without PCA) */
     double *seg_dt;      /* q − 1 mean training durations (s) */
+    /* Laban features (features ≠ KEYFRAMES): the ranker's vector is u = (L − lab_mean) / lab_sd
+     * (a component missing in the motion counts as the mean: 0), preceded with BOTH by
+     * kf_weight × z; its dimension is affect_strength_rank_dim(s) */
+    affect_strength_feature_kind features;
+    double lab_mean[AFFECT_LABAN_N], lab_sd[AFFECT_LABAN_N];
+    double kf_weight; /* BOTH: the keyframe block's weight (else 0) */
     /* ranker */
     double C;
-    double *w; /* pdim */
+    double *w; /* affect_strength_rank_dim(s): pdim (keyframes), 27 (laban), pdim + 27 (both) */
     affect_rank_stats stats;
     /* levels */
     uint32_t n_levels;
@@ -161,6 +177,9 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
 affect_status affect_strength_features(const affect_strength *s, const affect_motion *m, double *x,
                                        double *z, uint32_t *keyframes, affect_monitor *mon,
                                        affect_error *err);
+
+/* The ranker's dimension (the length of s->w). */
+uint32_t affect_strength_rank_dim(const affect_strength *s);
 
 /* The strength r(x) of a motion. */
 affect_status affect_strength_score(const affect_strength *s, const affect_motion *m,
