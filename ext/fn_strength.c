@@ -116,10 +116,10 @@ static char *dup_text(const char *s, size_t n)
     return d;
 }
 
-static const char *const strength_keys[] = {
-    "order",    "pairs",     "label",    "content",    "fraction", "similar",     "C", "seed",
-    "progress", "keyframes", "pca_dims", "regression", "relative", "standardize", "features",
-    NULL};
+static const char *const strength_keys[] = {"order",    "pairs",       "label",    "content",
+                                            "fraction", "similar",     "C",        "seed",
+                                            "progress", "keyframes",   "pca_dims", "regression",
+                                            "relative", "standardize", "features", NULL};
 static const char *const rank_keys[] = {"order",    "pairs",    "label", "content",
                                         "fraction", "similar",  "C",     "seed",
                                         "progress", "clusters", NULL};

@@ -40,8 +40,8 @@
 #define FLAG_PCA 1u
 #define FLAG_RELATIVE 2u
 #define FLAG_STANDARDIZE 4u
-#define FLAG_LABAN 8u  /* version 2: the ranker sees the Laban vector */
-#define FLAG_BOTH 16u  /* version 2: … after the weighted keyframe coordinates */
+#define FLAG_LABAN 8u /* version 2: the ranker sees the Laban vector */
+#define FLAG_BOTH 16u /* version 2: … after the weighted keyframe coordinates */
 #define DT_CLAMP 10.0 /* durations kept within [mean / 10, mean × 10] */
 #define MAX_OUT_FRAMES 1000000u
 #define HEADER_SIZE 44u
@@ -1489,11 +1489,10 @@ affect_status affect_strength_decode(const unsigned char *data, size_t size, aff
         return AFFECT_ERR_FORMAT;
     bool pca = (flags & FLAG_PCA) != 0, stdz = (flags & FLAG_STANDARDIZE) != 0;
     bool relative = (flags & FLAG_RELATIVE) != 0, lab = (flags & FLAG_LABAN) != 0;
-    uint32_t known = FLAG_PCA | FLAG_RELATIVE | FLAG_STANDARDIZE |
-                     (version >= 2 ? FLAG_LABAN | FLAG_BOTH : 0u);
+    uint32_t known =
+        FLAG_PCA | FLAG_RELATIVE | FLAG_STANDARDIZE | (version >= 2 ? FLAG_LABAN | FLAG_BOTH : 0u);
     if ((flags & ~known) != 0 || (version >= 2 && !lab) || ((flags & FLAG_BOTH) && !lab) ||
-        root >= J ||
-        (!relative && root != 0) || reg < AFFECT_STRENGTH_REG_KERNEL_RIDGE ||
+        root >= J || (!relative && root != 0) || reg < AFFECT_STRENGTH_REG_KERNEL_RIDGE ||
         reg > AFFECT_STRENGTH_REG_LOCAL_LINEAR)
         return affect_fail(err, AFFECT_ERR_FORMAT, "reserved strength model fields are not valid");
     if (J < 1 || J > AFFECT_MOTION_MAX_JOINTS || q < 2 || q > AFFECT_KEYFRAMES_MAX ||
@@ -1639,8 +1638,8 @@ affect_status affect_strength_decode(const unsigned char *data, size_t size, aff
                              k);
             goto cleanup;
         }
-    if (lab && (s->features == AFFECT_STRENGTH_FEAT_BOTH ? !(s->kf_weight > 0)
-                                                         : s->kf_weight != 0)) {
+    if (lab &&
+        (s->features == AFFECT_STRENGTH_FEAT_BOTH ? !(s->kf_weight > 0) : s->kf_weight != 0)) {
         st = affect_fail(err, AFFECT_ERR_FORMAT, "the keyframe block's weight is out of range");
         goto cleanup;
     }

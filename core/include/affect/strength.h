@@ -100,19 +100,19 @@ typedef enum affect_strength_feature_kind {
 
 typedef struct affect_strength_options {
     affect_strength_feature_kind features; /* default AFFECT_STRENGTH_FEAT_LABAN */
-    uint32_t keyframes;                /* default 13 */
-    uint32_t pca_dims;  /* default 40; 0 = no PCA */
-    double C;           /* ranker C (default 1); with Laban features it multiplies the MEAN
-                           pair loss (the ranker gets C / number of pairs) */
-    double fraction;    /* of the pairs kept, (0, 1] (default 1) */
-    bool similar;       /* use similar pairs (same label) too (default true) */
-    bool relative;      /* poses relative to the root joint (the pelvis role, else joint 0),
-                           the root's own position kept (default false: the paper's
-                           first-frame-normalized poses) */
-    bool standardize;   /* divide each feature by its training standard deviation before
-                           PCA and the ranker (default true: +5 to +19 points of held-out
-                           pair accuracy on all three tasks of docs/EVALUATION.md) */
-    uint64_t seed;      /* the pair sample */
+    uint32_t keyframes;                    /* default 13 */
+    uint32_t pca_dims;                     /* default 40; 0 = no PCA */
+    double C;         /* ranker C (default 1); with Laban features it multiplies the MEAN
+                         pair loss (the ranker gets C / number of pairs) */
+    double fraction;  /* of the pairs kept, (0, 1] (default 1) */
+    bool similar;     /* use similar pairs (same label) too (default true) */
+    bool relative;    /* poses relative to the root joint (the pelvis role, else joint 0),
+                         the root's own position kept (default false: the paper's
+                         first-frame-normalized poses) */
+    bool standardize; /* divide each feature by its training standard deviation before
+                         PCA and the ranker (default true: +5 to +19 points of held-out
+                         pair accuracy on all three tasks of docs/EVALUATION.md) */
+    uint64_t seed;    /* the pair sample */
     affect_strength_regression regression;
     affect_monitor *monitor; /* may be NULL */
 } affect_strength_options;
