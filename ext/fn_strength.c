@@ -21,7 +21,8 @@
  * Training options (the same text on every row): order, pairs ("all" | "same_content"),
  * label, content, fraction (0 < f ≤ 1), similar (true), C (1), seed (0), progress; and for
  * strength_train keyframes (13), pca_dims (40; 0 = none), regression ("auto" | "kernel_ridge"
- * | "local_linear"), relative (false), standardize (true); for rank_train clusters (1).
+ * | "local_linear"), relative (false), standardize (true), features ("laban" | "keyframes" |
+ * "both"); for rank_train clusters (1).
  *
  * How the aggregates work: the state (one pointer in the aggregate context) keeps each row's
  * decoded motion (strength_train: every motion is checked against the first's skeleton and

@@ -17,6 +17,11 @@
  * motions sorted by strength, fold = rank mod 5. The error is the mean over motions of
  * ‖f(r_i) − z_i‖² predicted by the fold that held motion i out.
  *
+ * Laban features: the ranker's input is built by rank_input from z and the raw Laban vector
+ * (laban_raw: affect_laban_vector with missing_null); laban_stats sets the means, deviations and
+ * the keyframe block's weight. Only the ranker changes: the keyframe features, PCA and the
+ * regression are computed as without them.
+ *
  * Memory: the features (n × D), the PCA workspace (N² + N + 3N doubles, N = min(n, D)), the
  * model's arrays; every size overflow-checked.
  */

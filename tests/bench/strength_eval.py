@@ -248,8 +248,9 @@ def main():
     ap.add_argument("--features", action="store_true",
                     help="compare the ranker's features (keyframes, laban, both) instead of the "
                          "keyframe options")
-    ap.add_argument("--synthesis-features", default=None,
-                    help="the synthesis table's models' \"features\" (default: the default)")
+    ap.add_argument("--synthesis-features", default="keyframes",
+                    help="the synthesis table's models' \"features\": keyframes (default) or "
+                         "both (a laban model cannot synthesize)")
     ap.add_argument("--synthesis-only", action="store_true",
                     help="only the synthesis and editing table (exhausted)")
     a = ap.parse_args()

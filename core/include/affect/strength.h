@@ -31,7 +31,13 @@
  *      when n < D); its rank caps the dimension. Option relative: poses relative to the root
  *      joint (its own position kept), default off (the paper's first-frame-normalized poses);
  *   5. the ranker (affect/rank.h) on pairs from the levels (all pairs, or within the same
- *      content group; a seeded fraction); r(x) = wᵀ z is the strength;
+ *      content group; a seeded fraction); r(x) = wᵀ u is the strength, where the ranker's
+ *      input u is (option features) the motion's Laban vector L (affect/laban.h, default
+ *      options, on the motion as given) standardized by the training motions' means and
+ *      population deviations, (L − mean)/sd, a missing component counting as 0 (LABAN, the
+ *      default); or z (KEYFRAMES); or both, (a z, (L − mean)/sd) with a making the two blocks'
+ *      total training variances equal (BOTH). With Laban features the ranker's C multiplies
+ *      the mean pair loss (it gets C / the number of pairs), with keyframes the sum;
  *   6. the regression z = f(s) from strength back to the (PCA) features, chosen by 5-fold
  *      cross-validated reconstruction error among kernel ridge regression (Gaussian kernel,
  *      bandwidth and ridge on a grid) and local linear regression (Gaussian weights, bandwidth
@@ -51,6 +57,10 @@
  * keyframes move by k'_i − k_i (interpolated linearly between keyframes and added to every
  * frame) and its time between keyframes is rescaled to the new durations; the result is put
  * back where the original stood (the inverse of step 1) and made rigid.
+ *
+ * With BOTH, editing moves z by the regression's f(s) − f(r(x)) instead (the ranker does not act
+ * on z alone). A LABAN model refuses synthesis and editing (AFFECT_ERR_INVALID): the motions they
+ * make do not follow the Laban ranker (docs/EVALUATION.md, "Laban features").
  *
  * Both then measure the strength of what they made (keyframes chosen again, the rigid
  * projection and the interpolation move it off the target) and correct the target by the miss,
