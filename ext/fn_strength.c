@@ -166,6 +166,8 @@ static ax_arg read_options(sqlite3_context *ctx, int argc, sqlite3_value **argv,
                          ax_opt_enum(ctx, &opts, "features", feat_choices, &feat)))
         goto done;
     ts->so.features = (affect_strength_feature_kind)feat;
+    if (!ts->vectors && ax_opt(&opts, "C"))
+        ts->so.cv_C = false; /* a C given is used as it is */
     if (ts->vectors && ax_opt_u32(ctx, &opts, "clusters", &ts->clusters))
         goto done;
     ts->so.seed = (uint64_t)seed;
@@ -922,7 +924,8 @@ AX_FN(ax_strength_info)
     if (s->features == AFFECT_STRENGTH_FEAT_BOTH)
         json_num(&sb, "keyframe_weight", s->kf_weight, true);
     json_num(&sb, "C", s->C, true);
-    affect_strbuf_printf(&sb, ",\"loss\":\"%s\"",
+    affect_strbuf_printf(&sb, ",\"C_cross_validated\":%s,\"loss\":\"%s\"",
+                         s->cv_C ? "true" : "false",
                          s->features == AFFECT_STRENGTH_FEAT_KEYFRAMES ? "sum" : "mean");
     affect_strbuf_printf(&sb, ",\"ordered_pairs\":%" PRIu64 ",\"similar_pairs\":%" PRIu64,
                          s->stats.ordered, s->stats.similar);

@@ -34,6 +34,7 @@
 #include <string.h>
 
 #include "util/bytes.h"
+#include "util/rng.h"
 #include "affect/hmm_blob.h" /* affect_fnv1a64 */
 #include "affect/keyframes.h"
 #include "affect/normalize.h"
@@ -45,9 +46,11 @@
 #define FLAG_PCA 1u
 #define FLAG_RELATIVE 2u
 #define FLAG_STANDARDIZE 4u
-#define FLAG_LABAN 8u /* version 2: the ranker sees the Laban vector */
-#define FLAG_BOTH 16u /* version 2: … after the weighted keyframe coordinates */
-#define DT_CLAMP 10.0 /* durations kept within [mean / 10, mean × 10] */
+#define FLAG_LABAN 8u       /* version 2: the ranker sees the Laban vector */
+#define FLAG_BOTH 16u       /* version 2: … after the weighted keyframe coordinates */
+#define FLAG_CV_C 32u       /* version 2: C chosen by the inner cross-validation */
+#define CV_SEED 0x5c0ffee5u /* the inner folds' draw: opt->seed mixed with this */
+#define DT_CLAMP 10.0       /* durations kept within [mean / 10, mean × 10] */
 #define MAX_OUT_FRAMES 1000000u
 #define HEADER_SIZE 44u
 #define FIXED_SIZE (HEADER_SIZE + 8 * 8 + 4 * 4 + 8 * 4 + AFFECT_MOTION_UNIT_MAX + 1)
@@ -67,6 +70,7 @@ void affect_strength_options_default(affect_strength_options *opt)
     opt->fraction = 1.0;
     opt->similar = true;
     opt->standardize = true;
+    opt->cv_C = true;
 }
 
 void affect_strength_free(affect_strength *s)
@@ -700,6 +704,107 @@ cleanup:
 
 /* ---- training ---- */
 
+/* The C grid of the inner cross-validation, in the order ties are broken (the middle first). */
+static const double C_GRID[] = {1, 0.1, 10, 0.01, 100};
+#define N_C (sizeof C_GRID / sizeof C_GRID[0])
+
+/* C for the mean pair loss by AFFECT_STRENGTH_CV_FOLDS-fold cross-validation over the n training
+ * motions (inputs U, n × d; levels lv; groups grp or NULL): folds stratified by level, drawn by
+ * the seed; for each C of C_GRID a ranker on the other folds' pairs (drawn as training draws
+ * them) scores every motion, and each held-out motion's ordered pairs with every motion (of its
+ * group) count right when ordered right. The C with the most right wins (ties: C_GRID's order);
+ * *C_out is untouched when no fold can be scored. */
+static affect_status cv_choose_C(const double *U, uint32_t n, uint32_t d, const int32_t *lv,
+                                 const uint32_t *grp, uint32_t n_levels,
+                                 const affect_strength_options *opt, double *C_out,
+                                 affect_error *err)
+{
+    uint32_t F = AFFECT_STRENGTH_CV_FOLDS;
+    uint32_t *fold = NULL, *perm = NULL;
+    int32_t *inner = NULL;
+    double *w = NULL, *score = NULL;
+    affect_rank_pair *pairs = NULL;
+    affect_ws_part parts[] = {
+        {(void **)&fold, n, sizeof(uint32_t)}, {(void **)&perm, n, sizeof(uint32_t)},
+        {(void **)&inner, n, sizeof(int32_t)}, {(void **)&w, d, sizeof(double)},
+        {(void **)&score, n, sizeof(double)},
+    };
+    void *block = affect_ws_alloc(parts, sizeof parts / sizeof parts[0]);
+    if (!block)
+        return affect_nomem(err);
+    affect_status st = AFFECT_OK;
+    affect_rng rng;
+    affect_rng_seed(&rng, opt->seed ^ CV_SEED);
+    /* stratified folds: each level's motions shuffled, then dealt round-robin */
+    uint32_t dealt = 0;
+    for (uint32_t l = 0; l < n_levels; l++) {
+        uint32_t m = 0;
+        for (uint32_t i = 0; i < n; i++)
+            if (lv[i] == (int32_t)l)
+                perm[m++] = i;
+        for (uint32_t k = m; k > 1; k--) {
+            uint32_t j = (uint32_t)(affect_rng_next(&rng) % k), t = perm[k - 1];
+            perm[k - 1] = perm[j];
+            perm[j] = t;
+        }
+        for (uint32_t k = 0; k < m; k++)
+            fold[perm[k]] = (dealt + k) % F;
+        dealt += m;
+    }
+    uint64_t best = 0;
+    bool any = false;
+    for (size_t c = 0; c < N_C; c++) {
+        uint64_t right = 0, total = 0;
+        for (uint32_t f = 0; f < F; f++) {
+            st = affect_monitor_check(opt->monitor, err);
+            if (st != AFFECT_OK)
+                goto cleanup;
+            for (uint32_t i = 0; i < n; i++)
+                inner[i] = fold[i] == f ? -1 : lv[i];
+            size_t np = 0, no = 0;
+            affect_free(pairs);
+            pairs = NULL;
+            st = affect_rank_pairs(inner, grp, n, opt->similar, opt->fraction, opt->seed, &pairs,
+                                   &np, err);
+            if (st != AFFECT_OK)
+                goto cleanup;
+            for (size_t p = 0; p < np; p++)
+                no += !pairs[p].similar;
+            if (no == 0)
+                continue;
+            affect_rank_options ro;
+            affect_rank_options_default(&ro);
+            ro.C = C_GRID[c] / (double)np;
+            ro.monitor = opt->monitor;
+            affect_rank_stats rs;
+            st = affect_rank_fit(U, n, d, pairs, np, &ro, w, &rs, err);
+            if (st != AFFECT_OK)
+                goto cleanup;
+            for (uint32_t i = 0; i < n; i++)
+                score[i] = dotp(w, U + (size_t)i * d, d);
+            for (uint32_t i = 0; i < n; i++) {
+                if (fold[i] != f)
+                    continue;
+                for (uint32_t j = 0; j < n; j++) {
+                    if (lv[j] == lv[i] || (grp && grp[j] != grp[i]))
+                        continue;
+                    total++;
+                    right += lv[i] > lv[j] ? score[i] > score[j] : score[j] > score[i];
+                }
+            }
+        }
+        if (total > 0 && (!any || right > best)) {
+            best = right;
+            any = true;
+            *C_out = C_GRID[c];
+        }
+    }
+cleanup:
+    affect_free(pairs);
+    affect_free(block);
+    return st;
+}
+
 /* lab_mean and lab_sd from the n raw Laban vectors L (NaN = missing): the mean and population
  * standard deviation of the values present; a component missing everywhere gets mean 0, one
  * with a zero or undefined deviation sd 1. With both feature blocks, kf_weight makes the
@@ -965,7 +1070,17 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
     /* Laban features: C multiplies the mean pair loss (the right C of the sum scales like one
      * over the number of pairs; docs/EVALUATION.md); keyframes keep the sum (their accuracy
      * does not depend on C) */
-    ro.C = lab_on ? opt->C / (double)n_pairs : opt->C;
+    if (lab_on && opt->cv_C) {
+        double C = opt->C;
+        st = cv_choose_C(rank_x, used, rd, lv, grp, n_levels, opt, &C, err);
+        if (st != AFFECT_OK) {
+            affect_prefix(err, "cross-validation of C");
+            goto cleanup;
+        }
+        s->C = C;
+        s->cv_C = true;
+    }
+    ro.C = lab_on ? s->C / (double)n_pairs : opt->C;
     ro.monitor = opt->monitor;
     st = affect_rank_fit(rank_x, used, rd, pairs, n_pairs, &ro, s->w, &s->stats, err);
     if (st != AFFECT_OK) {
@@ -1367,7 +1482,8 @@ affect_status affect_strength_encode(const affect_strength *s, unsigned char **o
     affect_bw_header(&w, AFFECT_STRENGTH_MAGIC, lab ? 2u : 1u,
                      (s->pca ? FLAG_PCA : 0u) | (s->relative ? FLAG_RELATIVE : 0u) |
                          (s->scale ? FLAG_STANDARDIZE : 0u) | (lab ? FLAG_LABAN : 0u) |
-                         (s->features == AFFECT_STRENGTH_FEAT_BOTH ? FLAG_BOTH : 0u));
+                         (s->features == AFFECT_STRENGTH_FEAT_BOTH ? FLAG_BOTH : 0u) |
+                         (s->cv_C ? FLAG_CV_C : 0u));
     affect_bw_u32(&w, s->n_joints);
     affect_bw_u32(&w, s->keyframes);
     affect_bw_u32(&w, s->dim);
@@ -1494,8 +1610,8 @@ affect_status affect_strength_decode(const unsigned char *data, size_t size, aff
         return AFFECT_ERR_FORMAT;
     bool pca = (flags & FLAG_PCA) != 0, stdz = (flags & FLAG_STANDARDIZE) != 0;
     bool relative = (flags & FLAG_RELATIVE) != 0, lab = (flags & FLAG_LABAN) != 0;
-    uint32_t known =
-        FLAG_PCA | FLAG_RELATIVE | FLAG_STANDARDIZE | (version >= 2 ? FLAG_LABAN | FLAG_BOTH : 0u);
+    uint32_t known = FLAG_PCA | FLAG_RELATIVE | FLAG_STANDARDIZE |
+                     (version >= 2 ? FLAG_LABAN | FLAG_BOTH | FLAG_CV_C : 0u);
     if ((flags & ~known) != 0 || (version >= 2 && !lab) || ((flags & FLAG_BOTH) && !lab) ||
         root >= J || (!relative && root != 0) || reg < AFFECT_STRENGTH_REG_KERNEL_RIDGE ||
         reg > AFFECT_STRENGTH_REG_LOCAL_LINEAR)
@@ -1534,6 +1650,7 @@ affect_status affect_strength_decode(const unsigned char *data, size_t size, aff
     s->relative = relative;
     s->root = root;
     s->regression = (affect_strength_regression)reg;
+    s->cv_C = (flags & FLAG_CV_C) != 0;
     s->features = !lab                  ? AFFECT_STRENGTH_FEAT_KEYFRAMES
                   : (flags & FLAG_BOTH) ? AFFECT_STRENGTH_FEAT_BOTH
                                         : AFFECT_STRENGTH_FEAT_LABAN;

@@ -354,6 +354,7 @@ static void test_laban_mean_loss(void **state)
     opt.pca_dims = 3;
     opt.keyframes = 4;
     opt.similar = false; /* the copies would add similar pairs of identical motions */
+    opt.cv_C = false;    /* the copies would change the inner folds */
     affect_strength *a, *b;
     affect_error err;
     assert_int_equal(affect_strength_train((const affect_motion *const *)tr.m, tr.level, NULL, tr.n,
@@ -368,8 +369,57 @@ static void test_laban_mean_loss(void **state)
         tu_assert_near(b->w[k], a->w[k], 1e-9 * (1 + fabs(a->w[k])));
         tu_assert_near(b->lab_mean[k], a->lab_mean[k], 1e-9 * (1 + fabs(a->lab_mean[k])));
     }
+    assert_false(a->cv_C);
+    assert_true(a->C == 1);
     affect_strength_free(a);
     affect_strength_free(b);
+    free_corpus(&tr);
+}
+
+/* The inner cross-validation of C (the default with Laban features): a C of the grid, marked in
+ * the model and its BLOB; a C given (cv_C false) is kept; keyframes never cross-validate. */
+static void test_cv_C(void **state)
+{
+    (void)state;
+    corpus tr;
+    make_corpus(&tr, 1, 3);
+    affect_strength_options opt;
+    affect_strength_options_default(&opt);
+    opt.pca_dims = 3;
+    opt.keyframes = 4;
+    affect_strength *s;
+    affect_error err;
+    assert_true(opt.cv_C);
+    assert_int_equal(affect_strength_train((const affect_motion *const *)tr.m, tr.level, NULL, tr.n,
+                                           LEVELS, N_INT, &opt, &s, &err),
+                     AFFECT_OK);
+    assert_true(s->cv_C);
+    assert_true(s->C == 0.01 || s->C == 0.1 || s->C == 1 || s->C == 10 || s->C == 100);
+    unsigned char *b;
+    size_t nb;
+    affect_strength *back;
+    assert_int_equal(affect_strength_encode(s, &b, &nb, &err), AFFECT_OK);
+    assert_int_equal(affect_strength_decode(b, nb, &back, &err), AFFECT_OK);
+    assert_true(back->cv_C && back->C == s->C);
+    affect_free(b);
+    affect_strength_free(back);
+    affect_strength_free(s);
+    opt.cv_C = false;
+    opt.C = 0.5;
+    assert_int_equal(affect_strength_train((const affect_motion *const *)tr.m, tr.level, NULL, tr.n,
+                                           LEVELS, N_INT, &opt, &s, &err),
+                     AFFECT_OK);
+    assert_false(s->cv_C);
+    assert_true(s->C == 0.5);
+    affect_strength_free(s);
+    opt.cv_C = true;
+    opt.features = AFFECT_STRENGTH_FEAT_KEYFRAMES;
+    assert_int_equal(affect_strength_train((const affect_motion *const *)tr.m, tr.level, NULL, tr.n,
+                                           LEVELS, N_INT, &opt, &s, &err),
+                     AFFECT_OK);
+    assert_false(s->cv_C);
+    assert_true(s->C == 0.5);
+    affect_strength_free(s);
     free_corpus(&tr);
 }
 
@@ -603,7 +653,7 @@ static void test_fixture_v1(void **state)
     free(data);
 }
 
-/* Version 2: both feature blocks (flags 29: PCA, standardized, Laban, both). */
+/* Version 2: both feature blocks (flags 61: PCA, standardized, Laban, both, C cross-validated). */
 static void test_fixture_v2(void **state)
 {
     (void)state;
@@ -616,7 +666,7 @@ static void test_fixture_v2(void **state)
     assert_int_equal(s->features, AFFECT_STRENGTH_FEAT_BOTH);
     assert_int_equal(s->pdim, 2);
     assert_int_equal(affect_strength_rank_dim(s), 2 + AFFECT_LABAN_N);
-    assert_true(s->kf_weight > 0 && s->scale != NULL && s->pca);
+    assert_true(s->kf_weight > 0 && s->scale != NULL && s->pca && s->cv_C);
     assert_int_equal(s->n_train, 3);
     assert_int_equal(s->stats.ordered, 3);
     assert_int_equal(s->stats.correct, 3);
@@ -653,12 +703,19 @@ static void test_fixture_v2(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_keyframes_optimal),     cmocka_unit_test(test_keyframes_exact),
-        cmocka_unit_test(test_regression_smooth_map), cmocka_unit_test(test_model),
-        cmocka_unit_test(test_no_pca_and_options),    cmocka_unit_test(test_errors),
-        cmocka_unit_test(test_out_of_memory),         cmocka_unit_test(test_fixture_v1),
-        cmocka_unit_test(test_model_laban),           cmocka_unit_test(test_model_both),
-        cmocka_unit_test(test_laban_mean_loss),       cmocka_unit_test(test_fixture_v2),
+        cmocka_unit_test(test_keyframes_optimal),
+        cmocka_unit_test(test_keyframes_exact),
+        cmocka_unit_test(test_regression_smooth_map),
+        cmocka_unit_test(test_model),
+        cmocka_unit_test(test_no_pca_and_options),
+        cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_out_of_memory),
+        cmocka_unit_test(test_fixture_v1),
+        cmocka_unit_test(test_model_laban),
+        cmocka_unit_test(test_model_both),
+        cmocka_unit_test(test_laban_mean_loss),
+        cmocka_unit_test(test_fixture_v2),
+        cmocka_unit_test(test_cv_C),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

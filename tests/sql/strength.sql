@@ -91,6 +91,15 @@ SELECT group_concat(name || ' ' || json_extract(i, '$.version') || ' ' || json_e
   FROM (SELECT name, strength_info(r) AS i FROM models WHERE name IN ('both', 'kf', 'blocks') ORDER BY name);
 -- expect: blocks 2 both 37 mean 1; both 2 laban 27 mean -; kf 1 keyframes 10 sum -
 
+-- C: chosen by the inner cross-validation with Laban features unless given; keyframes: as given
+SELECT json_extract(strength_info(r), '$.ranker.C_cross_validated') AND json_extract(strength_info(r), '$.ranker.C') IN (0.01, 0.1, 1, 10, 100)
+  FROM models WHERE name = 'both';
+-- expect: 1
+
+SELECT group_concat(json_extract(strength_info(r), '$.ranker.C_cross_validated') || ' ' || json_extract(strength_info(r), '$.ranker.C'), '; ')
+  FROM (SELECT r FROM models WHERE name IN ('small', 'kf') ORDER BY name);
+-- expect: 0 1; 0 0.5
+
 SELECT 'info: training accuracy, converged, levels in order, a regression chosen',
        json_extract(i, '$.ranker.training_accuracy') >= 0.95 AND json_extract(i, '$.ranker.converged')
        AND json_extract(i, '$.levels[0].strength') < json_extract(i, '$.levels[1].strength')

@@ -114,6 +114,9 @@ typedef struct affect_strength_options {
     uint32_t pca_dims;                     /* default 40; 0 = no PCA */
     double C;         /* ranker C (default 1); with Laban features it multiplies the MEAN
                          pair loss (the ranker gets C / number of pairs) */
+    bool cv_C;        /* Laban features: choose C among {0.01, 0.1, 1, 10, 100} by 5-fold
+                         cross-validation over the training motions (default true; C is then
+                         the fallback when no fold can be scored) */
     double fraction;  /* of the pairs kept, (0, 1] (default 1) */
     bool similar;     /* use similar pairs (same label) too (default true) */
     bool relative;    /* poses relative to the root joint (the pelvis role, else joint 0),
@@ -154,6 +157,7 @@ typedef struct affect_strength {
     affect_strength_feature_kind features;
     double lab_mean[AFFECT_LABAN_N], lab_sd[AFFECT_LABAN_N];
     double kf_weight; /* BOTH: the keyframe block's weight (else 0) */
+    bool cv_C;        /* C (below) was chosen by the inner cross-validation */
     /* ranker */
     double C;
     double *w; /* affect_strength_rank_dim(s): pdim (keyframes), 27 (laban), pdim + 27 (both) */
