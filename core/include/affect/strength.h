@@ -37,7 +37,10 @@
  *      population deviations, (L − mean)/sd, a missing component counting as 0 (LABAN, the
  *      default); or z (KEYFRAMES); or both, (a z, (L − mean)/sd) with a making the two blocks'
  *      total training variances equal (BOTH). With Laban features the ranker's C multiplies
- *      the mean pair loss (it gets C / the number of pairs), with keyframes the sum;
+ *      the mean pair loss (it gets C / the number of pairs) and, with cv_C (the default), is
+ *      chosen among 0.01 … 100 by 5-fold cross-validation over the training motions
+ *      (stratified by level; the C whose rankers order the held-out motions' pairs best);
+ *      with keyframes C multiplies the sum;
  *   6. the regression z = f(s) from strength back to the (PCA) features, chosen by 5-fold
  *      cross-validated reconstruction error among kernel ridge regression (Gaussian kernel,
  *      bandwidth and ridge on a grid) and local linear regression (Gaussian weights, bandwidth
