@@ -3,7 +3,8 @@
 
 Usage (from the repository root, after any build of build/affect.so; about 15 minutes):
     OPENBLAS_NUM_THREADS=1 python3 tests/bench/strength_eval.py [--db build/strength.db]
-        [--tasks anger,happiness,exhausted] [--seeds 1,2,3] [--quick]
+        [--tasks anger,happiness,exhausted] [--seeds 1,2,3] [--quick] [--features]
+        [--synthesis-features keyframes|both]
 AFFECT_EXT overrides the extension's path (default build/affect). Python 3 standard library and
 sqlite3 only. It imports the BVH files of ../shared/corpora/bandai-namco-1 and
 bandai-namco-2-dev into --db once (motion_from_bvh), then, for every task:
@@ -26,6 +27,11 @@ test normal motion of that content is edited to the same 5 strengths; the Spearm
 between the strength asked and the strength affect_strength measures on the result, and the
 correlation of laban_time and laban_weight with it. Output: Markdown tables (mean ± sd over the
 seeds), and the wall and CPU time of the runs.
+
+The rows above rank by keyframe features ("features": "keyframes"). --features replaces them by
+the three inputs of the ranker, "keyframes", "laban" (the default of strength_train) and "both",
+with default options otherwise (about 1 minute; the "dims" column is then the keyframe PCA's).
+--synthesis-features chooses the synthesis models' input (a "laban" model cannot synthesize).
 """
 import argparse
 import json
