@@ -10,6 +10,7 @@
  *     affect_error err;
  *     affect_strength_options opt;
  *     affect_strength_options_default(&opt);
+ *     opt.features = AFFECT_STRENGTH_FEAT_KEYFRAMES;   // to edit (the default ranks by Laban)
  *     affect_strength *s = NULL;
  *     affect_motion *stronger = NULL;  double r = 0;
  *     if (affect_strength_train(motions, level, NULL, n, names, 3, &opt, &s, &err) != AFFECT_OK
