@@ -21,7 +21,8 @@
  * Training options (the same text on every row): order, pairs ("all" | "same_content"),
  * label, content, fraction (0 < f ≤ 1), similar (true), C (1), seed (0), progress; and for
  * strength_train keyframes (13), pca_dims (40; 0 = none), regression ("auto" | "kernel_ridge"
- * | "local_linear"), relative (false), standardize (true); for rank_train clusters (1).
+ * | "local_linear"), relative (false), standardize (true), features ("laban" | "keyframes" |
+ * "both"); for rank_train clusters (1).
  *
  * How the aggregates work: the state (one pointer in the aggregate context) keeps each row's
  * decoded motion (strength_train: every motion is checked against the first's skeleton and
@@ -117,9 +118,10 @@ static char *dup_text(const char *s, size_t n)
     return d;
 }
 
-static const char *const strength_keys[] = {
-    "order",    "pairs",     "label",    "content",    "fraction", "similar",     "C", "seed",
-    "progress", "keyframes", "pca_dims", "regression", "relative", "standardize", NULL};
+static const char *const strength_keys[] = {"order",    "pairs",       "label",    "content",
+                                            "fraction", "similar",     "C",        "seed",
+                                            "progress", "keyframes",   "pca_dims", "regression",
+                                            "relative", "standardize", "features", NULL};
 static const char *const rank_keys[] = {"order",    "pairs",    "label", "content",
                                         "fraction", "similar",  "C",     "seed",
                                         "progress", "clusters", NULL};
@@ -139,9 +141,10 @@ static ax_arg read_options(sqlite3_context *ctx, int argc, sqlite3_value **argv,
     ax_arg r = AX_ERROR;
     double seed = 0;
     const char *lk = "label", *ck = "content";
-    int pairs = 0, reg = 0;
+    int pairs = 0, reg = 0, feat = (int)ts->so.features;
     static const char *const pair_choices[] = {"all", "same_content", NULL};
     static const char *const reg_choices[] = {"auto", "kernel_ridge", "local_linear", NULL};
+    static const char *const feat_choices[] = {"keyframes", "laban", "both", NULL};
     if (ax_opt_enum(ctx, &opts, "pairs", pair_choices, &pairs) ||
         ax_opt_string(ctx, &opts, "label", &lk) || ax_opt_string(ctx, &opts, "content", &ck) ||
         ax_opt_number(ctx, &opts, "fraction", &ts->so.fraction) ||
@@ -153,8 +156,12 @@ static ax_arg read_options(sqlite3_context *ctx, int argc, sqlite3_value **argv,
                          ax_opt_u32(ctx, &opts, "pca_dims", &ts->so.pca_dims) ||
                          ax_opt_enum(ctx, &opts, "regression", reg_choices, &reg) ||
                          ax_opt_bool(ctx, &opts, "relative", &ts->so.relative) ||
-                         ax_opt_bool(ctx, &opts, "standardize", &ts->so.standardize)))
+                         ax_opt_bool(ctx, &opts, "standardize", &ts->so.standardize) ||
+                         ax_opt_enum(ctx, &opts, "features", feat_choices, &feat)))
         goto done;
+    ts->so.features = (affect_strength_feature_kind)feat;
+    if (!ts->vectors && ax_opt(&opts, "C"))
+        ts->so.cv_C = false; /* a C given is used as it is */
     if (ts->vectors && ax_opt_u32(ctx, &opts, "clusters", &ts->clusters))
         goto done;
     ts->so.seed = (uint64_t)seed;
@@ -879,10 +886,12 @@ AX_FN(ax_strength_info)
         return;
     affect_strength *s = mv;
     static const char *const reg_names[] = {"auto", "kernel_ridge", "local_linear"};
+    static const char *const feat_names[] = {"keyframes", "laban", "both"};
     affect_strbuf sb;
     affect_strbuf_init(&sb);
     affect_strbuf_printf(&sb, "{\"version\":%u,\"motions\":%u,\"joints\":%u,\"keyframes\":%u",
-                         AFFECT_STRENGTH_VERSION, s->n_train, s->n_joints, s->keyframes);
+                         s->features == AFFECT_STRENGTH_FEAT_KEYFRAMES ? 1u : 2u, s->n_train,
+                         s->n_joints, s->keyframes);
     json_num(&sb, "fps", s->fps, true);
     affect_strbuf_printf(&sb, ",\"features\":%u,\"pca\":", s->dim);
     if (s->pca) {
@@ -892,8 +901,14 @@ AX_FN(ax_strength_info)
     } else {
         affect_strbuf_puts(&sb, "null");
     }
-    affect_strbuf_puts(&sb, ",\"ranker\":{");
-    json_num(&sb, "C", s->C, false);
+    affect_strbuf_printf(&sb, ",\"ranker\":{\"features\":\"%s\",\"dims\":%u",
+                         feat_names[s->features], affect_strength_rank_dim(s));
+    if (s->features == AFFECT_STRENGTH_FEAT_BOTH)
+        json_num(&sb, "keyframe_weight", s->kf_weight, true);
+    json_num(&sb, "C", s->C, true);
+    affect_strbuf_printf(&sb, ",\"C_cross_validated\":%s,\"loss\":\"%s\"",
+                         s->cv_C ? "true" : "false",
+                         s->features == AFFECT_STRENGTH_FEAT_KEYFRAMES ? "sum" : "mean");
     affect_strbuf_printf(&sb, ",\"ordered_pairs\":%" PRIu64 ",\"similar_pairs\":%" PRIu64,
                          s->stats.ordered, s->stats.similar);
     json_num(&sb, "training_accuracy",
@@ -902,7 +917,7 @@ AX_FN(ax_strength_info)
                          s->stats.converged ? "true" : "false");
     json_num(&sb, "objective", s->stats.objective, true);
     double ww = 0;
-    for (uint32_t c = 0; c < s->pdim; c++)
+    for (uint32_t c = 0; c < affect_strength_rank_dim(s); c++)
         ww += s->w[c] * s->w[c];
     json_num(&sb, "w_norm", sqrt(ww), true);
     affect_strbuf_puts(&sb, "},\"levels\":[");

@@ -17,6 +17,11 @@
  * motions sorted by strength, fold = rank mod 5. The error is the mean over motions of
  * ‖f(r_i) − z_i‖² predicted by the fold that held motion i out.
  *
+ * Laban features: the ranker's input is built by rank_input from z and the raw Laban vector
+ * (laban_raw: affect_laban_vector with missing_null); laban_stats sets the means, deviations and
+ * the keyframe block's weight. Only the ranker changes: the keyframe features, PCA and the
+ * regression are computed as without them.
+ *
  * Memory: the features (n × D), the PCA workspace (N² + N + 3N doubles, N = min(n, D)), the
  * model's arrays; every size overflow-checked.
  */
@@ -29,6 +34,7 @@
 #include <string.h>
 
 #include "util/bytes.h"
+#include "util/rng.h"
 #include "affect/hmm_blob.h" /* affect_fnv1a64 */
 #include "affect/keyframes.h"
 #include "affect/normalize.h"
@@ -40,7 +46,11 @@
 #define FLAG_PCA 1u
 #define FLAG_RELATIVE 2u
 #define FLAG_STANDARDIZE 4u
-#define DT_CLAMP 10.0 /* durations kept within [mean / 10, mean × 10] */
+#define FLAG_LABAN 8u       /* version 2: the ranker sees the Laban vector */
+#define FLAG_BOTH 16u       /* version 2: … after the weighted keyframe coordinates */
+#define FLAG_CV_C 32u       /* version 2: C chosen by the inner cross-validation */
+#define CV_SEED 0x5c0ffee5u /* the inner folds' draw: opt->seed mixed with this */
+#define DT_CLAMP 10.0       /* durations kept within [mean / 10, mean × 10] */
 #define MAX_OUT_FRAMES 1000000u
 #define HEADER_SIZE 44u
 #define FIXED_SIZE (HEADER_SIZE + 8 * 8 + 4 * 4 + 8 * 4 + AFFECT_MOTION_UNIT_MAX + 1)
@@ -53,12 +63,14 @@ static const double L_GRID[] = {1e-4, 1e-3, 1e-2, 1e-1};
 void affect_strength_options_default(affect_strength_options *opt)
 {
     memset(opt, 0, sizeof *opt);
+    opt->features = AFFECT_STRENGTH_FEAT_LABAN;
     opt->keyframes = AFFECT_KEYFRAMES_DEFAULT;
     opt->pca_dims = 40;
     opt->C = 1.0;
     opt->fraction = 1.0;
     opt->similar = true;
     opt->standardize = true;
+    opt->cv_C = true;
 }
 
 void affect_strength_free(affect_strength *s)
@@ -88,6 +100,18 @@ void affect_strength_free(affect_strength *s)
     affect_free(s);
 }
 
+uint32_t affect_strength_rank_dim(const affect_strength *s)
+{
+    switch (s->features) {
+    case AFFECT_STRENGTH_FEAT_LABAN:
+        return AFFECT_LABAN_N;
+    case AFFECT_STRENGTH_FEAT_BOTH:
+        return s->pdim + AFFECT_LABAN_N;
+    default:
+        return s->pdim;
+    }
+}
+
 /* Allocates the arrays of s from its sizes (names and level names zeroed). */
 static bool alloc_arrays(affect_strength *s)
 {
@@ -97,7 +121,7 @@ static bool alloc_arrays(affect_strength *s)
     s->names = affect_calloc(s->n_joints, sizeof *s->names);
     s->parents = affect_calloc(s->n_joints, sizeof *s->parents);
     s->seg_dt = affect_calloc(s->keyframes, sizeof(double));
-    s->w = affect_calloc(s->pdim, sizeof(double));
+    s->w = affect_calloc(affect_strength_rank_dim(s), sizeof(double));
     s->level_names = affect_calloc(s->n_levels, sizeof *s->level_names);
     s->level_strength = affect_calloc(s->n_levels, sizeof(double));
     s->level_count = affect_calloc(s->n_levels, sizeof(uint32_t));
@@ -287,20 +311,63 @@ static double dotp(const double *a, const double *b, size_t n)
     return s;
 }
 
+/* The Laban vector of m (affect/laban.h with its defaults; NaN where a component cannot be
+ * computed, e.g. a role the skeleton lacks). */
+static affect_status laban_raw(const affect_motion *m, double *v, affect_monitor *mon,
+                               affect_error *err)
+{
+    affect_roles roles;
+    affect_roles_resolve(m, &roles);
+    affect_laban_options lo;
+    affect_laban_options_default(&lo);
+    lo.missing_null = true;
+    lo.monitor = mon;
+    affect_status st = affect_laban_vector(m, &roles, &lo, v, err);
+    if (st != AFFECT_OK)
+        affect_prefix(err, "Laban vector");
+    return st;
+}
+
+/* The ranker's input u (affect_strength_rank_dim(s)) from the keyframe coordinates z (pdim;
+ * unused with Laban features alone) and the raw Laban vector lab (unused with keyframes). */
+static void rank_input(const affect_strength *s, const double *z, const double *lab, double *u)
+{
+    uint32_t o = 0;
+    if (s->features != AFFECT_STRENGTH_FEAT_LABAN) {
+        double a = s->features == AFFECT_STRENGTH_FEAT_BOTH ? s->kf_weight : 1;
+        for (uint32_t c = 0; c < s->pdim; c++)
+            u[c] = a * z[c];
+        o = s->pdim;
+    }
+    if (s->features != AFFECT_STRENGTH_FEAT_KEYFRAMES)
+        for (uint32_t k = 0; k < AFFECT_LABAN_N; k++)
+            u[o + k] = isfinite(lab[k]) ? (lab[k] - s->lab_mean[k]) / s->lab_sd[k] : 0;
+}
+
 affect_status affect_strength_score(const affect_strength *s, const affect_motion *m,
                                     double *strength, affect_monitor *mon, affect_error *err)
 {
+    uint32_t rd = affect_strength_rank_dim(s);
+    double lab[AFFECT_LABAN_N];
     double *x = affect_malloc_array(s->dim, sizeof(double));
     double *z = affect_malloc_array(s->pdim, sizeof(double));
+    double *u = affect_malloc_array(rd, sizeof(double));
     affect_status st = AFFECT_OK;
-    if (!x || !z)
+    if (!x || !z || !u)
         st = affect_nomem(err);
-    else
+    else if (s->features != AFFECT_STRENGTH_FEAT_LABAN)
         st = affect_strength_features(s, m, x, z, NULL, mon, err);
-    if (st == AFFECT_OK)
-        *strength = dotp(s->w, z, s->pdim);
+    else
+        st = check_skeleton(s->n_joints, s->names, m, err);
+    if (st == AFFECT_OK && s->features != AFFECT_STRENGTH_FEAT_KEYFRAMES)
+        st = laban_raw(m, lab, mon, err);
+    if (st == AFFECT_OK) {
+        rank_input(s, z, lab, u);
+        *strength = dotp(s->w, u, rd);
+    }
     affect_free(x);
     affect_free(z);
+    affect_free(u);
     return st;
 }
 
@@ -637,6 +704,151 @@ cleanup:
 
 /* ---- training ---- */
 
+/* The C grid of the inner cross-validation, in the order ties are broken (the middle first). */
+static const double C_GRID[] = {1, 0.1, 10, 0.01, 100};
+#define N_C (sizeof C_GRID / sizeof C_GRID[0])
+
+/* C for the mean pair loss by AFFECT_STRENGTH_CV_FOLDS-fold cross-validation over the n training
+ * motions (inputs U, n × d; levels lv; groups grp or NULL): folds stratified by level, drawn by
+ * the seed; for each C of C_GRID a ranker on the other folds' pairs (drawn as training draws
+ * them) scores every motion, and each held-out motion's ordered pairs with every motion (of its
+ * group) count right when ordered right. The C with the most right wins (ties: C_GRID's order);
+ * *C_out is untouched when no fold can be scored. */
+static affect_status cv_choose_C(const double *U, uint32_t n, uint32_t d, const int32_t *lv,
+                                 const uint32_t *grp, uint32_t n_levels,
+                                 const affect_strength_options *opt, double *C_out,
+                                 affect_error *err)
+{
+    uint32_t F = AFFECT_STRENGTH_CV_FOLDS;
+    uint32_t *fold = NULL, *perm = NULL;
+    int32_t *inner = NULL;
+    double *w = NULL, *score = NULL;
+    affect_rank_pair *pairs = NULL;
+    affect_ws_part parts[] = {
+        {(void **)&fold, n, sizeof(uint32_t)}, {(void **)&perm, n, sizeof(uint32_t)},
+        {(void **)&inner, n, sizeof(int32_t)}, {(void **)&w, d, sizeof(double)},
+        {(void **)&score, n, sizeof(double)},
+    };
+    void *block = affect_ws_alloc(parts, sizeof parts / sizeof parts[0]);
+    if (!block)
+        return affect_nomem(err);
+    affect_status st = AFFECT_OK;
+    affect_rng rng;
+    affect_rng_seed(&rng, opt->seed ^ CV_SEED);
+    /* stratified folds: each level's motions shuffled, then dealt round-robin */
+    uint32_t dealt = 0;
+    for (uint32_t l = 0; l < n_levels; l++) {
+        uint32_t m = 0;
+        for (uint32_t i = 0; i < n; i++)
+            if (lv[i] == (int32_t)l)
+                perm[m++] = i;
+        for (uint32_t k = m; k > 1; k--) {
+            uint32_t j = (uint32_t)(affect_rng_next(&rng) % k), t = perm[k - 1];
+            perm[k - 1] = perm[j];
+            perm[j] = t;
+        }
+        for (uint32_t k = 0; k < m; k++)
+            fold[perm[k]] = (dealt + k) % F;
+        dealt += m;
+    }
+    uint64_t best = 0;
+    bool any = false;
+    for (size_t c = 0; c < N_C; c++) {
+        uint64_t right = 0, total = 0;
+        for (uint32_t f = 0; f < F; f++) {
+            st = affect_monitor_check(opt->monitor, err);
+            if (st != AFFECT_OK)
+                goto cleanup;
+            for (uint32_t i = 0; i < n; i++)
+                inner[i] = fold[i] == f ? -1 : lv[i];
+            size_t np = 0, no = 0;
+            affect_free(pairs);
+            pairs = NULL;
+            st = affect_rank_pairs(inner, grp, n, opt->similar, opt->fraction, opt->seed, &pairs,
+                                   &np, err);
+            if (st != AFFECT_OK)
+                goto cleanup;
+            for (size_t p = 0; p < np; p++)
+                no += !pairs[p].similar;
+            if (no == 0)
+                continue;
+            affect_rank_options ro;
+            affect_rank_options_default(&ro);
+            ro.C = C_GRID[c] / (double)np;
+            ro.monitor = opt->monitor;
+            affect_rank_stats rs;
+            st = affect_rank_fit(U, n, d, pairs, np, &ro, w, &rs, err);
+            if (st != AFFECT_OK)
+                goto cleanup;
+            for (uint32_t i = 0; i < n; i++)
+                score[i] = dotp(w, U + (size_t)i * d, d);
+            for (uint32_t i = 0; i < n; i++) {
+                if (fold[i] != f)
+                    continue;
+                for (uint32_t j = 0; j < n; j++) {
+                    if (lv[j] == lv[i] || (grp && grp[j] != grp[i]))
+                        continue;
+                    total++;
+                    right += lv[i] > lv[j] ? score[i] > score[j] : score[j] > score[i];
+                }
+            }
+        }
+        if (total > 0 && (!any || right > best)) {
+            best = right;
+            any = true;
+            *C_out = C_GRID[c];
+        }
+    }
+cleanup:
+    affect_free(pairs);
+    affect_free(block);
+    return st;
+}
+
+/* lab_mean and lab_sd from the n raw Laban vectors L (NaN = missing): the mean and population
+ * standard deviation of the values present; a component missing everywhere gets mean 0, one
+ * with a zero or undefined deviation sd 1. With both feature blocks, kf_weight makes the
+ * keyframe block's total training variance equal the Laban block's. */
+static void laban_stats(affect_strength *s, const double *L, uint32_t n)
+{
+    double vl = 0;
+    for (uint32_t k = 0; k < AFFECT_LABAN_N; k++) {
+        double mu = 0, var = 0;
+        uint32_t c = 0;
+        for (uint32_t i = 0; i < n; i++)
+            if (isfinite(L[(size_t)i * AFFECT_LABAN_N + k])) {
+                mu += L[(size_t)i * AFFECT_LABAN_N + k];
+                c++;
+            }
+        mu = c ? mu / c : 0;
+        for (uint32_t i = 0; i < n; i++) {
+            double v = L[(size_t)i * AFFECT_LABAN_N + k];
+            if (isfinite(v))
+                var += (v - mu) * (v - mu);
+        }
+        var = c ? var / c : 0;
+        s->lab_mean[k] = mu;
+        s->lab_sd[k] = var > 0 && isfinite(var) ? sqrt(var) : 1;
+        if (var > 0 && isfinite(var)) /* the standardized block's variance: present share */
+            vl += (double)c / n;
+    }
+    s->kf_weight = 0;
+    if (s->features == AFFECT_STRENGTH_FEAT_BOTH) {
+        double vk = 0;
+        for (uint32_t c = 0; c < s->pdim; c++) {
+            double mu = 0, var = 0;
+            for (uint32_t i = 0; i < n; i++)
+                mu += s->train_z[(size_t)i * s->pdim + c] / n;
+            for (uint32_t i = 0; i < n; i++) {
+                double d = s->train_z[(size_t)i * s->pdim + c] - mu;
+                var += d * d / n;
+            }
+            vk += var;
+        }
+        s->kf_weight = vk > 0 && vl > 0 ? sqrt(vl / vk) : 1;
+    }
+}
+
 affect_status affect_strength_train(const affect_motion *const *motions, const int32_t *level,
                                     const uint32_t *group, uint32_t n,
                                     const char *const *level_names, uint32_t n_levels,
@@ -660,6 +872,9 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
     if (!(opt->fraction > 0 && opt->fraction <= 1))
         return affect_fail(err, AFFECT_ERR_INVALID, "fraction must be in (0, 1] (got %g)",
                            opt->fraction);
+    if (opt->features > AFFECT_STRENGTH_FEAT_BOTH)
+        return affect_fail(err, AFFECT_ERR_INVALID, "features must be 0 to 2 (got %d)",
+                           (int)opt->features);
     if (n_levels < 2 || n_levels > AFFECT_STRENGTH_MAX_LEVELS)
         return affect_fail(err, AFFECT_ERR_INVALID, "the order must have 2 to %u labels (got %u)",
                            AFFECT_STRENGTH_MAX_LEVELS, n_levels);
@@ -687,7 +902,8 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
     if (!s)
         return affect_nomem(err);
     affect_status st = AFFECT_OK;
-    double *X = NULL, *Z = NULL, *work = NULL;
+    double *X = NULL, *Z = NULL, *work = NULL, *Lab = NULL, *U = NULL;
+    bool lab_on = opt->features != AFFECT_STRENGTH_FEAT_KEYFRAMES;
     uint32_t *kf = NULL, *idx = NULL, *grp = NULL;
     int32_t *lv = NULL;
     affect_rank_pair *pairs = NULL;
@@ -698,6 +914,7 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
     s->n_levels = n_levels;
     s->n_train = used;
     s->C = opt->C;
+    s->features = opt->features;
     s->fps = m0->fps;
     memcpy(s->unit, m0->unit, sizeof s->unit);
     s->pca = false; /* the PCA arrays are made by pca_fit */
@@ -730,7 +947,8 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
     lv = affect_malloc_array(used, sizeof *lv);
     grp = group ? affect_malloc_array(used, sizeof *grp) : NULL;
     work = affect_malloc_array(D, sizeof(double));
-    if (!X || !kf || !idx || !lv || (group && !grp) || !work) {
+    Lab = lab_on ? affect_malloc_array((size_t)used * AFFECT_LABAN_N, sizeof(double)) : NULL;
+    if (!X || !kf || !idx || !lv || (group && !grp) || !work || (lab_on && !Lab)) {
         st = affect_nomem_of(err, (size_t)used, D * sizeof(double), "the %u x %zu features", used,
                              D);
         goto cleanup;
@@ -747,6 +965,8 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
         if (st == AFFECT_OK)
             st = motion_features(motions[i], q, s->relative, s->root, X + (size_t)k * D, kf, NULL,
                                  NULL, opt->monitor, err);
+        if (st == AFFECT_OK && lab_on)
+            st = laban_raw(motions[i], Lab + (size_t)k * AFFECT_LABAN_N, opt->monitor, err);
         if (st != AFFECT_OK) {
             affect_prefix(err, "motion %u", i);
             goto cleanup;
@@ -804,7 +1024,7 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
                     X[(size_t)i * D + c] *= s->scale[c];
         s->pca = true;
         s->train_z = affect_calloc((size_t)used * s->pdim, sizeof(double));
-        s->w = affect_calloc(s->pdim, sizeof(double));
+        s->w = affect_calloc(affect_strength_rank_dim(s), sizeof(double));
         s->zbar = affect_calloc(s->pdim, sizeof(double));
         if (!s->train_z || !s->w || !s->zbar) {
             st = affect_nomem(err);
@@ -815,6 +1035,22 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
     }
     for (uint32_t i = 0; i < used; i++)
         project(s, X + (size_t)i * D, s->train_z + (size_t)i * s->pdim, work);
+    /* the ranker's inputs: U = train_z (keyframes), else the standardized Laban vectors (after
+     * the weighted train_z with both) */
+    uint32_t rd = affect_strength_rank_dim(s);
+    const double *rank_x = s->train_z;
+    if (lab_on) {
+        laban_stats(s, Lab, used);
+        U = affect_malloc_array((size_t)used * rd, sizeof(double));
+        if (!U) {
+            st = affect_nomem(err);
+            goto cleanup;
+        }
+        for (uint32_t i = 0; i < used; i++)
+            rank_input(s, s->train_z + (size_t)i * s->pdim, Lab + (size_t)i * AFFECT_LABAN_N,
+                       U + (size_t)i * rd);
+        rank_x = U;
+    }
     /* pairs and the ranker */
     st = affect_rank_pairs(lv, grp, used, opt->similar, opt->fraction, opt->seed, &pairs, &n_pairs,
                            err);
@@ -831,15 +1067,28 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
     }
     affect_rank_options ro;
     affect_rank_options_default(&ro);
-    ro.C = opt->C;
+    /* Laban features: C multiplies the mean pair loss (the right C of the sum scales like one
+     * over the number of pairs; docs/EVALUATION.md); keyframes keep the sum (their accuracy
+     * does not depend on C) */
+    if (lab_on && opt->cv_C) {
+        double C = opt->C;
+        st = cv_choose_C(rank_x, used, rd, lv, grp, n_levels, opt, &C, err);
+        if (st != AFFECT_OK) {
+            affect_prefix(err, "cross-validation of C");
+            goto cleanup;
+        }
+        s->C = C;
+        s->cv_C = true;
+    }
+    ro.C = lab_on ? s->C / (double)n_pairs : opt->C;
     ro.monitor = opt->monitor;
-    st = affect_rank_fit(s->train_z, used, s->pdim, pairs, n_pairs, &ro, s->w, &s->stats, err);
+    st = affect_rank_fit(rank_x, used, rd, pairs, n_pairs, &ro, s->w, &s->stats, err);
     if (st != AFFECT_OK) {
         affect_prefix(err, "ranker");
         goto cleanup;
     }
     for (uint32_t i = 0; i < used; i++) {
-        s->train_r[i] = dotp(s->w, s->train_z + (size_t)i * s->pdim, s->pdim);
+        s->train_r[i] = dotp(s->w, rank_x + (size_t)i * rd, rd);
         s->level_strength[lv[i]] += s->train_r[i];
         s->level_count[lv[i]]++;
     }
@@ -852,6 +1101,8 @@ cleanup:
     affect_free(X);
     affect_free(Z);
     affect_free(work);
+    affect_free(Lab);
+    affect_free(U);
     affect_free(kf);
     affect_free(idx);
     affect_free(grp);
@@ -1044,9 +1295,22 @@ static affect_status edit_once(const affect_strength *s, const affect_motion *m,
     if (st != AFFECT_OK)
         goto cleanup;
     project(s, x, z, work);
-    double ww = dotp(s->w, s->w, s->pdim), r = dotp(s->w, z, s->pdim);
-    for (uint32_t c = 0; c < s->pdim; c++)
-        dz[c] = ww > 0 ? (strength - r) * s->w[c] / ww : 0;
+    if (s->features == AFFECT_STRENGTH_FEAT_KEYFRAMES) {
+        double ww = dotp(s->w, s->w, s->pdim), r = dotp(s->w, z, s->pdim);
+        for (uint32_t c = 0; c < s->pdim; c++)
+            dz[c] = ww > 0 ? (strength - r) * s->w[c] / ww : 0;
+    } else {
+        /* both blocks: the ranker does not act on z alone; move z by the regression's
+         * f(s') − f(r(m)) */
+        double r;
+        st = affect_strength_score(s, m, &r, mon, err);
+        if (st != AFFECT_OK)
+            goto cleanup;
+        affect_strength_predict(s, strength, dz);
+        affect_strength_predict(s, r, work);
+        for (uint32_t c = 0; c < s->pdim; c++)
+            dz[c] -= work[c];
+    }
     if (s->pca)
         AFFECT_BLAS(cblas_dgemv(CblasRowMajor, CblasTrans, (int)s->pdim, (int)s->dim, 1.0, s->comps,
                                 (int)s->dim, dz, 1, 0.0, work, 1));
@@ -1168,10 +1432,27 @@ static affect_status hit_target(const affect_strength *s, const affect_motion *m
     return st;
 }
 
+/* Synthesis and editing steer the keyframe features: a ranker of the Laban vector alone does not
+ * follow them (docs/EVALUATION.md, "Laban features": Spearman 0.37 synthesized, 0.52 edited). */
+static affect_status need_keyframes(const affect_strength *s, affect_motion **out,
+                                    affect_error *err)
+{
+    *out = NULL;
+    if (s->features != AFFECT_STRENGTH_FEAT_LABAN)
+        return AFFECT_OK;
+    return affect_fail(err, AFFECT_ERR_INVALID,
+                       "the model ranks by the Laban vector alone, which synthesized and edited "
+                       "motions do not follow: train it with \"features\": \"keyframes\" (or "
+                       "\"both\") to synthesize or edit");
+}
+
 affect_status affect_strength_synthesize(const affect_strength *s, double strength, bool rigid,
                                          affect_motion **out, affect_monitor *mon,
                                          affect_error *err)
 {
+    affect_status st = need_keyframes(s, out, err);
+    if (st != AFFECT_OK)
+        return st;
     return hit_target(s, NULL, strength, rigid, synthesize_once, out, mon, err);
 }
 
@@ -1179,8 +1460,9 @@ affect_status affect_strength_edit(const affect_strength *s, const affect_motion
                                    double strength, bool rigid, affect_motion **out,
                                    affect_monitor *mon, affect_error *err)
 {
-    *out = NULL;
-    affect_status st = check_skeleton(s->n_joints, s->names, m, err);
+    affect_status st = need_keyframes(s, out, err);
+    if (st == AFFECT_OK)
+        st = check_skeleton(s->n_joints, s->names, m, err);
     if (st != AFFECT_OK)
         return st;
     return hit_target(s, m, strength, rigid, edit_once, out, mon, err);
@@ -1195,9 +1477,13 @@ affect_status affect_strength_encode(const affect_strength *s, unsigned char **o
     *size = 0;
     affect_bw w;
     affect_bw_init(&w);
-    affect_bw_header(&w, AFFECT_STRENGTH_MAGIC, AFFECT_STRENGTH_VERSION,
+    bool lab = s->features != AFFECT_STRENGTH_FEAT_KEYFRAMES;
+    /* a keyframe model keeps version 1's layout, byte for byte */
+    affect_bw_header(&w, AFFECT_STRENGTH_MAGIC, lab ? 2u : 1u,
                      (s->pca ? FLAG_PCA : 0u) | (s->relative ? FLAG_RELATIVE : 0u) |
-                         (s->scale ? FLAG_STANDARDIZE : 0u));
+                         (s->scale ? FLAG_STANDARDIZE : 0u) | (lab ? FLAG_LABAN : 0u) |
+                         (s->features == AFFECT_STRENGTH_FEAT_BOTH ? FLAG_BOTH : 0u) |
+                         (s->cv_C ? FLAG_CV_C : 0u));
     affect_bw_u32(&w, s->n_joints);
     affect_bw_u32(&w, s->keyframes);
     affect_bw_u32(&w, s->dim);
@@ -1243,12 +1529,17 @@ affect_status affect_strength_encode(const affect_strength *s, unsigned char **o
         affect_bw_f64s(&w, s->comps, (size_t)s->pdim * s->dim);
     }
     affect_bw_f64s(&w, s->seg_dt, s->keyframes - 1);
-    affect_bw_f64s(&w, s->w, s->pdim);
+    affect_bw_f64s(&w, s->w, affect_strength_rank_dim(s));
     affect_bw_f64s(&w, s->train_r, s->n_train);
     affect_bw_f64s(&w, s->train_z, (size_t)s->n_train * s->pdim);
     affect_bw_f64s(&w, s->zbar, s->pdim);
     if (s->regression == AFFECT_STRENGTH_REG_KERNEL_RIDGE)
         affect_bw_f64s(&w, s->alpha, (size_t)s->n_train * s->pdim);
+    if (lab) {
+        affect_bw_f64s(&w, s->lab_mean, AFFECT_LABAN_N);
+        affect_bw_f64s(&w, s->lab_sd, AFFECT_LABAN_N);
+        affect_bw_f64(&w, s->kf_weight);
+    }
     if (!w.failed)
         affect_bw_checksum(&w, 0);
     if (w.failed) {
@@ -1318,9 +1609,11 @@ affect_status affect_strength_decode(const unsigned char *data, size_t size, aff
     if (affect_check_version(version, AFFECT_STRENGTH_VERSION, NULL, err) != AFFECT_OK)
         return AFFECT_ERR_FORMAT;
     bool pca = (flags & FLAG_PCA) != 0, stdz = (flags & FLAG_STANDARDIZE) != 0;
-    bool relative = (flags & FLAG_RELATIVE) != 0;
-    if ((flags & ~(FLAG_PCA | FLAG_RELATIVE | FLAG_STANDARDIZE)) != 0 || root >= J ||
-        (!relative && root != 0) || reg < AFFECT_STRENGTH_REG_KERNEL_RIDGE ||
+    bool relative = (flags & FLAG_RELATIVE) != 0, lab = (flags & FLAG_LABAN) != 0;
+    uint32_t known = FLAG_PCA | FLAG_RELATIVE | FLAG_STANDARDIZE |
+                     (version >= 2 ? FLAG_LABAN | FLAG_BOTH | FLAG_CV_C : 0u);
+    if ((flags & ~known) != 0 || (version >= 2 && !lab) || ((flags & FLAG_BOTH) && !lab) ||
+        root >= J || (!relative && root != 0) || reg < AFFECT_STRENGTH_REG_KERNEL_RIDGE ||
         reg > AFFECT_STRENGTH_REG_LOCAL_LINEAR)
         return affect_fail(err, AFFECT_ERR_FORMAT, "reserved strength model fields are not valid");
     if (J < 1 || J > AFFECT_MOTION_MAX_JOINTS || q < 2 || q > AFFECT_KEYFRAMES_MAX ||
@@ -1335,7 +1628,9 @@ affect_status affect_strength_decode(const unsigned char *data, size_t size, aff
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "strength model checksum mismatch: the BLOB is corrupt");
     /* the arrays must fit in what is left (before allocating them) */
-    uint64_t doubles = (uint64_t)(q - 1) + p + n + (uint64_t)n * p + p +
+    uint64_t rd = lab ? ((flags & FLAG_BOTH) ? (uint64_t)p : 0) + AFFECT_LABAN_N : p;
+    uint64_t doubles = (uint64_t)(q - 1) + rd + n + (uint64_t)n * p + p +
+                       (lab ? 2 * AFFECT_LABAN_N + 1 : 0) +
                        (reg == AFFECT_STRENGTH_REG_KERNEL_RIDGE ? (uint64_t)n * p : 0) +
                        (pca ? (uint64_t)D + (uint64_t)p * D : 0) + (stdz ? (uint64_t)D : 0);
     if (doubles > (size - 8) / 8)
@@ -1355,6 +1650,10 @@ affect_status affect_strength_decode(const unsigned char *data, size_t size, aff
     s->relative = relative;
     s->root = root;
     s->regression = (affect_strength_regression)reg;
+    s->cv_C = (flags & FLAG_CV_C) != 0;
+    s->features = !lab                  ? AFFECT_STRENGTH_FEAT_KEYFRAMES
+                  : (flags & FLAG_BOTH) ? AFFECT_STRENGTH_FEAT_BOTH
+                                        : AFFECT_STRENGTH_FEAT_LABAN;
     if (stdz && !(s->scale = affect_malloc_array(D, sizeof(double)))) {
         st = affect_nomem(err);
         goto cleanup;
@@ -1431,11 +1730,14 @@ affect_status affect_strength_decode(const unsigned char *data, size_t size, aff
     if (ok && pca)
         ok = affect_br_f64s(&r, s->mean, D) && affect_br_f64s(&r, s->comps, (size_t)p * D) &&
              finite_all(s->mean, D) && finite_all(s->comps, (size_t)p * D);
-    ok = ok && affect_br_f64s(&r, s->seg_dt, q - 1) && affect_br_f64s(&r, s->w, p) &&
+    ok = ok && affect_br_f64s(&r, s->seg_dt, q - 1) && affect_br_f64s(&r, s->w, (size_t)rd) &&
          affect_br_f64s(&r, s->train_r, n) && affect_br_f64s(&r, s->train_z, nz) &&
          affect_br_f64s(&r, s->zbar, p);
     if (ok && s->regression == AFFECT_STRENGTH_REG_KERNEL_RIDGE)
         ok = affect_br_f64s(&r, s->alpha, nz) && finite_all(s->alpha, nz);
+    if (ok && lab)
+        ok = affect_br_f64s(&r, s->lab_mean, AFFECT_LABAN_N) &&
+             affect_br_f64s(&r, s->lab_sd, AFFECT_LABAN_N) && affect_br_f64(&r, &s->kf_weight);
     if (!ok || r.off != r.size) {
         st = affect_fail(err, AFFECT_ERR_FORMAT,
                          "strength model BLOB length %zu does not match its sizes", size);
@@ -1446,9 +1748,21 @@ affect_status affect_strength_decode(const unsigned char *data, size_t size, aff
             st = affect_fail(err, AFFECT_ERR_FORMAT, "segment %u: duration out of range", i);
             goto cleanup;
         }
-    if (!finite_all(s->w, p) || !finite_all(s->train_r, n) || !finite_all(s->train_z, nz) ||
-        !finite_all(s->zbar, p)) {
+    if (!finite_all(s->w, (size_t)rd) || !finite_all(s->train_r, n) ||
+        !finite_all(s->train_z, nz) || !finite_all(s->zbar, p) ||
+        (lab && (!finite_all(s->lab_mean, AFFECT_LABAN_N) || !isfinite(s->kf_weight)))) {
         st = affect_fail(err, AFFECT_ERR_FORMAT, "non-finite value in the strength model");
+        goto cleanup;
+    }
+    for (uint32_t k = 0; lab && k < AFFECT_LABAN_N; k++)
+        if (!(s->lab_sd[k] > 0 && isfinite(s->lab_sd[k]))) {
+            st = affect_fail(err, AFFECT_ERR_FORMAT, "Laban component %u: deviation out of range",
+                             k);
+            goto cleanup;
+        }
+    if (lab &&
+        (s->features == AFFECT_STRENGTH_FEAT_BOTH ? !(s->kf_weight > 0) : s->kf_weight != 0)) {
+        st = affect_fail(err, AFFECT_ERR_FORMAT, "the keyframe block's weight is out of range");
         goto cleanup;
     }
 cleanup:

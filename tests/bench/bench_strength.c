@@ -140,6 +140,8 @@ static int bench_set(dataset *d)
         affect_strength_options so;
         affect_strength_options_default(&so);
         so.pca_dims = v == 0 ? 40 : 0;
+        so.features = AFFECT_STRENGTH_FEAT_KEYFRAMES; /* the keyframe path (the default ranks by
+                                                         the Laban vector) */
         double runs[N_RUNS];
         for (int r = 0; r < N_RUNS; r++) {
             affect_strength_free(model[v]);

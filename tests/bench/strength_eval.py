@@ -3,7 +3,8 @@
 
 Usage (from the repository root, after any build of build/affect.so; about 15 minutes):
     OPENBLAS_NUM_THREADS=1 python3 tests/bench/strength_eval.py [--db build/strength.db]
-        [--tasks anger,happiness,exhausted] [--seeds 1,2,3] [--quick]
+        [--tasks anger,happiness,exhausted] [--seeds 1,2,3] [--quick] [--features]
+        [--synthesis-features keyframes|both]
 AFFECT_EXT overrides the extension's path (default build/affect). Python 3 standard library and
 sqlite3 only. It imports the BVH files of ../shared/corpora/bandai-namco-1 and
 bandai-namco-2-dev into --db once (motion_from_bvh), then, for every task:
@@ -34,6 +35,11 @@ strength_edit of every test motion to each; per result affect_strength (the Spea
 correlation with the strength asked), affect_classify (recognized as the label whose training
 mean strength is nearest the strength asked?), laban_time and laban_weight (their Pearson
 correlation with it).
+
+The rows above rank by keyframe features ("features": "keyframes"). --features replaces them by
+the three inputs of the ranker, "keyframes", "laban" (the default of strength_train) and "both",
+with default options otherwise (about 1 minute; the "dims" column is then the keyframe PCA's).
+--synthesis-features chooses the synthesis models' input (a "laban" model cannot synthesize).
 """
 import argparse
 import json
@@ -53,11 +59,17 @@ TASKS = {
 FRACTIONS = [0.1, 0.3, 0.5, 0.7, 0.9]
 # (name, strength_train options): the paper's three feature sizes with the defaults
 # (standardized features), then the two feature options at PCA-40
-CONFIGS = [("PCA-40", {"pca_dims": 40}), ("PCA-80", {"pca_dims": 80}),
-           ("no PCA", {"pca_dims": 0}),
-           ("PCA-40, relative poses", {"pca_dims": 40, "relative": True}),
+# (the keyframe features' options: these rows rank by them, "features": "keyframes")
+KF = {"features": "keyframes"}
+CONFIGS = [("PCA-40", dict(KF, pca_dims=40)), ("PCA-80", dict(KF, pca_dims=80)),
+           ("no PCA", dict(KF, pca_dims=0)),
+           ("PCA-40, relative poses", dict(KF, pca_dims=40, relative=True)),
            ("PCA-40, not standardized (the paper's features)",
-            {"pca_dims": 40, "standardize": False})]
+            dict(KF, pca_dims=40, standardize=False))]
+# --features: what the ranker sees (docs/EVALUATION.md, "Laban features"), default options
+# otherwise (PCA-40 keyframes for the regression and for "both")
+FEATURE_CONFIGS = [("keyframes", {"features": "keyframes"}), ("laban", {"features": "laban"}),
+                   ("both", {"features": "both"})]
 
 
 def task_rows(con, task):
@@ -197,7 +209,7 @@ def leave_one_content_out(con, task, configs):
                                       total))
 
 
-def synthesis(con, task, seeds):
+def synthesis(con, task, seeds, features=None):
     rows = task_rows(con, task)
     contents = sorted(set(r["content"] for r in rows))
     print("\nSynthesis and editing (%s, PCA-40, one model per content from its training half; "
@@ -210,7 +222,8 @@ def synthesis(con, task, seeds):
         syn, edit, lt, lw = [], [], [], []
         for seed in seeds:
             tr, te = split_half([r for r in rows if r["content"] == c], seed)
-            model, _, _ = train(con, task, tr, {"pca_dims": 40, "seed": seed})
+            o = {"pca_dims": 40, "seed": seed, "features": features or "keyframes"}
+            model, _, _ = train(con, task, tr, o)
             info = json.loads(con.execute("SELECT strength_info(?)", (model,)).fetchone()[0])
             lo, hi = info["levels"][0]["strength"], info["levels"][-1]["strength"]
             targets = [lo + (hi - lo) * k / 4 for k in range(5)]
@@ -261,7 +274,8 @@ def recognizer_check(con, task, seeds, npoints=5):
     lab = {"syn_t": [], "syn_w": [], "edit_t": [], "edit_w": []}
     for seed in seeds:
         tr, te = split_half(rows, seed)
-        model, _, _ = train(con, task, tr, {"pca_dims": 40, "seed": seed})
+        # keyframe features: a Laban-only model (the default) cannot synthesize or edit
+        model, _, _ = train(con, task, tr, dict(KF, pca_dims=40, seed=seed))
         rec = con.execute("SELECT affect_train(motion, style) FROM motions JOIN tr USING (id)"
                           ).fetchone()[0]
         info = json.loads(con.execute("SELECT strength_info(?)", (model,)).fetchone()[0])
@@ -346,6 +360,12 @@ def main():
     ap.add_argument("--quick", action="store_true",
                     help="one seed, 50 %% of the pairs, PCA-40 only (a smoke run)")
     ap.add_argument("--no-synthesis", action="store_true")
+    ap.add_argument("--features", action="store_true",
+                    help="compare the ranker's features (keyframes, laban, both) instead of the "
+                         "keyframe options")
+    ap.add_argument("--synthesis-features", default="keyframes",
+                    help="the synthesis table's models' \"features\": keyframes (default) or "
+                         "both (a laban model cannot synthesize)")
     ap.add_argument("--synthesis-only", action="store_true",
                     help="only the synthesis and editing table (exhausted)")
     ap.add_argument("--recognizer", action="store_true",
@@ -356,9 +376,9 @@ def main():
         print("strength_eval: ../shared/corpora is absent; nothing to measure")
         return 0
     seeds = [int(s) for s in a.seeds.split(",")]
-    fractions, configs = FRACTIONS, CONFIGS
+    fractions, configs = FRACTIONS, (FEATURE_CONFIGS if a.features else CONFIGS)
     if a.quick:
-        seeds, fractions, configs = seeds[:1], [0.5], CONFIGS[:1]
+        seeds, fractions, configs = seeds[:1], [0.5], configs[:1]
     con = connect(a.db)
     t0, c0 = time.perf_counter(), time.process_time()
     import_corpora(con)
@@ -372,7 +392,7 @@ def main():
         protocol(con, task, seeds, fractions, configs)
         leave_one_content_out(con, task, configs)
     if not a.no_synthesis and "exhausted" in a.tasks.split(","):
-        synthesis(con, "exhausted", seeds)
+        synthesis(con, "exhausted", seeds, a.synthesis_features)
     print("\n(total: %.0f s wall, %.0f s CPU)" % (time.perf_counter() - t0,
                                                   time.process_time() - c0))
     return 0

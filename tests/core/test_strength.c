@@ -10,6 +10,7 @@
 
 #include "testutil.h"
 
+#include "affect/hmm_blob.h" /* affect_fnv1a64 */
 #include "affect/keyframes.h"
 #include "util/rng.h"
 #include "affect/strength.h"
@@ -258,15 +259,17 @@ static double pair_accuracy(const affect_strength *s, const corpus *c, double *s
     return (double)right / total;
 }
 
-static void test_model(void **state)
+/* Training, ranking, determinism, the BLOB, then synthesis and editing (keyframes: both in the
+ * order asked; both blocks: editing in order; the Laban vector alone: a clear error). */
+static void check_model(affect_strength_feature_kind feat)
 {
-    (void)state;
     corpus tr, te;
     make_corpus(&tr, 1, 4);
     make_corpus(&te, 101, 2);
     affect_strength_options opt;
     affect_strength_options_default(&opt);
     opt.pca_dims = 10;
+    opt.features = feat;
     affect_strength *s, *s2;
     affect_error err;
     assert_int_equal(affect_strength_train((const affect_motion *const *)tr.m, tr.level, tr.group,
@@ -274,6 +277,11 @@ static void test_model(void **state)
                      AFFECT_OK);
     assert_true(s->stats.converged);
     assert_true(s->pdim == 10);
+    assert_int_equal(s->features, feat);
+    assert_int_equal(affect_strength_rank_dim(s), feat == AFFECT_STRENGTH_FEAT_KEYFRAMES ? 10u
+                                                  : feat == AFFECT_STRENGTH_FEAT_LABAN   ? 27u
+                                                                                         : 37u);
+    assert_true(feat == AFFECT_STRENGTH_FEAT_BOTH ? s->kf_weight > 0 : s->kf_weight == 0);
     assert_true(s->pca_variance > 0.5 && s->pca_variance <= 1);
     double score[64];
     double acc = pair_accuracy(s, &te, score);
@@ -316,6 +324,18 @@ static void test_model(void **state)
      * the mean of two actions is neither): strengths spread over the training range come out
      * in order */
     affect_strength *whole = s;
+    if (feat == AFFECT_STRENGTH_FEAT_LABAN) {
+        affect_motion *m = NULL;
+        assert_int_equal(affect_strength_synthesize(s, 0, true, &m, NULL, &err),
+                         AFFECT_ERR_INVALID);
+        assert_null(m);
+        assert_true(strstr(err.msg, "the Laban vector alone") != NULL);
+        assert_int_equal(affect_strength_edit(s, te.m[0], 0, true, &m, NULL, &err),
+                         AFFECT_ERR_INVALID);
+        assert_null(m);
+        s = NULL;
+        goto done;
+    }
     affect_motion *knock[12];
     int32_t klev[12];
     for (uint32_t i = 0; i < 12; i++) {
@@ -326,7 +346,7 @@ static void test_model(void **state)
                                            LEVELS, N_INT, &opt, &s, &err),
                      AFFECT_OK);
     double lo = s->level_strength[0], hi = s->level_strength[2], prev = -INFINITY;
-    for (int k = 0; k < 5; k++) {
+    for (int k = 0; feat == AFFECT_STRENGTH_FEAT_KEYFRAMES && k < 5; k++) {
         double target = lo + (hi - lo) * k / 4.0, got;
         affect_motion *m;
         assert_int_equal(affect_strength_synthesize(s, target, true, &m, NULL, &err), AFFECT_OK);
@@ -350,6 +370,7 @@ static void test_model(void **state)
         prev = got;
         affect_motion_free(m);
     }
+done:
     affect_free(b1);
     affect_free(b2);
     affect_free(b3);
@@ -359,6 +380,112 @@ static void test_model(void **state)
     affect_strength_free(back);
     free_corpus(&tr);
     free_corpus(&te);
+}
+
+static void test_model(void **state)
+{
+    (void)state;
+    check_model(AFFECT_STRENGTH_FEAT_KEYFRAMES);
+}
+
+static void test_model_laban(void **state)
+{
+    (void)state;
+    check_model(AFFECT_STRENGTH_FEAT_LABAN);
+}
+
+static void test_model_both(void **state)
+{
+    (void)state;
+    check_model(AFFECT_STRENGTH_FEAT_BOTH);
+}
+
+/* The Laban ranker's C multiplies the mean pair loss: doubling every pair (the same data twice)
+ * leaves the model as it is, where the sum form (keyframes) would halve the regularization. */
+static void test_laban_mean_loss(void **state)
+{
+    (void)state;
+    corpus tr;
+    make_corpus(&tr, 1, 2);
+    corpus two = tr;
+    for (uint32_t i = 0; i < tr.n; i++) {
+        two.m[tr.n + i] = tr.m[i];
+        two.level[tr.n + i] = tr.level[i];
+        two.group[tr.n + i] = tr.group[i];
+    }
+    two.n = 2 * tr.n;
+    affect_strength_options opt;
+    affect_strength_options_default(&opt);
+    opt.pca_dims = 3;
+    opt.keyframes = 4;
+    opt.similar = false; /* the copies would add similar pairs of identical motions */
+    opt.cv_C = false;    /* the copies would change the inner folds */
+    affect_strength *a, *b;
+    affect_error err;
+    assert_int_equal(affect_strength_train((const affect_motion *const *)tr.m, tr.level, NULL, tr.n,
+                                           LEVELS, N_INT, &opt, &a, &err),
+                     AFFECT_OK);
+    assert_int_equal(affect_strength_train((const affect_motion *const *)two.m, two.level, NULL,
+                                           two.n, LEVELS, N_INT, &opt, &b, &err),
+                     AFFECT_OK);
+    /* 4 times the ordered pairs (every pair, its copies and the cross pairs): the same mean */
+    assert_int_equal(b->stats.ordered, 4 * a->stats.ordered);
+    for (uint32_t k = 0; k < AFFECT_LABAN_N; k++) {
+        tu_assert_near(b->w[k], a->w[k], 1e-9 * (1 + fabs(a->w[k])));
+        tu_assert_near(b->lab_mean[k], a->lab_mean[k], 1e-9 * (1 + fabs(a->lab_mean[k])));
+    }
+    assert_false(a->cv_C);
+    assert_true(a->C == 1);
+    affect_strength_free(a);
+    affect_strength_free(b);
+    free_corpus(&tr);
+}
+
+/* The inner cross-validation of C (the default with Laban features): a C of the grid, marked in
+ * the model and its BLOB; a C given (cv_C false) is kept; keyframes never cross-validate. */
+static void test_cv_C(void **state)
+{
+    (void)state;
+    corpus tr;
+    make_corpus(&tr, 1, 3);
+    affect_strength_options opt;
+    affect_strength_options_default(&opt);
+    opt.pca_dims = 3;
+    opt.keyframes = 4;
+    affect_strength *s;
+    affect_error err;
+    assert_true(opt.cv_C);
+    assert_int_equal(affect_strength_train((const affect_motion *const *)tr.m, tr.level, NULL, tr.n,
+                                           LEVELS, N_INT, &opt, &s, &err),
+                     AFFECT_OK);
+    assert_true(s->cv_C);
+    assert_true(s->C == 0.01 || s->C == 0.1 || s->C == 1 || s->C == 10 || s->C == 100);
+    unsigned char *b;
+    size_t nb;
+    affect_strength *back;
+    assert_int_equal(affect_strength_encode(s, &b, &nb, &err), AFFECT_OK);
+    assert_int_equal(affect_strength_decode(b, nb, &back, &err), AFFECT_OK);
+    assert_true(back->cv_C && back->C == s->C);
+    affect_free(b);
+    affect_strength_free(back);
+    affect_strength_free(s);
+    opt.cv_C = false;
+    opt.C = 0.5;
+    assert_int_equal(affect_strength_train((const affect_motion *const *)tr.m, tr.level, NULL, tr.n,
+                                           LEVELS, N_INT, &opt, &s, &err),
+                     AFFECT_OK);
+    assert_false(s->cv_C);
+    assert_true(s->C == 0.5);
+    affect_strength_free(s);
+    opt.cv_C = true;
+    opt.features = AFFECT_STRENGTH_FEAT_KEYFRAMES;
+    assert_int_equal(affect_strength_train((const affect_motion *const *)tr.m, tr.level, NULL, tr.n,
+                                           LEVELS, N_INT, &opt, &s, &err),
+                     AFFECT_OK);
+    assert_false(s->cv_C);
+    assert_true(s->C == 0.5);
+    affect_strength_free(s);
+    free_corpus(&tr);
 }
 
 static void test_no_pca_and_options(void **state)
@@ -374,6 +501,7 @@ static void test_no_pca_and_options(void **state)
     opt.seed = 3;
     opt.regression = AFFECT_STRENGTH_REG_KERNEL_RIDGE;
     opt.relative = true;
+    opt.features = AFFECT_STRENGTH_FEAT_BOTH; /* synthesis and editing need keyframes */
     affect_strength *s;
     affect_error err;
     assert_int_equal(affect_strength_train((const affect_motion *const *)tr.m, tr.level, NULL, tr.n,
@@ -445,9 +573,25 @@ static void test_errors(void **state)
     assert_int_equal(affect_strength_train(ms, tr.level, NULL, tr.n, LEVELS, 1, &opt, &s, &err),
                      AFFECT_ERR_INVALID);
     assert_string_equal(err.msg, "the order must have 2 to 64 labels (got 1)");
-    /* another skeleton */
+    opt.features = (affect_strength_feature_kind)3;
+    assert_int_equal(affect_strength_train(ms, tr.level, NULL, tr.n, LEVELS, N_INT, &opt, &s, &err),
+                     AFFECT_ERR_INVALID);
+    assert_string_equal(err.msg, "features must be 0 to 2 (got 3)");
+    /* the Laban vector scores a motion shorter than the keyframes (it needs none) */
+    opt.features = AFFECT_STRENGTH_FEAT_LABAN;
     opt.pca_dims = 3;
     opt.keyframes = 5;
+    assert_int_equal(affect_strength_train(ms, tr.level, NULL, tr.n, LEVELS, N_INT, &opt, &s, &err),
+                     AFFECT_OK);
+    affect_motion *shortl;
+    double vl;
+    assert_int_equal(affect_motion_slice(tr.m[0], 0, 2, &shortl, &err), AFFECT_OK);
+    assert_int_equal(affect_strength_score(s, shortl, &vl, NULL, &err), AFFECT_OK);
+    assert_true(isfinite(vl));
+    affect_motion_free(shortl);
+    affect_strength_free(s);
+    /* another skeleton */
+    opt.features = AFFECT_STRENGTH_FEAT_KEYFRAMES;
     assert_int_equal(affect_strength_train(ms, tr.level, NULL, tr.n, LEVELS, N_INT, &opt, &s, &err),
                      AFFECT_OK);
     affect_motion *other;
@@ -484,6 +628,7 @@ static affect_status oom_op(void *ctx, affect_error *err)
     affect_strength_options_default(&opt);
     opt.pca_dims = 3;
     opt.keyframes = 4;
+    opt.features = AFFECT_STRENGTH_FEAT_BOTH; /* the Laban and the keyframe paths */
     if (c->what == 0)
         return affect_strength_train((const affect_motion *const *)c->tr.m, c->tr.level, NULL,
                                      c->tr.n, LEVELS, N_INT, &opt, &c->s, err);
@@ -519,6 +664,7 @@ static void test_out_of_memory(void **state)
     affect_strength_options_default(&opt);
     opt.pca_dims = 3;
     opt.keyframes = 4;
+    opt.features = AFFECT_STRENGTH_FEAT_BOTH;
     assert_int_equal(affect_strength_train((const affect_motion *const *)c.tr.m, c.tr.level, NULL,
                                            c.tr.n, LEVELS, N_INT, &opt, &c.s, &err),
                      AFFECT_OK);
@@ -572,6 +718,53 @@ static void test_fixture_v1(void **state)
     free(data);
 }
 
+/* Version 2: both feature blocks (flags 61: PCA, standardized, Laban, both, C cross-validated). */
+static void test_fixture_v2(void **state)
+{
+    (void)state;
+    size_t n;
+    char *data = tu_read_file(AFFECT_FIXTURES_DIR "/strength-v2.bin", &n);
+    assert_non_null(data);
+    affect_strength *s;
+    affect_error err;
+    assert_int_equal(affect_strength_decode((const unsigned char *)data, n, &s, &err), AFFECT_OK);
+    assert_int_equal(s->features, AFFECT_STRENGTH_FEAT_BOTH);
+    assert_int_equal(s->pdim, 2);
+    assert_int_equal(affect_strength_rank_dim(s), 2 + AFFECT_LABAN_N);
+    assert_true(s->kf_weight > 0 && s->scale != NULL && s->pca && s->cv_C);
+    assert_int_equal(s->n_train, 3);
+    assert_int_equal(s->stats.ordered, 3);
+    assert_int_equal(s->stats.correct, 3);
+    for (uint32_t k = 0; k < AFFECT_LABAN_N; k++)
+        assert_true(s->lab_sd[k] > 0);
+    unsigned char *enc;
+    size_t ne;
+    assert_int_equal(affect_strength_encode(s, &enc, &ne, &err), AFFECT_OK);
+    assert_int_equal(ne, n);
+    assert_memory_equal(enc, data, n);
+    /* the wave of intensity 1.4 scores its level's stored strength */
+    affect_synth_options so;
+    affect_synth_options_default(&so);
+    so.intensity = 1.4;
+    affect_motion *m;
+    assert_int_equal(affect_motion_synth("wave", "angry", 1, &so, &m, &err), AFFECT_OK);
+    double r;
+    assert_int_equal(affect_strength_score(s, m, &r, NULL, &err), AFFECT_OK);
+    tu_assert_near(r, s->level_strength[2], 1e-9);
+    /* a flag of version 2 in a version-1 header is rejected (checksum recomputed) */
+    enc[4] = 1;
+    uint64_t h = affect_fnv1a64(enc, ne - 8);
+    for (int k = 0; k < 8; k++)
+        enc[ne - 8 + (size_t)k] = (unsigned char)(h >> (8 * k));
+    affect_strength *bad;
+    assert_int_equal(affect_strength_decode(enc, ne, &bad, &err), AFFECT_ERR_FORMAT);
+    assert_string_equal(err.msg, "reserved strength model fields are not valid");
+    affect_motion_free(m);
+    affect_free(enc);
+    affect_strength_free(s);
+    free(data);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -584,6 +777,11 @@ int main(void)
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_out_of_memory),
         cmocka_unit_test(test_fixture_v1),
+        cmocka_unit_test(test_model_laban),
+        cmocka_unit_test(test_model_both),
+        cmocka_unit_test(test_laban_mean_loss),
+        cmocka_unit_test(test_fixture_v2),
+        cmocka_unit_test(test_cv_C),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

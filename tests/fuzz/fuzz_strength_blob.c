@@ -16,8 +16,8 @@
  *   - on success: encode(decode(x)) == x byte for byte; a strength model predicts features
  *     for a strength, and a ranker scores the zero vector (0 for one ranker) and puts it in one
  *     of its clusters.
- * Seeds (tests/fuzz/corpus/fuzz_strength_blob): copies of tests/fixtures/strength-v1.bin and
- * tests/fixtures/ranker-v1.bin. A broken invariant aborts.
+ * Seeds (tests/fuzz/corpus/fuzz_strength_blob): copies of tests/fixtures/strength-v1.bin,
+ * strength-v2.bin (Laban features) and ranker-v1.bin. A broken invariant aborts.
  */
 #include "affect/hmm_blob.h" /* affect_fnv1a64 */
 #include "affect/rank.h"

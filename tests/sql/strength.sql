@@ -25,18 +25,28 @@ SELECT 'the strength functions are deterministic and innocuous', count(*) = 13 F
    AND (flags & 0x000000800) <> 0 AND (flags & 0x000200000) <> 0;
 
 -- ---- models: seeds 1–4 train, 5–6 are held out ----
+-- ('both': both actions, the default features, the Laban vector; 'kf' the same motions ranked
+-- by keyframe features, which synthesis and editing need; 'blocks': both feature blocks)
 CREATE TABLE models AS
 SELECT 'both' AS name, strength_train(m, lvl, '{"pca_dims":10}') AS r FROM s WHERE seed <= 4
 UNION ALL
-SELECT 'knock', strength_train(m, lvl, '{"pca_dims":10}') FROM s WHERE seed <= 4 AND action = 'knock'
+SELECT 'kf', strength_train(m, lvl, '{"pca_dims":10,"features":"keyframes"}') FROM s WHERE seed <= 4
+UNION ALL
+SELECT 'blocks', strength_train(m, lvl, '{"pca_dims":10,"features":"both"}') FROM s WHERE seed <= 4 AND action = 'knock'
+UNION ALL
+SELECT 'knock', strength_train(m, lvl, '{"pca_dims":10,"features":"keyframes"}') FROM s WHERE seed <= 4 AND action = 'knock'
 UNION ALL
 SELECT 'content', strength_train(m, json_object('label', CASE lvl WHEN 0.2 THEN 'mild' WHEN 0.8 THEN 'medium' ELSE 'strong' END, 'content', action),
                                  '{"order":["mild","medium","strong"],"pairs":"same_content","pca_dims":0,"keyframes":6,"regression":"local_linear"}')
   FROM s WHERE seed <= 4
 UNION ALL
-SELECT 'small', strength_train(m, lvl, '{"pca_dims":3,"keyframes":4,"fraction":0.5,"seed":2,"C":0.5}') FROM s WHERE seed <= 2 AND action = 'wave';
+SELECT 'small', strength_train(m, lvl, '{"pca_dims":3,"keyframes":4,"fraction":0.5,"seed":2,"C":0.5,"features":"keyframes"}') FROM s WHERE seed <= 2 AND action = 'wave'
+UNION ALL
+SELECT 'small_laban', strength_train(m, lvl, '{"pca_dims":3,"keyframes":4}') FROM s WHERE seed <= 2 AND action = 'wave'
+UNION ALL
+SELECT 'small_both', strength_train(m, lvl, '{"pca_dims":3,"keyframes":4,"features":"both"}') FROM s WHERE seed <= 2 AND action = 'wave';
 
-SELECT 'every model trained', count(*) = 4 AND min(length(r)) > 100 FROM models;
+SELECT 'every model trained', count(*) = 8 AND min(length(r)) > 100 FROM models;
 
 -- affect_strength keeps its last model per connection: calls that alternate two models (one
 -- function, so one cache) score as each model alone
@@ -49,10 +59,22 @@ SELECT 'alternating models score as each alone', count(*) = 8 AND sum(alt = own)
                (SELECT r AS b FROM models WHERE name = 'both'),
                (SELECT r AS c FROM models WHERE name = 'small'));
 
--- ranking accuracy on the held-out motions' pairs of one action
+-- ranking accuracy on the held-out motions' pairs of one action (the default: the Laban vector)
 SELECT 'held-out pair accuracy ' || avg(a.sc > b.sc), avg(a.sc > b.sc) >= 0.9
   FROM (SELECT action, lvl, affect_strength((SELECT r FROM models WHERE name = 'both'), m) AS sc FROM s WHERE seed > 4) AS a
   JOIN (SELECT action, lvl, affect_strength((SELECT r FROM models WHERE name = 'both'), m) AS sc FROM s WHERE seed > 4) AS b
+    ON a.action = b.action AND a.lvl > b.lvl;
+-- oom: skip
+
+SELECT 'keyframe features: held-out pair accuracy ' || avg(a.sc > b.sc), avg(a.sc > b.sc) >= 0.9
+  FROM (SELECT action, lvl, affect_strength((SELECT r FROM models WHERE name = 'kf'), m) AS sc FROM s WHERE seed > 4) AS a
+  JOIN (SELECT action, lvl, affect_strength((SELECT r FROM models WHERE name = 'kf'), m) AS sc FROM s WHERE seed > 4) AS b
+    ON a.action = b.action AND a.lvl > b.lvl;
+-- oom: skip
+
+SELECT 'both feature blocks: held-out pair accuracy ' || avg(a.sc > b.sc), avg(a.sc > b.sc) >= 0.9
+  FROM (SELECT action, lvl, affect_strength((SELECT r FROM models WHERE name = 'blocks'), m) AS sc FROM s WHERE seed > 4 AND action = 'knock') AS a
+  JOIN (SELECT action, lvl, affect_strength((SELECT r FROM models WHERE name = 'blocks'), m) AS sc FROM s WHERE seed > 4 AND action = 'knock') AS b
     ON a.action = b.action AND a.lvl > b.lvl;
 -- oom: skip
 
@@ -73,6 +95,21 @@ SELECT json_extract(strength_info(r), '$.motions') || ' ' || json_extract(streng
        json_extract(strength_info(r), '$.ranker.similar_pairs') || ' ' || json_array_length(strength_info(r), '$.levels')
   FROM models WHERE name = 'both';
 -- expect: 24 13 10 192 84 3
+
+SELECT group_concat(name || ' ' || json_extract(i, '$.version') || ' ' || json_extract(i, '$.ranker.features') || ' ' ||
+       json_extract(i, '$.ranker.dims') || ' ' || json_extract(i, '$.ranker.loss') || ' ' ||
+       coalesce(json_extract(i, '$.ranker.keyframe_weight') > 0, '-'), '; ')
+  FROM (SELECT name, strength_info(r) AS i FROM models WHERE name IN ('both', 'kf', 'blocks') ORDER BY name);
+-- expect: blocks 2 both 37 mean 1; both 2 laban 27 mean -; kf 1 keyframes 10 sum -
+
+-- C: chosen by the inner cross-validation with Laban features unless given; keyframes: as given
+SELECT json_extract(strength_info(r), '$.ranker.C_cross_validated') AND json_extract(strength_info(r), '$.ranker.C') IN (0.01, 0.1, 1, 10, 100)
+  FROM models WHERE name = 'both';
+-- expect: 1
+
+SELECT group_concat(json_extract(strength_info(r), '$.ranker.C_cross_validated') || ' ' || json_extract(strength_info(r), '$.ranker.C'), '; ')
+  FROM (SELECT r FROM models WHERE name IN ('small', 'kf') ORDER BY name);
+-- expect: 0 1; 0 0.5
 
 SELECT 'info: training accuracy, converged, levels in order, a regression chosen',
        json_extract(i, '$.ranker.training_accuracy') >= 0.95 AND json_extract(i, '$.ranker.converged')
@@ -119,13 +156,19 @@ SELECT 'a label as the target: its mean strength',
 SELECT 'edited motions rank in the order asked',
        affect_strength(r, strength_edit(r, m, -1)) < affect_strength(r, strength_edit(r, m, 0))
        AND affect_strength(r, strength_edit(r, m, 0)) < affect_strength(r, strength_edit(r, m, 1))
-  FROM models, s WHERE name = 'both' AND seed = 5 AND action = 'knock' AND lvl = 0.2;
+  FROM models, s WHERE name = 'kf' AND seed = 5 AND action = 'knock' AND lvl = 0.2;
+-- oom: skip
+
+SELECT 'both feature blocks: edited motions rank in the order asked',
+       affect_strength(r, strength_edit(r, m, -1)) < affect_strength(r, strength_edit(r, m, 0))
+       AND affect_strength(r, strength_edit(r, m, 0)) < affect_strength(r, strength_edit(r, m, 1))
+  FROM models, s WHERE name = 'blocks' AND seed = 5 AND action = 'knock' AND lvl = 0.2;
 -- oom: skip
 
 SELECT 'editing keeps the skeleton and roughly the duration',
        motion_joints(e) = motion_joints(m) AND motion_duration(e) BETWEEN motion_duration(m) / 3 AND motion_duration(m) * 3
   FROM (SELECT m, strength_edit(r, m, 0.5, '{"rigid":false}') AS e FROM models, s
-         WHERE name = 'both' AND seed = 6 AND action = 'wave' AND lvl = 0.8);
+         WHERE name = 'kf' AND seed = 6 AND action = 'wave' AND lvl = 0.8);
 -- oom: skip
 
 -- ---- the small model under fault injection ----
@@ -142,6 +185,14 @@ SELECT motion_joints(strength_edit(r, (SELECT m FROM s WHERE seed = 6 AND action
 
 SELECT json_extract(strength_info(r), '$.keyframes') FROM models WHERE name = 'small';
 -- expect: 4
+
+-- the Laban vector (the default) and both blocks under fault injection (their editing: the
+-- unit test's sweep, tests/core/test_strength.c)
+SELECT typeof(affect_strength(r, (SELECT m FROM s WHERE seed = 5 AND action = 'wave' AND lvl = 1.4))) FROM models WHERE name = 'small_laban';
+-- expect: real
+
+SELECT typeof(affect_strength(r, (SELECT m FROM s WHERE seed = 6 AND action = 'wave' AND lvl = 0.2))) FROM models WHERE name = 'small_both';
+-- expect: real
 
 SELECT strength_train(m, lvl, '{"pca_dims":2,"keyframes":3}') IS NOT NULL FROM s WHERE seed <= 1 AND action = 'knock';
 -- expect: 1
@@ -208,7 +259,13 @@ SELECT strength_train(m, lvl, '{"order":["a","a"]}') FROM s;
 -- error: strength_train: option "order" must be an array of 2 to 64 distinct non-empty labels
 
 SELECT strength_train(m, lvl, '{"clusters":2}') FROM s;
--- error: strength_train: unknown option "clusters" (expected order, pairs, label, content, fraction, similar, C, seed, progress, keyframes, pca_dims, regression, relative, standardize)
+-- error: strength_train: unknown option "clusters" (expected order, pairs, label, content, fraction, similar, C, seed, progress, keyframes, pca_dims, regression, relative, standardize, features)
+
+SELECT strength_train(m, lvl, '{"features":"pose"}') FROM s;
+-- error: strength_train: option "features" must be one of "keyframes", "laban", "both", got "pose"
+
+SELECT strength_train(m, lvl, '{"features":1}') FROM s;
+-- error: strength_train: option "features" must be one of "keyframes", "laban", "both", got number
 
 SELECT strength_train(m, lvl, '{"regression":"mlp"}') FROM s;
 -- error: strength_train: option "regression" must be one of "auto", "kernel_ridge", "local_linear", got "mlp"
@@ -263,6 +320,15 @@ SELECT strength_synthesize(r, 'furious') FROM models WHERE name = 'small';
 
 SELECT strength_synthesize(r, 0, '{"rigid":1}') FROM models WHERE name = 'small';
 -- error: strength_synthesize: option "rigid" must be true or false, got number
+
+SELECT strength_synthesize(r, 0) FROM models WHERE name = 'small_laban';
+-- error: strength_synthesize: the model ranks by the Laban vector alone, which synthesized and edited motions do not follow: train it with "features": "keyframes" (or "both") to synthesize or edit
+
+SELECT strength_edit(r, m, 0) FROM models, s WHERE name = 'small_laban' LIMIT 1;
+-- error: strength_edit: the model ranks by the Laban vector alone, which synthesized and edited motions do not follow: train it with "features": "keyframes" (or "both") to synthesize or edit
+
+SELECT affect_strength(r, motion_select(m, '["Hips","Spine"]')) FROM models, s WHERE name = 'small_laban' LIMIT 1;
+-- error: affect_strength: 2 joints, the model has 26
 
 SELECT strength_edit(r, 'm', 0) FROM models WHERE name = 'small';
 -- error: strength_edit: argument 2 must be a motion BLOB, got text
