@@ -759,6 +759,8 @@ void ax_affect_crossval_step(sqlite3_context *ctx, int argc, sqlite3_value **arg
         ax_arg r = read_classifier_options(ctx, &opts, &s->t);
         if (r == AX_OK)
             r = read_cv_options(ctx, &opts, s);
+        /* the functional methods alone train no HMM: any motion length is theirs to judge */
+        s->t.l.s.any_length = !(s->methods & AFFECT_CV_RECOGNIZER_MASK);
         ax_opts_free(&opts);
         if (r != AX_OK) {
             s->t.l.s.failed = true;

@@ -228,7 +228,7 @@ ax_arg ax_seqs_add(sqlite3_context *ctx, int argc, sqlite3_value **argv, ax_seqs
                   ts->rows, a, b);
         goto done;
     }
-    if (m->n_frames < ts->cfg.n_states) {
+    if (!ts->any_length && m->n_frames < ts->cfg.n_states) {
         ax_errorf(ctx, "row %" PRIu64 ": the motion has %u frames; %u states need at least %u",
                   ts->rows, m->n_frames, ts->cfg.n_states, ts->cfg.n_states);
         goto done;

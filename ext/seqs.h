@@ -37,6 +37,7 @@ typedef struct ax_seqs {
     char *progress;     /* the "progress" option: an SQL function's name, or NULL */
     ax_monitor probe;   /* asked after every row (see ax_seqs_add) */
     bool probing;       /* probe begun */
+    bool any_length;    /* no HMM is trained: motions shorter than cfg.n_states are fine */
 } ax_seqs;
 
 /* The HMM and observation option keys (states … seed), for building an allowed-keys list. */

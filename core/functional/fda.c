@@ -13,7 +13,8 @@
  *      centroids;
  *   4. the method: FPCA axes Wᵀ v / √λ; FSPCA by affect_spca_fit_dual on K and
  *      affect_spca_add_rows on W; FFDA in the FPCA score space (R × R, plain C Cholesky);
- *      F-Isomap from K's distances (kNN graph, Floyd–Warshall, MDS by dsyevr).
+ *      F-Isomap from K's distances (kNN graph, its pieces joined by their shortest distances,
+ *      Floyd–Warshall, MDS by dsyevr).
  * The monitor is polled between motions, between λ values and between Floyd–Warshall rounds.
  */
 #include "affect/fda.h"
@@ -894,6 +895,56 @@ static void k_smallest(const double *d, uint32_t n, uint32_t skip, uint32_t k, u
     }
 }
 
+/* Marks in in[] every motion reachable from the motions already marked through the finite
+ * entries of geo (n × n), breadth first; queue holds n entries. */
+static void reach(const double *geo, uint32_t n, unsigned char *in, uint32_t *queue)
+{
+    uint32_t head = 0, tail = 0;
+    for (uint32_t i = 0; i < n; i++)
+        if (in[i])
+            queue[tail++] = i;
+    while (head < tail) {
+        uint32_t i = queue[head++];
+        const double *row = geo + (size_t)i * n;
+        for (uint32_t j = 0; j < n; j++)
+            if (!in[j] && isfinite(row[j])) {
+                in[j] = 1;
+                queue[tail++] = j;
+            }
+    }
+}
+
+/* Joins the components of the neighbour graph (the finite entries of geo) into one: while some
+ * motion cannot be reached from motion 0, the shortest distance of d0 between a motion reached
+ * and one that is not (ties to the lowest pair) becomes an edge of geo — a minimum spanning tree
+ * over the components, as scikit-learn's Isomap joins them. in and queue hold n entries. */
+static affect_status join_components(double *geo, const double *d0, uint32_t n, unsigned char *in,
+                                     uint32_t *queue, affect_monitor *mon, affect_error *err)
+{
+    memset(in, 0, n);
+    in[0] = 1;
+    for (;;) {
+        reach(geo, n, in, queue);
+        uint32_t bi = UINT32_MAX, bj = 0;
+        for (uint32_t i = 0; i < n; i++) {
+            if (!in[i])
+                continue;
+            const double *row = d0 + (size_t)i * n;
+            for (uint32_t j = 0; j < n; j++)
+                if (!in[j] && (bi == UINT32_MAX || row[j] < d0[(size_t)bi * n + bj])) {
+                    bi = i;
+                    bj = j;
+                }
+        }
+        if (bi == UINT32_MAX)
+            return AFFECT_OK;
+        geo[(size_t)bi * n + bj] = geo[(size_t)bj * n + bi] = d0[(size_t)bi * n + bj];
+        affect_status st = affect_monitor_check(mon, err);
+        if (st)
+            return st;
+    }
+}
+
 static affect_status fit_isomap(train_ctx *t, affect_error *err)
 {
     affect_fda *f = t->f;
@@ -901,11 +952,13 @@ static affect_status fit_isomap(train_ctx *t, affect_error *err)
     size_t nn = (size_t)n * n;
     double *d0 = affect_malloc_array(nn, sizeof *d0), *bm = affect_malloc_array(nn, sizeof *bm);
     double *ev = affect_malloc_array(n, sizeof *ev), *ez = affect_malloc_array(nn, sizeof *ez);
-    uint32_t *nb = affect_malloc_array(kk, sizeof *nb);
+    uint32_t *nb = affect_malloc_array(kk, sizeof *nb),
+             *queue = affect_malloc_array(n, sizeof *queue);
+    unsigned char *in = affect_malloc(n);
     affect_status st = AFFECT_OK;
     f->geo = affect_malloc_array(nn, sizeof *f->geo);
     f->d2mean = affect_malloc_array(n, sizeof *f->d2mean);
-    if (!d0 || !bm || !ev || !ez || !nb || !f->geo || !f->d2mean) {
+    if (!d0 || !bm || !ev || !ez || !nb || !queue || !in || !f->geo || !f->d2mean) {
         st = affect_nomem(err);
         goto done;
     }
@@ -925,6 +978,8 @@ static affect_status fit_isomap(train_ctx *t, affect_error *err)
             f->geo[(size_t)i * n + j] = f->geo[(size_t)j * n + i] = d0[(size_t)i * n + j];
         }
     }
+    if ((st = join_components(f->geo, d0, n, in, queue, t->cfg->monitor, err)) != AFFECT_OK)
+        goto done;
     for (uint32_t l = 0; l < n; l++) {
         if ((st = affect_monitor_check(t->cfg->monitor, err)) != AFFECT_OK)
             goto done;
@@ -939,14 +994,6 @@ static affect_status fit_isomap(train_ctx *t, affect_error *err)
             }
         }
     }
-    for (uint32_t i = 1; i < n; i++)
-        if (!isfinite(f->geo[i])) {
-            st = affect_fail(err, AFFECT_ERR_INVALID,
-                             "the %u-nearest-neighbour graph is not "
-                             "connected (motion %u cannot reach motion 0): raise isomap_k",
-                             kk, i);
-            goto done;
-        }
     /* B = −½ H D² H */
     double all = 0.0;
     for (uint32_t j = 0; j < n; j++) {
@@ -1015,6 +1062,8 @@ done:
     affect_free(ev);
     affect_free(ez);
     affect_free(nb);
+    affect_free(queue);
+    affect_free(in);
     return st;
 }
 

@@ -20,7 +20,7 @@ motions of 7 styles, 6 folds), "group":"id" (loo: leave one motion out; 44 or 50
 "group":"k10" (k10: the motion's id modulo 10, fda_eval.py's --folds2 10).
 Observations: "default" = affect_crossval's (body frame, every joint, positions), "chosen" =
 docs/EVALUATION.md's set chosen on bandai-namco-1 (body frame, 7 joints, with velocities).
-A method whose training fails (F-Isomap's k-NN graph not connected) is reported as such and the
+A method whose training fails (for example a singular fit) is reported as such and the
 others run without it. Output: a Markdown table per corpus and protocol (pooled accuracy =
 correct / all held-out motions) and the CPU time of each query.
 """

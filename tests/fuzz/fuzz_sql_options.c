@@ -5,8 +5,9 @@
  * roles, normalization, motion_svg (film strip and animation), motion_svg_group, affect_heatmap,
  * motion_synth, motion_angles, every laban_* descriptor, laban_zvector (its options, and its
  * index name as ?1), laban_series, laban_plot (its time-series mode too), hmm_train,
- * hmm_loglik, affect_train, affect_crossval(_json), laban_salient and
- * affect_generate(_explain) (its classifier option as hex text included).
+ * hmm_loglik, affect_train, affect_crossval(_json), laban_salient, fda_train, strength_train
+ * (through fda_info and strength_info) and affect_generate(_explain) (its classifier option as
+ * hex text included).
  *
  * Usage (see tests/fuzz/run.sh, or build with -DAFFECT_FUZZ=ON and clang):
  *     build-fuzz/tests/fuzz/fuzz_sql_options -max_total_time=60 <a copy of
@@ -97,6 +98,10 @@ static const call calls[] = {
      "SELECT method, fold, held_out, n_train, n_test, accuracy, confusion, params "
      "FROM affect_crossval('motions', 'motion', 'label', ?1)"},
     {"laban_salient", "laban_salient", 'j', false, "SELECT laban_salient('ix', ?1)"},
+    {"fda_train", "fda_train", 'j', false,
+     "SELECT fda_info(fda_train(motion, label, ?1)) FROM motions"},
+    {"strength_train", "strength_train", 'j', false,
+     "SELECT strength_info(strength_train(motion, label, ?1)) FROM motions"},
     {"affect_generate", "affect_generate", 'm', false,
      "SELECT affect_generate('ix', " M1 ", 'sad', ?1)"},
     {"affect_generate_explain", "affect_generate_explain", 'j', false,

@@ -126,6 +126,14 @@ SELECT 'affect_crossval takes the alignment too: the same fold as by hand',
           FROM fs WHERE seed = 1);
 -- oom: skip
 
+CREATE TEMP TABLE fshort AS SELECT emotion, seed, motion_slice(m, 0, 2) AS m FROM fs;
+SELECT 'affect_crossval with functional methods only takes motions shorter than the HMM states (3 frames)',
+       count(*) = 7 AND min(motion_frames(m)) = 3
+  FROM affect_crossval('fshort', 'm', 'emotion', '{"group":"seed","methods":["ffda"],"basis":4}'),
+       (SELECT m FROM fshort LIMIT 1);
+SELECT * FROM affect_crossval('fshort', 'm', 'emotion', '{"group":"seed","methods":["ffda","svm"],"basis":4}');
+-- error: affect_crossval: affect_crossval_json: row 1: the motion has 3 frames; 5 states need at least 5
+
 SELECT 'fda_prototype: the class''s mean length, on the model''s skeleton, exportable',
        motion_frames(fda_prototype(model, 'sad')) = (SELECT round(avg(motion_frames(m))) FROM fs WHERE emotion = 'sad')
    AND motion_joints(fda_prototype(model, 'sad')) = 26
@@ -178,8 +186,9 @@ SELECT fda_train(m, 'sad') FROM fs;
 -- error: fda_train: need motions of at least 2 labels, got 1 ("sad")
 SELECT fda_train(m, x'00') FROM fs;
 -- error: fda_train: row 1: label must be text or a number, got a BLOB
-SELECT fda_train(m, emotion, '{"basis":20,"method":"fisomap","isomap_k":1}') FROM fs;
--- error: fda_train: the 1-nearest-neighbour graph is not connected (motion 1 cannot reach motion 0): raise isomap_k
+SELECT 'F-Isomap joins a 1-NN graph in pieces by the shortest distances between them: every motion embeds, 1-NN right on its training waves',
+       sum(fda_classify(model, m, 1) = emotion) = 24
+  FROM (SELECT fda_train(m, emotion, '{"basis":20,"method":"fisomap","isomap_k":1}') AS model FROM fs), fs;
 -- oom: skip
 SELECT fda_prototype(model, 'joy') FROM fm WHERE method = 'small';
 -- error: fda_prototype: no class "joy" in the model (angry, happy, neutral, sad)

@@ -153,8 +153,7 @@ typedef struct affect_fda affect_fda;
  * the configuration's, "need at least 3 motions", "need at least 2 classes", "m must be from
  * 1 to 4096", "m is 12 but the feature definition gives 9", "motion 4: label 9 is out of range
  * (3 classes)", "class 2 (\"sad\") has no motion", "motion 3: <the fit's error>", "the
- * training functions are all equal (no variance)", "the 7-nearest-neighbour graph is not
- * connected (motion 12 cannot reach motion 0): raise isomap_k", "the eigendecomposition did
+ * training functions are all equal (no variance)", "the eigendecomposition did
  * not converge (LAPACK info 3)" (AFFECT_ERR_RANGE), the sPCA's ("the data carry no label
  * information …"), AFFECT_ERR_INTERRUPTED, AFFECT_ERR_NOMEM. */
 affect_status affect_fda_train(const affect_fda_config *cfg, const affect_features *feat,
