@@ -15,7 +15,8 @@
  * recordings of the ten contents recorded in every style (22); bn2-exhausted,
  * bandai-namco-2-dev's normal and exhausted recordings (144). The first half of each label in
  * name order trains (11 and 72 motions), the rest is scored.
- * Timed (process CPU time, median of 5 runs, default options: 13 keyframes, standardized):
+ * Timed (process CPU time, median of 5 runs; the keyframe features, 13 keyframes, standardized,
+ * which synthesis and editing need, except the last two columns):
  *   train PCA-40 / train no PCA  the whole affect_strength_train (features, PCA, ranker,
  *                                cross-validated regression);
  *   ranker PCA-40 / no PCA       affect_rank_fit alone on the model's training coordinates and
@@ -24,7 +25,9 @@
  *   regression                   affect_strength_fit_regression alone (PCA-40 model: the grid
  *                                of 20 kernel ridge and 5 local linear fits × 5 folds);
  *   affect_strength              affect_strength_score per scored motion (normalization,
- *                                keyframe DP, features, projection), median over the motions.
+ *                                keyframe DP, features, projection), median over the motions;
+ *   train default / affect_strength default   the same with strength_train's default options
+ *                                (the standardized Laban vector, C by inner cross-validation).
  * Output: a table, then lines "BENCH strength_<what>_<data set> <seconds> s" for scripts.
  * Exit status 1 if a step fails.
  */
@@ -121,6 +124,31 @@ static double median(double *v, int n)
     return v[n / 2];
 }
 
+/* affect_strength_score per scored motion (the mean of 3 calls), the median over them. */
+static int score_time(const affect_strength *model, const dataset *d, double *out)
+{
+    double *per = malloc(sizeof(double) * d->n);
+    int ns = 0;
+    affect_error err;
+    if (!per)
+        return 1;
+    for (uint32_t i = 0; i < d->n; i++) {
+        if (d->train[i])
+            continue;
+        double s, c0 = cpu_now();
+        for (int r = 0; r < 3; r++)
+            if (affect_strength_score(model, d->m[i], &s, NULL, &err)) {
+                fprintf(stderr, "bench_strength: score: %s\n", err.msg);
+                free(per);
+                return 1;
+            }
+        per[ns++] = (cpu_now() - c0) / 3;
+    }
+    *out = median(per, ns);
+    free(per);
+    return 0;
+}
+
 static int bench_set(dataset *d)
 {
     static const char *const names[] = {"low", "high"};
@@ -187,33 +215,44 @@ static int bench_set(dataset *d)
         runs[r] = cpu_now() - c0;
     }
     t_reg = median(runs, N_RUNS);
-    double *per = malloc(sizeof(double) * d->n);
-    int ns = 0;
-    for (uint32_t i = 0; i < d->n; i++) {
-        if (d->train[i])
-            continue;
-        double s, c0 = cpu_now();
-        for (int r = 0; r < 3; r++)
-            if (affect_strength_score(model[0], d->m[i], &s, NULL, &err)) {
-                fprintf(stderr, "bench_strength: score: %s\n", err.msg);
+    if (score_time(model[0], d, &t_score))
+        return 1;
+    /* the default model (the standardized Laban vector): trained and scored likewise */
+    affect_strength *def = NULL;
+    double t_train_def, t_score_def;
+    {
+        affect_strength_options so;
+        affect_strength_options_default(&so);
+        for (int r = 0; r < N_RUNS; r++) {
+            affect_strength_free(def);
+            def = NULL;
+            double c0 = cpu_now();
+            if (affect_strength_train((const affect_motion *const *)tm, tl, NULL, nt, names, 2, &so,
+                                      &def, &err)) {
+                fprintf(stderr, "bench_strength: %s: default: %s\n", d->name, err.msg);
                 return 1;
             }
-        per[ns++] = (cpu_now() - c0) / 3;
+            runs[r] = cpu_now() - c0;
+        }
+        t_train_def = median(runs, N_RUNS);
     }
-    t_score = median(per, ns);
+    if (score_time(def, d, &t_score_def))
+        return 1;
+    affect_strength_free(def);
     uint32_t frames = 0;
     for (uint32_t i = 0; i < d->n; i++)
         frames = d->m[i]->n_frames > frames ? d->m[i]->n_frames : frames;
-    printf("| %s | %u | %u | %u, %u | %.4f | %.4f | %.4f | %.4f | %.4f | %.5f |\n", d->name, nt,
-           d->n - nt, dims[0], dims[1], t_train[0], t_train[1], t_rank[0], t_rank[1], t_reg,
-           t_score);
+    printf("| %s | %u | %u | %u, %u | %.4f | %.4f | %.4f | %.4f | %.4f | %.5f | %.4f | %.5f |\n",
+           d->name, nt, d->n - nt, dims[0], dims[1], t_train[0], t_train[1], t_rank[0], t_rank[1],
+           t_reg, t_score, t_train_def, t_score_def);
     printf("BENCH strength_train_pca40_%s %.6f s\n", d->name, t_train[0]);
     printf("BENCH strength_train_nopca_%s %.6f s\n", d->name, t_train[1]);
     printf("BENCH strength_ranker_pca40_%s %.6f s\n", d->name, t_rank[0]);
     printf("BENCH strength_ranker_nopca_%s %.6f s\n", d->name, t_rank[1]);
     printf("BENCH strength_regression_%s %.6f s\n", d->name, t_reg);
     printf("BENCH strength_score_%s %.6f s\n", d->name, t_score);
-    free(per);
+    printf("BENCH strength_train_default_%s %.6f s\n", d->name, t_train_def);
+    printf("BENCH strength_score_default_%s %.6f s\n", d->name, t_score_def);
     free(tm);
     free(tl);
     affect_strength_free(model[0]);
@@ -232,8 +271,9 @@ int main(int argc, char **argv)
     }
     printf(
         "| data set | train | scored | dims (PCA-40, none) | train PCA-40 (s) | train no PCA (s) "
-        "| ranker PCA-40 (s) | ranker no PCA (s) | regression (s) | affect_strength (s) |\n");
-    printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+        "| ranker PCA-40 (s) | ranker no PCA (s) | regression (s) | affect_strength (s) "
+        "| train default (s) | affect_strength default (s) |\n");
+    printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     dataset d1 = {.name = "bn1-anger"}, d2 = {.name = "bn2-exhausted"};
     int rc = load(c1, "normal", "angry", TEN, &d1);
     if (rc == 1)
