@@ -19,7 +19,8 @@
  *   alignment   "linear" (default: t_j = j / (T − 1)) | "landmarks" (piecewise-linear
  *               registration to automatic landmarks, affect/fda.h)
  *   ffda_reg    FFDA regularization γ (default 1e-3); isomap_k (default 7); proto_dims
- *               (FPCA components of the prototypes, default 3)
+ *               (FPCA components of the prototypes, 1 .. 64, or "all" — the default, the
+ *               measured best: the class's mean function; the thesis's is 3)
  *   observations: frame ("body", the default, or "first"), joints, normalize, scale, up,
  *               velocity, root (as hmm_train's); progress (an SQL function's name)
  * Rows whose motion or label is NULL are skipped; labels are compared as text and the classes
@@ -80,9 +81,23 @@ ax_arg ax_fda_read_options(sqlite3_context *ctx, const ax_opts *opts, affect_fda
         ax_opt_number(ctx, opts, "sigma", &cfg->sigma) ||
         ax_opt_number(ctx, opts, "ffda_reg", &cfg->ffda_reg) ||
         ax_opt_u32(ctx, opts, "isomap_k", &cfg->isomap_k) ||
-        ax_opt_u32(ctx, opts, "proto_dims", &cfg->proto_dims) ||
         ax_opt_enum(ctx, opts, "alignment", alignments, &align))
         return AX_ERROR;
+    const affect_json_node *pd = ax_opt(opts, "proto_dims");
+    if (pd && pd->type == AFFECT_JSON_STRING && strcmp(pd->str, "all") == 0) {
+        cfg->proto_dims = 0;
+    } else if (pd) {
+        if (pd->type != AFFECT_JSON_NUMBER) {
+            ax_errorf(ctx, "option \"proto_dims\" must be a number or \"all\"");
+            return AX_ERROR;
+        }
+        if (ax_opt_u32(ctx, opts, "proto_dims", &cfg->proto_dims))
+            return AX_ERROR;
+        if (cfg->proto_dims == 0) {
+            ax_errorf(ctx, "proto_dims must be from 1 to 64, or all");
+            return AX_ERROR;
+        }
+    }
     cfg->alignment = (affect_fda_alignment)align;
     cfg->method = (affect_fda_method)method;
     cfg->kernel = (affect_spca_kernel)kernel;
@@ -295,8 +310,11 @@ void ax_fda_info(sqlite3_context *ctx, int argc, sqlite3_value **argv)
     affect_strbuf_double(&sb, cfg->sigma);
     affect_strbuf_puts(&sb, ",\"ffda_reg\":");
     affect_strbuf_double(&sb, cfg->ffda_reg);
-    affect_strbuf_printf(&sb, ",\"isomap_k\":%u,\"proto_dims\":%u", cfg->isomap_k,
-                         affect_fda_proto_dims(f));
+    affect_strbuf_printf(&sb, ",\"isomap_k\":%u", cfg->isomap_k);
+    if (affect_fda_proto_dims(f) == 0)
+        affect_strbuf_puts(&sb, ",\"proto_dims\":\"all\"");
+    else
+        affect_strbuf_printf(&sb, ",\"proto_dims\":%u", affect_fda_proto_dims(f));
     uint32_t n_lm;
     const affect_fda_landmark *lm = affect_fda_template(f, &n_lm);
     affect_strbuf_printf(&sb, ",\"alignment\":\"%s\",\"landmarks\":[",

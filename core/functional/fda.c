@@ -62,6 +62,7 @@ struct affect_fda {
     double *mean;      /* h */
     double *efun;      /* P × h */
     double *centroid;  /* c × P */
+    double *cmean;     /* c × h: the classes' mean centred coefficients (proto_dims 0, "all") */
     double *train_z;   /* n × p */
     double *axes;      /* p × h (FPCA, FFDA, FSPCA) */
     double *train_c;   /* n × h centred (F-Isomap) */
@@ -88,7 +89,7 @@ void affect_fda_config_default(affect_fda_config *cfg)
     cfg->sigma = 1.0;
     cfg->ffda_reg = 1e-3;
     cfg->isomap_k = 7;
-    cfg->proto_dims = 3;
+    cfg->proto_dims = 0; /* every component: the class's mean function (the measured best) */
     cfg->alignment = AFFECT_FDA_ALIGN_LINEAR;
     cfg->monitor = NULL;
 }
@@ -115,8 +116,8 @@ const char *affect_fda_config_check(const affect_fda_config *cfg)
         return "ffda_reg must be a finite number, 0 or more";
     if (cfg->isomap_k < 1 || cfg->isomap_k > AFFECT_FDA_MAX_ISOMAP_K)
         return "isomap_k must be from 1 to 1024";
-    if (cfg->proto_dims < 1 || cfg->proto_dims > AFFECT_FDA_MAX_DIMS)
-        return "proto_dims must be from 1 to 64";
+    if (cfg->proto_dims > AFFECT_FDA_MAX_DIMS)
+        return "proto_dims must be from 1 to 64, or all";
     if ((unsigned)cfg->alignment > AFFECT_FDA_ALIGN_LANDMARKS)
         return "unknown alignment";
     return NULL;
@@ -139,6 +140,7 @@ void affect_fda_free(affect_fda *f)
     affect_free(f->mean);
     affect_free(f->efun);
     affect_free(f->centroid);
+    affect_free(f->cmean);
     affect_free(f->train_z);
     affect_free(f->axes);
     affect_free(f->train_c);
@@ -1303,12 +1305,16 @@ affect_status affect_fda_train(const affect_fda_config *cfg, const affect_featur
     while (R < n - 1 && t.lam[R] > AFFECT_FDA_RANK_TOL * t.lam[0])
         R++;
     f->R = R;
-    f->P = cfg->proto_dims < R ? cfg->proto_dims : R;
+    f->P = cfg->proto_dims < R ? cfg->proto_dims : R; /* 0: the class means instead */
     f->fpca_eig = affect_malloc_array(R, sizeof *f->fpca_eig);
     t.q = affect_malloc_array((size_t)n * R, sizeof *t.q);
-    f->efun = affect_malloc_array((size_t)f->P * h, sizeof *f->efun);
-    f->centroid = affect_calloc((size_t)c * f->P, sizeof *f->centroid);
-    if (!f->fpca_eig || !t.q || !f->efun || !f->centroid)
+    if (f->P > 0) {
+        f->efun = affect_malloc_array((size_t)f->P * h, sizeof *f->efun);
+        f->centroid = affect_calloc((size_t)c * f->P, sizeof *f->centroid);
+    } else {
+        f->cmean = affect_calloc((size_t)c * h, sizeof *f->cmean);
+    }
+    if (!f->fpca_eig || !t.q || (f->P && (!f->efun || !f->centroid)) || (!f->P && !f->cmean))
         goto nomem;
     for (uint32_t r = 0; r < R; r++) {
         f->fpca_eig[r] = t.lam[r] / (n - 1);
@@ -1326,7 +1332,7 @@ affect_status affect_fda_train(const affect_fda_config *cfg, const affect_featur
                     t.v[(size_t)r * n + i] = -t.v[(size_t)r * n + i];
         affect_free(flips);
     }
-    {
+    if (f->P > 0) {
         double *g = affect_malloc_array((size_t)f->P * n, sizeof *g);
         if (!g)
             goto nomem;
@@ -1349,6 +1355,14 @@ affect_status affect_fda_train(const affect_fda_config *cfg, const affect_featur
         for (uint32_t k = 0; k < c; k++)
             for (uint32_t r = 0; r < f->P; r++)
                 f->centroid[(size_t)k * f->P + r] /= num[k];
+        if (f->cmean) { /* every component's centroid mapped back: the class's mean */
+            for (uint32_t i = 0; i < n; i++)
+                for (size_t j = 0; j < h; j++)
+                    f->cmean[(size_t)y[i] * h + j] += t.cc[(size_t)i * h + j];
+            for (uint32_t k = 0; k < c; k++)
+                for (size_t j = 0; j < h; j++)
+                    f->cmean[(size_t)k * h + j] /= num[k];
+        }
         affect_free(num);
     }
     /* 4. the method */
@@ -1488,6 +1502,9 @@ affect_status affect_fda_classify(const affect_fda *f, const double *x, uint32_t
 void affect_fda_prototype_coefs(const affect_fda *f, uint32_t label, double *coef)
 {
     memcpy(coef, f->mean, f->h * sizeof *coef);
+    if (f->cmean)
+        for (size_t j = 0; j < f->h; j++)
+            coef[j] += f->cmean[(size_t)label * f->h + j];
     for (uint32_t r = 0; r < f->P; r++) {
         double q = f->centroid[(size_t)label * f->P + r];
         const double *e = f->efun + (size_t)r * f->h;
@@ -1695,8 +1712,12 @@ affect_status affect_fda_encode(const affect_fda *f, unsigned char **out, size_t
     affect_bw w;
     affect_bw_init(&w);
     const affect_fda_config *cfg = &f->cfg;
-    bool lm = cfg->alignment == AFFECT_FDA_ALIGN_LANDMARKS;
-    affect_bw_header(&w, AFFECT_FDA_MAGIC, lm ? 2u : 1u, lm ? 1u : 0u);
+    bool lm = cfg->alignment == AFFECT_FDA_ALIGN_LANDMARKS, all = f->cmean != NULL;
+    affect_bw_header(&w, AFFECT_FDA_MAGIC,
+                     all  ? 3u
+                     : lm ? 2u
+                          : 1u,
+                     (lm ? 1u : 0u) | (all ? 2u : 0u));
     affect_bw_u32(&w, (uint32_t)cfg->method);
     affect_bw_u32(&w, f->b.order);
     affect_bw_u32(&w, f->b.n);
@@ -1744,6 +1765,8 @@ affect_status affect_fda_encode(const affect_fda *f, unsigned char **out, size_t
     affect_bw_f64s(&w, f->mean, h);
     affect_bw_f64s(&w, f->efun, (size_t)f->P * h);
     affect_bw_f64s(&w, f->centroid, (size_t)f->c * f->P);
+    if (all) /* version 3: the class means' centred coefficients */
+        affect_bw_f64s(&w, f->cmean, (size_t)f->c * h);
     affect_bw_f64s(&w, f->train_z, n * p);
     if (is_linear(cfg->method)) {
         affect_bw_f64s(&w, f->axes, p * h);
@@ -1833,7 +1856,9 @@ static affect_status decode_head(affect_br *r, affect_fda *f, affect_error *err)
     affect_br_f64(r, &cfg->sigma);
     affect_br_f64(r, &cfg->ffda_reg);
     affect_br_f64(r, &f->total_var);
-    if (flags > (version >= 2 ? 1u : 0u))
+    /* exactly what the encoder writes: version 1 no flag; 2 bit 0 (landmarks); 3 bit 1 (class-
+     * mean prototypes) and maybe bit 0 */
+    if (version == 1 ? flags != 0 : version == 2 ? flags != 1 : (flags != 2 && flags != 3))
         return out_of_range(err, "flags", flags, 8);
     if (method > AFFECT_FDA_FISOMAP)
         return out_of_range(err, "method", method, 12);
@@ -1853,7 +1878,7 @@ static affect_status decode_head(affect_br *r, affect_fda *f, affect_error *err)
         return out_of_range(err, "dimensions", p, 36);
     if (R < 1 || R > n - 1)
         return out_of_range(err, "FPCA rank", R, 44);
-    if (P < 1 || P > R || P > AFFECT_FDA_MAX_DIMS)
+    if ((flags & 2u) ? P != 0 : (P < 1 || P > R || P > AFFECT_FDA_MAX_DIMS))
         return out_of_range(err, "prototype dimensions", P, 40);
     if (iso_k < 1 || iso_k > AFFECT_FDA_MAX_ISOMAP_K)
         return out_of_range(err, "isomap_k", iso_k, 48);
@@ -1960,6 +1985,7 @@ static affect_status decode_body(affect_br *r, affect_fda *f, affect_error *err)
         (st = read_f64s(r, h, "the mean function", &f->mean, err)) ||
         (st = read_f64s(r, (size_t)f->P * h, "the eigenfunctions", &f->efun, err)) ||
         (st = read_f64s(r, (size_t)f->c * f->P, "the class centroids", &f->centroid, err)) ||
+        (f->P == 0 && (st = read_f64s(r, (size_t)f->c * h, "the class means", &f->cmean, err))) ||
         (st = read_f64s(r, n * p, "the training embedding", &f->train_z, err)))
         return st;
     for (uint32_t k = 0; k < f->c; k++)

@@ -626,8 +626,107 @@ static void test_fixture_v2(void **state)
         assert_int_equal(tp[k].type, k % 2 == 0 ? 1 : -1);
     }
     encodes_to(f, bytes, len);
+    /* a version 2 without the landmark flag would re-encode as version 1: refused */
+    bytes[8] = 0;
+    uint64_t sum = affect_fnv1a64((const unsigned char *)bytes, len - 8);
+    for (int i = 0; i < 8; i++)
+        bytes[len - 8 + (size_t)i] = (char)(unsigned char)(sum >> (8 * i));
+    affect_fda *bad = NULL;
+    affect_error err;
+    assert_int_equal(affect_fda_decode((const unsigned char *)bytes, len, &bad, &err),
+                     AFFECT_ERR_FORMAT);
+    assert_string_equal(err.msg, "flags 0 is out of range (offset 8)");
     free(bytes);
     affect_fda_free(f);
+}
+
+/* tests/fixtures/fda-v3.bin: fda-v1.bin's motions and options with the default prototypes
+ * (every component: the class means; version 3, flags 2, no eigenfunctions). */
+static void test_fixture_v3(void **state)
+{
+    (void)state;
+    size_t len;
+    char *bytes;
+    affect_fda *f = decode_fixture(AFFECT_FIXTURES_DIR "/fda-v3.bin", &bytes, &len);
+    assert_int_equal(len, 1587);
+    assert_int_equal((unsigned char)bytes[4], 3);
+    assert_int_equal((unsigned char)bytes[8], 2);
+    assert_int_equal(affect_fda_proto_dims(f), 0);
+    assert_int_equal(affect_fda_get_config(f)->proto_dims, 0);
+    assert_int_equal(affect_fda_get_config(f)->alignment, AFFECT_FDA_ALIGN_LINEAR);
+    assert_int_equal(affect_fda_train_size(f), 12);
+    encodes_to(f, bytes, len);
+    affect_motion *p = NULL;
+    affect_error err;
+    assert_int_equal(affect_fda_prototype(f, 1, &p, &err), AFFECT_OK);
+    affect_motion_free(p);
+    free(bytes);
+    affect_fda_free(f);
+}
+
+/* The default prototype is the class's mean function: its coefficients are the mean of the
+ * class's training coefficients; P = R components give the same (they span every centred
+ * training function), 3 components do not; the BLOB is version 3 and decodes to the same
+ * prototypes. */
+static void test_prototype_class_mean(void **state)
+{
+    (void)state;
+    data d = make_data(24, 4, 0.8, 5);
+    affect_fda_config cfg;
+    small_cfg(&cfg, AFFECT_FDA_FFDA);
+    affect_fda *all = train_ok(&cfg, &d);
+    assert_int_equal(affect_fda_proto_dims(all), 0);
+    cfg.proto_dims = 64; /* clamped to the rank R */
+    affect_fda *every = train_ok(&cfg, &d);
+    assert_int_equal(affect_fda_proto_dims(every), affect_fda_fpca_rank(every));
+    cfg.proto_dims = 3;
+    affect_fda *three = train_ok(&cfg, &d);
+    size_t h = 12 * 2;
+    double pa[24], pe[24], p3[24], mean[24], c[24];
+    affect_error err;
+    for (uint32_t k = 0; k < 4; k++) {
+        memset(mean, 0, sizeof mean);
+        uint32_t nk = 0;
+        for (uint32_t i = 0; i < d.n; i++) {
+            if (d.y[i] != k)
+                continue;
+            assert_int_equal(affect_fda_coefficients(all, d.x[i], d.seqs[i].n_frames, c, &err),
+                             AFFECT_OK);
+            for (size_t j = 0; j < h; j++)
+                mean[j] += c[j];
+            nk++;
+        }
+        affect_fda_prototype_coefs(all, k, pa);
+        affect_fda_prototype_coefs(every, k, pe);
+        affect_fda_prototype_coefs(three, k, p3);
+        double far = 0;
+        for (size_t j = 0; j < h; j++) {
+            tu_assert_near(pa[j], mean[j] / nk, 1e-9 * (1 + fabs(pa[j])));
+            tu_assert_near(pe[j], pa[j], 1e-7 * (1 + fabs(pa[j])));
+            far = fmax(far, fabs(p3[j] - pa[j]));
+        }
+        assert_true(far > 1e-3);
+    }
+    unsigned char *b;
+    size_t n;
+    assert_int_equal(affect_fda_encode(all, &b, &n, &err), AFFECT_OK);
+    assert_int_equal(b[4], 3);
+    assert_int_equal(b[8], 2);
+    affect_fda *back = NULL;
+    if (affect_fda_decode(b, n, &back, &err))
+        fail_msg("decode: %s", err.msg);
+    encodes_to(back, (const char *)b, n);
+    for (uint32_t k = 0; k < 4; k++) {
+        affect_fda_prototype_coefs(all, k, pa);
+        affect_fda_prototype_coefs(back, k, pe);
+        assert_memory_equal(pa, pe, sizeof pa);
+    }
+    free(b);
+    affect_fda_free(back);
+    affect_fda_free(all);
+    affect_fda_free(every);
+    affect_fda_free(three);
+    free_data(&d);
 }
 
 static void test_perturbation(void **state)
@@ -636,6 +735,7 @@ static void test_perturbation(void **state)
     data d = make_data(20, 4, 0.8, 17);
     affect_fda_config cfg;
     small_cfg(&cfg, AFFECT_FDA_FPCA);
+    cfg.proto_dims = 3; /* keeps the eigenfunctions the check compares with */
     affect_fda *f = train_ok(&cfg, &d);
     double mean[11], plus[11], minus[11], psi[11], mc[12], ec[12];
     affect_error err;
@@ -839,6 +939,7 @@ static void test_landmarks_model(void **state)
     small_cfg(&cfg, AFFECT_FDA_FPCA);
     cfg.n_basis = 40;
     cfg.lambda = 1e-8;
+    cfg.proto_dims = 3; /* the thesis's prototypes: versions 1 and 2 */
     affect_fda *lin = train_ok(&cfg, &d);
     cfg.alignment = AFFECT_FDA_ALIGN_LANDMARKS;
     affect_fda *lm = train_ok(&cfg, &d);
@@ -925,6 +1026,8 @@ int main(void)
         cmocka_unit_test(test_fixture_v2),
         cmocka_unit_test(test_perturbation),
         cmocka_unit_test(test_oom),
+        cmocka_unit_test(test_fixture_v3),
+        cmocka_unit_test(test_prototype_class_mean),
         cmocka_unit_test(test_landmarks_known_warp),
         cmocka_unit_test(test_landmarks_model),
     };

@@ -42,7 +42,7 @@ static const fixture FIXTURES[] = {
     {"fda-v1.bin", "AFFD", NULL},           {"strength-v1.bin", "AFST", NULL},
     {"strength-v2.bin", "AFST", NULL},      {"ranker-v1.bin", "AFRK", NULL},
     {"rmlr-v1.bin", "\x01", "rmlr-v2.bin"}, {"rmlr-v2.bin", "AFRL", NULL},
-    {"fda-v2.bin", "AFFD", NULL},
+    {"fda-v2.bin", "AFFD", NULL},           {"fda-v3.bin", "AFFD", NULL},
 };
 #define N_FIXTURES (sizeof FIXTURES / sizeof FIXTURES[0])
 

@@ -14,8 +14,8 @@
  *     series without error or NaN (when the series is not too large);
  * and between the two: when the input's checksum is wrong the raw decode fails, with
  * "functional model checksum mismatch: the BLOB is corrupt" whenever the fixed copy decodes.
- * Seed (tests/fuzz/corpus/fuzz_fda): fda-v1.bin, a copy of tests/fixtures/fda-v1.bin.
- * A broken invariant aborts.
+ * Seeds (tests/fuzz/corpus/fuzz_fda): fda-v1.bin, fda-v2.bin and fda-v3.bin, copies of the
+ * fixtures. A broken invariant aborts.
  */
 #include "affect/fda.h"
 #include "affect/hmm_blob.h"

@@ -31,7 +31,21 @@ SELECT 'fisomap', fda_train(m, emotion, '{"basis":20,"method":"fisomap","isomap_
 UNION ALL
 SELECT 'small', fda_train(m, emotion, '{"basis":6,"dims":2,"joints":["right_hand"],"frame":"first","method":"fpca"}') FROM fs WHERE seed <= 3;
 
-SELECT 'an AFFD BLOB of version 1', substr(model, 1, 8) = x'4146464401000000' FROM fm;
+SELECT 'an AFFD BLOB of version 3 (flags 2: the prototypes are the class means, the default)',
+       substr(model, 1, 12) = x'414646440300000002000000' FROM fm;
+
+SELECT 'proto_dims: "all" by default, the thesis''s 3 one option away (version 1, as before)',
+       json_extract(fda_info(model), '$.proto_dims') = 'all'
+   AND json_extract(fda_info(fda_train(m, emotion, '{"basis":20,"dims":2,"method":"fpca","proto_dims":3}')), '$.proto_dims') = 3
+   AND substr(fda_train(m, emotion, '{"basis":20,"dims":2,"method":"fpca","proto_dims":3}'), 1, 12) = x'414646440100000000000000'
+   AND fda_train(m, emotion, '{"basis":20,"dims":2,"method":"fpca","proto_dims":"all"}') = model
+  FROM fm, fs WHERE method = 'fpca' GROUP BY model;
+-- oom: skip
+
+SELECT fda_train(m, emotion, '{"proto_dims":0}') FROM fs;
+-- error: fda_train: proto_dims must be from 1 to 64, or all
+SELECT fda_train(m, emotion, '{"proto_dims":"some"}') FROM fs;
+-- error: fda_train: option "proto_dims" must be a number or "all"
 
 SELECT 'retraining gives the same bytes', model = (SELECT fda_train(m, emotion, '{"basis":20,"dims":2,"method":"fpca"}') FROM fs)
   FROM fm WHERE method = 'fpca';
@@ -98,9 +112,9 @@ CREATE TABLE flm AS
 SELECT fda_train(m, emotion, '{"basis":20,"method":"ffda","alignment":"landmarks"}') AS model,
        fda_train(m, emotion, '{"basis":20,"method":"ffda"}') AS linear FROM fs;
 
-SELECT 'landmarks: a version-2 BLOB, the template in fda_info (times increasing in (0, 1), rests and peaks)',
-       substr(hex(model), 9, 8) = '02000000' AND substr(hex(model), 17, 8) = '01000000'
-   AND substr(hex(linear), 9, 8) = '01000000'
+SELECT 'landmarks: flag 1 (version 3 with the default prototypes), the template in fda_info (times increasing in (0, 1), rests and peaks)',
+       substr(hex(model), 9, 8) = '03000000' AND substr(hex(model), 17, 8) = '03000000'
+   AND substr(hex(linear), 17, 8) = '02000000'
    AND json_extract(fda_info(model), '$.alignment') = 'landmarks'
    AND json_extract(fda_info(linear), '$.alignment') = 'linear'
    AND json_array_length(fda_info(linear), '$.landmarks') = 0

@@ -77,12 +77,17 @@
  * coordinates. λ by GCV uses the registered times too. The prototypes are in template time.
  *
  * Prototypes (§3.2): the class centroid of the training scores on the first P FPCA
- * components (proto_dims, default 3), mapped back by the inverse transform c̄ + Σ q_r e_r,
+ * components (proto_dims; the thesis's is 3), mapped back by the inverse transform
+ * c̄ + Σ q_r e_r; by default (proto_dims 0, "all") on every component, which is the class's mean
+ * function c̄ + mean of its centred coefficients — the measured best: on bandai-namco-2-dev's
+ * per-movement models the recognizer names 74–83 % of these prototypes' styles against 40–45 %
+ * with 3 components (docs/EVALUATION.md, "Prototypes");
  * evaluated at the class's mean frame count (rounded, ≥ 2), its positions put on the feature
  * definition's skeleton (affect_features_posture_motion) and made rigid (affect_motion_rigid,
  * constant bone lengths), so motion_to_bvh exports it (when no observed joint has an observed
  * ancestor there are no bones: the positions are returned as they are). Every model, whatever
- * its method, keeps the P eigenfunctions for this.
+ * its method, keeps the P eigenfunctions and centroids for this, or (proto_dims 0) the c class
+ * means (version 3 of the BLOB).
  *
  * Determinism: the same inputs give bit-identical models and embeddings on a given BLAS build.
  */
@@ -121,17 +126,18 @@ typedef enum affect_fda_alignment {
 #define AFFECT_FDA_NOVAR_TOL 1e-20
 
 typedef struct affect_fda_config {
-    affect_fda_method method;       /* default FFDA, the measured best (docs/EVALUATION.md) */
-    uint32_t order;                 /* B-spline order k (default 4: cubic) */
-    uint32_t n_basis;               /* G (default 200, the thesis's for recognition) */
-    double lambda;                  /* roughness penalty (default 1e-10; ignored with gcv) */
-    bool gcv;                       /* choose λ by GCV (default false) */
-    uint32_t dims;                  /* embedding dimensions (default 3; 1 .. 64) */
-    affect_spca_kernel kernel;      /* FSPCA label kernel (default linear) */
-    double sigma;                   /* FSPCA RBF σ (default 1) */
-    double ffda_reg;                /* FFDA γ (default 1e-3; ≥ 0) */
-    uint32_t isomap_k;              /* F-Isomap neighbours (default 7) */
-    uint32_t proto_dims;            /* P FPCA components of the prototype space (default 3) */
+    affect_fda_method method;  /* default FFDA, the measured best (docs/EVALUATION.md) */
+    uint32_t order;            /* B-spline order k (default 4: cubic) */
+    uint32_t n_basis;          /* G (default 200, the thesis's for recognition) */
+    double lambda;             /* roughness penalty (default 1e-10; ignored with gcv) */
+    bool gcv;                  /* choose λ by GCV (default false) */
+    uint32_t dims;             /* embedding dimensions (default 3; 1 .. 64) */
+    affect_spca_kernel kernel; /* FSPCA label kernel (default linear) */
+    double sigma;              /* FSPCA RBF σ (default 1) */
+    double ffda_reg;           /* FFDA γ (default 1e-3; ≥ 0) */
+    uint32_t isomap_k;         /* F-Isomap neighbours (default 7) */
+    uint32_t proto_dims; /* P FPCA components of the prototype space, 1 .. 64; 0 (the default):
+                            all of them, the class means */
     affect_fda_alignment alignment; /* default linear (the measured best, docs/EVALUATION.md) */
     affect_monitor *monitor;        /* may be NULL */
 } affect_fda_config;
@@ -140,7 +146,7 @@ void affect_fda_config_default(affect_fda_config *cfg);
 /* NULL, or a message: "unknown method", "order must be at least 3 for the roughness penalty",
  * "dims must be from 1 to 64", "lambda must be a finite number, 0 or more", "unknown label
  * kernel", "sigma must be a positive finite number", "ffda_reg must be a finite number, 0 or
- * more", "isomap_k must be from 1 to 1024", "proto_dims must be from 1 to 64", "unknown
+ * more", "isomap_k must be from 1 to 1024", "proto_dims must be from 1 to 64, or all", "unknown
  * alignment", and affect_bspline_check's. */
 const char *affect_fda_config_check(const affect_fda_config *cfg);
 
@@ -177,7 +183,8 @@ affect_status affect_fda_classify(const affect_fda *f, const double *x, uint32_t
  * projection's, AFFECT_ERR_NOMEM. */
 affect_status affect_fda_prototype(const affect_fda *f, uint32_t label, affect_motion **out,
                                    affect_error *err);
-/* The prototype's coefficients (G × m): c̄ + Σ_r centroid_r e_r. */
+/* The prototype's coefficients (G × m): c̄ + Σ_r centroid_r e_r (or c̄ + the class's mean
+ * centred coefficients when proto_dims is 0). */
 void affect_fda_prototype_coefs(const affect_fda *f, uint32_t label, double *coef);
 
 /* Perturbation plot data (the thesis's Figure 3.3) for a linear method's axis r (0 .. p − 1) and
@@ -216,7 +223,8 @@ const double *affect_fda_train_embedding(const affect_fda *f); /* n × p */
 const uint32_t *affect_fda_train_labels(const affect_fda *f);  /* n */
 /* The class's mean frame count over its training motions. */
 double affect_fda_class_frames(const affect_fda *f, uint32_t k);
-/* The mean function's coefficients (G × m) and the P eigenfunctions' (P × G × m). */
+/* The mean function's coefficients (G × m) and the P eigenfunctions' (P × G × m; none when
+ * affect_fda_proto_dims is 0: the prototypes are the class means). */
 const double *affect_fda_mean(const affect_fda *f);
 const double *affect_fda_eigenfunctions(const affect_fda *f);
 uint32_t affect_fda_proto_dims(const affect_fda *f);
@@ -265,7 +273,7 @@ affect_status affect_fda_times(const affect_fda *f, const double *x, uint32_t T,
 #define AFFECT_FDA_MAGIC "AFFD"
 /* Version 2 adds the landmark template (flags bit 0); models with linear alignment are still
  * written as version 1, byte for byte as before. */
-#define AFFECT_FDA_VERSION 2u
+#define AFFECT_FDA_VERSION 3u
 #define AFFECT_FDA_HEADER_SIZE 96u
 affect_status affect_fda_encode(const affect_fda *f, unsigned char **out, size_t *size,
                                 affect_error *err);
