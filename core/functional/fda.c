@@ -1141,6 +1141,213 @@ static affect_status copy_features(const affect_features *feat, affect_features 
     return st;
 }
 
+/* 0. Landmark registration: the template into f, each training motion's registered times
+ * into *times (*off: where motion i's begin). */
+static affect_status register_landmarks(affect_fda *f, const affect_hmm_seq *seqs, uint32_t n,
+                                        uint32_t m, const uint32_t *y, uint32_t c,
+                                        const affect_fda_config *cfg, double **times, size_t **off,
+                                        affect_error *err)
+{
+    size_t total = 0;
+    if (!(*off = affect_malloc_array(n, sizeof **off)))
+        return affect_nomem(err);
+    for (uint32_t i = 0; i < n; i++) {
+        (*off)[i] = total;
+        if (total > SIZE_MAX / sizeof(double) - seqs[i].n_frames)
+            return affect_nomem(err);
+        total += seqs[i].n_frames;
+    }
+    if (!(*times = affect_malloc_array(total ? total : 1, sizeof **times)))
+        return affect_nomem(err);
+    return build_template(f, seqs, n, m, y, c, cfg, *times, *off, err);
+}
+
+/* 2. Every training motion's B-spline coefficients (times: registered, or NULL), their mean
+ * (f->mean), the centred coefficients t->cc and t->w = C̃ (M ⊗ I); the classes' mean frame
+ * counts. */
+static affect_status fit_coefficients(train_ctx *t, const affect_hmm_seq *seqs, const uint32_t *y,
+                                      const double *times, const size_t *off, affect_error *err)
+{
+    affect_fda *f = t->f;
+    const affect_fda_config *cfg = t->cfg;
+    uint32_t n = f->n, m = f->m, c = f->c;
+    size_t h = f->h, G = f->b.n, kb = f->b.order;
+    affect_status st = AFFECT_OK;
+    t->cc = affect_malloc_array((size_t)n * h, sizeof *t->cc);
+    t->w = affect_malloc_array((size_t)n * h, sizeof *t->w);
+    f->mean = affect_calloc(h, sizeof *f->mean);
+    double *fit_work = affect_malloc_array(2 * G * kb + G, sizeof *fit_work);
+    double *num = affect_calloc(c, sizeof *num);
+    if (!t->cc || !t->w || !f->mean || !fit_work || !num) {
+        st = affect_nomem(err);
+        goto done;
+    }
+    for (uint32_t i = 0; i < n; i++) {
+        if ((st = affect_monitor_check(cfg->monitor, err)) != AFFECT_OK)
+            goto done;
+        affect_monitor_report(cfg->monitor, "B-spline fits", i, n);
+        st = affect_bspline_fit(&f->b, f->rband, times ? times + off[i] : NULL, seqs[i].x,
+                                seqs[i].n_frames, m, f->cfg.lambda, t->cc + (size_t)i * h, fit_work,
+                                err);
+        if (st) {
+            affect_prefix(err, "motion %u", i);
+            goto done;
+        }
+    }
+    for (uint32_t i = 0; i < n; i++)
+        for (size_t j = 0; j < h; j++)
+            f->mean[j] += t->cc[(size_t)i * h + j];
+    for (size_t j = 0; j < h; j++)
+        f->mean[j] /= n;
+    for (uint32_t i = 0; i < n; i++) {
+        for (size_t j = 0; j < h; j++)
+            t->cc[(size_t)i * h + j] -= f->mean[j];
+        affect_band_mul(f->mband, (uint32_t)G, (uint32_t)kb, t->cc + (size_t)i * h, m,
+                        t->w + (size_t)i * h);
+    }
+    for (uint32_t i = 0; i < n; i++) {
+        f->frames[y[i]] += seqs[i].n_frames;
+        num[y[i]] += 1.0;
+    }
+    for (uint32_t k = 0; k < c; k++)
+        f->frames[k] /= num[k];
+done:
+    affect_free(fit_work);
+    affect_free(num);
+    return st;
+}
+
+/* 3. FPCA: the Gram matrix K = C̃ Wᵀ (t->k), its eigendecomposition (t->lam, t->v), the total
+ * variance, the rank R, the covariance eigenvalues and the scores t->q (n × R, each column's
+ * sign fixed by orient_columns, t->v's with it). */
+static affect_status fpca_space(train_ctx *t, affect_error *err)
+{
+    affect_fda *f = t->f;
+    uint32_t n = f->n, m = f->m;
+    size_t h = f->h, G = f->b.n, kb = f->b.order;
+    affect_status st = AFFECT_OK;
+    t->k = affect_malloc_array((size_t)n * n, sizeof *t->k);
+    t->v = affect_malloc_array((size_t)n * n, sizeof *t->v);
+    t->lam = affect_malloc_array(n, sizeof *t->lam);
+    double *kw = affect_malloc_array((size_t)n * n, sizeof *kw);
+    double *asc = affect_malloc_array(n, sizeof *asc);
+    double *zv = affect_malloc_array((size_t)n * n, sizeof *zv);
+    double *mw = affect_malloc_array(h, sizeof *mw);
+    bool *flips = NULL;
+    if (!t->k || !t->v || !t->lam || !kw || !asc || !zv || !mw)
+        goto nomem;
+    AFFECT_BLAS(cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasTrans, (int)n, (int)n, (int)h, 1.0,
+                            t->cc, (int)h, t->w, (int)h, 0.0, t->k, (int)n));
+    double trace = 0.0;
+    for (uint32_t i = 0; i < n; i++) {
+        trace += t->k[(size_t)i * n + i];
+        for (uint32_t j = 0; j < i; j++)
+            t->k[(size_t)i * n + j] = t->k[(size_t)j * n + i] =
+                0.5 * (t->k[(size_t)i * n + j] + t->k[(size_t)j * n + i]);
+    }
+    f->total_var = trace / (n - 1);
+    if (!isfinite(trace)) {
+        st = affect_fail(err, AFFECT_ERR_RANGE,
+                         "the data are too large: the Gram matrix "
+                         "overflows");
+        goto done;
+    }
+    memcpy(kw, t->k, (size_t)n * n * sizeof *kw);
+    if ((st = sym_eig(kw, n, asc, zv, err)) != AFFECT_OK)
+        goto done;
+    for (uint32_t r = 0; r < n; r++) {
+        t->lam[r] = asc[n - 1 - r];
+        memcpy(t->v + (size_t)r * n, zv + (size_t)(n - 1 - r) * n, n * sizeof *zv);
+    }
+    double energy = trace; /* Σ ‖x_i‖² = tr K + n ‖x̄‖² */
+    affect_band_mul(f->mband, (uint32_t)G, (uint32_t)kb, f->mean, m, mw);
+    energy += n * dot(f->mean, mw, h);
+    if (!(t->lam[0] > 0) || !(trace > AFFECT_FDA_NOVAR_TOL * energy)) {
+        st = affect_fail(err, AFFECT_ERR_INVALID,
+                         "the training functions are all equal (no "
+                         "variance)");
+        goto done;
+    }
+    uint32_t R = 0;
+    while (R < n - 1 && t->lam[R] > AFFECT_FDA_RANK_TOL * t->lam[0])
+        R++;
+    f->R = R;
+    f->fpca_eig = affect_malloc_array(R, sizeof *f->fpca_eig);
+    t->q = affect_malloc_array((size_t)n * R, sizeof *t->q);
+    flips = affect_malloc_array(R, sizeof *flips);
+    if (!f->fpca_eig || !t->q || !flips)
+        goto nomem;
+    for (uint32_t r = 0; r < R; r++) {
+        f->fpca_eig[r] = t->lam[r] / (n - 1);
+        for (uint32_t i = 0; i < n; i++)
+            t->q[(size_t)i * R + r] = sqrt(t->lam[r]) * t->v[(size_t)r * n + i];
+    }
+    orient_columns(t->q, n, R, flips);
+    for (uint32_t r = 0; r < R; r++)
+        if (flips[r])
+            for (uint32_t i = 0; i < n; i++)
+                t->v[(size_t)r * n + i] = -t->v[(size_t)r * n + i];
+    goto done;
+nomem:
+    st = affect_nomem(err);
+done:
+    affect_free(kw);
+    affect_free(asc);
+    affect_free(zv);
+    affect_free(mw);
+    affect_free(flips);
+    return st;
+}
+
+/* The prototypes' space: the first P FPCA eigenfunctions and the class centroids of the scores
+ * on them, or (proto_dims 0) the class means of the centred coefficients. */
+static affect_status fit_prototypes(train_ctx *t, const uint32_t *y, affect_error *err)
+{
+    affect_fda *f = t->f;
+    uint32_t n = f->n, c = f->c, R = f->R, P;
+    size_t h = f->h;
+    f->P = P = t->cfg->proto_dims < R ? t->cfg->proto_dims : R; /* 0: the class means instead */
+    double *g = NULL, *num = affect_calloc(c, sizeof *num);
+    if (P > 0) {
+        f->efun = affect_malloc_array((size_t)P * h, sizeof *f->efun);
+        f->centroid = affect_calloc((size_t)c * P, sizeof *f->centroid);
+        g = affect_malloc_array((size_t)P * n, sizeof *g);
+    } else {
+        f->cmean = affect_calloc((size_t)c * h, sizeof *f->cmean);
+    }
+    if (!num || (P && (!f->efun || !f->centroid || !g)) || (!P && !f->cmean)) {
+        affect_free(g);
+        affect_free(num);
+        return affect_nomem(err);
+    }
+    if (P > 0) {
+        for (uint32_t r = 0; r < P; r++)
+            for (uint32_t i = 0; i < n; i++)
+                g[(size_t)r * n + i] = t->v[(size_t)r * n + i] / sqrt(t->lam[r]);
+        AFFECT_BLAS(cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, (int)P, (int)h, (int)n,
+                                1.0, g, (int)n, t->cc, (int)h, 0.0, f->efun, (int)h));
+    }
+    for (uint32_t i = 0; i < n; i++) {
+        num[y[i]] += 1.0;
+        for (uint32_t r = 0; r < P; r++)
+            f->centroid[(size_t)y[i] * P + r] += t->q[(size_t)i * R + r];
+    }
+    for (uint32_t k = 0; k < c; k++)
+        for (uint32_t r = 0; r < P; r++)
+            f->centroid[(size_t)k * P + r] /= num[k];
+    if (f->cmean) { /* every component's centroid mapped back: the class's mean */
+        for (uint32_t i = 0; i < n; i++)
+            for (size_t j = 0; j < h; j++)
+                f->cmean[(size_t)y[i] * h + j] += t->cc[(size_t)i * h + j];
+        for (uint32_t k = 0; k < c; k++)
+            for (size_t j = 0; j < h; j++)
+                f->cmean[(size_t)k * h + j] /= num[k];
+    }
+    affect_free(g);
+    affect_free(num);
+    return AFFECT_OK;
+}
+
 affect_status affect_fda_train(const affect_fda_config *cfg, const affect_features *feat,
                                const affect_hmm_seq *seqs, uint32_t n, uint32_t m,
                                const uint32_t *y, const char *const *classes, uint32_t c,
@@ -1152,7 +1359,7 @@ affect_status affect_fda_train(const affect_fda_config *cfg, const affect_featur
         return st;
     train_ctx t;
     memset(&t, 0, sizeof t);
-    double *fit_work = NULL, *kw = NULL, *times = NULL;
+    double *times = NULL;
     size_t *off = NULL;
     affect_fda *f = affect_calloc(1, sizeof *f);
     if (!f)
@@ -1165,7 +1372,6 @@ affect_status affect_fda_train(const affect_fda_config *cfg, const affect_featur
     f->n = n;
     f->c = c;
     f->h = (size_t)cfg->n_basis * m;
-    size_t h = f->h, G = cfg->n_basis, kb = cfg->order;
     t.f = f;
     t.cfg = cfg;
     if ((st = make_bands(f, err)) != AFFECT_OK || (st = copy_features(feat, &f->feat, err)))
@@ -1173,198 +1379,26 @@ affect_status affect_fda_train(const affect_fda_config *cfg, const affect_featur
     f->classes = affect_calloc(c, sizeof *f->classes);
     f->y = affect_malloc_array(n, sizeof *f->y);
     f->frames = affect_calloc(c, sizeof *f->frames);
-    if (!f->classes || !f->y || !f->frames)
-        goto nomem;
-    for (uint32_t k = 0; k < c; k++)
-        if (!(f->classes[k] = affect_strndup(classes[k], strlen(classes[k]))))
-            goto nomem;
-    memcpy(f->y, y, n * sizeof *y);
-    /* 0. landmark registration */
-    if (cfg->alignment == AFFECT_FDA_ALIGN_LANDMARKS) {
-        size_t total = 0;
-        if (!(off = affect_malloc_array(n, sizeof *off)))
-            goto nomem;
-        for (uint32_t i = 0; i < n; i++) {
-            off[i] = total;
-            if (total > SIZE_MAX / sizeof(double) - seqs[i].n_frames)
-                goto nomem;
-            total += seqs[i].n_frames;
-        }
-        if (!(times = affect_malloc_array(total ? total : 1, sizeof *times)))
-            goto nomem;
-        if ((st = build_template(f, seqs, n, m, y, c, cfg, times, off, err)) != AFFECT_OK)
-            goto fail;
+    if (!f->classes || !f->y || !f->frames) {
+        st = affect_nomem(err);
+        goto fail;
     }
-    /* 1. λ */
-    if (cfg->gcv && (st = choose_lambda(cfg, &f->b, f->rband, seqs, n, m, times, off,
-                                        &f->cfg.lambda, err)) != AFFECT_OK)
+    for (uint32_t k = 0; k < c; k++)
+        if (!(f->classes[k] = affect_strndup(classes[k], strlen(classes[k])))) {
+            st = affect_nomem(err);
+            goto fail;
+        }
+    memcpy(f->y, y, n * sizeof *y);
+    /* 0. landmark registration; 1. λ; 2. coefficients; 3. FPCA and the prototypes' space */
+    if ((cfg->alignment == AFFECT_FDA_ALIGN_LANDMARKS &&
+         (st = register_landmarks(f, seqs, n, m, y, c, cfg, &times, &off, err)) != AFFECT_OK) ||
+        (cfg->gcv && (st = choose_lambda(cfg, &f->b, f->rband, seqs, n, m, times, off,
+                                         &f->cfg.lambda, err)) != AFFECT_OK))
         goto fail;
     f->cfg.gcv = cfg->gcv;
-    /* 2. coefficients */
-    t.cc = affect_malloc_array((size_t)n * h, sizeof *t.cc);
-    t.w = affect_malloc_array((size_t)n * h, sizeof *t.w);
-    f->mean = affect_calloc(h, sizeof *f->mean);
-    fit_work = affect_malloc_array(2 * G * kb + G, sizeof *fit_work);
-    if (!t.cc || !t.w || !f->mean || !fit_work)
-        goto nomem;
-    for (uint32_t i = 0; i < n; i++) {
-        if ((st = affect_monitor_check(cfg->monitor, err)) != AFFECT_OK)
-            goto fail;
-        affect_monitor_report(cfg->monitor, "B-spline fits", i, n);
-        st = affect_bspline_fit(&f->b, f->rband, times ? times + off[i] : NULL, seqs[i].x,
-                                seqs[i].n_frames, m, f->cfg.lambda, t.cc + (size_t)i * h, fit_work,
-                                err);
-        if (st) {
-            affect_prefix(err, "motion %u", i);
-            goto fail;
-        }
-    }
-    for (uint32_t i = 0; i < n; i++)
-        for (size_t j = 0; j < h; j++)
-            f->mean[j] += t.cc[(size_t)i * h + j];
-    for (size_t j = 0; j < h; j++)
-        f->mean[j] /= n;
-    for (uint32_t i = 0; i < n; i++) {
-        for (size_t j = 0; j < h; j++)
-            t.cc[(size_t)i * h + j] -= f->mean[j];
-        affect_band_mul(f->mband, (uint32_t)G, (uint32_t)kb, t.cc + (size_t)i * h, m,
-                        t.w + (size_t)i * h);
-    }
-    {
-        double *num = affect_calloc(c, sizeof *num);
-        if (!num)
-            goto nomem;
-        for (uint32_t i = 0; i < n; i++) {
-            f->frames[y[i]] += seqs[i].n_frames;
-            num[y[i]] += 1.0;
-        }
-        for (uint32_t k = 0; k < c; k++)
-            f->frames[k] /= num[k];
-        affect_free(num);
-    }
-    /* K = C̃ Wᵀ */
-    t.k = affect_malloc_array((size_t)n * n, sizeof *t.k);
-    kw = affect_malloc_array((size_t)n * n, sizeof *kw);
-    t.v = affect_malloc_array((size_t)n * n, sizeof *t.v);
-    t.lam = affect_malloc_array(n, sizeof *t.lam);
-    if (!t.k || !kw || !t.v || !t.lam)
-        goto nomem;
-    AFFECT_BLAS(cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasTrans, (int)n, (int)n, (int)h, 1.0,
-                            t.cc, (int)h, t.w, (int)h, 0.0, t.k, (int)n));
-    double trace = 0.0;
-    for (uint32_t i = 0; i < n; i++) {
-        trace += t.k[(size_t)i * n + i];
-        for (uint32_t j = 0; j < i; j++)
-            t.k[(size_t)i * n + j] = t.k[(size_t)j * n + i] =
-                0.5 * (t.k[(size_t)i * n + j] + t.k[(size_t)j * n + i]);
-    }
-    f->total_var = trace / (n - 1);
-    if (!isfinite(trace)) {
-        st = affect_fail(err, AFFECT_ERR_RANGE,
-                         "the data are too large: the Gram matrix "
-                         "overflows");
+    if ((st = fit_coefficients(&t, seqs, y, times, off, err)) != AFFECT_OK ||
+        (st = fpca_space(&t, err)) != AFFECT_OK || (st = fit_prototypes(&t, y, err)) != AFFECT_OK)
         goto fail;
-    }
-    /* 3. FPCA */
-    memcpy(kw, t.k, (size_t)n * n * sizeof *kw);
-    {
-        double *asc = affect_malloc_array(n, sizeof *asc);
-        double *zv = affect_malloc_array((size_t)n * n, sizeof *zv);
-        if (!asc || !zv) {
-            affect_free(asc);
-            affect_free(zv);
-            goto nomem;
-        }
-        st = sym_eig(kw, n, asc, zv, err);
-        if (st == AFFECT_OK)
-            for (uint32_t r = 0; r < n; r++) {
-                t.lam[r] = asc[n - 1 - r];
-                memcpy(t.v + (size_t)r * n, zv + (size_t)(n - 1 - r) * n, n * sizeof *zv);
-            }
-        affect_free(asc);
-        affect_free(zv);
-        if (st)
-            goto fail;
-    }
-    double energy = trace; /* Σ ‖x_i‖² = tr K + n ‖x̄‖² */
-    {
-        double *mw = affect_malloc_array(h, sizeof *mw);
-        if (!mw)
-            goto nomem;
-        affect_band_mul(f->mband, (uint32_t)G, (uint32_t)kb, f->mean, m, mw);
-        energy += n * dot(f->mean, mw, h);
-        affect_free(mw);
-    }
-    if (!(t.lam[0] > 0) || !(trace > AFFECT_FDA_NOVAR_TOL * energy)) {
-        st = affect_fail(err, AFFECT_ERR_INVALID,
-                         "the training functions are all equal (no "
-                         "variance)");
-        goto fail;
-    }
-    uint32_t R = 0;
-    while (R < n - 1 && t.lam[R] > AFFECT_FDA_RANK_TOL * t.lam[0])
-        R++;
-    f->R = R;
-    f->P = cfg->proto_dims < R ? cfg->proto_dims : R; /* 0: the class means instead */
-    f->fpca_eig = affect_malloc_array(R, sizeof *f->fpca_eig);
-    t.q = affect_malloc_array((size_t)n * R, sizeof *t.q);
-    if (f->P > 0) {
-        f->efun = affect_malloc_array((size_t)f->P * h, sizeof *f->efun);
-        f->centroid = affect_calloc((size_t)c * f->P, sizeof *f->centroid);
-    } else {
-        f->cmean = affect_calloc((size_t)c * h, sizeof *f->cmean);
-    }
-    if (!f->fpca_eig || !t.q || (f->P && (!f->efun || !f->centroid)) || (!f->P && !f->cmean))
-        goto nomem;
-    for (uint32_t r = 0; r < R; r++) {
-        f->fpca_eig[r] = t.lam[r] / (n - 1);
-        for (uint32_t i = 0; i < n; i++)
-            t.q[(size_t)i * R + r] = sqrt(t.lam[r]) * t.v[(size_t)r * n + i];
-    }
-    {
-        bool *flips = affect_malloc_array(R, sizeof *flips);
-        if (!flips)
-            goto nomem;
-        orient_columns(t.q, n, R, flips);
-        for (uint32_t r = 0; r < R; r++)
-            if (flips[r])
-                for (uint32_t i = 0; i < n; i++)
-                    t.v[(size_t)r * n + i] = -t.v[(size_t)r * n + i];
-        affect_free(flips);
-    }
-    if (f->P > 0) {
-        double *g = affect_malloc_array((size_t)f->P * n, sizeof *g);
-        if (!g)
-            goto nomem;
-        for (uint32_t r = 0; r < f->P; r++)
-            for (uint32_t i = 0; i < n; i++)
-                g[(size_t)r * n + i] = t.v[(size_t)r * n + i] / sqrt(t.lam[r]);
-        AFFECT_BLAS(cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, (int)f->P, (int)h,
-                                (int)n, 1.0, g, (int)n, t.cc, (int)h, 0.0, f->efun, (int)h));
-        affect_free(g);
-    }
-    {
-        double *num = affect_calloc(c, sizeof *num);
-        if (!num)
-            goto nomem;
-        for (uint32_t i = 0; i < n; i++) {
-            num[y[i]] += 1.0;
-            for (uint32_t r = 0; r < f->P; r++)
-                f->centroid[(size_t)y[i] * f->P + r] += t.q[(size_t)i * R + r];
-        }
-        for (uint32_t k = 0; k < c; k++)
-            for (uint32_t r = 0; r < f->P; r++)
-                f->centroid[(size_t)k * f->P + r] /= num[k];
-        if (f->cmean) { /* every component's centroid mapped back: the class's mean */
-            for (uint32_t i = 0; i < n; i++)
-                for (size_t j = 0; j < h; j++)
-                    f->cmean[(size_t)y[i] * h + j] += t.cc[(size_t)i * h + j];
-            for (uint32_t k = 0; k < c; k++)
-                for (size_t j = 0; j < h; j++)
-                    f->cmean[(size_t)k * h + j] /= num[k];
-        }
-        affect_free(num);
-    }
     /* 4. the method */
     switch (cfg->method) {
     case AFFECT_FDA_FPCA:
@@ -1387,14 +1421,8 @@ affect_status affect_fda_train(const affect_fda_config *cfg, const affect_featur
     affect_monitor_report(cfg->monitor, "B-spline fits", n, n);
     *out = f;
     f = NULL;
-    goto done;
-nomem:
-    st = affect_nomem(err);
 fail:
     affect_fda_free(f);
-done:
-    affect_free(fit_work);
-    affect_free(kw);
     affect_free(times);
     affect_free(off);
     affect_free(t.cc);
