@@ -3,7 +3,7 @@
 
 Usage (from the repository root, after a build of build/affect.so; about 3 minutes):
     OPENBLAS_NUM_THREADS=1 /usr/bin/python3 tests/bench/fda_prototype_eval.py [--db build/fda.db]
-        [--corpora 1,2] [--dims 3,10,20,40,all]
+        [--corpora 1,2] [--dims 3,10,20,40,all] [--options '{"alignment":"landmarks"}']
 AFFECT_EXT overrides the extension's path (default build/affect). Python's standard library and
 sqlite3 only.
 
@@ -25,6 +25,7 @@ motions (the prototypes are in arm lengths, the motions in cm: only the order co
 content on bandai-namco-2-dev, averaged). Output: Markdown tables and the CPU time.
 """
 import argparse
+import json
 import os
 import sys
 import time
@@ -59,10 +60,12 @@ def spearman(a, b):
     return sab / (saa * sbb) ** 0.5 if saa > 0 and sbb > 0 else float("nan")
 
 
-def prototypes(con, where, args, classes, dims):
+def prototypes(con, where, args, classes, dims, extra):
     """{class: prototype BLOB} of one fda_train over the rows of motions matching where."""
+    options = json.loads(MODEL % (dims if dims != "all" else '"all"'))
+    options.update(extra)
     model = con.execute("SELECT fda_train(motion, style, ?) FROM motions WHERE " + where,
-                        [MODEL % (dims if dims != "all" else '"all"')] + args).fetchone()[0]
+                        [json.dumps(options)] + args).fetchone()[0]
     return {c: con.execute("SELECT fda_prototype(?, ?)", (model, c)).fetchone()[0]
             for c in classes}
 
@@ -90,7 +93,9 @@ def main():
     ap.add_argument("--db", default=os.path.join(ROOT, "build", "fda.db"))
     ap.add_argument("--corpora", default="1,2")
     ap.add_argument("--dims", default="3,10,20,40,all")
+    ap.add_argument("--options", default="{}", help="more fda_train options")
     a = ap.parse_args()
+    extra = json.loads(a.options)
     dims = a.dims.split(",")
     con = connect(a.db)
     import_corpora(con)
@@ -104,7 +109,7 @@ def main():
         print("| proto_dims | recognized | Weight order (Spearman) | Time order (Spearman) |")
         print("|---:|---:|---:|---:|")
         for d in dims:
-            protos = prototypes(con, where, [], FOUR, d)
+            protos = prototypes(con, where, [], FOUR, d, extra)
             ok = classify(con, rec, protos)
             w, t = laban_order(con, protos, where, [])
             print("| %s | %d of %d | %.2f | %.2f |" % (d, ok, len(protos), w, t), flush=True)
@@ -128,7 +133,7 @@ def main():
             ws, ts = [], []
             for c in contents:
                 where, args = "source = ? AND content = ?", [src, c]
-                protos = prototypes(con, where, args, styles, d)
+                protos = prototypes(con, where, args, styles, d, extra)
                 ok_h += classify(con, held[c], protos)
                 ok_a += classify(con, every, protos)
                 n += len(protos)

@@ -4,7 +4,7 @@
 Usage (from the repository root, after any build of build/affect.so):
     OPENBLAS_NUM_THREADS=1 /usr/bin/python3 tests/bench/generation_eval.py
         [--db build/recognition.db] [--corpus 1|2|both] [--options JSON] [--quick]
-        [--protocol takes|content|both]
+        [--protocol takes|content|both] [--recognizer JSON]
 AFFECT_EXT overrides the extension's path (default build/affect). The corpora are imported into
 --db by corpus_import.py (once; reused when the file holds them).
 
@@ -78,18 +78,19 @@ def dist(a, b):
 
 
 RUN = "r%d_" % os.getpid()  # table names of this run: runs may share one --db
+RECOGNIZER = {"threads": 2}  # affect_train's options (--recognizer adds to them)
 
 
 def fold_setup(con, name, where, params):
-    """A training table, its laban index and a recognizer with affect_train's defaults."""
+    """A training table, its laban index and a recognizer (affect_train with RECOGNIZER)."""
     name = RUN + name
     con.execute('DROP TABLE IF EXISTS "lab_%s"' % name)
     con.execute('DROP TABLE IF EXISTS "tr_%s"' % name)
     con.execute('CREATE TABLE "tr_%s" AS SELECT * FROM pool WHERE %s' % (name, where), params)
     con.execute('CREATE VIRTUAL TABLE "lab_%s" USING laban(content="tr_%s", motion=motion, '
                 'label=style)' % (name, name))
-    model = con.execute('SELECT affect_train(motion, style, \'{"threads":2}\') FROM "tr_%s"'
-                        % name).fetchone()[0]
+    model = con.execute('SELECT affect_train(motion, style, ?) FROM "tr_%s"' % name,
+                        (json.dumps(RECOGNIZER),)).fetchone()[0]
     return "lab_" + name, model
 
 
@@ -314,13 +315,17 @@ def main():
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--protocol", default="both", choices=["takes", "content", "both"],
                     help="bandai-namco-2-dev: which protocol(s)")
+    ap.add_argument("--recognizer", default="{}",
+                    help='affect_train options of the recognizers, e.g. {"descriptors":"none"}')
     a = ap.parse_args()
+    RECOGNIZER.update(json.loads(a.recognizer))
     if not os.path.isdir(ci.CORPORA):
         sys.exit("generation_eval.py: the corpora are not at %s (../shared)" % ci.CORPORA)
     con = ci.connect(a.db)
     ci.import_corpora(con)
     options = json.loads(a.options)
-    print("affect_generate options: %s (plus source_label)\n" % json.dumps(options))
+    print("affect_generate options: %s (plus source_label); recognizer: affect_train %s\n"
+          % (json.dumps(options), json.dumps(RECOGNIZER)))
     if a.corpus in ("1", "both"):
         corpus1(con, options, a.quick)
     if a.corpus in ("2", "both"):
