@@ -91,6 +91,9 @@
  * dimensions on (below, the test costs more than the rows) */
 #define PRUNE_ROUNDOFF 0x1p-53
 #define PRUNE_MIN_DIM 24u
+/* the quick test's widening: the relative rounding of the two distances, of z and of the
+ * weighted sums is below 3 (m + 4) 2⁻⁵³, under 1e-9 for m up to 10⁶ (AFFECT_HMM_MAX_DIM: 4096) */
+#define PRUNE_BOUND_SLACK (1.0 + 1e-9)
 /* exp of less than EXP_MIN is taken as 0: below DBL_MIN, it skips libm's slow underflow path, and
  * such terms are below one ulp of the sums they join (whose largest term is 1) */
 #define EXP_MIN (-708.0)
@@ -1239,6 +1242,7 @@ typedef struct train_ws {
     double *mbar;      /* m */
     double *pool;      /* cs */
     double *dsq;       /* m: scatter's scratch */
+    double *rn;        /* maxT: ‖x_t − centre‖ of the sequence (scatter's quick test) */
 } train_ws;
 
 /* Squared distance with four partial sums (fixed order). */
@@ -1371,10 +1375,14 @@ static double weighted_sq(const double *restrict z, const double *restrict sc, u
  * Such a row has z_td² ≤ u D_d in every coordinate, so by Cauchy–Schwarz the part left out is at
  * most 2⁻⁵³ √(D_d D_e) in entry (d, e): within one unit roundoff of the scatter's own scale, the
  * size of the rounding error of a single addition to it. Only from PRUNE_MIN_DIM dimensions on
- * (below, the test costs more than the rows it saves). dsq is m doubles of scratch. */
+ * (below, the test costs more than the rows it saves). dsq is m doubles of scratch. With rn (the
+ * frames' distances to a point g, and dc = ‖c − g‖), a row is first tested by the bound
+ * r_t (rn_t + dc)² max_d(1 / (u D_d)) of its weighted norm (the triangle inequality), widened by
+ * PRUNE_BOUND_SLACK for the rounding of both: when that is at most 1 the exact test would drop
+ * the row too, so it is dropped unread — the same rows as the exact test alone, the same bits. */
 static void scatter(const affect_hmm *h, const double *const *rows, const double *x, size_t T,
                     const double *r, size_t stride, const double *c, double *n, double *s1,
-                    double *S, double *dbuf, double *dsq)
+                    double *S, double *dbuf, double *dsq, const double *rn, double dc)
 {
     uint32_t m = h->cfg.dim;
     bool full = h->cfg.cov == AFFECT_HMM_FULL, prune = full && r && m >= PRUNE_MIN_DIM;
@@ -1420,12 +1428,19 @@ static void scatter(const affect_hmm *h, const double *const *rows, const double
         size_t kept = nb;
         if (prune) {
             /* dsq becomes 1 / (u D_d), or 0 where D_d = 0 (every z_td is 0 there) */
-            double u = PRUNE_ROUNDOFF / (double)nb;
-            for (uint32_t d = 0; d < m; d++)
+            double u = PRUNE_ROUNDOFF / (double)nb, smax = 0.0;
+            for (uint32_t d = 0; d < m; d++) {
                 dsq[d] = dsq[d] > 0 ? 1.0 / (u * dsq[d]) : 0.0;
+                smax = dsq[d] > smax ? dsq[d] : smax;
+            }
             kept = 0;
             for (size_t t = 0; t < nb; t++) {
                 const double *dt = dbuf + t * m;
+                if (rn) {
+                    double e = rn[t0 + t] + dc;
+                    if (r[(t0 + t) * stride] * e * e * smax * PRUNE_BOUND_SLACK <= 1.0)
+                        continue;
+                }
                 if (!(weighted_sq(dt, dsq, m) > 1.0))
                     continue;
                 if (kept != t)
@@ -1584,7 +1599,7 @@ static affect_status init_params(affect_hmm *h, const affect_hmm_seq *seqs, uint
             double n = 0.0;
             memset(w->s1, 0, m * sizeof(double));
             memset(w->S, 0, h->cs * sizeof(double));
-            scatter(h, w->mp, NULL, q, NULL, 0, mu, &n, w->s1, w->S, w->fb.dbuf, NULL);
+            scatter(h, w->mp, NULL, q, NULL, 0, mu, &n, w->s1, w->S, w->fb.dbuf, NULL, NULL, 0.0);
             moments(h, k, n, w->s1, w->S);
         }
         if (any_empty) {
@@ -1625,13 +1640,26 @@ static affect_status init_params(affect_hmm *h, const affect_hmm_seq *seqs, uint
     return AFFECT_OK;
 }
 
-/* Adds one sequence's posteriors (in w->rho) to the statistics, centred on the current means. */
+/* ‖a − b‖ over m coordinates, with four partial sums (fixed order). */
+static double dist(const double *a, const double *b, size_t m)
+{
+    return sqrt(dist2(a, b, (uint32_t)m));
+}
+
+/* Adds one sequence's posteriors (in w->rho) to the statistics, centred on the current means.
+ * When scatter prunes, the frames' distances to the centre of the component means go to w->rn
+ * first, for its quick test. */
 static void accumulate(const affect_hmm *h, const double *x, uint32_t T, train_ws *w)
 {
     size_t K = (size_t)h->cfg.n_states * h->cfg.n_mix, m = h->cfg.dim;
+    bool quick = h->cfg.cov == AFFECT_HMM_FULL && m >= PRUNE_MIN_DIM;
+    if (quick)
+        for (uint32_t t = 0; t < T; t++)
+            w->rn[t] = dist(x + (size_t)t * m, h->centre, m);
     for (size_t k = 0; k < K; k++)
         scatter(h, NULL, x, T, w->rho + k, K, h->means + k * m, &w->n[k], w->s1 + k * m,
-                w->S + k * h->cs, w->fb.dbuf, w->dsq);
+                w->S + k * h->cs, w->fb.dbuf, w->dsq, quick ? w->rn : NULL,
+                quick ? dist(h->means + k * m, h->centre, m) : 0.0);
 }
 
 /* The M-step: new parameters from the statistics of one pass over the sequences. */
@@ -1790,6 +1818,7 @@ affect_status affect_hmm_train(const affect_hmm_config *cfg, const affect_hmm_se
     parts[np++] = (affect_ws_part){(void **)&w.mbar, m, sizeof(double)};
     parts[np++] = (affect_ws_part){(void **)&w.pool, h->cs, sizeof(double)};
     parts[np++] = (affect_ws_part){(void **)&w.dsq, m, sizeof(double)};
+    parts[np++] = (affect_ws_part){(void **)&w.rn, max_t, sizeof(double)};
     ws = affect_ws_alloc(parts, np);
     if (!ws) {
         st = affect_nomem(err);
