@@ -38,11 +38,13 @@
  *
  * 2-D: Andrew's monotone chain. Each grid point becomes one 64-bit key, x in the high bits
  * and y in the low, so that sorting keys sorts points by (x, y); the keys are written into
- * scratch[0, n) and sorted — insertion sort up to 32 points, a bottom-up merge sort through
- * scratch[n, 2n) above; the lower and the upper chain are then built in turn in
- * scratch[n, 2n) (a point stays only on a strict left turn, so duplicates and collinear
- * points drop out) and the shoelace sum is accumulated over both. Only 2n of the 4n doubles
- * of scratch are used.
+ * scratch[0, n), those strictly inside the octagon of the extreme points along x, y, x + y and
+ * x − y are dropped (exact; never a vertex of the hull, so the chains and the area's bits are
+ * unchanged) and the rest are sorted —
+ * insertion sort up to 32 points, a bottom-up merge sort through scratch[n, 2n) above; the lower
+ * and the upper chain are then built in turn in scratch[n, 2n) (a point stays only on a strict left
+ * turn, so duplicates and collinear points drop out) and the shoelace sum is accumulated over both.
+ * Only 2n of the 4n doubles of scratch are used.
  *
  * 3-D: Quickhull (Barber, Dobkin & Huhdanpaa 1996) on a triangulated surface with face
  * adjacency. Start: the extreme points a, b on the axis of largest extent, c the farthest from
@@ -257,6 +259,54 @@ static double chain_2d(const double *p, size_t n, bool backward, double *st)
     return sum;
 }
 
+/* Drops the keys (grid points) of p[0, n) that lie strictly inside the octagon of the extreme
+ * points along x, y, x + y and x − y (Akl and Toussaint's heuristic), keeping the others in
+ * order at the front; returns their number. Such a point is strictly inside the hull, so it is
+ * never a vertex of either chain: the chains, and so the area's bits, are those of all the
+ * points. The extremes, taken in the counter-clockwise order of their directions, lie on the
+ * hull in counter-clockwise order (ties may repeat a point or put three on one edge); a point
+ * strictly left of every edge between two different extremes is strictly inside. Exact: the
+ * cross products of grid differences fit in int64_t. */
+static size_t interior_filter_2d(double *p, size_t n)
+{
+    /* extremes: min y, max x − y, max x, max x + y, max y, min x − y, min x, min x + y */
+    size_t ext[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    int64_t best[8];
+    for (size_t i = 0; i < n; i++) {
+        uint64_t k = key_get(p + i);
+        int64_t x = KEY_X(k), y = KEY_Y(k);
+        int64_t v[8] = {-y, x - y, x, x + y, y, y - x, -x, -x - y};
+        for (int d = 0; d < 8; d++)
+            if (i == 0 || v[d] > best[d]) {
+                best[d] = v[d];
+                ext[d] = i;
+            }
+    }
+    int64_t ex[8], ey[8], dx[8], dy[8];
+    int ne = 0;
+    for (int d = 0; d < 8; d++) {
+        uint64_t a = key_get(p + ext[d]), b = key_get(p + ext[(d + 1) % 8]);
+        if (a == b)
+            continue; /* the same point twice: no edge */
+        ex[ne] = KEY_X(a), ey[ne] = KEY_Y(a);
+        dx[ne] = KEY_X(b) - ex[ne], dy[ne] = KEY_Y(b) - ey[ne];
+        ne++;
+    }
+    if (ne < 3)
+        return n; /* no polygon with an interior */
+    size_t m = 0;
+    for (size_t i = 0; i < n; i++) {
+        uint64_t k = key_get(p + i);
+        int64_t x = KEY_X(k), y = KEY_Y(k);
+        bool inside = true;
+        for (int e = 0; e < ne; e++)
+            inside &= dx[e] * (y - ey[e]) - dy[e] * (x - ex[e]) > 0;
+        if (!inside)
+            key_put(p + m++, k);
+    }
+    return m;
+}
+
 double affect_hull_area_2d(const double *xy, uint32_t n, double *scratch)
 {
     if (n < 3)
@@ -273,8 +323,9 @@ double affect_hull_area_2d(const double *xy, uint32_t n, double *scratch)
         uint64_t y = (uint64_t)(grid(xy[2 * i + 1], c[1], scale) + HULL_HALF);
         key_put(p + i, x << 31 | y);
     }
-    sort_keys(p, tmp, n);
-    double area = 0.5 * (chain_2d(p, n, false, tmp) + chain_2d(p, n, true, tmp));
+    size_t m = interior_filter_2d(p, n);
+    sort_keys(p, tmp, m);
+    double area = 0.5 * (chain_2d(p, m, false, tmp) + chain_2d(p, m, true, tmp));
     if (!(area > HULL_FLAT * HULL_SCALE * HULL_SCALE))
         return 0;
     double step = len / HULL_SCALE;

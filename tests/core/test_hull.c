@@ -370,6 +370,71 @@ static void test_area_scale_and_random(void **state)
     }
 }
 
+/* Points strictly inside the hull (which affect_hull_area_2d drops before sorting, when they
+ * are inside the octagon of its extreme points) and copies of the points change nothing, to
+ * the bit; and on a small integer lattice, where the extremes tie and many points lie on the
+ * hull's edges, the area is right (a lost vertex would take at least 1/2 off). */
+static void test_area_interior_points(void **state)
+{
+    (void)state;
+    affect_rng rng;
+    affect_rng_seed(&rng, 57);
+    double p[2 * 200];
+    for (int rep = 0; rep < 300; rep++) {
+        uint32_t n = 3 + (uint32_t)(affect_rng_next(&rng) % 30), m = n;
+        double c[2] = {0, 0};
+        for (uint32_t i = 0; i < n; i++) {
+            /* a body seen from above: an ellipse's outline with noise, or scattered points */
+            double t = 6.283185307179586 * affect_rng_uniform(&rng);
+            double rr = rep % 2 ? 1 + 0.2 * affect_rng_normal(&rng) : affect_rng_normal(&rng);
+            p[2 * i] = 0.5 * rr * cos(t) + 3;
+            p[2 * i + 1] = 0.2 * rr * sin(t) - 1;
+            c[0] += p[2 * i] / n, c[1] += p[2 * i + 1] / n;
+        }
+        double a = hull_area(p, n);
+        /* halfway from the centroid to a convex combination of three points: strictly
+         * inside unless the points are collinear */
+        uint32_t extra = (uint32_t)(affect_rng_next(&rng) % 150);
+        for (uint32_t k = 0; k < extra; k++, m++) {
+            if (k % 5 == 4) { /* a copy of any point */
+                uint32_t i = (uint32_t)(affect_rng_next(&rng) % m);
+                p[2 * m] = p[2 * i], p[2 * m + 1] = p[2 * i + 1];
+                continue;
+            }
+            double w[3], ws = 0;
+            uint32_t at[3];
+            for (int j = 0; j < 3; j++) {
+                ws += w[j] = affect_rng_uniform(&rng) + 1e-3;
+                at[j] = (uint32_t)(affect_rng_next(&rng) % n);
+            }
+            for (int d = 0; d < 2; d++) {
+                double v = 0;
+                for (int j = 0; j < 3; j++)
+                    v += w[j] / ws * p[2 * at[j] + (uint32_t)d];
+                p[2 * m + (uint32_t)d] = c[d] + 0.5 * (v - c[d]);
+            }
+        }
+        shuffle_points(p, m, 2, &rng);
+        double b = hull_area(p, m);
+        if (!(a == b) && !(a == 0 && b == 0))
+            fail_msg("set %d (%u + %u points): area %.17g, with interior points %.17g", rep, n,
+                     extra, a, b);
+    }
+    /* lattice points of a 6 × 6 grid, random subsets of every size */
+    for (int rep = 0; rep < 400; rep++) {
+        uint32_t n = 0;
+        for (int i = 0; i < 36; i++)
+            if (affect_rng_next(&rng) % (uint64_t)(2 + rep % 9) == 0) {
+                p[2 * n] = i % 6, p[2 * n + 1] = i / 6;
+                n++;
+            }
+        double ref = n >= 3 ? fabs(brute_area_2d(p, n, 1e-12, NULL)) : 0;
+        double a = hull_area(p, n); /* the grid moves a point by 2^-31 of the box at most */
+        if (!(fabs(a - ref) <= 1e-6))
+            fail_msg("lattice set %d (%u points): area %.17g, expected %.17g", rep, n, a, ref);
+    }
+}
+
 /* Near-duplicates: every point of a random set gets up to three copies moved by 10^-5 to
  * 10^-13 of the set's size (a decision made in plain floating point about such clusters can
  * tilt a tiny edge or face and lose a large part of the hull). The result must stay within
@@ -979,6 +1044,7 @@ int main(void)
         cmocka_unit_test(test_area_triangle_and_polygon),
         cmocka_unit_test(test_area_degenerate),
         cmocka_unit_test(test_area_scale_and_random),
+        cmocka_unit_test(test_area_interior_points),
         cmocka_unit_test(test_volume_cube),
         cmocka_unit_test(test_volume_polyhedra),
         cmocka_unit_test(test_volume_sphere),
