@@ -751,11 +751,13 @@ affect_status affect_laban_shape_directional(const affect_motion *m, const affec
     if (st)
         return st;
     uint32_t n = m->n_frames;
-    double *block = affect_malloc_array((size_t)n * 9 + n + 2 * PAD_MAX, sizeof *block);
+    /* the positions (3n), then the path's two channels' derivatives, each with PAD_MAX rows of
+     * room for the filter's padding before and after (lowpass_channels) */
+    size_t rows = (size_t)n + 2 * PAD_MAX;
+    double *block = affect_malloc_array((size_t)n * 3 + 4 * rows, sizeof *block);
     if (!block)
         return affect_nomem(err);
-    double *pos = block, *d1 = block + (size_t)n * 3, *d2 = block + (size_t)n * 6;
-    double *scratch = block + (size_t)n * 9;
+    double *pos = block, *d1 = block + (size_t)n * 3 + 2 * PAD_MAX, *d2 = d1 + 2 * rows;
     part_positions(m, hand, pos);
 
     /* principal axes of the path */
@@ -779,28 +781,36 @@ affect_status affect_laban_shape_directional(const affect_motion *m, const affec
                    : affect_fail(err, AFFECT_ERR_INVALID,
                                  "eigen-decomposition failed (LAPACK info %d)", (int)info);
     }
-    /* eigenvalues ascend: columns 2 and 1 are the two main axes; project onto them (x, y) and
-     * leave z = 0 so the 3-D derivative helpers can be reused */
+    /* eigenvalues ascend: columns 2 and 1 are the two main axes; project onto them (x, y),
+     * two interleaved channels written over the positions (row t is read before rows ≤ t are
+     * written) */
+    double *xy = pos;
     for (uint32_t t = 0; t < n; t++) {
         double c[3] = {pos[(size_t)t * 3] - mean[0], pos[(size_t)t * 3 + 1] - mean[1],
                        pos[(size_t)t * 3 + 2] - mean[2]};
         double x = c[0] * cov[2] + c[1] * cov[5] + c[2] * cov[8];
         double y = c[0] * cov[1] + c[1] * cov[4] + c[2] * cov[7];
-        pos[(size_t)t * 3] = x;
-        pos[(size_t)t * 3 + 1] = y;
-        pos[(size_t)t * 3 + 2] = 0;
+        xy[(size_t)t * 2] = x;
+        xy[(size_t)t * 2 + 1] = y;
     }
-    derivative3(pos, n, m->fps, opt->cutoff_hz, scratch, d1);
-    derivative3(d1, n, m->fps, opt->cutoff_hz, scratch, d2);
-    double peak = 0;
-    for (uint32_t t = 0; t < n; t++)
-        peak = fmax(peak, hypot(d1[(size_t)t * 3], d1[(size_t)t * 3 + 1]));
+    /* the derivatives of both channels in lockstep: per channel the arithmetic of gradient3
+     * and affect_lowpass (derivative3), so the same bits */
+    gradient_channels(xy, n, 2, m->fps, d1);
+    lowpass_channels(d1, n, 2, m->fps, opt->cutoff_hz);
+    gradient_channels(d1, n, 2, m->fps, d2);
+    lowpass_channels(d2, n, 2, m->fps, opt->cutoff_hz);
+    double peak = 0, *speeds = pos; /* the path is no longer needed */
+    for (uint32_t t = 0; t < n; t++) {
+        double v = hypot(d1[(size_t)t * 2], d1[(size_t)t * 2 + 1]);
+        speeds[t] = v;
+        peak = v > peak ? v : peak; /* fmax(peak, v), NaN too, without the libm call */
+    }
     double sum = 0;
     uint32_t used = 0;
     for (uint32_t t = 0; t < n && peak > 0; t++) {
-        double xd = d1[(size_t)t * 3], yd = d1[(size_t)t * 3 + 1];
-        double xdd = d2[(size_t)t * 3], ydd = d2[(size_t)t * 3 + 1];
-        double speed = hypot(xd, yd);
+        double xd = d1[(size_t)t * 2], yd = d1[(size_t)t * 2 + 1];
+        double xdd = d2[(size_t)t * 2], ydd = d2[(size_t)t * 2 + 1];
+        double speed = speeds[t];
         if (speed <= 0 || speed < opt->speed_floor * peak)
             continue;
         sum += fabs(xdd * yd - ydd * xd) / (speed * speed * speed);
