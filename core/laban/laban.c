@@ -11,7 +11,8 @@
  * principal axes (LAPACKE_dsyev on the 3 × 3 covariance), Shaping and Flow take convex hulls
  * per frame (hull.c). Shape Flow is the largest 3-D hull volume over the frames: the frame of
  * the largest bounding box is built first, then every frame is bounded from the last hull
- * built (affect_hull3d_bound, rigorous and tight while the hull's faces change little) and its
+ * built (affect_hull3d_bound, rigorous and tight while the hull's faces change little; first
+ * by the cheaper affect_hull3d_bound_quick when the last bound was well below the best) and its
  * hull is built only when the bound reaches the best so far (on the corpora about a quarter
  * of the frames: fast limbs soon make the last hull's faces a loose fit). The volumes built
  * are Quickhull's, so the result has the same bits as a hull of every frame.
@@ -60,6 +61,9 @@ static const char *const all_parts[6] = {"torso",      "head",      "left_hand",
 #define PAD_MAX 9                    /* odd-reflection padding of the filter */
 #define HULL_GRID_STEPS 1073741824.0 /* hull.c's grid: 2^30 steps over the longest side */
 #define AREA_BOUND_SLACK 1e-6        /* relative widening of the hull area bound */
+/* Shape Flow tries affect_hull3d_bound_quick first when the last bound was below this fraction
+ * of the best volume (it then usually suffices; closer, it rarely does and only adds cost) */
+#define FLOW_QUICK_MARGIN 0.85
 
 int affect_laban_index(const char *name)
 {
@@ -1005,7 +1009,7 @@ static affect_status shape_flow(const affect_motion *m, int32_t pelvis,
          * and built only when the bound does not rule out that it beats the best so far; the
          * frame of the largest bounding box goes first, a good guess of the maximum */
         uint32_t first = 0;
-        double box_best = -1;
+        double box_best = -1, last = INFINITY;
         for (uint32_t t = 0; t < m->n_frames && !stop_at(opt, t); t++) {
             gather_body(m, t, joints, nb, xyz);
             double v = box_volume(xyz, nb);
@@ -1017,8 +1021,14 @@ static affect_status shape_flow(const affect_motion *m, int32_t pelvis,
             if (k > 0 && t == first)
                 continue;
             gather_body(m, t, joints, nb, xyz);
-            if (affect_hull3d_bound(hull, xyz, nb) < best)
-                continue; /* this frame's hull cannot beat the best */
+            if (last < FLOW_QUICK_MARGIN * best) {
+                last = affect_hull3d_bound_quick(hull, xyz, nb);
+                if (last < best)
+                    continue; /* this frame's hull cannot beat the best */
+            }
+            last = affect_hull3d_bound(hull, xyz, nb);
+            if (last < best)
+                continue;
             double v = affect_hull3d_volume(hull, xyz, nb);
             best = v > best ? v : best;
         }

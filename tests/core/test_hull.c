@@ -910,7 +910,9 @@ static void test_out_of_memory(void **state)
  * their parent, as in the corpus): the bound from the last hull built (every 1 to 8 frames, as
  * shape_flow would) is never below the volume a fresh Quickhull gives, and it is the volume
  * itself, to 1e-4 (the slack of its float arithmetic), on the reference's own frame (the
- * certificate: no point above a face). */
+ * certificate: no point above a face). affect_hull3d_bound_quick, with the cones of the previous
+ * frame's bound frozen, is never below the volume either, and with this frame's it is that
+ * frame's bound to 1e-8. */
 static void test_bound_random_walk(void **state)
 {
     (void)state;
@@ -921,7 +923,7 @@ static void test_bound_random_walk(void **state)
     assert_non_null(fresh);
     double rest[81], p[81], off[81] = {0};
     random_skeleton(&rng, rest);
-    uint32_t tight = 0, frames = 4000, next = 0;
+    uint32_t tight = 0, quick_tight = 0, frames = 4000, next = 0;
     double sigma = 1, yaw = 0;
     for (uint32_t t = 0; t < frames; t++) {
         if (t % 500 == 0)
@@ -940,13 +942,19 @@ static void test_bound_random_walk(void **state)
             for (int k = 0; k < 3; k++)
                 p[3 * 26 + k] = p[3 * 25 + k], p[3 * 12 + k] = p[3 * 11 + k];
         double v = affect_hull3d_volume(fresh, p, 27);
+        double q = affect_hull3d_bound_quick(ref, p, 27); /* last frame's cones, frozen */
         double b = affect_hull3d_bound(ref, p, 27);
         assert_true(v > 0);
         if (t == 0)
-            assert_true(isinf(b) && b > 0); /* no reference yet */
+            assert_true(isinf(b) && b > 0 && isinf(q)); /* no reference yet */
         else
-            assert_true(b >= v);
+            assert_true(b >= v && q >= v);
         tight += b <= 1.05 * v;
+        quick_tight += q <= 1.25 * v;
+        /* the frozen cones of this very frame: the same bound but for rounding */
+        double q_same = affect_hull3d_bound_quick(ref, p, 27);
+        if (isfinite(b))
+            assert_true(q_same >= v && fabs(q_same - b) <= 1e-8 * b);
         if (t == next) {
             assert_true(affect_hull3d_volume(ref, p, 27) == v); /* same bits, any handle */
             double self = affect_hull3d_bound(ref, p, 27);
@@ -954,7 +962,8 @@ static void test_bound_random_walk(void **state)
             next = t + 1 + (uint32_t)(affect_rng_next(&rng) % 8);
         }
     }
-    assert_true(tight > frames / 5); /* a useful bound (within 5 %), not merely a valid one */
+    assert_true(tight > frames / 5);       /* a useful bound (within 5 %), not merely a valid one */
+    assert_true(quick_tight > frames / 4); /* one frame stale: within 25 % often enough */
     affect_hull3d_free(ref);
     affect_hull3d_free(fresh);
 }
@@ -991,8 +1000,10 @@ static void test_bound_random_sets(void **state)
             double scale = trial % 50 == 0 ? 1e-150 : trial % 50 == 1 ? 1e150 : 1;
             for (uint32_t i = 0; i < 3 * n; i++)
                 q[i] *= scale;
-            double v = affect_hull3d_volume(fresh, q, n), b = affect_hull3d_bound(ref, q, n);
-            assert_true(b >= v);
+            double v = affect_hull3d_volume(fresh, q, n);
+            double bq = affect_hull3d_bound_quick(ref, q, n); /* the previous set's cones */
+            double b = affect_hull3d_bound(ref, q, n);
+            assert_true(b >= v && bq >= v);
             for (uint32_t i = 0; i < 3 * n; i++)
                 q[i] /= scale;
         }
@@ -1002,7 +1013,8 @@ static void test_bound_random_sets(void **state)
 }
 
 /* No reference, fewer than 4 points, another number of points, non-finite input, degenerate
- * frames (a flat frame leaves the reference as it was). */
+ * frames (a flat frame leaves the reference as it was); the same for the quick bound, and its
+ * frozen cones follow the centroid but refuse another scale. */
 static void test_bound_limits(void **state)
 {
     (void)state;
@@ -1030,9 +1042,37 @@ static void test_bound_limits(void **state)
     assert_true(isinf(affect_hull3d_bound(h, box, 7))); /* not the reference's points */
     double same[24] = {0};
     assert_true(affect_hull3d_bound(h, same, 8) == 0);
+    /* the quick bound: the cones of the last finite affect_hull3d_bound, for its n */
+    assert_true(isinf(affect_hull3d_bound_quick(NULL, box, 8)));
+    assert_true(isinf(affect_hull3d_bound_quick(h, box, 8))); /* the last bound was 0 */
+    b = affect_hull3d_bound(h, box, 8);
+    double bq = affect_hull3d_bound_quick(h, box, 8);
+    assert_true(bq >= 1 && fabs(bq - b) <= 1e-8 * b);
+    assert_true(affect_hull3d_bound_quick(h, box, 3) == 0);
+    assert_true(isinf(affect_hull3d_bound_quick(h, box, 7)));
+    assert_true(isinf(affect_hull3d_bound_quick(h, box, 9)));
+    double big[24], shifted[24];
+    for (int i = 0; i < 24; i++) {
+        big[i] = 1000 * box[i];    /* far from the frozen scale */
+        shifted[i] = box[i] + 1e6; /* the cones move with the centroid */
+    }
+    assert_true(isinf(affect_hull3d_bound_quick(h, big, 8)));
+    bq = affect_hull3d_bound_quick(h, shifted, 8);
+    assert_true(bq >= 1 && bq < 1 + 1e-4);
+    big[0] = 2; /* one corner out: the bound grows, stays above the volume */
+    for (int i = 1; i < 24; i++)
+        big[i] = box[i];
+    bq = affect_hull3d_bound_quick(h, big, 8);
+    assert_true(isfinite(bq) && bq >= affect_hull3d_volume(h, big, 8));
+    b = affect_hull3d_bound(h, box, 8);
     box[5] = NAN;
+    assert_true(isinf(affect_hull3d_bound_quick(h, box, 8)));
     assert_true(isinf(affect_hull3d_bound(h, box, 8)));
+    box[5] = 1;
+    assert_true(isinf(affect_hull3d_bound_quick(h, box, 8))); /* the last bound was +∞ */
+    b = affect_hull3d_bound(h, box, 8);
     box[5] = INFINITY;
+    assert_true(isinf(affect_hull3d_bound_quick(h, box, 8)));
     assert_true(isinf(affect_hull3d_bound(h, box, 8)));
     affect_hull3d_free(h);
 }
