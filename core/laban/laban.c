@@ -928,8 +928,9 @@ affect_status affect_laban_shape_shaping(const affect_motion *m, const affect_ro
     for (uint32_t t = 0; t < n; t++) {
         const double *p = pos + (size_t)t * 3;
         double d[3] = {p[0] - pos[0], p[1] - pos[1], p[2] - pos[2]};
-        vertical = fmax(vertical, fabs(d[u]));
-        sagittal = fmax(sagittal, fabs(d[0] * fwd[0] + d[1] * fwd[1] + d[2] * fwd[2]));
+        double dv = fabs(d[u]), ds = fabs(d[0] * fwd[0] + d[1] * fwd[1] + d[2] * fwd[2]);
+        vertical = dv > vertical ? dv : vertical; /* fmax, NaN too, without the libm call */
+        sagittal = ds > sagittal ? ds : sagittal;
     }
     uint32_t nb = body_joints(m, roles->joint[AFFECT_ROLE_PELVIS], joints);
     /* the largest hull area: every frame's area is bounded first (area_bound_2d); the frame
@@ -950,7 +951,8 @@ affect_status affect_laban_shape_shaping(const affect_motion *m, const affect_ro
             xy[2 * i] = p[a];
             xy[2 * i + 1] = p[b];
         }
-        horizontal = fmax(horizontal, affect_hull_area_2d(xy, nb, scratch));
+        double area = affect_hull_area_2d(xy, nb, scratch);
+        horizontal = area > horizontal ? area : horizontal; /* fmax, NaN too */
     }
     out[0] = vertical;
     out[1] = sagittal;
@@ -984,6 +986,24 @@ static double box_volume(const double *xyz, uint32_t nb)
     return (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
 }
 
+/* box_volume of frame t's body joints, read from the motion without gathering them (the
+ * floats widen to the same doubles). */
+static double frame_box_volume(const affect_motion *m, uint32_t t, const int32_t *joints,
+                               uint32_t nb)
+{
+    const float *p0 = affect_motion_at(m, t, (uint32_t)joints[0]);
+    double lo[3] = {p0[0], p0[1], p0[2]}, hi[3] = {p0[0], p0[1], p0[2]};
+    for (uint32_t i = 1; i < nb; i++) {
+        const float *p = affect_motion_at(m, t, (uint32_t)joints[i]);
+        for (int a = 0; a < 3; a++) {
+            double c = p[a];
+            lo[a] = c < lo[a] ? c : lo[a];
+            hi[a] = c > hi[a] ? c : hi[a];
+        }
+    }
+    return (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
+}
+
 /* Shape Flow with the roles' pelvis (for the body joints). */
 static affect_status shape_flow(const affect_motion *m, int32_t pelvis,
                                 const affect_laban_options *opt, double *out, affect_error *err)
@@ -1011,8 +1031,7 @@ static affect_status shape_flow(const affect_motion *m, int32_t pelvis,
         uint32_t first = 0;
         double box_best = -1, last = INFINITY;
         for (uint32_t t = 0; t < m->n_frames && !stop_at(opt, t); t++) {
-            gather_body(m, t, joints, nb, xyz);
-            double v = box_volume(xyz, nb);
+            double v = frame_box_volume(m, t, joints, nb);
             first = v > box_best ? t : first;
             box_best = v > box_best ? v : box_best;
         }
