@@ -831,6 +831,17 @@ static int bound_winding(const affect_hull3d *h, const double *X, const double *
     return w;
 }
 
+/* 2^k: built from its bits when it is a normal double (ldexp is a library call) */
+static double pow2(int k)
+{
+    if (k < -1022 || k > 1023)
+        return ldexp(1.0, k);
+    uint64_t bits = (uint64_t)(k + 1023) << 52;
+    double v;
+    memcpy(&v, &bits, sizeof v);
+    return v;
+}
+
 /* The points xyz (n) about their centroid, scaled by 2^-e, as doubles x, y, z apart in X (3n)
  * and floats in xf (3n); *big = their largest |coordinate| and *len = the longest side of their
  * bounding box, both scaled; e is *e when keep_e, else taken from big (max|P| then in [1/2, 1))
@@ -846,18 +857,12 @@ static bool bound_points(const double *xyz, uint32_t n, double *X, float *xf, bo
         double x = xyz[3 * (size_t)i], y = xyz[3 * (size_t)i + 1], z = xyz[3 * (size_t)i + 2];
         X[i] = x, Y[i] = y, Z[i] = z;
         sum[0] += x, sum[1] += y, sum[2] += z;
+        lo[0] = x < lo[0] ? x : lo[0], hi[0] = x > hi[0] ? x : hi[0];
+        lo[1] = y < lo[1] ? y : lo[1], hi[1] = y > hi[1] ? y : hi[1];
+        lo[2] = z < lo[2] ? z : lo[2], hi[2] = z > hi[2] ? z : hi[2];
     }
-    for (int k = 0; k < 3; k++) {
-        const double *c = X + (size_t)k * n;
-        double l = lo[k], h = hi[k];
-        for (uint32_t i = 0; i < n; i++) {
-            l = c[i] < l ? c[i] : l;
-            h = c[i] > h ? c[i] : h;
-        }
-        lo[k] = l, hi[k] = h;
-        if (!(fabs(sum[k]) <= DBL_MAX))
-            return false;
-    }
+    if (!(fabs(sum[0]) <= DBL_MAX && fabs(sum[1]) <= DBL_MAX && fabs(sum[2]) <= DBL_MAX))
+        return false;
     double r[3] = {sum[0] / n, sum[1] / n, sum[2] / n};
     double l = hi[0] - lo[0];
     l = hi[1] - lo[1] > l ? hi[1] - lo[1] : l;
@@ -873,7 +878,7 @@ static bool bound_points(const double *xyz, uint32_t n, double *X, float *xf, bo
         return false;
     if (!keep_e)
         frexp(b, e); /* 0 when b is */
-    double unit = ldexp(1.0, -*e);
+    double unit = pow2(-*e);
     for (int k = 0; k < 3; k++) {
         double *c = X + (size_t)k * n, rk = r[k];
         for (uint32_t i = 0; i < n; i++)
