@@ -843,11 +843,12 @@ static double pow2(int k)
 }
 
 /* The points xyz (n) about their centroid, scaled by 2^-e, as doubles x, y, z apart in X (3n)
- * and floats in xf (3n); *big = their largest |coordinate| and *len = the longest side of their
+ * and floats in xf (x, y, z apart, n apart; only the *nu points that differ from the one
+ * before them); *big = their largest |coordinate| and *len = the longest side of their
  * bounding box, both scaled; e is *e when keep_e, else taken from big (max|P| then in [1/2, 1))
  * into *e. False when a coordinate is not finite. */
-static bool bound_points(const double *xyz, uint32_t n, double *X, float *xf, bool keep_e, int *e,
-                         double *big, double *len)
+static bool bound_points(const double *xyz, uint32_t n, double *X, float *xf, uint32_t *nu,
+                         bool keep_e, int *e, double *big, double *len)
 {
     /* r: the points' centroid; their bounding box's longest side gives the grid's step. The
      * sums are not finite when a coordinate is not (or when they overflow: refused too). */
@@ -884,9 +885,17 @@ static bool bound_points(const double *xyz, uint32_t n, double *X, float *xf, bo
         for (uint32_t i = 0; i < n; i++)
             c[i] = (c[i] - rk) * unit;
     }
-    if (xf)
-        for (size_t i = 0; i < 3 * (size_t)n; i++)
-            xf[i] = (float)X[i];
+    /* the floats without the points equal to the one before (an end site on its joint: the
+     * same extents) */
+    float *yf = xf + n, *zf = yf + n;
+    uint32_t u = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        if (i > 0 && X[i] == X[i - 1] && Y[i] == Y[i - 1] && Z[i] == Z[i - 1])
+            continue;
+        xf[u] = (float)X[i], yf[u] = (float)Y[i], zf[u] = (float)Z[i];
+        u++;
+    }
+    *nu = u;
     *big = b * unit;
     *len = l * unit;
     return true;
@@ -906,10 +915,11 @@ double affect_hull3d_bound_quick(affect_hull3d *h, const double *xyz, uint32_t n
     float *xf = (float *)(void *)h->bf, *n0f = xf + 3 * (size_t)n, *n1f = n0f + nf;
     float *n2f = n1f + nf, *top = n2f + nf;
     const double *coef = h->bf + 2 * (size_t)n + 4 * (size_t)nf, *g1 = coef + nf;
-    if (!bound_points(xyz, n, h->ys, xf, true, &e, &big, &len) ||
+    uint32_t nu;
+    if (!bound_points(xyz, n, h->ys, xf, &nu, true, &e, &big, &len) ||
         !(big >= HULL_QUICK_BIG_MIN && big <= HULL_QUICK_BIG_MAX))
         return INFINITY; /* not finite, or too far from the frozen scale for the floats */
-    bound_extents(xf, xf + n, xf + 2 * (size_t)n, n, n0f, n1f, n2f, nf, top);
+    bound_extents(xf, xf + n, xf + 2 * (size_t)n, nu, n0f, n1f, n2f, nf, top);
     double grid_slack = HULL_BOUND_STEP * (len / HULL_SCALE) + HULL_BOUND_EPS * big, total = 0;
     for (uint32_t f = 0; f < nf; f++) {
         double toph = (double)top[f] + g1[f] * (grid_slack + HULL_BOUND_EPSF * big);
@@ -934,7 +944,8 @@ double affect_hull3d_bound(affect_hull3d *h, const double *xyz, uint32_t n)
     int e = 0;
     double big, len, *X = h->ys, *Y = X + n, *Z = Y + n;
     float *xf = (float *)(void *)h->bf, *yf = xf + n, *zf = yf + n;
-    if (!bound_points(xyz, n, X, xf, false, &e, &big, &len))
+    uint32_t nu;
+    if (!bound_points(xyz, n, X, xf, &nu, false, &e, &big, &len))
         return INFINITY; /* a coordinate is not finite */
     if (!(big > 0))
         return 0; /* all points coincide */
@@ -970,7 +981,7 @@ double affect_hull3d_bound(affect_hull3d *h, const double *xyz, uint32_t n)
         hi_d[f] = dc > dmax ? dc : dmax;
         n0f[f] = (float)g0, n1f[f] = (float)g1, n2f[f] = (float)g2;
     }
-    bound_extents(xf, yf, zf, n, n0f, n1f, n2f, nf, top);
+    bound_extents(xf, yf, zf, nu, n0f, n1f, n2f, nf, top);
     /* each face's cone, cut at λ = widened extent / least g · z on the face (≥ 1; exactly 1
      * but for the widening when no point is above the face) */
     for (uint32_t f = 0; f < nf; f++) {
