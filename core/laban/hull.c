@@ -99,12 +99,12 @@
  * affect_hull3d_volume returns.
  *
  * Quick bound (affect_hull3d_bound_quick): the last finite bound's cones frozen — each face's
- * float normal g, its lower bound of g · z on the face and its upper bound of |det| kept as
- * one coefficient |det| / (min g · z)³, with its scale exponent. That surface wound around
- * its centroid, so translated to any apex (the new points' centroid) its cones still cover
- * space; only the extents along the frozen g are recomputed (the same float loop and the same
- * widening for the grid and rounding, at the frozen scale), so the bound is Σ_f coef_f ·
- * top_f³ / 6 without the normals, the divisions and the winding test: about half the cost,
+ * float normal g, its lower bound of g · z on the face and its upper bound of |det|, with
+ * the scale exponent. That surface wound around its centroid, so translated to any apex (the
+ * new points' centroid) its cones still cover space; only the extents along the frozen g are
+ * recomputed (the same float loop and the same widening for the grid and rounding, at the
+ * frozen scale), so the bound is Σ_f |det_f| · (top_f / min g · z)³ / 6 again, without the
+ * normals and the winding test: about half the cost,
  * looser as the body turns and bends (the normals do not follow). On the corpus, right after
  * a full bound well below the best volume it rules the frame out about 80 % of the time.
  *
@@ -146,8 +146,8 @@
 /* |det(P_a, P_b, P_c) − g · P_v| for g the face normal rounded to floats, per unit of
  * |g|_1 · max|P| (2^-24 and the dot product's rounding, widened), besides det_slack */
 #define HULL_BOUND_EPSG 1e-7
-/* affect_hull3d_bound_quick: the final relative widening (the rounding of the frozen
- * coefficients, the cubes and the sum, a few units of 2^-53, and the volume's running sum) */
+/* affect_hull3d_bound_quick: the final relative widening (the rounding of λ, the cubes and
+ * the sum, a few units of 2^-53, and the volume's running sum) */
 #define HULL_QUICK_SLACK 2e-9
 /* and the range of max|P| at the frozen scale in which its float extents are trusted */
 #define HULL_QUICK_BIG_MIN 0.015625
@@ -392,7 +392,7 @@ struct affect_hull3d {
     double *ys; /* 3·max: a bound's points about their centroid, x, y, z apart */
     double *bf; /* 6·cap: a bound's points and face normals as floats, per-face sums */
     /* the frozen cones of affect_hull3d_bound_quick: the last finite affect_hull3d_bound's
-     * faces (their float normals stay in bf, their coefficients and |g|_1 after them), their
+     * faces (their float normals stay in bf, their |det|, |g|_1 and least g · z after them), their
      * number (0: none), its number of points and its scale exponent */
     uint32_t q_faces, q_points;
     int q_exp;
@@ -914,7 +914,7 @@ double affect_hull3d_bound_quick(affect_hull3d *h, const double *xyz, uint32_t n
     double big, len;
     float *xf = (float *)(void *)h->bf, *n0f = xf + 3 * (size_t)n, *n1f = n0f + nf;
     float *n2f = n1f + nf, *top = n2f + nf;
-    const double *coef = h->bf + 2 * (size_t)n + 4 * (size_t)nf, *g1 = coef + nf;
+    const double *det = h->bf + 2 * (size_t)n + 4 * (size_t)nf, *g1 = det + nf, *dmin = g1 + nf;
     uint32_t nu;
     if (!bound_points(xyz, n, h->ys, xf, &nu, true, &e, &big, &len) ||
         !(big >= HULL_QUICK_BIG_MIN && big <= HULL_QUICK_BIG_MAX))
@@ -924,7 +924,8 @@ double affect_hull3d_bound_quick(affect_hull3d *h, const double *xyz, uint32_t n
     for (uint32_t f = 0; f < nf; f++) {
         double toph = (double)top[f] + g1[f] * (grid_slack + HULL_BOUND_EPSF * big);
         toph = toph > 0 ? toph : 0;
-        total += coef[f] * (toph * toph * toph);
+        double lambda = toph / dmin[f];
+        total += det[f] * lambda * lambda * lambda;
     }
     double u = ldexp(total / 6 * (1 + HULL_QUICK_SLACK), 3 * e);
     return u > 2 * DBL_MIN ? u : 2 * DBL_MIN;
@@ -957,7 +958,8 @@ double affect_hull3d_bound(affect_hull3d *h, const double *xyz, uint32_t n)
     uint32_t inverted = 0, nf = h->ref_faces;
     float *n0f = zf + n, *n1f = n0f + nf, *n2f = n1f + nf, *top = n2f + nf;
     double *lo_d = h->bf + 2 * (size_t)n + 2 * (size_t)nf, *hi_d = lo_d + nf;
-    double *coef = hi_d + nf, *g1s = coef + nf; /* the frozen cones' (bf: 2n + 6nf doubles) */
+    /* the frozen cones' |det| and |g|_1 and least g · z (bf: 2n + 7nf doubles in all) */
+    double *dets = hi_d + nf, *g1s = dets + nf, *dmins = g1s + nf;
     /* each face's normal n = (P_b − P_a) × (P_c − P_a) rounded to floats, g, turned to face
      * away from r, and the range of g · P over its vertices (all the triple product
      * |det(P_a, P_b, P_c)| but for rounding: within HULL_BOUND_EPSG · |g|_1 · max|P| plus
@@ -992,7 +994,7 @@ double affect_hull3d_bound(affect_hull3d *h, const double *xyz, uint32_t n)
             return INFINITY; /* r is (nearly) on the face's plane */
         double lambda = toph / dmin;
         total += (hi_d[f] + err + det_slack) * lambda * lambda * lambda;
-        coef[f] = (hi_d[f] + err + det_slack) / (dmin * dmin * dmin);
+        dets[f] = hi_d[f] + err + det_slack, dmins[f] = dmin;
         g1s[f] = g1;
     }
     if (inverted > 0 && bound_winding(h, X, Y, Z, big) == 0)
