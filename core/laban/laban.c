@@ -403,16 +403,6 @@ static double accumulated(const effort_series *s, bool of_acc)
     return sum;
 }
 
-/* The same series restricted to part k alone. */
-static effort_series series_part(const effort_series *s, uint32_t k)
-{
-    effort_series one = *s;
-    one.n_parts = 1;
-    one.vel[0] = s->vel[k];
-    one.acc[0] = s->acc[k];
-    return one;
-}
-
 /* ---- the six parts' kinematics at once (affect_laban_vector) ---- */
 
 #define MAX_CHANNELS 18 /* six parts × three axes */
@@ -1079,6 +1069,61 @@ affect_status affect_laban_shape_flow(const affect_motion *m, const affect_laban
 
 /* ---- all 27 ---- */
 
+/* The vector's 21 Effort values in one pass over the frames: for each part k present (have[k],
+ * in es's order) Weight (weight_q1), Time (time_q1) and Flow (accumulated of the acceleration),
+ * and with all six also their combinations, with exactly those functions' arithmetic: every
+ * norm is computed once and shared, the sums over parts run in part order, each part's Flow
+ * sums its frames in order from 0, and the combined Flow continues one sum through the parts'
+ * terms in turn (kept in a block of n per part), as accumulated does. */
+static affect_status effort_vector(const effort_series *es, const bool have[6], bool all,
+                                   const affect_laban_options *opt, double out[AFFECT_LABAN_N],
+                                   affect_error *err)
+{
+    uint32_t n = es->n_frames, np = es->n_parts, slot[6], kk = 0;
+    double *terms = affect_malloc_array(n, np * sizeof *terms);
+    if (!terms)
+        return affect_nomem(err);
+    for (uint32_t k = 0; k < 6; k++)
+        if (have[k])
+            slot[kk++] = k;
+    double wmax[6] = {0}, tmax[6] = {0}, fsum[6] = {0}, wall = 0, tall = 0;
+    for (uint32_t t = 0; t < n; t++) {
+        double ws = 0, ts = 0;
+        for (uint32_t j = 0; j < np; j++) {
+            const double *v = es->vel[slot[j]] + (size_t)t * es->stride;
+            const double *a = es->acc[slot[j]] + (size_t)t * es->stride;
+            double v2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+            double an = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+            ws += v2, ts += an;
+            wmax[j] = v2 > wmax[j] ? v2 : wmax[j];
+            tmax[j] = an > tmax[j] ? an : tmax[j];
+            if (t > 0) {
+                double term = dist3(a, a - es->stride) * es->fps;
+                terms[(size_t)j * n + t] = term;
+                fsum[j] += term;
+            }
+        }
+        wall = ws > wall ? ws : wall;
+        tall = ts > tall ? ts : tall;
+    }
+    for (uint32_t j = 0; j < np; j++) {
+        out[IDX_WEIGHT + 1 + slot[j]] = wmax[j];
+        out[IDX_TIME + 1 + slot[j]] = tmax[j];
+        out[IDX_FLOW + 1 + slot[j]] = fsum[j];
+    }
+    if (all) {
+        double sum = 0;
+        for (uint32_t j = 0; j < np; j++)
+            for (uint32_t t = 1; t < n; t++)
+                sum += terms[(size_t)j * n + t];
+        out[IDX_WEIGHT] = wall;
+        out[IDX_TIME] = tall;
+        out[IDX_FLOW] = sum;
+    }
+    affect_free(terms);
+    return affect_monitor_check(opt->monitor, err);
+}
+
 /* Runs one Shape step; with missing_null a missing role or short motion gives NaN. */
 static affect_status soft(affect_status st, const affect_laban_options *opt, double *dst,
                           uint32_t n)
@@ -1134,18 +1179,10 @@ affect_status affect_laban_vector(const affect_motion *m, const affect_roles *ro
                 goto done;
         }
     }
-    for (uint32_t k = 0; k < 6; k++) {
-        if (!have[k])
-            continue;
-        effort_series one = series_part(&es, k);
-        out[IDX_WEIGHT + 1 + k] = weight_q1(&one);
-        out[IDX_TIME + 1 + k] = time_q1(&one);
-        out[IDX_FLOW + 1 + k] = accumulated(&one, true);
-    }
-    if (n_have == 6) {
-        out[IDX_WEIGHT] = weight_q1(&es);
-        out[IDX_TIME] = time_q1(&es);
-        out[IDX_FLOW] = accumulated(&es, true);
+    if (n_have > 0) {
+        st = effort_vector(&es, have, n_have == 6, opt, out, err);
+        if (st)
+            goto done;
     }
 
     /* Shape */

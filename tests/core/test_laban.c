@@ -464,6 +464,42 @@ static void test_vector_matches_reference(void **state)
                                  affect_synth_actions[a], emotions[e], variant,
                                  affect_laban_names[i], out[i], ref[i]);
             }
+            /* two parts missing (missing_null): the others' Effort values, the same bits as
+             * each part alone, and NaN for the missing and for the combinations */
+            affect_roles some = roles;
+            some.joint[AFFECT_ROLE_LEFT_HAND] = -1;
+            some.joint[AFFECT_ROLE_HEAD] = -1;
+            affect_laban_options opt;
+            affect_laban_options_default(&opt);
+            opt.missing_null = true;
+            double out[AFFECT_LABAN_N];
+            if (affect_laban_vector(m, &some, &opt, out, &err))
+                fail_msg("%s", err.msg);
+            static const char *const part_names[6] = {"torso",      "head",      "left_hand",
+                                                      "right_hand", "left_foot", "right_foot"};
+            for (int k = 0; k < 6; k++) {
+                affect_part part;
+                int idx[3] = {1 + k, 8 + k, 15 + k}; /* Weight, Time, Flow of part k */
+                if (affect_part_resolve(m, &some, part_names[k], &part, &err) != AFFECT_OK) {
+                    for (int c = 0; c < 3; c++)
+                        assert_true(isnan(out[idx[c]]));
+                    continue;
+                }
+                double ref[3];
+                assert_int_equal(
+                    affect_laban_weight(m, &part, 1, AFFECT_LABAN_Q1, &opt, &ref[0], &err),
+                    AFFECT_OK);
+                assert_int_equal(
+                    affect_laban_time(m, &part, 1, AFFECT_LABAN_Q1, &opt, &ref[1], &err),
+                    AFFECT_OK);
+                assert_int_equal(affect_laban_flow(m, &part, 1, &opt, &ref[2], &err), AFFECT_OK);
+                for (int c = 0; c < 3; c++)
+                    if (memcmp(&out[idx[c]], &ref[c], sizeof ref[c]) != 0)
+                        fail_msg("%s %s without head and left hand: %s = %.17g, reference %.17g",
+                                 affect_synth_actions[a], emotions[e], affect_laban_names[idx[c]],
+                                 out[idx[c]], ref[c]);
+            }
+            assert_true(isnan(out[0]) && isnan(out[7]) && isnan(out[14]));
             affect_motion_free(m);
         }
 }
