@@ -371,7 +371,7 @@ static void test_area_scale_and_random(void **state)
 }
 
 /* Points strictly inside the hull (which affect_hull_area_2d drops before sorting, when they
- * are inside the octagon of its extreme points) and copies of the points change nothing, to
+ * are inside the quadrilateral of its extreme points) and copies of the points change nothing, to
  * the bit; and on a small integer lattice, where the extremes tie and many points lie on the
  * hull's edges, the area is right (a lost vertex would take at least 1/2 off). */
 static void test_area_interior_points(void **state)
