@@ -38,11 +38,13 @@
  *
  * 2-D: Andrew's monotone chain. Each grid point becomes one 64-bit key, x in the high bits
  * and y in the low, so that sorting keys sorts points by (x, y); the keys are written into
- * scratch[0, n) and sorted — insertion sort up to 32 points, a bottom-up merge sort through
- * scratch[n, 2n) above; the lower and the upper chain are then built in turn in
- * scratch[n, 2n) (a point stays only on a strict left turn, so duplicates and collinear
- * points drop out) and the shoelace sum is accumulated over both. Only 2n of the 4n doubles
- * of scratch are used.
+ * scratch[0, n), those strictly inside the quadrilateral of the extreme points along x and y
+ * are dropped (exact; never a vertex of the hull, so the chains and the area's bits are
+ * unchanged) and the rest are sorted —
+ * insertion sort up to 32 points, a bottom-up merge sort through scratch[n, 2n) above; the lower
+ * and the upper chain are then built in turn in scratch[n, 2n) (a point stays only on a strict left
+ * turn, so duplicates and collinear points drop out) and the shoelace sum is accumulated over both.
+ * Only 2n of the 4n doubles of scratch are used.
  *
  * 3-D: Quickhull (Barber, Dobkin & Huhdanpaa 1996) on a triangulated surface with face
  * adjacency. Start: the extreme points a, b on the axis of largest extent, c the farthest from
@@ -69,7 +71,7 @@
  * Workspace (affect_hull3d_new): four blocks sized from max_points m with checked arithmetic:
  * the handle, 3m + 8 faces and a spare (at most 2m − 4 are alive and a round adds at most m
  * before it frees the visible ones), 3m grid coordinates as doubles and as 64-bit integers
- * plus 3m + 6(3m + 8) doubles for the bound, and 7m + 4(3m + 8) 32-bit indices
+ * plus 3m + 6(3m + 8) doubles for the bounds, and 7m + 4(3m + 8) 32-bit indices
  * (outside-set links, per-vertex marks, horizon edges, new faces; the search queue, the
  * stack of faces waiting with an outside set, free face slots, the bound's reference faces).
  * max_points must leave 3m + 8 below 2^32 − 1 (else affect_hull3d_new returns NULL).
@@ -95,6 +97,16 @@
  * points by a power of two; the extents, 26 points × about 36 faces, are computed in floats,
  * four faces at a time. A bound costs about a third of a hull and changes nothing that
  * affect_hull3d_volume returns.
+ *
+ * Quick bound (affect_hull3d_bound_quick): the last finite bound's cones frozen — each face's
+ * float normal g, its lower bound of g · z on the face and its upper bound of |det|, with
+ * the scale exponent. That surface wound around its centroid, so translated to any apex (the
+ * new points' centroid) its cones still cover space; only the extents along the frozen g are
+ * recomputed (the same float loop and the same widening for the grid and rounding, at the
+ * frozen scale), so the bound is Σ_f |det_f| · (top_f / min g · z)³ / 6 again, without the
+ * normals and the winding test: about half the cost,
+ * looser as the body turns and bends (the normals do not follow). On the corpus, right after
+ * a full bound well below the best volume it rules the frame out about 80 % of the time.
  *
  * Speed (27 joints, gcc -O2, the project's 2-vCPU x86-64 build machine): a volume takes about
  * 2.3 µs on consecutive frames of the real corpus and 3.1 µs on unrelated random skeletons
@@ -134,6 +146,12 @@
 /* |det(P_a, P_b, P_c) − g · P_v| for g the face normal rounded to floats, per unit of
  * |g|_1 · max|P| (2^-24 and the dot product's rounding, widened), besides det_slack */
 #define HULL_BOUND_EPSG 1e-7
+/* affect_hull3d_bound_quick: the final relative widening (the rounding of λ, the cubes and
+ * the sum, a few units of 2^-53, and the volume's running sum) */
+#define HULL_QUICK_SLACK 2e-9
+/* and the range of max|P| at the frozen scale in which its float extents are trusted */
+#define HULL_QUICK_BIG_MIN 0.015625
+#define HULL_QUICK_BIG_MAX 64.0
 
 /* Bounding box of n points of dimension dim (2 or 3): its centre c, its longest side len
  * (0 when all points are equal) and the axis of that side; false when a coordinate is not
@@ -257,6 +275,57 @@ static double chain_2d(const double *p, size_t n, bool backward, double *st)
     return sum;
 }
 
+/* Drops the keys (grid points) of p[0, n) that lie strictly inside the quadrilateral of the
+ * extreme points along x and y (Akl and Toussaint's heuristic), keeping the others in order at
+ * the front; returns their number. Such a point is strictly inside the hull, so it is never a
+ * vertex of either chain: the chains, and so the area's bits, are those of all the points. The
+ * extremes, taken in the counter-clockwise order of their directions, lie on the hull in
+ * counter-clockwise order (ties may repeat a point); a point strictly left of every edge
+ * between two different extremes is strictly inside (the quadrilateral winds around it). Exact:
+ * the cross products of grid differences fit in int64_t. (The octagon of the diagonal extremes
+ * as well drops more points but costs more than the sort it saves.) */
+static size_t interior_filter_2d(double *p, size_t n)
+{
+    /* extremes: min y, max x, max y, min x */
+    size_t ext[4] = {0, 0, 0, 0};
+    int64_t b0, b1, b2, b3;
+    {
+        uint64_t k = key_get(p);
+        b0 = -KEY_Y(k), b1 = KEY_X(k), b2 = KEY_Y(k), b3 = -KEY_X(k);
+    }
+    for (size_t i = 1; i < n; i++) {
+        uint64_t k = key_get(p + i);
+        int64_t x = KEY_X(k), y = KEY_Y(k);
+        ext[0] = -y > b0 ? i : ext[0], b0 = -y > b0 ? -y : b0;
+        ext[1] = x > b1 ? i : ext[1], b1 = x > b1 ? x : b1;
+        ext[2] = y > b2 ? i : ext[2], b2 = y > b2 ? y : b2;
+        ext[3] = -x > b3 ? i : ext[3], b3 = -x > b3 ? -x : b3;
+    }
+    int64_t ex[4], ey[4], dx[4], dy[4];
+    int ne = 0;
+    for (int d = 0; d < 4; d++) {
+        uint64_t a = key_get(p + ext[d]), b = key_get(p + ext[(d + 1) % 4]);
+        if (a == b)
+            continue;
+        ex[ne] = KEY_X(a), ey[ne] = KEY_Y(a);
+        dx[ne] = KEY_X(b) - ex[ne], dy[ne] = KEY_Y(b) - ey[ne];
+        ne++;
+    }
+    if (ne < 3)
+        return n;
+    size_t m = 0;
+    for (size_t i = 0; i < n; i++) {
+        uint64_t k = key_get(p + i);
+        int64_t x = KEY_X(k), y = KEY_Y(k);
+        bool inside = true;
+        for (int e = 0; e < ne; e++)
+            inside &= dx[e] * (y - ey[e]) - dy[e] * (x - ex[e]) > 0;
+        if (!inside)
+            key_put(p + m++, k);
+    }
+    return m;
+}
+
 double affect_hull_area_2d(const double *xy, uint32_t n, double *scratch)
 {
     if (n < 3)
@@ -273,8 +342,9 @@ double affect_hull_area_2d(const double *xy, uint32_t n, double *scratch)
         uint64_t y = (uint64_t)(grid(xy[2 * i + 1], c[1], scale) + HULL_HALF);
         key_put(p + i, x << 31 | y);
     }
-    sort_keys(p, tmp, n);
-    double area = 0.5 * (chain_2d(p, n, false, tmp) + chain_2d(p, n, true, tmp));
+    size_t m = interior_filter_2d(p, n);
+    sort_keys(p, tmp, m);
+    double area = 0.5 * (chain_2d(p, m, false, tmp) + chain_2d(p, m, true, tmp));
     if (!(area > HULL_FLAT * HULL_SCALE * HULL_SCALE))
         return 0;
     double step = len / HULL_SCALE;
@@ -324,6 +394,11 @@ struct affect_hull3d {
     uint32_t ref_faces, ref_points;
     double *ys; /* 3·max: a bound's points about their centroid, x, y, z apart */
     double *bf; /* 6·cap: a bound's points and face normals as floats, per-face sums */
+    /* the frozen cones of affect_hull3d_bound_quick: the last finite affect_hull3d_bound's
+     * faces (their float normals stay in bf, their |det|, |g|_1 and least g · z after them), their
+     * number (0: none), its number of points and its scale exponent */
+    uint32_t q_faces, q_points;
+    int q_exp;
 };
 
 affect_hull3d *affect_hull3d_new(uint32_t max_points)
@@ -710,6 +785,23 @@ double affect_hull3d_volume(affect_hull3d *h, const double *xyz, uint32_t n)
     return h->vol / 6 * step * step * step;
 }
 
+/* The points' (xf, yf, zf; n) extent along every face normal (n0f, n1f, n2f; nf) into top, in
+ * floats: points outside, faces inside (a loop that gcc vectorises, four faces at a time). */
+static void bound_extents(const float *xf, const float *yf, const float *zf, uint32_t n,
+                          const float *n0f, const float *n1f, const float *n2f, uint32_t nf,
+                          float *top)
+{
+    for (uint32_t f = 0; f < nf; f++)
+        top[f] = -INFINITY;
+    for (uint32_t i = 0; i < n; i++) {
+        float x = xf[i], y = yf[i], z = zf[i];
+        for (uint32_t f = 0; f < nf; f++) {
+            float d = n0f[f] * x + n1f[f] * y + n2f[f] * z;
+            top[f] = d > top[f] ? d : top[f];
+        }
+    }
+}
+
 /* The winding number of the reference surface (its points X, Y, Z about r) around r: the
  * signed count of its faces that the ray from r along +x crosses; 0 also when a face's
  * projection along x passes within rounding of r (the count would not be certain). */
@@ -742,62 +834,135 @@ static int bound_winding(const affect_hull3d *h, const double *X, const double *
     return w;
 }
 
-double affect_hull3d_bound(affect_hull3d *h, const double *xyz, uint32_t n)
+/* 2^k: built from its bits when it is a normal double (ldexp is a library call) */
+static double pow2(int k)
+{
+    if (k < -1022 || k > 1023)
+        return ldexp(1.0, k);
+    uint64_t bits = (uint64_t)(k + 1023) << 52;
+    double v;
+    memcpy(&v, &bits, sizeof v);
+    return v;
+}
+
+/* The points xyz (n) about their centroid, scaled by 2^-e, as doubles x, y, z apart in X (3n)
+ * and floats in xf (x, y, z apart, n apart; only the *nu points that differ from the one
+ * before them); *big = their largest |coordinate| and *len = the longest side of their
+ * bounding box, both scaled; e is *e when keep_e, else taken from big (max|P| then in [1/2, 1))
+ * into *e. False when a coordinate is not finite. */
+static bool bound_points(const double *xyz, uint32_t n, double *X, float *xf, uint32_t *nu,
+                         bool keep_e, int *e, double *big, double *len)
+{
+    /* r: the points' centroid; their bounding box's longest side gives the grid's step. The
+     * sums are not finite when a coordinate is not (or when they overflow: refused too). */
+    double sum[3] = {0, 0, 0}, lo[3] = {xyz[0], xyz[1], xyz[2]}, hi[3] = {lo[0], lo[1], lo[2]};
+    double *Y = X + n, *Z = Y + n;
+    for (uint32_t i = 0; i < n; i++) {
+        double x = xyz[3 * (size_t)i], y = xyz[3 * (size_t)i + 1], z = xyz[3 * (size_t)i + 2];
+        X[i] = x, Y[i] = y, Z[i] = z;
+        sum[0] += x, sum[1] += y, sum[2] += z;
+        lo[0] = x < lo[0] ? x : lo[0], hi[0] = x > hi[0] ? x : hi[0];
+        lo[1] = y < lo[1] ? y : lo[1], hi[1] = y > hi[1] ? y : hi[1];
+        lo[2] = z < lo[2] ? z : lo[2], hi[2] = z > hi[2] ? z : hi[2];
+    }
+    if (!(fabs(sum[0]) <= DBL_MAX && fabs(sum[1]) <= DBL_MAX && fabs(sum[2]) <= DBL_MAX))
+        return false;
+    double r[3] = {sum[0] / n, sum[1] / n, sum[2] / n};
+    double l = hi[0] - lo[0];
+    l = hi[1] - lo[1] > l ? hi[1] - lo[1] : l;
+    l = hi[2] - lo[2] > l ? hi[2] - lo[2] : l;
+    /* max |x_i − r| over the points is max(hi − r, r − lo) (rounding is monotone) */
+    double b = 0;
+    for (int k = 0; k < 3; k++) {
+        double u = hi[k] - r[k], v = r[k] - lo[k];
+        b = u > b ? u : b;
+        b = v > b ? v : b;
+    }
+    if (!(b <= DBL_MAX) || !(l <= DBL_MAX))
+        return false;
+    if (!keep_e)
+        frexp(b, e); /* 0 when b is */
+    double unit = pow2(-*e);
+    for (int k = 0; k < 3; k++) {
+        double *c = X + (size_t)k * n, rk = r[k];
+        for (uint32_t i = 0; i < n; i++)
+            c[i] = (c[i] - rk) * unit;
+    }
+    /* the floats without the points equal to the one before (an end site on its joint: the
+     * same extents) */
+    float *yf = xf + n, *zf = yf + n;
+    uint32_t u = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        if (i > 0 && X[i] == X[i - 1] && Y[i] == Y[i - 1] && Z[i] == Z[i - 1])
+            continue;
+        xf[u] = (float)X[i], yf[u] = (float)Y[i], zf[u] = (float)Z[i];
+        u++;
+    }
+    *nu = u;
+    *big = b * unit;
+    *len = l * unit;
+    return true;
+}
+
+double affect_hull3d_bound_quick(affect_hull3d *h, const double *xyz, uint32_t n)
 {
     if (!h || n > h->max_points)
         return INFINITY;
     if (n < 4)
         return 0;
+    if (h->q_faces == 0 || h->q_points != n)
+        return INFINITY;
+    uint32_t nf = h->q_faces;
+    int e = h->q_exp;
+    double big, len;
+    float *xf = (float *)(void *)h->bf, *n0f = xf + 3 * (size_t)n, *n1f = n0f + nf;
+    float *n2f = n1f + nf, *top = n2f + nf;
+    const double *det = h->bf + 2 * (size_t)n + 4 * (size_t)nf, *g1 = det + nf, *dmin = g1 + nf;
+    uint32_t nu;
+    if (!bound_points(xyz, n, h->ys, xf, &nu, true, &e, &big, &len) ||
+        !(big >= HULL_QUICK_BIG_MIN && big <= HULL_QUICK_BIG_MAX))
+        return INFINITY; /* not finite, or too far from the frozen scale for the floats */
+    bound_extents(xf, xf + n, xf + 2 * (size_t)n, nu, n0f, n1f, n2f, nf, top);
+    double grid_slack = HULL_BOUND_STEP * (len / HULL_SCALE) + HULL_BOUND_EPS * big, total = 0;
+    for (uint32_t f = 0; f < nf; f++) {
+        double toph = (double)top[f] + g1[f] * (grid_slack + HULL_BOUND_EPSF * big);
+        toph = toph > 0 ? toph : 0;
+        double lambda = toph / dmin[f];
+        total += det[f] * lambda * lambda * lambda;
+    }
+    double u = ldexp(total / 6 * (1 + HULL_QUICK_SLACK), 3 * e);
+    return u > 2 * DBL_MIN ? u : 2 * DBL_MIN;
+}
+
+double affect_hull3d_bound(affect_hull3d *h, const double *xyz, uint32_t n)
+{
+    if (!h || n > h->max_points)
+        return INFINITY;
+    h->q_faces = 0; /* the frozen cones are kept again below when this bound is finite */
+    if (n < 4)
+        return 0;
     if (h->ref_faces == 0 || h->ref_points != n)
         return INFINITY;
-    /* r: the points' centroid; their bounding box's longest side len gives the grid's step */
-    double sum[3] = {0, 0, 0}, lo[3] = {xyz[0], xyz[1], xyz[2]}, hi[3] = {lo[0], lo[1], lo[2]};
-    for (uint32_t i = 0; i < n; i++) {
-        const double *p = xyz + 3 * (size_t)i;
-        for (int k = 0; k < 3; k++) {
-            sum[k] += p[k];
-            lo[k] = p[k] < lo[k] ? p[k] : lo[k];
-            hi[k] = p[k] > hi[k] ? p[k] : hi[k];
-        }
-    }
-    double r[3] = {sum[0] / n, sum[1] / n, sum[2] / n};
-    double len = hi[0] - lo[0];
-    len = hi[1] - lo[1] > len ? hi[1] - lo[1] : len;
-    len = hi[2] - lo[2] > len ? hi[2] - lo[2] : len;
-    double *X = h->ys, *Y = X + n, *Z = Y + n, big = 0;
-    for (uint32_t i = 0; i < n; i++) {
-        X[i] = xyz[3 * (size_t)i] - r[0];
-        Y[i] = xyz[3 * (size_t)i + 1] - r[1];
-        Z[i] = xyz[3 * (size_t)i + 2] - r[2];
-        double a = fabs(X[i]), b = fabs(Y[i]), c = fabs(Z[i]);
-        big = a > big ? a : big;
-        big = b > big ? b : big;
-        big = c > big ? c : big;
-    }
-    if (!(big <= DBL_MAX) || !(len <= DBL_MAX))
+    /* the points about their centroid r, scaled by a power of two (exactly) to max|P| in
+     * [1/2, 1): the floats below can then neither overflow nor lose more than their rounding */
+    int e = 0;
+    double big, len, *X = h->ys, *Y = X + n, *Z = Y + n;
+    float *xf = (float *)(void *)h->bf, *yf = xf + n, *zf = yf + n;
+    uint32_t nu;
+    if (!bound_points(xyz, n, X, xf, &nu, false, &e, &big, &len))
         return INFINITY; /* a coordinate is not finite */
     if (!(big > 0))
         return 0; /* all points coincide */
-    /* scale by a power of two (exactly) to max|P| in [1/2, 1): the floats below can then
-     * neither overflow nor lose more than their rounding */
-    int e;
-    frexp(big, &e);
-    double unit = ldexp(1.0, -e);
-    for (uint32_t i = 0; i < n; i++)
-        X[i] *= unit, Y[i] *= unit, Z[i] *= unit;
-    big *= unit;
-    len *= unit;
     /* slack of N · y per unit of |N|_1: the grid's rounding (each grid point within
      * HULL_BOUND_STEP steps of its point per axis), the rounding of the points P about r and
      * of the dot product; and of the triple product */
     double grid_slack = HULL_BOUND_STEP * (len / HULL_SCALE) + HULL_BOUND_EPS * big;
     double det_slack = HULL_BOUND_EPS3 * big * big * big, total = 0;
     uint32_t inverted = 0, nf = h->ref_faces;
-    float *xf = (float *)(void *)h->bf, *yf = xf + n, *zf = yf + n;
     float *n0f = zf + n, *n1f = n0f + nf, *n2f = n1f + nf, *top = n2f + nf;
     double *lo_d = h->bf + 2 * (size_t)n + 2 * (size_t)nf, *hi_d = lo_d + nf;
-    for (uint32_t i = 0; i < n; i++)
-        xf[i] = (float)X[i], yf[i] = (float)Y[i], zf[i] = (float)Z[i];
+    /* the frozen cones' |det| and |g|_1 and least g · z (bf: 2n + 7nf doubles in all) */
+    double *dets = hi_d + nf, *g1s = dets + nf, *dmins = g1s + nf;
     /* each face's normal n = (P_b − P_a) × (P_c − P_a) rounded to floats, g, turned to face
      * away from r, and the range of g · P over its vertices (all the triple product
      * |det(P_a, P_b, P_c)| but for rounding: within HULL_BOUND_EPSG · |g|_1 · max|P| plus
@@ -820,17 +985,8 @@ double affect_hull3d_bound(affect_hull3d *h, const double *xyz, uint32_t n)
         lo_d[f] = dc < dmin ? dc : dmin;
         hi_d[f] = dc > dmax ? dc : dmax;
         n0f[f] = (float)g0, n1f[f] = (float)g1, n2f[f] = (float)g2;
-        top[f] = -INFINITY;
     }
-    /* the points' extent along every g, in floats: points outside, faces inside (a loop that
-     * gcc vectorises, four faces at a time) */
-    for (uint32_t i = 0; i < n; i++) {
-        float x = xf[i], y = yf[i], z = zf[i];
-        for (uint32_t f = 0; f < nf; f++) {
-            float d = n0f[f] * x + n1f[f] * y + n2f[f] * z;
-            top[f] = d > top[f] ? d : top[f];
-        }
-    }
+    bound_extents(xf, yf, zf, nu, n0f, n1f, n2f, nf, top);
     /* each face's cone, cut at λ = widened extent / least g · z on the face (≥ 1; exactly 1
      * but for the widening when no point is above the face) */
     for (uint32_t f = 0; f < nf; f++) {
@@ -841,9 +997,12 @@ double affect_hull3d_bound(affect_hull3d *h, const double *xyz, uint32_t n)
             return INFINITY; /* r is (nearly) on the face's plane */
         double lambda = toph / dmin;
         total += (hi_d[f] + err + det_slack) * lambda * lambda * lambda;
+        dets[f] = hi_d[f] + err + det_slack, dmins[f] = dmin;
+        g1s[f] = g1;
     }
     if (inverted > 0 && bound_winding(h, X, Y, Z, big) == 0)
         return INFINITY;
+    h->q_faces = nf, h->q_points = n, h->q_exp = e;
     /* back to the points' scale; a bound that underflows is raised to 2 · DBL_MIN, above any
      * volume that affect_hull3d_volume can round up to from below DBL_MIN */
     double u = ldexp(total / 6 * (1 + HULL_BOUND_SLACK), 3 * e);

@@ -11,7 +11,8 @@
  * principal axes (LAPACKE_dsyev on the 3 × 3 covariance), Shaping and Flow take convex hulls
  * per frame (hull.c). Shape Flow is the largest 3-D hull volume over the frames: the frame of
  * the largest bounding box is built first, then every frame is bounded from the last hull
- * built (affect_hull3d_bound, rigorous and tight while the hull's faces change little) and its
+ * built (affect_hull3d_bound, rigorous and tight while the hull's faces change little; first
+ * by the cheaper affect_hull3d_bound_quick when the last bound was well below the best) and its
  * hull is built only when the bound reaches the best so far (on the corpora about a quarter
  * of the frames: fast limbs soon make the last hull's faces a loose fit). The volumes built
  * are Quickhull's, so the result has the same bits as a hull of every frame.
@@ -60,6 +61,9 @@ static const char *const all_parts[6] = {"torso",      "head",      "left_hand",
 #define PAD_MAX 9                    /* odd-reflection padding of the filter */
 #define HULL_GRID_STEPS 1073741824.0 /* hull.c's grid: 2^30 steps over the longest side */
 #define AREA_BOUND_SLACK 1e-6        /* relative widening of the hull area bound */
+/* Shape Flow tries affect_hull3d_bound_quick first when the last bound was below this fraction
+ * of the best volume (it then usually suffices; closer, it rarely does and only adds cost) */
+#define FLOW_QUICK_MARGIN 0.85
 
 int affect_laban_index(const char *name)
 {
@@ -397,16 +401,6 @@ static double accumulated(const effort_series *s, bool of_acc)
             sum += dist3(x + (size_t)t * s->stride, x + (size_t)(t - 1) * s->stride) * s->fps;
     }
     return sum;
-}
-
-/* The same series restricted to part k alone. */
-static effort_series series_part(const effort_series *s, uint32_t k)
-{
-    effort_series one = *s;
-    one.n_parts = 1;
-    one.vel[0] = s->vel[k];
-    one.acc[0] = s->acc[k];
-    return one;
 }
 
 /* ---- the six parts' kinematics at once (affect_laban_vector) ---- */
@@ -751,11 +745,13 @@ affect_status affect_laban_shape_directional(const affect_motion *m, const affec
     if (st)
         return st;
     uint32_t n = m->n_frames;
-    double *block = affect_malloc_array((size_t)n * 9 + n + 2 * PAD_MAX, sizeof *block);
+    /* the positions (3n), then the path's two channels' derivatives, each with PAD_MAX rows of
+     * room for the filter's padding before and after (lowpass_channels) */
+    size_t rows = (size_t)n + 2 * PAD_MAX;
+    double *block = affect_malloc_array((size_t)n * 3 + 4 * rows, sizeof *block);
     if (!block)
         return affect_nomem(err);
-    double *pos = block, *d1 = block + (size_t)n * 3, *d2 = block + (size_t)n * 6;
-    double *scratch = block + (size_t)n * 9;
+    double *pos = block, *d1 = block + (size_t)n * 3 + 2 * PAD_MAX, *d2 = d1 + 2 * rows;
     part_positions(m, hand, pos);
 
     /* principal axes of the path */
@@ -779,28 +775,36 @@ affect_status affect_laban_shape_directional(const affect_motion *m, const affec
                    : affect_fail(err, AFFECT_ERR_INVALID,
                                  "eigen-decomposition failed (LAPACK info %d)", (int)info);
     }
-    /* eigenvalues ascend: columns 2 and 1 are the two main axes; project onto them (x, y) and
-     * leave z = 0 so the 3-D derivative helpers can be reused */
+    /* eigenvalues ascend: columns 2 and 1 are the two main axes; project onto them (x, y),
+     * two interleaved channels written over the positions (row t is read before rows ≤ t are
+     * written) */
+    double *xy = pos;
     for (uint32_t t = 0; t < n; t++) {
         double c[3] = {pos[(size_t)t * 3] - mean[0], pos[(size_t)t * 3 + 1] - mean[1],
                        pos[(size_t)t * 3 + 2] - mean[2]};
         double x = c[0] * cov[2] + c[1] * cov[5] + c[2] * cov[8];
         double y = c[0] * cov[1] + c[1] * cov[4] + c[2] * cov[7];
-        pos[(size_t)t * 3] = x;
-        pos[(size_t)t * 3 + 1] = y;
-        pos[(size_t)t * 3 + 2] = 0;
+        xy[(size_t)t * 2] = x;
+        xy[(size_t)t * 2 + 1] = y;
     }
-    derivative3(pos, n, m->fps, opt->cutoff_hz, scratch, d1);
-    derivative3(d1, n, m->fps, opt->cutoff_hz, scratch, d2);
-    double peak = 0;
-    for (uint32_t t = 0; t < n; t++)
-        peak = fmax(peak, hypot(d1[(size_t)t * 3], d1[(size_t)t * 3 + 1]));
+    /* the derivatives of both channels in lockstep: per channel the arithmetic of gradient3
+     * and affect_lowpass (derivative3), so the same bits */
+    gradient_channels(xy, n, 2, m->fps, d1);
+    lowpass_channels(d1, n, 2, m->fps, opt->cutoff_hz);
+    gradient_channels(d1, n, 2, m->fps, d2);
+    lowpass_channels(d2, n, 2, m->fps, opt->cutoff_hz);
+    double peak = 0, *speeds = pos; /* the path is no longer needed */
+    for (uint32_t t = 0; t < n; t++) {
+        double v = hypot(d1[(size_t)t * 2], d1[(size_t)t * 2 + 1]);
+        speeds[t] = v;
+        peak = v > peak ? v : peak; /* fmax(peak, v), NaN too, without the libm call */
+    }
     double sum = 0;
     uint32_t used = 0;
     for (uint32_t t = 0; t < n && peak > 0; t++) {
-        double xd = d1[(size_t)t * 3], yd = d1[(size_t)t * 3 + 1];
-        double xdd = d2[(size_t)t * 3], ydd = d2[(size_t)t * 3 + 1];
-        double speed = hypot(xd, yd);
+        double xd = d1[(size_t)t * 2], yd = d1[(size_t)t * 2 + 1];
+        double xdd = d2[(size_t)t * 2], ydd = d2[(size_t)t * 2 + 1];
+        double speed = speeds[t];
         if (speed <= 0 || speed < opt->speed_floor * peak)
             continue;
         sum += fabs(xdd * yd - ydd * xd) / (speed * speed * speed);
@@ -914,8 +918,9 @@ affect_status affect_laban_shape_shaping(const affect_motion *m, const affect_ro
     for (uint32_t t = 0; t < n; t++) {
         const double *p = pos + (size_t)t * 3;
         double d[3] = {p[0] - pos[0], p[1] - pos[1], p[2] - pos[2]};
-        vertical = fmax(vertical, fabs(d[u]));
-        sagittal = fmax(sagittal, fabs(d[0] * fwd[0] + d[1] * fwd[1] + d[2] * fwd[2]));
+        double dv = fabs(d[u]), ds = fabs(d[0] * fwd[0] + d[1] * fwd[1] + d[2] * fwd[2]);
+        vertical = dv > vertical ? dv : vertical; /* fmax, NaN too, without the libm call */
+        sagittal = ds > sagittal ? ds : sagittal;
     }
     uint32_t nb = body_joints(m, roles->joint[AFFECT_ROLE_PELVIS], joints);
     /* the largest hull area: every frame's area is bounded first (area_bound_2d); the frame
@@ -936,7 +941,8 @@ affect_status affect_laban_shape_shaping(const affect_motion *m, const affect_ro
             xy[2 * i] = p[a];
             xy[2 * i + 1] = p[b];
         }
-        horizontal = fmax(horizontal, affect_hull_area_2d(xy, nb, scratch));
+        double area = affect_hull_area_2d(xy, nb, scratch);
+        horizontal = area > horizontal ? area : horizontal; /* fmax, NaN too */
     }
     out[0] = vertical;
     out[1] = sagittal;
@@ -970,6 +976,24 @@ static double box_volume(const double *xyz, uint32_t nb)
     return (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
 }
 
+/* box_volume of frame t's body joints, read from the motion without gathering them (the
+ * floats widen to the same doubles). */
+static double frame_box_volume(const affect_motion *m, uint32_t t, const int32_t *joints,
+                               uint32_t nb)
+{
+    const float *p0 = affect_motion_at(m, t, (uint32_t)joints[0]);
+    double lo[3] = {p0[0], p0[1], p0[2]}, hi[3] = {p0[0], p0[1], p0[2]};
+    for (uint32_t i = 1; i < nb; i++) {
+        const float *p = affect_motion_at(m, t, (uint32_t)joints[i]);
+        for (int a = 0; a < 3; a++) {
+            double c = p[a];
+            lo[a] = c < lo[a] ? c : lo[a];
+            hi[a] = c > hi[a] ? c : hi[a];
+        }
+    }
+    return (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
+}
+
 /* Shape Flow with the roles' pelvis (for the body joints). */
 static affect_status shape_flow(const affect_motion *m, int32_t pelvis,
                                 const affect_laban_options *opt, double *out, affect_error *err)
@@ -995,10 +1019,9 @@ static affect_status shape_flow(const affect_motion *m, int32_t pelvis,
          * and built only when the bound does not rule out that it beats the best so far; the
          * frame of the largest bounding box goes first, a good guess of the maximum */
         uint32_t first = 0;
-        double box_best = -1;
+        double box_best = -1, last = INFINITY;
         for (uint32_t t = 0; t < m->n_frames && !stop_at(opt, t); t++) {
-            gather_body(m, t, joints, nb, xyz);
-            double v = box_volume(xyz, nb);
+            double v = frame_box_volume(m, t, joints, nb);
             first = v > box_best ? t : first;
             box_best = v > box_best ? v : box_best;
         }
@@ -1007,8 +1030,14 @@ static affect_status shape_flow(const affect_motion *m, int32_t pelvis,
             if (k > 0 && t == first)
                 continue;
             gather_body(m, t, joints, nb, xyz);
-            if (affect_hull3d_bound(hull, xyz, nb) < best)
-                continue; /* this frame's hull cannot beat the best */
+            if (last < FLOW_QUICK_MARGIN * best) {
+                last = affect_hull3d_bound_quick(hull, xyz, nb);
+                if (last < best)
+                    continue; /* this frame's hull cannot beat the best */
+            }
+            last = affect_hull3d_bound(hull, xyz, nb);
+            if (last < best)
+                continue;
             double v = affect_hull3d_volume(hull, xyz, nb);
             best = v > best ? v : best;
         }
@@ -1039,6 +1068,61 @@ affect_status affect_laban_shape_flow(const affect_motion *m, const affect_laban
 }
 
 /* ---- all 27 ---- */
+
+/* The vector's 21 Effort values in one pass over the frames: for each part k present (have[k],
+ * in es's order) Weight (weight_q1), Time (time_q1) and Flow (accumulated of the acceleration),
+ * and with all six also their combinations, with exactly those functions' arithmetic: every
+ * norm is computed once and shared, the sums over parts run in part order, each part's Flow
+ * sums its frames in order from 0, and the combined Flow continues one sum through the parts'
+ * terms in turn (kept in a block of n per part), as accumulated does. */
+static affect_status effort_vector(const effort_series *es, const bool have[6], bool all,
+                                   const affect_laban_options *opt, double out[AFFECT_LABAN_N],
+                                   affect_error *err)
+{
+    uint32_t n = es->n_frames, np = es->n_parts, slot[6], kk = 0;
+    double *terms = affect_malloc_array(n, np * sizeof *terms);
+    if (!terms)
+        return affect_nomem(err);
+    for (uint32_t k = 0; k < 6; k++)
+        if (have[k])
+            slot[kk++] = k;
+    double wmax[6] = {0}, tmax[6] = {0}, fsum[6] = {0}, wall = 0, tall = 0;
+    for (uint32_t t = 0; t < n; t++) {
+        double ws = 0, ts = 0;
+        for (uint32_t j = 0; j < np; j++) {
+            const double *v = es->vel[slot[j]] + (size_t)t * es->stride;
+            const double *a = es->acc[slot[j]] + (size_t)t * es->stride;
+            double v2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+            double an = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+            ws += v2, ts += an;
+            wmax[j] = v2 > wmax[j] ? v2 : wmax[j];
+            tmax[j] = an > tmax[j] ? an : tmax[j];
+            if (t > 0) {
+                double term = dist3(a, a - es->stride) * es->fps;
+                terms[(size_t)j * n + t] = term;
+                fsum[j] += term;
+            }
+        }
+        wall = ws > wall ? ws : wall;
+        tall = ts > tall ? ts : tall;
+    }
+    for (uint32_t j = 0; j < np; j++) {
+        out[IDX_WEIGHT + 1 + slot[j]] = wmax[j];
+        out[IDX_TIME + 1 + slot[j]] = tmax[j];
+        out[IDX_FLOW + 1 + slot[j]] = fsum[j];
+    }
+    if (all) {
+        double sum = 0;
+        for (uint32_t j = 0; j < np; j++)
+            for (uint32_t t = 1; t < n; t++)
+                sum += terms[(size_t)j * n + t];
+        out[IDX_WEIGHT] = wall;
+        out[IDX_TIME] = tall;
+        out[IDX_FLOW] = sum;
+    }
+    affect_free(terms);
+    return affect_monitor_check(opt->monitor, err);
+}
 
 /* Runs one Shape step; with missing_null a missing role or short motion gives NaN. */
 static affect_status soft(affect_status st, const affect_laban_options *opt, double *dst,
@@ -1095,18 +1179,10 @@ affect_status affect_laban_vector(const affect_motion *m, const affect_roles *ro
                 goto done;
         }
     }
-    for (uint32_t k = 0; k < 6; k++) {
-        if (!have[k])
-            continue;
-        effort_series one = series_part(&es, k);
-        out[IDX_WEIGHT + 1 + k] = weight_q1(&one);
-        out[IDX_TIME + 1 + k] = time_q1(&one);
-        out[IDX_FLOW + 1 + k] = accumulated(&one, true);
-    }
-    if (n_have == 6) {
-        out[IDX_WEIGHT] = weight_q1(&es);
-        out[IDX_TIME] = time_q1(&es);
-        out[IDX_FLOW] = accumulated(&es, true);
+    if (n_have > 0) {
+        st = effort_vector(&es, have, n_have == 6, opt, out, err);
+        if (st)
+            goto done;
     }
 
     /* Shape */

@@ -370,6 +370,71 @@ static void test_area_scale_and_random(void **state)
     }
 }
 
+/* Points strictly inside the hull (which affect_hull_area_2d drops before sorting, when they
+ * are inside the quadrilateral of its extreme points) and copies of the points change nothing, to
+ * the bit; and on a small integer lattice, where the extremes tie and many points lie on the
+ * hull's edges, the area is right (a lost vertex would take at least 1/2 off). */
+static void test_area_interior_points(void **state)
+{
+    (void)state;
+    affect_rng rng;
+    affect_rng_seed(&rng, 57);
+    double p[2 * 200];
+    for (int rep = 0; rep < 300; rep++) {
+        uint32_t n = 3 + (uint32_t)(affect_rng_next(&rng) % 30), m = n;
+        double c[2] = {0, 0};
+        for (uint32_t i = 0; i < n; i++) {
+            /* a body seen from above: an ellipse's outline with noise, or scattered points */
+            double t = 6.283185307179586 * affect_rng_uniform(&rng);
+            double rr = rep % 2 ? 1 + 0.2 * affect_rng_normal(&rng) : affect_rng_normal(&rng);
+            p[2 * i] = 0.5 * rr * cos(t) + 3;
+            p[2 * i + 1] = 0.2 * rr * sin(t) - 1;
+            c[0] += p[2 * i] / n, c[1] += p[2 * i + 1] / n;
+        }
+        double a = hull_area(p, n);
+        /* halfway from the centroid to a convex combination of three points: strictly
+         * inside unless the points are collinear */
+        uint32_t extra = (uint32_t)(affect_rng_next(&rng) % 150);
+        for (uint32_t k = 0; k < extra; k++, m++) {
+            if (k % 5 == 4) { /* a copy of any point */
+                uint32_t i = (uint32_t)(affect_rng_next(&rng) % m);
+                p[2 * m] = p[2 * i], p[2 * m + 1] = p[2 * i + 1];
+                continue;
+            }
+            double w[3], ws = 0;
+            uint32_t at[3];
+            for (int j = 0; j < 3; j++) {
+                ws += w[j] = affect_rng_uniform(&rng) + 1e-3;
+                at[j] = (uint32_t)(affect_rng_next(&rng) % n);
+            }
+            for (int d = 0; d < 2; d++) {
+                double v = 0;
+                for (int j = 0; j < 3; j++)
+                    v += w[j] / ws * p[2 * at[j] + (uint32_t)d];
+                p[2 * m + (uint32_t)d] = c[d] + 0.5 * (v - c[d]);
+            }
+        }
+        shuffle_points(p, m, 2, &rng);
+        double b = hull_area(p, m);
+        if (!(a == b) && !(a == 0 && b == 0))
+            fail_msg("set %d (%u + %u points): area %.17g, with interior points %.17g", rep, n,
+                     extra, a, b);
+    }
+    /* lattice points of a 6 × 6 grid, random subsets of every size */
+    for (int rep = 0; rep < 400; rep++) {
+        uint32_t n = 0;
+        for (int i = 0; i < 36; i++)
+            if (affect_rng_next(&rng) % (uint64_t)(2 + rep % 9) == 0) {
+                p[2 * n] = i % 6, p[2 * n + 1] = i / 6;
+                n++;
+            }
+        double ref = n >= 3 ? fabs(brute_area_2d(p, n, 1e-12, NULL)) : 0;
+        double a = hull_area(p, n); /* the grid moves a point by 2^-31 of the box at most */
+        if (!(fabs(a - ref) <= 1e-6))
+            fail_msg("lattice set %d (%u points): area %.17g, expected %.17g", rep, n, a, ref);
+    }
+}
+
 /* Near-duplicates: every point of a random set gets up to three copies moved by 10^-5 to
  * 10^-13 of the set's size (a decision made in plain floating point about such clusters can
  * tilt a tiny edge or face and lose a large part of the hull). The result must stay within
@@ -845,7 +910,9 @@ static void test_out_of_memory(void **state)
  * their parent, as in the corpus): the bound from the last hull built (every 1 to 8 frames, as
  * shape_flow would) is never below the volume a fresh Quickhull gives, and it is the volume
  * itself, to 1e-4 (the slack of its float arithmetic), on the reference's own frame (the
- * certificate: no point above a face). */
+ * certificate: no point above a face). affect_hull3d_bound_quick, with the cones of the previous
+ * frame's bound frozen, is never below the volume either, and with this frame's it is that
+ * frame's bound to 1e-8. */
 static void test_bound_random_walk(void **state)
 {
     (void)state;
@@ -856,7 +923,7 @@ static void test_bound_random_walk(void **state)
     assert_non_null(fresh);
     double rest[81], p[81], off[81] = {0};
     random_skeleton(&rng, rest);
-    uint32_t tight = 0, frames = 4000, next = 0;
+    uint32_t tight = 0, quick_tight = 0, frames = 4000, next = 0;
     double sigma = 1, yaw = 0;
     for (uint32_t t = 0; t < frames; t++) {
         if (t % 500 == 0)
@@ -875,13 +942,19 @@ static void test_bound_random_walk(void **state)
             for (int k = 0; k < 3; k++)
                 p[3 * 26 + k] = p[3 * 25 + k], p[3 * 12 + k] = p[3 * 11 + k];
         double v = affect_hull3d_volume(fresh, p, 27);
+        double q = affect_hull3d_bound_quick(ref, p, 27); /* last frame's cones, frozen */
         double b = affect_hull3d_bound(ref, p, 27);
         assert_true(v > 0);
         if (t == 0)
-            assert_true(isinf(b) && b > 0); /* no reference yet */
+            assert_true(isinf(b) && b > 0 && isinf(q)); /* no reference yet */
         else
-            assert_true(b >= v);
+            assert_true(b >= v && q >= v);
         tight += b <= 1.05 * v;
+        quick_tight += q <= 1.25 * v;
+        /* the frozen cones of this very frame: the same bound but for rounding */
+        double q_same = affect_hull3d_bound_quick(ref, p, 27);
+        if (isfinite(b))
+            assert_true(q_same >= v && fabs(q_same - b) <= 1e-8 * b);
         if (t == next) {
             assert_true(affect_hull3d_volume(ref, p, 27) == v); /* same bits, any handle */
             double self = affect_hull3d_bound(ref, p, 27);
@@ -889,7 +962,8 @@ static void test_bound_random_walk(void **state)
             next = t + 1 + (uint32_t)(affect_rng_next(&rng) % 8);
         }
     }
-    assert_true(tight > frames / 5); /* a useful bound (within 5 %), not merely a valid one */
+    assert_true(tight > frames / 5);       /* a useful bound (within 5 %), not merely a valid one */
+    assert_true(quick_tight > frames / 4); /* one frame stale: within 25 % often enough */
     affect_hull3d_free(ref);
     affect_hull3d_free(fresh);
 }
@@ -926,8 +1000,10 @@ static void test_bound_random_sets(void **state)
             double scale = trial % 50 == 0 ? 1e-150 : trial % 50 == 1 ? 1e150 : 1;
             for (uint32_t i = 0; i < 3 * n; i++)
                 q[i] *= scale;
-            double v = affect_hull3d_volume(fresh, q, n), b = affect_hull3d_bound(ref, q, n);
-            assert_true(b >= v);
+            double v = affect_hull3d_volume(fresh, q, n);
+            double bq = affect_hull3d_bound_quick(ref, q, n); /* the previous set's cones */
+            double b = affect_hull3d_bound(ref, q, n);
+            assert_true(b >= v && bq >= v);
             for (uint32_t i = 0; i < 3 * n; i++)
                 q[i] /= scale;
         }
@@ -937,7 +1013,8 @@ static void test_bound_random_sets(void **state)
 }
 
 /* No reference, fewer than 4 points, another number of points, non-finite input, degenerate
- * frames (a flat frame leaves the reference as it was). */
+ * frames (a flat frame leaves the reference as it was); the same for the quick bound, and its
+ * frozen cones follow the centroid but refuse another scale. */
 static void test_bound_limits(void **state)
 {
     (void)state;
@@ -965,9 +1042,37 @@ static void test_bound_limits(void **state)
     assert_true(isinf(affect_hull3d_bound(h, box, 7))); /* not the reference's points */
     double same[24] = {0};
     assert_true(affect_hull3d_bound(h, same, 8) == 0);
+    /* the quick bound: the cones of the last finite affect_hull3d_bound, for its n */
+    assert_true(isinf(affect_hull3d_bound_quick(NULL, box, 8)));
+    assert_true(isinf(affect_hull3d_bound_quick(h, box, 8))); /* the last bound was 0 */
+    b = affect_hull3d_bound(h, box, 8);
+    double bq = affect_hull3d_bound_quick(h, box, 8);
+    assert_true(bq >= 1 && fabs(bq - b) <= 1e-8 * b);
+    assert_true(affect_hull3d_bound_quick(h, box, 3) == 0);
+    assert_true(isinf(affect_hull3d_bound_quick(h, box, 7)));
+    assert_true(isinf(affect_hull3d_bound_quick(h, box, 9)));
+    double big[24], shifted[24];
+    for (int i = 0; i < 24; i++) {
+        big[i] = 1000 * box[i];    /* far from the frozen scale */
+        shifted[i] = box[i] + 1e6; /* the cones move with the centroid */
+    }
+    assert_true(isinf(affect_hull3d_bound_quick(h, big, 8)));
+    bq = affect_hull3d_bound_quick(h, shifted, 8);
+    assert_true(bq >= 1 && bq < 1 + 1e-4);
+    big[0] = 2; /* one corner out: the bound grows, stays above the volume */
+    for (int i = 1; i < 24; i++)
+        big[i] = box[i];
+    bq = affect_hull3d_bound_quick(h, big, 8);
+    assert_true(isfinite(bq) && bq >= affect_hull3d_volume(h, big, 8));
+    b = affect_hull3d_bound(h, box, 8);
     box[5] = NAN;
+    assert_true(isinf(affect_hull3d_bound_quick(h, box, 8)));
     assert_true(isinf(affect_hull3d_bound(h, box, 8)));
+    box[5] = 1;
+    assert_true(isinf(affect_hull3d_bound_quick(h, box, 8))); /* the last bound was +∞ */
+    b = affect_hull3d_bound(h, box, 8);
     box[5] = INFINITY;
+    assert_true(isinf(affect_hull3d_bound_quick(h, box, 8)));
     assert_true(isinf(affect_hull3d_bound(h, box, 8)));
     affect_hull3d_free(h);
 }
@@ -979,6 +1084,7 @@ int main(void)
         cmocka_unit_test(test_area_triangle_and_polygon),
         cmocka_unit_test(test_area_degenerate),
         cmocka_unit_test(test_area_scale_and_random),
+        cmocka_unit_test(test_area_interior_points),
         cmocka_unit_test(test_volume_cube),
         cmocka_unit_test(test_volume_polyhedra),
         cmocka_unit_test(test_volume_sphere),

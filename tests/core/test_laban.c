@@ -6,9 +6,11 @@
  * rigid box; missing roles and short motions; and on motion_synth, WeightAll and TimeAll order
  * angry > neutral > sad for every action; and the vector, bit for bit, against the same values
  * computed component by component (every part alone, a hull area and a hull volume for every
- * frame).
+ * frame, Shape Directional axis by axis with affect_lowpass).
  */
+#include <lapacke.h>
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "testutil.h"
@@ -16,6 +18,10 @@
 #include "affect/synth.h"
 
 #define PI 3.14159265358979323846
+
+/* OpenBLAS's (the library the core links) */
+int openblas_get_num_threads(void);
+void openblas_set_num_threads(int num_threads);
 
 /* The six parts' joints plus two hips for the heading: every role that "all" needs. */
 static const char *const body_names[] = {"Hips",   "Spine",  "Chest",  "Head",       "Hand_L",
@@ -280,6 +286,79 @@ static void test_synth_ordering(void **state)
         }
 }
 
+/* Shape Directional as it was first written, channel by channel: the hand's path projected on
+ * its two principal axes (LAPACKE_dsyev), velocity and acceleration by central differences
+ * and affect_lowpass of each axis, the mean curvature over the frames above the speed floor.
+ * affect_laban_shape_directional filters both axes in lockstep; it must give these bits. */
+static double reference_directional(const affect_motion *m, const affect_part *hand,
+                                    const affect_laban_options *opt)
+{
+    uint32_t n = m->n_frames;
+    double *pos = malloc(((size_t)n * 11 + 20) * sizeof *pos);
+    assert_non_null(pos);
+    double *d1 = pos + 2 * (size_t)n, *d2 = d1 + 2 * (size_t)n, *col = d2 + 2 * (size_t)n;
+    double *scratch = col + 3 * (size_t)n, mean[3] = {0, 0, 0}, cov[9] = {0}, w[3];
+    for (uint32_t t = 0; t < n; t++) {
+        double c[3] = {0, 0, 0};
+        for (uint32_t i = 0; i < hand->n_joints; i++)
+            for (int a = 0; a < 3; a++)
+                c[a] += affect_motion_at(m, t, (uint32_t)hand->joints[i])[a];
+        for (int a = 0; a < 3; a++)
+            col[3 * (size_t)t + a] = hand->n_joints == 1 ? c[a] : c[a] * (1.0 / hand->n_joints);
+    }
+    for (uint32_t t = 0; t < n; t++)
+        for (int a = 0; a < 3; a++)
+            mean[a] += col[3 * (size_t)t + a];
+    for (int a = 0; a < 3; a++)
+        mean[a] /= n;
+    for (uint32_t t = 0; t < n; t++)
+        for (int a = 0; a < 3; a++)
+            for (int b = 0; b < 3; b++)
+                cov[a * 3 + b] +=
+                    (col[3 * (size_t)t + a] - mean[a]) * (col[3 * (size_t)t + b] - mean[b]);
+    /* on one OpenBLAS thread, as the core's calls run (dsyev's last bits depend on it) */
+    int threads = openblas_get_num_threads();
+    openblas_set_num_threads(1);
+    lapack_int info = LAPACKE_dsyev(LAPACK_ROW_MAJOR, 'V', 'U', 3, cov, 3, w);
+    openblas_set_num_threads(threads);
+    assert_int_equal(info, 0);
+    for (uint32_t t = 0; t < n; t++) {
+        const double *p = col + 3 * (size_t)t;
+        double c[3] = {p[0] - mean[0], p[1] - mean[1], p[2] - mean[2]};
+        pos[2 * (size_t)t] = c[0] * cov[2] + c[1] * cov[5] + c[2] * cov[8];
+        pos[2 * (size_t)t + 1] = c[0] * cov[1] + c[1] * cov[4] + c[2] * cov[7];
+    }
+    /* one axis at a time: central differences, then affect_lowpass, twice */
+    const double *src = pos;
+    double *dst = d1;
+    for (int order = 0; order < 2; order++, src = d1, dst = d2)
+        for (int a = 0; a < 2; a++) {
+            for (uint32_t t = 0; t < n; t++) {
+                double d =
+                    t == 0 ? (src[2 + a] - src[a]) * m->fps
+                    : t == n - 1
+                        ? (src[2 * (size_t)t + a] - src[2 * (size_t)t - 2 + a]) * m->fps
+                        : (src[2 * (size_t)t + 2 + a] - src[2 * (size_t)t - 2 + a]) * m->fps * 0.5;
+                dst[2 * (size_t)t + a] = d;
+            }
+            affect_lowpass(dst + a, n, 2, m->fps, opt->cutoff_hz, scratch, dst + a);
+        }
+    double peak = 0, sum = 0;
+    uint32_t used = 0;
+    for (uint32_t t = 0; t < n; t++)
+        peak = fmax(peak, hypot(d1[2 * (size_t)t], d1[2 * (size_t)t + 1]));
+    for (uint32_t t = 0; t < n && peak > 0; t++) {
+        double xd = d1[2 * (size_t)t], yd = d1[2 * (size_t)t + 1];
+        double xdd = d2[2 * (size_t)t], ydd = d2[2 * (size_t)t + 1], speed = hypot(xd, yd);
+        if (speed <= 0 || speed < opt->speed_floor * peak)
+            continue;
+        sum += fabs(xdd * yd - ydd * xd) / (speed * speed * speed);
+        used++;
+    }
+    free(pos);
+    return used ? sum / used : 0.0;
+}
+
 /* affect_laban_vector (one pass filtering the six parts together, hull areas bounded before
  * they are computed) against a straightforward reference built from the per-component
  * functions (each part's kinematics computed alone with affect_lowpass) and a hull area and a
@@ -348,8 +427,8 @@ static void reference_vector(const affect_motion *m, const affect_roles *roles,
     affect_hull3d_free(hull);
     ref[23] = horizontal;
     ref[24] = flow;
-    assert_int_equal(affect_laban_shape_directional(m, &parts[2], opt, &ref[25], &err), AFFECT_OK);
-    assert_int_equal(affect_laban_shape_directional(m, &parts[3], opt, &ref[26], &err), AFFECT_OK);
+    ref[25] = reference_directional(m, &parts[2], opt);
+    ref[26] = reference_directional(m, &parts[3], opt);
 }
 
 static void test_vector_matches_reference(void **state)
@@ -385,6 +464,42 @@ static void test_vector_matches_reference(void **state)
                                  affect_synth_actions[a], emotions[e], variant,
                                  affect_laban_names[i], out[i], ref[i]);
             }
+            /* two parts missing (missing_null): the others' Effort values, the same bits as
+             * each part alone, and NaN for the missing and for the combinations */
+            affect_roles some = roles;
+            some.joint[AFFECT_ROLE_LEFT_HAND] = -1;
+            some.joint[AFFECT_ROLE_HEAD] = -1;
+            affect_laban_options opt;
+            affect_laban_options_default(&opt);
+            opt.missing_null = true;
+            double out[AFFECT_LABAN_N];
+            if (affect_laban_vector(m, &some, &opt, out, &err))
+                fail_msg("%s", err.msg);
+            static const char *const part_names[6] = {"torso",      "head",      "left_hand",
+                                                      "right_hand", "left_foot", "right_foot"};
+            for (int k = 0; k < 6; k++) {
+                affect_part part;
+                int idx[3] = {1 + k, 8 + k, 15 + k}; /* Weight, Time, Flow of part k */
+                if (affect_part_resolve(m, &some, part_names[k], &part, &err) != AFFECT_OK) {
+                    for (int c = 0; c < 3; c++)
+                        assert_true(isnan(out[idx[c]]));
+                    continue;
+                }
+                double ref[3];
+                assert_int_equal(
+                    affect_laban_weight(m, &part, 1, AFFECT_LABAN_Q1, &opt, &ref[0], &err),
+                    AFFECT_OK);
+                assert_int_equal(
+                    affect_laban_time(m, &part, 1, AFFECT_LABAN_Q1, &opt, &ref[1], &err),
+                    AFFECT_OK);
+                assert_int_equal(affect_laban_flow(m, &part, 1, &opt, &ref[2], &err), AFFECT_OK);
+                for (int c = 0; c < 3; c++)
+                    if (memcmp(&out[idx[c]], &ref[c], sizeof ref[c]) != 0)
+                        fail_msg("%s %s without head and left hand: %s = %.17g, reference %.17g",
+                                 affect_synth_actions[a], emotions[e], affect_laban_names[idx[c]],
+                                 out[idx[c]], ref[c]);
+            }
+            assert_true(isnan(out[0]) && isnan(out[7]) && isnan(out[14]));
             affect_motion_free(m);
         }
 }

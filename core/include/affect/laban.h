@@ -346,6 +346,15 @@ double affect_hull3d_volume(affect_hull3d *h, const double *xyz, uint32_t n); /*
  * not finite or the centroid is too close to a face's plane; 0 when n < 4. Allocates nothing;
  * changes nothing that affect_hull3d_volume returns. */
 double affect_hull3d_bound(affect_hull3d *h, const double *xyz, uint32_t n);
+/* A cheaper, looser upper bound of affect_hull3d_volume(h, xyz, n): the cones of the last finite
+ * affect_hull3d_bound frozen (their faces' normals and shapes as they were then, moved to these
+ * points' centroid), each cut where these points' extent along its normal ends; only the
+ * extents are computed (hull.c). Meant for the frames right after that bound: as the body
+ * turns and bends it loosens. +∞ when there is no such bound (none yet, or the last one was
+ * +∞ or for another n), n > max, a coordinate is not finite or the points' size is far from
+ * that bound's (a factor 32); 0 when n < 4. Allocates nothing; changes nothing that
+ * affect_hull3d_volume or affect_hull3d_bound return. */
+double affect_hull3d_bound_quick(affect_hull3d *h, const double *xyz, uint32_t n);
 
 #ifdef __cplusplus
 }
