@@ -60,8 +60,9 @@
  * reloads the cache only when the index changed (here or in another connection); a rollback drops
  * the cache. Cursors hold a reference to the cache they started with, so a write during a scan
  * cannot pull it from under them. sqlite3_interrupt stops a query: the cache is read by SQL
- * (which SQLite interrupts), a query motion's vector is computed under the monitor, and a search
- * polls between parts of LAB_POLL_ROWS rows ("laban: interrupted").
+ * (which SQLite interrupts), its standardization and a search poll between parts of
+ * LAB_POLL_ROWS rows ("laban: interrupted"), and a query motion's vector is computed under the
+ * monitor.
  *
  * Queries. xBestIndex uses these equality constraints; idxNum says which are present, and they
  * are passed to xFilter in this order:
@@ -579,10 +580,6 @@ static int lab_query_vector(lab_vtab *vt, const lab_cache *ca, sqlite3_value *q,
     affect_laban_standardize(v, 1, ca->mean, ca->sd, zq);
     return SQLITE_OK;
 }
-
-/* Rows searched between two polls of the interrupt: about 3 ms of a search over the 27
- * components (22 ns a row, measured on 1,000,000 rows; a poll costs 20-50 µs). */
-#define LAB_POLL_ROWS ((size_t)1 << 17)
 
 static int hit_order(const void *a, const void *b)
 {

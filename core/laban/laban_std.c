@@ -31,12 +31,19 @@ void affect_laban_standardize(const float *x, size_t n, const double mean[AFFECT
             z[i * AFFECT_LABAN_N + j] = ((double)x[i * AFFECT_LABAN_N + j] - mean[j]) / sd[j];
 }
 
-void affect_laban_stats(const float *x, size_t n, double mean[AFFECT_LABAN_N],
-                        double sd[AFFECT_LABAN_N])
+void affect_laban_acc_init(affect_laban_acc *a)
 {
     for (int j = 0; j < AFFECT_LABAN_N; j++) {
-        double sum = 0;
-        size_t cnt = 0;
+        a->sum[j] = a->ss[j] = a->mean[j] = 0;
+        a->cnt[j] = 0;
+    }
+}
+
+void affect_laban_acc_sums(affect_laban_acc *a, const float *x, size_t n)
+{
+    for (int j = 0; j < AFFECT_LABAN_N; j++) {
+        double sum = a->sum[j];
+        size_t cnt = a->cnt[j];
         for (size_t i = 0; i < n; i++) {
             double v = x[i * AFFECT_LABAN_N + j];
             if (!isnan(v)) {
@@ -44,16 +51,50 @@ void affect_laban_stats(const float *x, size_t n, double mean[AFFECT_LABAN_N],
                 cnt++;
             }
         }
-        double m = cnt ? sum / (double)cnt : NAN, ss = 0;
-        for (size_t i = 0; i < n && cnt; i++) {
+        a->sum[j] = sum;
+        a->cnt[j] = cnt;
+    }
+}
+
+void affect_laban_acc_means(affect_laban_acc *a)
+{
+    for (int j = 0; j < AFFECT_LABAN_N; j++)
+        a->mean[j] = a->cnt[j] ? a->sum[j] / (double)a->cnt[j] : NAN;
+}
+
+void affect_laban_acc_squares(affect_laban_acc *a, const float *x, size_t n)
+{
+    for (int j = 0; j < AFFECT_LABAN_N; j++) {
+        double m = a->mean[j], ss = a->ss[j];
+        for (size_t i = 0; i < n && a->cnt[j]; i++) {
             double v = x[i * AFFECT_LABAN_N + j];
             if (!isnan(v))
                 ss += (v - m) * (v - m);
         }
-        double s = cnt > 1 ? sqrt(ss / (double)(cnt - 1)) : 0;
-        mean[j] = m;
+        a->ss[j] = ss;
+    }
+}
+
+void affect_laban_acc_result(const affect_laban_acc *a, double mean[AFFECT_LABAN_N],
+                             double sd[AFFECT_LABAN_N])
+{
+    for (int j = 0; j < AFFECT_LABAN_N; j++) {
+        size_t cnt = a->cnt[j];
+        double s = cnt > 1 ? sqrt(a->ss[j] / (double)(cnt - 1)) : 0;
+        mean[j] = a->mean[j];
         sd[j] = s > 0 && isfinite(s) ? s : 1;
     }
+}
+
+void affect_laban_stats(const float *x, size_t n, double mean[AFFECT_LABAN_N],
+                        double sd[AFFECT_LABAN_N])
+{
+    affect_laban_acc a;
+    affect_laban_acc_init(&a);
+    affect_laban_acc_sums(&a, x, n);
+    affect_laban_acc_means(&a);
+    affect_laban_acc_squares(&a, x, n);
+    affect_laban_acc_result(&a, mean, sd);
 }
 
 affect_status affect_laban_stats_check(const double mean[AFFECT_LABAN_N],

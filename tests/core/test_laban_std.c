@@ -1,13 +1,15 @@
 /*
  * test_laban_std.c — standardization of Laban vectors (core/laban/laban_std.c): the statistics on
  * a hand-made set (mean, sample sd with the n − 1 divisor, missing values skipped, sd 1 where it
- * is 0 or undefined), their validation, and the L2 vector: its z-scores, a component missing
- * everywhere written as 0, a component missing in the vector refused, chosen components, and
- * the identity it exists for: the L2 distance of two such vectors equals the index's distance
- * (the Euclidean distance of the z-scores over the components present in both).
+ * is 0 or undefined), the same bits when computed in parts, their validation, and the L2 vector:
+ * its z-scores, a component missing everywhere written as 0, a component missing in the vector
+ * refused, chosen components, and the identity it exists for: the L2 distance of two such vectors
+ * equals the index's distance (the Euclidean distance of the z-scores over the components present
+ * in both).
  */
 #include <float.h>
 #include <math.h>
+#include <stdint.h>
 #include <string.h>
 
 #include "testutil.h"
@@ -29,6 +31,48 @@ static void make_rows(float x[4 * N])
         if (i != 3)
             x[i * N + 4] = NAN;
     }
+}
+
+/* In parts (the laban index's polled cache) the statistics have the same bits as in one call,
+ * whatever the parts: 1,000 rows of values spread over six orders of magnitude with a third
+ * missing, one component missing everywhere, one present in a single row; no rows at all. */
+static void test_stats_parts(void **state)
+{
+    (void)state;
+    enum { ROWS = 1000 };
+    static float x[ROWS * N];
+    uint64_t r = 12345;
+    for (int i = 0; i < ROWS * N; i++) {
+        r = r * 6364136223846793005ull + 1442695040888963407ull;
+        double u = (double)(r >> 11) * 0x1p-53;
+        x[i] = (r >> 7) % 3 == 0 ? NAN : (float)((u - 0.3) * pow(10.0, (double)(i % 7) - 3.0));
+    }
+    for (int i = 0; i < ROWS; i++) {
+        x[i * N + 5] = NAN;
+        x[i * N + 6] = i == 17 ? 2.5f : NAN;
+    }
+    double mean[N], sd[N], pm[N], ps[N];
+    affect_laban_stats(x, ROWS, mean, sd);
+    static const size_t parts[] = {1, 7, 333, 999, 1000, 4096};
+    for (size_t k = 0; k < sizeof parts / sizeof parts[0]; k++) {
+        affect_laban_acc a;
+        affect_laban_acc_init(&a);
+        for (size_t at = 0; at < ROWS; at += parts[k])
+            affect_laban_acc_sums(&a, x + at * N, ROWS - at < parts[k] ? ROWS - at : parts[k]);
+        affect_laban_acc_means(&a);
+        for (size_t at = 0; at < ROWS; at += parts[k])
+            affect_laban_acc_squares(&a, x + at * N, ROWS - at < parts[k] ? ROWS - at : parts[k]);
+        affect_laban_acc_result(&a, pm, ps);
+        assert_memory_equal(pm, mean, sizeof mean);
+        assert_memory_equal(ps, sd, sizeof sd);
+    }
+    assert_true(isnan(mean[5]) && sd[5] == 1 && isfinite(mean[6]) && sd[6] == 1);
+    affect_laban_acc a;
+    affect_laban_acc_init(&a);
+    affect_laban_acc_means(&a);
+    affect_laban_acc_result(&a, pm, ps);
+    for (int j = 0; j < N; j++)
+        assert_true(isnan(pm[j]) && ps[j] == 1);
 }
 
 static void test_stats(void **state)
@@ -184,7 +228,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_stats),       cmocka_unit_test(test_standardize),
         cmocka_unit_test(test_stats_check), cmocka_unit_test(test_f32),
-        cmocka_unit_test(test_l2_vector),
+        cmocka_unit_test(test_l2_vector),   cmocka_unit_test(test_stats_parts),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -280,6 +280,49 @@ static void search_poll_case(void)
     }
     printf("  %-48s %d polls over 300,003 rows; interrupted at the first: laban: interrupted\n",
            name, polls);
+    /* the cache's standardization polls too (3 passes over 3 parts of LAB_POLL_ROWS rows: 8
+     * polls, the first part of the first pass unpolled): after a change of generation the same
+     * search starts at least 8 more statements, and an interrupt at any of the rebuild's polls
+     * stops it with "laban: interrupted" */
+    static const char bump[] = "UPDATE pm_laban_info SET value = value + 1 WHERE key = "
+                               "'generation'";
+    if (sqlite3_exec(ir_db, bump, NULL, NULL, NULL) != SQLITE_OK)
+        goto done;
+    rc = poll_run(whole, 0, &v, &err);
+    int rebuild = poll_trace.events;
+    checks++;
+    if (rc != SQLITE_OK || v != 12 || rebuild < base + polls + 8) {
+        fail("%s: the search with the cache rebuilt: %s, %d statements (expected %d or more)", name,
+             err ? err : "ok", rebuild, base + polls + 8);
+        goto done;
+    }
+    sqlite3_free(err);
+    err = NULL;
+    int ours = 0; /* interrupts answered by our polls */
+    for (int at = 1; at <= rebuild; at++) {
+        if (sqlite3_exec(ir_db, bump, NULL, NULL, NULL) != SQLITE_OK)
+            goto done;
+        rc = poll_run(whole, at, &v, &err);
+        if (rc == SQLITE_INTERRUPT && err && strcmp(err, "laban: interrupted") == 0)
+            ours++;
+        sqlite3_free(err);
+        err = NULL;
+    }
+    checks++;
+    if (ours < polls + 8) {
+        fail("%s: %d of the %d statements of a rebuilding search were polls that stopped it "
+             "(expected %d or more)",
+             name, ours, rebuild, polls + 8);
+        goto done;
+    }
+    rc = poll_run(whole, 0, &v, &err);
+    checks++;
+    if (rc != SQLITE_OK || v != 12) {
+        fail("%s: after the interrupts of the rebuild: %s", name, err ? err : "ok");
+        goto done;
+    }
+    printf("  %-48s %d statements with the cache rebuilt, %d polls stopped it\n",
+           "laban cache standardization polls", rebuild, ours);
 done:
     sqlite3_free(err);
     sqlite3_exec(ir_db, "DROP TABLE pm_laban; DROP TABLE pm", NULL, NULL, NULL);

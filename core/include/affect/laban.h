@@ -176,6 +176,22 @@ float affect_laban_f32(double v);
 void affect_laban_stats(const float *x, size_t n, double mean[AFFECT_LABAN_N],
                         double sd[AFFECT_LABAN_N]);
 
+/* affect_laban_stats in parts, for a caller that polls an interrupt between them (the laban
+ * index over millions of rows): affect_laban_acc_init, affect_laban_acc_sums over every part of
+ * the rows in order, affect_laban_acc_means, affect_laban_acc_squares over the same parts in the
+ * same order, then affect_laban_acc_result. Each component's sums take the rows in the same
+ * order as affect_laban_stats, so the result has the same bits, whatever the parts. */
+typedef struct affect_laban_acc {
+    double sum[AFFECT_LABAN_N], ss[AFFECT_LABAN_N], mean[AFFECT_LABAN_N];
+    size_t cnt[AFFECT_LABAN_N];
+} affect_laban_acc;
+void affect_laban_acc_init(affect_laban_acc *a);
+void affect_laban_acc_sums(affect_laban_acc *a, const float *x, size_t n);
+void affect_laban_acc_means(affect_laban_acc *a);
+void affect_laban_acc_squares(affect_laban_acc *a, const float *x, size_t n);
+void affect_laban_acc_result(const affect_laban_acc *a, double mean[AFFECT_LABAN_N],
+                             double sd[AFFECT_LABAN_N]);
+
 /* The z-scores of n vectors x (n × AFFECT_LABAN_N, NaN = missing) into z (the same shape):
  * z = ((double)x − mean) / sd per component, NaN where x or mean is missing. */
 void affect_laban_standardize(const float *x, size_t n, const double mean[AFFECT_LABAN_N],
