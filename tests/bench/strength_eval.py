@@ -4,7 +4,7 @@
 Usage (from the repository root, after any build of build/affect.so; about 15 minutes):
     OPENBLAS_NUM_THREADS=1 python3 tests/bench/strength_eval.py [--db build/strength.db]
         [--tasks anger,happiness,exhausted] [--seeds 1,2,3] [--quick] [--features]
-        [--synthesis-features keyframes|both]
+        [--synthesis-features keyframes|both] [--recognizer [--recognizer-options JSON]]
 AFFECT_EXT overrides the extension's path (default build/affect). Python 3 standard library and
 sqlite3 only. It imports the BVH files of ../shared/corpora/bandai-namco-1 and
 bandai-namco-2-dev into --db once (motion_from_bvh), then, for every task:
@@ -34,7 +34,8 @@ strength_synthesize at 5 strengths from the lowest to the highest level's traini
 strength_edit of every test motion to each; per result affect_strength (the Spearman
 correlation with the strength asked), affect_classify (recognized as the label whose training
 mean strength is nearest the strength asked?), laban_time and laban_weight (their Pearson
-correlation with it).
+correlation with it). --recognizer-options gives the recognizer other affect_train options
+(for example {"descriptors":"none"}: no kinematic summaries).
 
 The rows above rank by keyframe features ("features": "keyframes"). --features replaces them by
 the three inputs of the ranker, "keyframes", "laban" (the default of strength_train) and "both",
@@ -257,7 +258,7 @@ def nearest_level(levels, s):
     return d[0][1]
 
 
-def recognizer_check(con, task, seeds, npoints=5):
+def recognizer_check(con, task, seeds, npoints=5, rec_options="{}"):
     """Synthesized and edited motions checked by the ranker, affect_train's recognizer and Laban.
 
     Per seed: the half split of protocol(); a PCA-40 strength model and affect_train's recognizer
@@ -276,8 +277,8 @@ def recognizer_check(con, task, seeds, npoints=5):
         tr, te = split_half(rows, seed)
         # keyframe features: a Laban-only model (the default) cannot synthesize or edit
         model, _, _ = train(con, task, tr, dict(KF, pca_dims=40, seed=seed))
-        rec = con.execute("SELECT affect_train(motion, style) FROM motions JOIN tr USING (id)"
-                          ).fetchone()[0]
+        rec = con.execute("SELECT affect_train(motion, style, ?) FROM motions JOIN tr USING (id)",
+                          (rec_options,)).fetchone()[0]
         info = json.loads(con.execute("SELECT strength_info(?)", (model,)).fetchone()[0])
         levels = info["levels"]
         lo, hi = levels[0]["strength"], levels[-1]["strength"]
@@ -371,6 +372,9 @@ def main():
     ap.add_argument("--recognizer", action="store_true",
                     help="only the recognizer check of synthesized and edited motions, for every "
                     "task of --tasks")
+    ap.add_argument("--recognizer-options", default="{}",
+                    help='affect_train options of the recognizer check, e.g. '
+                         '{"descriptors":"none"}')
     a = ap.parse_args()
     if not os.path.isdir(CORPORA):
         print("strength_eval: ../shared/corpora is absent; nothing to measure")
@@ -384,7 +388,7 @@ def main():
     import_corpora(con)
     if a.recognizer:
         for task in a.tasks.split(","):
-            recognizer_check(con, task, seeds)
+            recognizer_check(con, task, seeds, rec_options=a.recognizer_options)
         print("\n(total: %.0f s wall, %.0f s CPU)" % (time.perf_counter() - t0,
                                                       time.process_time() - c0))
         return 0
