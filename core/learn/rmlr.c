@@ -117,6 +117,14 @@
 #include "affect/svm.h"
 #include "util/bytes.h"
 
+/* The losses sum log Σ_l exp(η_il − mx_i) over the samples as the log of products of up to
+ * LOG_CHUNK of those sums, one log per chunk instead of one per sample (log was a tenth of a
+ * cross-validation's time): each sum lies in [1, K] (its largest term is exp(0) = 1) and
+ * K ≤ 256 = 2⁸, so a chunk's product stays in [1, 2⁹⁶⁰]; its rounding (LOG_CHUNK ulps relative)
+ * is that of summing the logs one by one. */
+#define LOG_CHUNK 120u
+_Static_assert(AFFECT_RMLR_MAX_CLASSES <= 256, "LOG_CHUNK assumes K <= 2^8");
+
 /* Floor on the Newton weights p(1 − p) (the paper's 1e-5). */
 #define W_MIN 1e-5
 /* glmnet's floor on α in λ_max. */
@@ -135,8 +143,9 @@
 #define NEWTON_TOL 0.01
 /* Steps per call at most. */
 #define NEWTON_ITERS 20
-/* A kept factor is refreshed when the decrement falls by less than this factor in a step. */
-#define NEWTON_SLOW 0.25
+/* A kept factor is refreshed when the decrement falls by less than this factor in a step
+ * (0.1: measured against 0.02, 0.05, 0.25 and 0.5 on both corpora, docs/BENCHMARKS.md). */
+#define NEWTON_SLOW 0.1
 /* Damping added to the Hessian's diagonal, relative to its largest entry, and the tries (each
  * 1000 times more) before giving up on a factorisation. */
 #define NEWTON_DAMP 1e-10
@@ -414,21 +423,25 @@ static double penalty(const fitter *f, const double *b)
  * log-likelihood. */
 static double softmax_into(const fitter *f, const double *e, double *ex, double *mx, double *sum)
 {
-    uint32_t K = f->K;
-    double s = 0;
+    uint32_t K = f->K, c = 0;
+    double s = 0, prod = 1;
     for (size_t i = 0; i < f->n; i++) {
         const double *r = e + i * K;
         double *x = ex + i * K, m = r[0], t = 0;
+        uint32_t am = 0;
         for (uint32_t l = 1; l < K; l++)
             if (r[l] > m)
-                m = r[l];
-        for (uint32_t l = 0; l < K; l++)
-            t += x[l] = exp(r[l] - m);
+                m = r[l], am = l;
+        for (uint32_t l = 0; l < K; l++) /* exp(0) = 1 exactly: the maximum's term is free */
+            t += x[l] = l == am ? 1.0 : exp(r[l] - m);
         mx[i] = m;
         sum[i] = t;
-        s += m + log(t) - r[f->y[i]];
+        s += m - r[f->y[i]];
+        prod *= t;
+        if (++c == LOG_CHUNK)
+            s += log(prod), prod = 1, c = 0;
     }
-    return s / (double)f->n;
+    return (s + log(prod)) / (double)f->n;
 }
 
 /* Fills the softmax cache from η and returns −(1/n) log-likelihood (also kept in f->loss). */
@@ -445,8 +458,8 @@ static double softmax_fresh(fitter *f)
  * bits), so most rows cost one exp instead of K. */
 static double trial_loss(fitter *f, uint32_t k, const double *ek)
 {
-    double s = 0;
-    uint32_t K = f->K;
+    double s = 0, prod = 1;
+    uint32_t K = f->K, c = 0;
     for (size_t i = 0; i < f->n; i++) {
         const double *e = f->eta + i * K;
         double *x = f->ex + i * K, eki = ek[i], mx = eki, sum = 0;
@@ -464,9 +477,12 @@ static double trial_loss(fitter *f, uint32_t k, const double *ek)
             sum += x[l];
         f->sum[i] = sum;
         double ey = f->y[i] == k ? eki : e[f->y[i]];
-        s += mx + log(sum) - ey;
+        s += mx - ey;
+        prod *= sum;
+        if (++c == LOG_CHUNK)
+            s += log(prod), prod = 1, c = 0;
     }
-    return s / (double)f->n;
+    return (s + log(prod)) / (double)f->n;
 }
 
 /* For the m ≤ GRAD_BLOCK features j = blk[q]: out[q] = Σ_i w_i z_ij r_i, or Σ_i w_i z_ij² when
@@ -937,22 +953,39 @@ static bool newton_vars_current(const fitter *f)
     return coef == nz;
 }
 
-/* The probabilities (class-major, f->prob) at η (the softmax cache current) and, with g, the
- * gradient of the objective in the Newton variables (f->hg; the penalty's from the signs). */
-static void newton_grad(fitter *f, double lambda, bool g_too)
+/* The probabilities (class-major, f->prob) at η, the softmax cache current. */
+static void newton_probs(fitter *f)
+{
+    size_t n = f->n;
+    uint32_t K = f->K;
+    for (uint32_t k = 0; k < K; k++) {
+        double *P = f->prob + (size_t)k * n;
+        for (size_t i = 0; i < n; i++)
+            P[i] = f->ex[i * K + k] / f->sum[i];
+    }
+}
+
+/* The residuals 1{y_i = k} − p_ik (class-major, in f->et as scratch) at η, the softmax cache
+ * current; with f->prob the same p_ik, bit for bit (the same division). */
+static void newton_resid(fitter *f)
+{
+    size_t n = f->n;
+    uint32_t K = f->K;
+    for (uint32_t k = 0; k < K; k++) {
+        double *R = f->et + (size_t)k * n;
+        for (size_t i = 0; i < n; i++)
+            R[i] = (f->y[i] == k) - f->ex[i * K + k] / f->sum[i];
+    }
+}
+
+/* The gradient of the objective in the Newton variables (f->hg; the penalty's from the signs)
+ * from newton_resid's residuals. */
+static void newton_grad(fitter *f, double lambda)
 {
     size_t n = f->n, p = f->p, m = f->nv;
-    uint32_t K = f->K;
     double la = lambda * f->alpha, l2 = lambda * (1 - f->alpha);
-    double *P = f->prob, *R = f->et, *g = f->hg;
-    for (size_t i = 0; i < n; i++)
-        for (uint32_t k = 0; k < K; k++) {
-            double pk = f->ex[i * K + k] / f->sum[i];
-            P[(size_t)k * n + i] = pk;
-            R[(size_t)k * n + i] = (f->y[i] == k) - pk;
-        }
-    if (!g_too)
-        return;
+    const double *R = f->et;
+    double *g = f->hg;
     for (size_t a = 0; a < m; a++) {
         uint32_t ka = f->vk[a], ja = f->vj[a];
         const double *za = ja < p ? f->z + (size_t)ja * n : f->one, *ra = R + (size_t)ka * n;
@@ -972,9 +1005,9 @@ static void newton_grad(fitter *f, double lambda, bool g_too)
     }
 }
 
-/* The Hessian of the objective in the Newton variables at f->prob, factored (UᵀU, upper, in
- * f->hess, row stride nv_cap); false when it cannot be (f->fac_ok tells). The variables are
- * first ordered by class (a stable counting sort: appends may have mixed them). */
+/* The Hessian of the objective in the Newton variables at η (the softmax cache current), factored
+ * (UᵀU, upper, in f->hess, row stride nv_cap); false when it cannot be (f->fac_ok tells). The
+ * variables are first ordered by class (a stable counting sort: appends may have mixed them). */
 static bool newton_factor(fitter *f, double lambda)
 {
     size_t n = f->n, p = f->p, m = f->nv, S = f->nv_cap;
@@ -982,6 +1015,7 @@ static bool newton_factor(fitter *f, double lambda)
     double l2 = lambda * (1 - f->alpha), *P = f->prob, *H = f->hess, *u = f->hu, *cls = f->hc;
     double *dg = f->hd;
     f->fac_ok = false;
+    newton_probs(f);
     bool sorted = true;
     for (size_t a = 1; a < m && sorted; a++)
         sorted = f->vk[a - 1] <= f->vk[a];
@@ -1163,18 +1197,21 @@ static void newton_back(fitter *f)
     size_t m = f->nv, S = f->nv_cap;
     const double *H = f->hess;
     double *d = f->hd;
-    for (size_t a = m; a-- > 0;) { /* four partial sums (they overlap) */
+    /* Four partial sums taken from the far end, so that the value just solved, d[a + 1],
+     * enters last: the products of the older values do not wait for it, and each row waits
+     * only on one multiply-add, the sums' combination and the division. */
+    for (size_t a = m; a-- > 0;) {
         const double *u = H + a * S;
         double s0 = 0, s1 = 0, s2 = 0, s3 = 0;
-        size_t b = a + 1;
-        for (; b + 4 <= m; b += 4) {
-            s0 += u[b] * d[b];
-            s1 += u[b + 1] * d[b + 1];
-            s2 += u[b + 2] * d[b + 2];
-            s3 += u[b + 3] * d[b + 3];
+        size_t b = m;
+        for (; b >= a + 5; b -= 4) {
+            s0 += u[b - 1] * d[b - 1];
+            s1 += u[b - 2] * d[b - 2];
+            s2 += u[b - 3] * d[b - 3];
+            s3 += u[b - 4] * d[b - 4];
         }
-        for (; b < m; b++)
-            s0 += u[b] * d[b];
+        for (; b > a + 1; b--)
+            s0 += u[b - 1] * d[b - 1];
         d[a] = (d[a] - ((s0 + s1) + (s2 + s3))) / u[a];
     }
 }
@@ -1187,10 +1224,9 @@ static bool newton_line(fitter *f, double lambda, double *obj)
     size_t n = f->n, p = f->p, m = f->nv;
     uint32_t K = f->K;
     const double *d = f->hd;
-    double *et = f->et, pen0 = total_penalty(f), o0 = *obj;
+    double *et = f->et, *dl = f->hu, *col = f->deta, pen0 = total_penalty(f), o0 = *obj;
     for (int h = 0; h <= MAX_HALVINGS; h++) {
         double t = ldexp(1.0, -h), pen = pen0;
-        memcpy(et, f->eta, n * K * sizeof *et);
         for (size_t a = 0; a < m; a++) {
             uint32_t ka = f->vk[a], ja = f->vj[a];
             double delta = t * d[a];
@@ -1201,9 +1237,23 @@ static bool newton_line(fitter *f, double lambda, double *obj)
                 delta = nb - b;
                 pen += f->alpha * (fabs(nb) - fabs(b)) + 0.5 * (1 - f->alpha) * (nb * nb - b * b);
             }
-            const double *za = ja < p ? f->z + (size_t)ja * n : f->one;
+            dl[a] = delta;
+        }
+        /* η + Z Δ class by class in a contiguous column (each entry takes its class's
+         * variables in their order, as a pass over the variables would) */
+        for (uint32_t k = 0; k < K; k++) {
             for (size_t i = 0; i < n; i++)
-                et[i * K + ka] += za[i] * delta;
+                col[i] = f->eta[i * K + k];
+            for (size_t a = 0; a < m; a++) {
+                if (f->vk[a] != k)
+                    continue;
+                const double *za = f->vj[a] < p ? f->z + (size_t)f->vj[a] * n : f->one;
+                double delta = dl[a];
+                for (size_t i = 0; i < n; i++)
+                    col[i] += za[i] * delta;
+            }
+            for (size_t i = 0; i < n; i++)
+                et[i * K + k] = col[i];
         }
         double lo = loss_at(f, et), o = lo + lambda * pen;
         if (!(o < o0 - DESCENT_SLACK * (1 + fabs(o0))))
@@ -1245,7 +1295,7 @@ static bool newton_solve(fitter *f, double lambda, double *obj, bool enter)
         if (!newton_vars(f, enter))
             return false;
     } else if (enter) {
-        newton_grad(f, lambda, false);
+        newton_probs(f);
         for (uint32_t k = 0; k < f->K && f->fac_ok; k++)
             for (size_t j = 0; j < f->p && f->fac_ok; j++) {
                 double sg;
@@ -1262,11 +1312,12 @@ static bool newton_solve(fitter *f, double lambda, double *obj, bool enter)
     double dec_prev = INFINITY;
     for (int it = 0; it < NEWTON_ITERS; it++) {
         bool fresh = false;
-        newton_grad(f, lambda, true);
+        newton_resid(f);
+        newton_grad(f, lambda);
         if (!f->fac_ok) {
             if (!newton_factor(f, lambda))
                 return false;
-            newton_grad(f, lambda, true); /* the order of the variables may have changed */
+            newton_grad(f, lambda); /* the order of the variables may have changed */
             fresh = true;
         }
         double dec = newton_fwd(f);
@@ -1275,7 +1326,7 @@ static bool newton_solve(fitter *f, double lambda, double *obj, bool enter)
         if (!fresh && !(dec <= NEWTON_SLOW * dec_prev)) { /* the old factor is too far off */
             if (!newton_factor(f, lambda))
                 return false;
-            newton_grad(f, lambda, true);
+            newton_grad(f, lambda);
             fresh = true;
             dec = newton_fwd(f);
         }
