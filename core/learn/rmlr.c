@@ -953,33 +953,24 @@ static bool newton_vars_current(const fitter *f)
     return coef == nz;
 }
 
-/* The probabilities (class-major, f->prob) at η, the softmax cache current. */
-static void newton_probs(fitter *f)
+/* The probabilities p_ik (class-major) at η, the softmax cache current, into f->prob; with
+ * resid, the residuals 1{y_i = k} − p_ik instead, into f->et as scratch (the same p_ik, bit
+ * for bit: a step needs only those, a factorisation or an append the probabilities). */
+static void newton_probs(fitter *f, bool resid)
 {
     size_t n = f->n;
     uint32_t K = f->K;
     for (uint32_t k = 0; k < K; k++) {
-        double *P = f->prob + (size_t)k * n;
-        for (size_t i = 0; i < n; i++)
-            P[i] = f->ex[i * K + k] / f->sum[i];
-    }
-}
-
-/* The residuals 1{y_i = k} − p_ik (class-major, in f->et as scratch) at η, the softmax cache
- * current; with f->prob the same p_ik, bit for bit (the same division). */
-static void newton_resid(fitter *f)
-{
-    size_t n = f->n;
-    uint32_t K = f->K;
-    for (uint32_t k = 0; k < K; k++) {
-        double *R = f->et + (size_t)k * n;
-        for (size_t i = 0; i < n; i++)
-            R[i] = (f->y[i] == k) - f->ex[i * K + k] / f->sum[i];
+        double *o = (resid ? f->et : f->prob) + (size_t)k * n;
+        for (size_t i = 0; i < n; i++) {
+            double pk = f->ex[i * K + k] / f->sum[i];
+            o[i] = resid ? (f->y[i] == k) - pk : pk;
+        }
     }
 }
 
 /* The gradient of the objective in the Newton variables (f->hg; the penalty's from the signs)
- * from newton_resid's residuals. */
+ * from newton_probs's residuals. */
 static void newton_grad(fitter *f, double lambda)
 {
     size_t n = f->n, p = f->p, m = f->nv;
@@ -1015,7 +1006,7 @@ static bool newton_factor(fitter *f, double lambda)
     double l2 = lambda * (1 - f->alpha), *P = f->prob, *H = f->hess, *u = f->hu, *cls = f->hc;
     double *dg = f->hd;
     f->fac_ok = false;
-    newton_probs(f);
+    newton_probs(f, false);
     bool sorted = true;
     for (size_t a = 1; a < m && sorted; a++)
         sorted = f->vk[a - 1] <= f->vk[a];
@@ -1295,7 +1286,7 @@ static bool newton_solve(fitter *f, double lambda, double *obj, bool enter)
         if (!newton_vars(f, enter))
             return false;
     } else if (enter) {
-        newton_probs(f);
+        newton_probs(f, false);
         for (uint32_t k = 0; k < f->K && f->fac_ok; k++)
             for (size_t j = 0; j < f->p && f->fac_ok; j++) {
                 double sg;
@@ -1312,7 +1303,7 @@ static bool newton_solve(fitter *f, double lambda, double *obj, bool enter)
     double dec_prev = INFINITY;
     for (int it = 0; it < NEWTON_ITERS; it++) {
         bool fresh = false;
-        newton_resid(f);
+        newton_probs(f, true);
         newton_grad(f, lambda);
         if (!f->fac_ok) {
             if (!newton_factor(f, lambda))
