@@ -81,7 +81,9 @@
  * the full gradient (computed anyway for the next λ's screening): those that fail (beyond
  * KKT_SLACK √tol relative) join as variables with the sign of their gradient and Newton goes on;
  * after KKT_ENTER_MAX such rounds the cycles take over. So a λ costs a few gradients and
- * triangular solves when its pattern is the last one's, where it took 13 cycles.
+ * triangular solves when its pattern is the last one's, where it took 13 cycles. Along a
+ * stretch of the path where the signs hold, the start is extrapolated from the last two
+ * solutions (path_predict, a secant step in log λ), which saves about one Newton step per λ.
  * When to use it (fitter_solve, fitter_cycles): first at a λ whose predecessor converged by
  * Newton or whose factor is still that of the non-zero coefficients, or when the cycles of
  * the predecessor cost more than one factorisation; else after a cycle that changed no sign,
@@ -205,26 +207,29 @@ typedef struct fitter {
     double *v, *bold;            /* p each */
     double *grad;                /* K × p: (1/n) Σ_i z_ij (y_ik − p_ik) at η (when grad_ok) */
     double *s0;                  /* K × p + K: the state before a cycle */
-    double *et;                  /* n × K: a trial η, or the residuals (class-major) */
-    double *tex, *tmx, *tsum;    /* n × K, n, n: the trial's softmax cache (see loss_at) */
-    size_t nv_cap;               /* Newton variables at most (see fitter_newton) */
-    uint32_t *vk, *vj;           /* nv_cap each: variable q is β_{vk,vj} (vj = p: intercept) */
-    uint32_t *vend;              /* K: the end of class k's variables */
-    size_t nv;                   /* the Newton variables' count */
-    double *vs;                  /* nv_cap: their signs (0: intercept) */
-    bool newton_on;              /* options.solver: Newton steps allowed */
-    double kkt_slack;            /* KKT_SLACK √tol */
-    bool fac_ok;                 /* hess holds the factor for the variables vk, vj, vs */
-    double fac_mu;               /* the μ added to its diagonal */
-    bool newton_last;            /* the last λ converged by Newton steps */
-    double lambda_now;           /* the λ being fitted */
-    double work_now, work_last;  /* cycles' estimated work at this λ, at the last one */
-    double *hess, *hg, *hd, *hu; /* nv_cap², nv_cap, nv_cap, nv_cap */
-    double *hc;                  /* K */
-    double *prob, *one;          /* K × n (class-major), n */
-    bool grad_ok;                /* grad is that of the current probabilities */
-    bool cached;                 /* ex, mx, sum and loss are those of η */
-    double loss;                 /* −(1/n) log-likelihood at η (when cached) */
+    double *bprev;     /* K × p + K: the solution before the current one (path_predict) */
+    double lam1, lam2; /* the λ of the current solution, of bprev's */
+    bool sol_newton, prev_newton; /* each converged by Newton (path_predict may use it) */
+    double *et;                   /* n × K: a trial η, or the residuals (class-major) */
+    double *tex, *tmx, *tsum;     /* n × K, n, n: the trial's softmax cache (see loss_at) */
+    size_t nv_cap;                /* Newton variables at most (see fitter_newton) */
+    uint32_t *vk, *vj;            /* nv_cap each: variable q is β_{vk,vj} (vj = p: intercept) */
+    uint32_t *vend;               /* K: the end of class k's variables */
+    size_t nv;                    /* the Newton variables' count */
+    double *vs;                   /* nv_cap: their signs (0: intercept) */
+    bool newton_on;               /* options.solver: Newton steps allowed */
+    double kkt_slack;             /* KKT_SLACK √tol */
+    bool fac_ok;                  /* hess holds the factor for the variables vk, vj, vs */
+    double fac_mu;                /* the μ added to its diagonal */
+    bool newton_last;             /* the last λ converged by Newton steps */
+    double lambda_now;            /* the λ being fitted */
+    double work_now, work_last;   /* cycles' estimated work at this λ, at the last one */
+    double *hess, *hg, *hd, *hu;  /* nv_cap², nv_cap, nv_cap, nv_cap */
+    double *hc;                   /* K */
+    double *prob, *one;           /* K × n (class-major), n */
+    bool grad_ok;                 /* grad is that of the current probabilities */
+    bool cached;                  /* ex, mx, sum and loss are those of η */
+    double loss;                  /* −(1/n) log-likelihood at η (when cached) */
 } fitter;
 
 static void fitter_free(fitter *f)
@@ -247,7 +252,8 @@ static affect_status fitter_alloc(fitter *f, size_t n_cap, size_t p, uint32_t K,
         !affect_mul_size(n_cap, 6, &t) || !affect_add_size(total, t, &total) ||
         !affect_add_size(total, K, &total) || !affect_add_size(total, kp, &total) ||
         !affect_add_size(total, nk, &total) || !affect_add_size(kp, K, &t) ||
-        !affect_add_size(total, t, &total) || !affect_add_size(n_cap, p, &t))
+        !affect_add_size(total, t, &total) || !affect_add_size(total, t, &total) ||
+        !affect_add_size(n_cap, p, &t))
         return affect_fail(err, AFFECT_ERR_RANGE, "too many values: %zu samples × %zu features",
                            n_cap, p);
     size_t nv = kp + K - 1, nt, nn;
@@ -292,6 +298,7 @@ static affect_status fitter_alloc(fitter *f, size_t n_cap, size_t p, uint32_t K,
     f->etak = q, q += n_cap;
     f->et = q, q += nk;
     f->s0 = q, q += kp + K;
+    f->bprev = q, q += kp + K;
     f->hess = q, q += nv * nv;
     f->hg = q, q += nv;
     f->hd = q, q += nv;
@@ -333,6 +340,7 @@ static void fitter_load(fitter *f, const double *x, size_t n_all, const uint32_t
     f->grad_ok = false;
     f->fac_ok = false;
     f->newton_last = false;
+    f->sol_newton = f->prev_newton = false;
     f->work_last = 0;
     for (size_t i = 0, row = 0; i < n_all; i++) {
         if (fold_of && fold_of[i] == skip)
@@ -1470,6 +1478,66 @@ static int fitter_cycles(fitter *f, double lambda, uint32_t *passes, bool newton
     }
 }
 
+/* The secant predictor along the path: when the current solution (at λ1) and the one before
+ * it (at λ2) were both found by Newton's method with the same signs, the start for λ becomes
+ * β1 + t (β1 − β2), t = log(λ / λ1) / log(λ1 / λ2) (1 on the geometric path), intercepts too,
+ * kept only when no coefficient changes sign and the objective at λ falls; on a smooth stretch
+ * of the path Newton then starts about the square of the step closer. The current solution
+ * becomes bprev either way. */
+static void path_predict(fitter *f, double lambda)
+{
+    size_t n = f->n, p = f->p, kp = (size_t)f->K * p;
+    uint32_t K = f->K;
+    bool use = f->newton_on && f->sol_newton && f->prev_newton && f->lam1 > 0 && f->lam2 > 0 &&
+               f->lam1 != f->lam2 && same_pattern(f, f->bprev);
+    double t = use ? log(lambda / f->lam1) / log(f->lam1 / f->lam2) : 0;
+    double *b1 = f->s0, *d = f->bprev; /* b1: a copy of the current solution; d: the step */
+    memcpy(b1, f->beta, kp * sizeof *b1);
+    memcpy(b1 + kp, f->beta0, K * sizeof *b1);
+    if (use && t > 0 && t <= 2) {
+        for (size_t q = 0; q < kp + K; q++) {
+            d[q] = t * (b1[q] - d[q]);
+            if (q < kp && b1[q] != 0 && (b1[q] + d[q] > 0) != (b1[q] > 0))
+                use = false;
+        }
+        if (use) {
+            if (!f->cached)
+                softmax_fresh(f);
+            double o0 = f->loss + lambda * total_penalty(f);
+            double *et = f->et;
+            memcpy(et, f->eta, n * K * sizeof *et);
+            for (uint32_t k = 0; k < K; k++) {
+                for (size_t j = 0; j < p; j++) {
+                    double dq = d[(size_t)k * p + j];
+                    if (b1[(size_t)k * p + j] == 0 || dq == 0)
+                        continue;
+                    const double *zj = f->z + j * n;
+                    for (size_t i = 0; i < n; i++)
+                        et[i * K + k] += zj[i] * dq;
+                }
+                for (size_t i = 0; i < n; i++)
+                    et[i * K + k] += d[kp + k];
+            }
+            for (size_t q = 0; q < kp; q++)
+                if (b1[q] != 0)
+                    f->beta[q] = b1[q] + d[q];
+            for (uint32_t k = 0; k < K; k++)
+                f->beta0[k] = b1[kp + k] + d[kp + k];
+            double lo = loss_at(f, et);
+            if (lo + lambda * total_penalty(f) < o0) {
+                take_trial(f, lo);
+                f->grad_ok = false;
+            } else {
+                memcpy(f->beta, b1, kp * sizeof *b1);
+                memcpy(f->beta0, b1 + kp, K * sizeof *b1);
+            }
+        }
+    }
+    memcpy(f->bprev, b1, (kp + K) * sizeof *b1);
+    f->prev_newton = f->sol_newton;
+    f->lam2 = f->lam1;
+}
+
 /* Fits λ from the current state; lambda_prev is the λ of that state's fit (0 when there was
  * none). Sequential strong rule (Tibshirani et al. 2012, for the multinomial as glmnet: by
  * feature, over the classes): coordinate descent visits only the features with a non-zero
@@ -1491,6 +1559,7 @@ static bool fitter_solve(fitter *f, double lambda, double lambda_prev)
             nz = f->beta[(size_t)k * f->p + j] != 0;
         f->strong[j] = f->sd[j] != 0 && (nz || grad_max(f, j) >= thr);
     }
+    path_predict(f, lambda);
     bool newton_first = f->newton_on && (f->newton_last || (f->fac_ok && newton_vars_current(f)) ||
                                          f->work_last > NEWTON_GAIN * newton_work(f));
     bool enter = false;
@@ -1539,6 +1608,8 @@ static bool fitter_solve(fitter *f, double lambda, double lambda_prev)
         }
     }
     f->work_last = f->work_now;
+    f->lam1 = lambda;
+    f->sol_newton = converged && f->newton_last;
     double m = 0;
     for (uint32_t k = 0; k < f->K; k++)
         m += f->beta0[k];
