@@ -1482,8 +1482,8 @@ static int fitter_cycles(fitter *f, double lambda, uint32_t *passes, bool newton
  * it (at λ2) were both found by Newton's method with the same signs, the start for λ becomes
  * β1 + t (β1 − β2), t = log(λ / λ1) / log(λ1 / λ2) (1 on the geometric path), intercepts too,
  * kept only when no coefficient changes sign and the objective at λ falls; on a smooth stretch
- * of the path Newton then starts about the square of the step closer. The current solution
- * becomes bprev either way. */
+ * of the path the start is then off by the second order of the step in log λ instead of the
+ * first, which saves Newton about one step. The current solution becomes bprev either way. */
 static void path_predict(fitter *f, double lambda)
 {
     size_t n = f->n, p = f->p, kp = (size_t)f->K * p;
