@@ -28,6 +28,10 @@
  *                                keyframe DP, features, projection), median over the motions;
  *   train default / affect_strength default   the same with strength_train's default options
  *                                (the standardized Laban vector, C by inner cross-validation).
+ * Then, below the table, the keyframe selection alone (affect_keyframes_select_level, 13
+ * keyframes of the scored motions' joint positions; median over the motions of the mean of 3
+ * calls) at every instruction-set level this processor runs (SSE2, AVX2, AVX-512 on x86-64):
+ * what a processor without the wider ones gets.
  * Output: a table, then lines "BENCH strength_<what>_<data set> <seconds> s" for scripts.
  * Exit status 1 if a step fails.
  */
@@ -35,6 +39,7 @@
 #include "benchutil.h"
 
 #include "affect/io.h"
+#include "affect/keyframes.h"
 #include "affect/rank.h"
 #include "affect/strength.h"
 
@@ -145,6 +150,50 @@ static int score_time(const affect_strength *model, const dataset *d, double *ou
         per[ns++] = (cpu_now() - c0) / 3;
     }
     *out = median(per, ns);
+    free(per);
+    return 0;
+}
+
+/* The keyframe selection alone at each level the processor runs: 13 keyframes of each scored
+ * motion's joint positions (the mean of 3 calls), the median over the motions. */
+static int keyframe_levels(const dataset *d)
+{
+    static const char *const level_names[] = {"base", "avx2", "avx512"};
+    double *per = malloc(sizeof(double) * d->n);
+    if (!per)
+        return 1;
+    for (int level = AFFECT_KEYFRAMES_LEVEL_BASE; level <= affect_keyframes_level(); level++) {
+        int ns = 0;
+        for (uint32_t i = 0; i < d->n; i++) {
+            if (d->train[i])
+                continue;
+            const affect_motion *m = d->m[i];
+            size_t nv = (size_t)m->n_frames * m->n_joints * 3;
+            double *Y = malloc(sizeof(double) * nv);
+            uint32_t frames[AFFECT_KEYFRAMES_DEFAULT], nf;
+            affect_error err;
+            if (!Y) {
+                free(per);
+                return 1;
+            }
+            for (size_t k = 0; k < nv; k++)
+                Y[k] = m->pos[k];
+            double c0 = cpu_now();
+            for (int r = 0; r < 3; r++)
+                if (affect_keyframes_select_level(Y, m->n_frames, m->n_joints * 3,
+                                                  AFFECT_KEYFRAMES_DEFAULT, frames, &nf, NULL,
+                                                  level, NULL, &err)) {
+                    fprintf(stderr, "bench_strength: keyframes: %s\n", err.msg);
+                    free(Y);
+                    free(per);
+                    return 1;
+                }
+            per[ns++] = (cpu_now() - c0) / 3;
+            free(Y);
+        }
+        printf("BENCH strength_keyframes_%s_%s %.6f s\n", level_names[level], d->name,
+               median(per, ns));
+    }
     free(per);
     return 0;
 }
@@ -284,6 +333,8 @@ int main(int argc, char **argv)
     if (rc == 1)
         printf("bench_strength: %s absent: bn2-exhausted skipped\n", c2);
     else if (rc || bench_set(&d2))
+        return 1;
+    if ((d1.n && keyframe_levels(&d1)) || (d2.n && keyframe_levels(&d2)))
         return 1;
     for (uint32_t i = 0; i < d1.n; i++)
         affect_motion_free(d1.m[i]);

@@ -133,6 +133,49 @@ static void test_keyframes_pruned_optimal(void **state)
     }
 }
 
+/* The vector loops of every level the processor runs (SSE2, AVX2, AVX-512) give the same bits:
+ * keyframes and error of random curves whose lengths leave partial blocks of ends, noisy, random
+ * walks and integer steps (ties), compared with the base level's. */
+static void test_keyframes_levels(void **state)
+{
+    (void)state;
+    affect_rng r;
+    affect_rng_seed(&r, 23);
+    int top = affect_keyframes_level();
+    assert_true(top >= AFFECT_KEYFRAMES_LEVEL_BASE && top <= AFFECT_KEYFRAMES_LEVEL_AVX512);
+    for (int trial = 0; trial < 30; trial++) {
+        uint32_t T = 3 + (uint32_t)(affect_rng_uniform(&r) * 150); /* 3 .. 152 */
+        uint32_t D = 1 + (uint32_t)(affect_rng_uniform(&r) * 10);
+        uint32_t q = 2 + (uint32_t)(affect_rng_uniform(&r) * 16);
+        double *Y = malloc(sizeof(double) * T * D);
+        assert_non_null(Y);
+        for (uint32_t t = 0; t < T; t++)
+            for (uint32_t c = 0; c < D; c++)
+                Y[t * D + c] = trial % 3 == 0 ? 40 * affect_rng_normal(&r)
+                               : trial % 3 == 1
+                                   ? (t ? Y[(t - 1) * D + c] : 0) + affect_rng_normal(&r)
+                                   : (double)((t / 5 + c) % 3);
+        uint32_t fr0[32], fr[32], n0, n;
+        double sse0, sse;
+        affect_error err;
+        assert_int_equal(affect_keyframes_select_level(Y, T, D, q, fr0, &n0, &sse0,
+                                                       AFFECT_KEYFRAMES_LEVEL_BASE, NULL, &err),
+                         AFFECT_OK);
+        for (int level = AFFECT_KEYFRAMES_LEVEL_BASE; level <= AFFECT_KEYFRAMES_LEVEL_AVX512;
+             level++) {
+            assert_int_equal(
+                affect_keyframes_select_level(Y, T, D, q, fr, &n, &sse, level, NULL, &err),
+                AFFECT_OK);
+            assert_int_equal(n, n0);
+            assert_memory_equal(fr, fr0, n * sizeof fr[0]);
+            assert_memory_equal(&sse, &sse0, sizeof sse);
+        }
+        assert_int_equal(affect_keyframes_select(Y, T, D, q, fr, &n, &sse, NULL, &err), AFFECT_OK);
+        assert_memory_equal(fr, fr0, n * sizeof fr[0]);
+        free(Y);
+    }
+}
+
 static void test_keyframes_exact(void **state)
 {
     (void)state;
@@ -770,6 +813,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_keyframes_optimal),
         cmocka_unit_test(test_keyframes_pruned_optimal),
+        cmocka_unit_test(test_keyframes_levels),
         cmocka_unit_test(test_keyframes_exact),
         cmocka_unit_test(test_regression_smooth_map),
         cmocka_unit_test(test_model),

@@ -29,6 +29,12 @@
  *     Σ_t ‖y_t − y_a − s_t Δ‖² = Σ‖y_t − y_a‖² − 2 Σ s_t (y_t − y_a)·Δ + ‖Δ‖² Σ s_t²
  * (sums over a < t < b; rounding can make it slightly negative: clamped at 0).
  *
+ * Speed: the costs of a start a are computed for many ends at once, in vector lanes (on x86-64
+ * with SSE2, AVX2 or AVX-512, the widest the processor has, chosen at run time); each lane does
+ * the scalar operations in the scalar order, so the keyframes and errors are the same bits on
+ * every processor. Rows are cut where a lower bound of their costs proves they cannot be on the
+ * optimal path (affect/keyframes.c).
+ *
  * When q ≥ T every frame is a keyframe and the error is 0. Errors: q < 2 with T ≥ 2, sizes too
  * large, interrupted (the DP polls the monitor once per row).
  */
@@ -52,6 +58,21 @@ extern "C" {
 affect_status affect_keyframes_select(const double *Y, uint32_t T, uint32_t D, uint32_t q,
                                       uint32_t *frames, uint32_t *n_out, double *sse,
                                       affect_monitor *mon, affect_error *err);
+
+/* The instruction sets of affect_keyframes_select's loops (exposed for tests). */
+#define AFFECT_KEYFRAMES_LEVEL_BASE 0   /* SSE2 on x86-64; other compilers and processors */
+#define AFFECT_KEYFRAMES_LEVEL_AVX2 1   /* x86-64 with AVX2 */
+#define AFFECT_KEYFRAMES_LEVEL_AVX512 2 /* x86-64 with AVX-512F */
+
+/* The widest level this processor runs (what affect_keyframes_select uses). */
+int affect_keyframes_level(void);
+
+/* affect_keyframes_select with its loops at most at max_level (AFFECT_KEYFRAMES_LEVEL_…; a
+ * level above the processor's is lowered to it): the same results, for tests that compare the
+ * levels. */
+affect_status affect_keyframes_select_level(const double *Y, uint32_t T, uint32_t D, uint32_t q,
+                                            uint32_t *frames, uint32_t *n_out, double *sse,
+                                            int max_level, affect_monitor *mon, affect_error *err);
 
 /* The squared error of piecewise-linear interpolation of Y through the given keyframes (for
  * tests and reports). */
