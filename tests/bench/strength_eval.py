@@ -5,6 +5,7 @@ Usage (from the repository root, after any build of build/affect.so; about 15 mi
     OPENBLAS_NUM_THREADS=1 python3 tests/bench/strength_eval.py [--db build/strength.db]
         [--tasks anger,happiness,exhausted] [--seeds 1,2,3] [--quick] [--features]
         [--synthesis-features keyframes|both] [--recognizer [--recognizer-options JSON]]
+        [--score-timing]
 AFFECT_EXT overrides the extension's path (default build/affect). Python 3 standard library and
 sqlite3 only. It imports the BVH files of ../shared/corpora/bandai-namco-1 and
 bandai-namco-2-dev into --db once (motion_from_bvh), then, for every task:
@@ -41,6 +42,10 @@ The rows above rank by keyframe features ("features": "keyframes"). --features r
 the three inputs of the ranker, "keyframes", "laban" (the default of strength_train) and "both",
 with default options otherwise (about 1 minute; the "dims" column is then the keyframe PCA's).
 --synthesis-features chooses the synthesis models' input (a "laban" model cannot synthesize).
+
+--score-timing (under a minute) only times affect_strength through SQL, one statement per
+motion with its decoding, for a default (Laban) and a PCA-40 keyframe model of each task
+trained on all its motions: process CPU per call over 5 passes after a warm-up pass.
 """
 import argparse
 import json
@@ -353,6 +358,24 @@ def recognizer_check(con, task, seeds, npoints=5, rec_options="{}"):
         print("| %s | %s | %s |" % (kind, c, " | ".join(str(d.get(x, 0)) for x in order)))
 
 
+def score_timing(con, task, passes=5):
+    """affect_strength through SQL, one statement per motion, the motion's decoding included:
+    a model of each kind (the default Laban model, a PCA-40 keyframe model) trained on all the
+    task's motions; after one untimed pass (the model is decoded once per connection), the
+    process CPU time of `passes` passes over the motions, per call."""
+    rows = task_rows(con, task)
+    print("\n#### affect_strength through SQL: %s, %d motions\n" % (task, len(rows)))
+    print("| model | CPU per call (ms) |")
+    print("|---|---:|")
+    for name, opts in (("default (Laban vector)", {}), ("keyframes, PCA-40", dict(KF, pca_dims=40))):
+        model, _, _ = train(con, task, rows, opts)
+        scores(con, model, rows)
+        c0 = time.process_time()
+        for _ in range(passes):
+            scores(con, model, rows)
+        print("| %s | %.2f |" % (name, 1e3 * (time.process_time() - c0) / (passes * len(rows))))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--db", default=os.path.join(ROOT, "build", "strength.db"))
@@ -372,6 +395,9 @@ def main():
     ap.add_argument("--recognizer", action="store_true",
                     help="only the recognizer check of synthesized and edited motions, for every "
                     "task of --tasks")
+    ap.add_argument("--score-timing", action="store_true",
+                    help="only the CPU time of affect_strength through SQL per motion, for the "
+                         "default and a keyframe model of each task")
     ap.add_argument("--recognizer-options", default="{}",
                     help='affect_train options of the recognizer check, e.g. '
                          '{"descriptors":"none"}')
@@ -386,6 +412,10 @@ def main():
     con = connect(a.db)
     t0, c0 = time.perf_counter(), time.process_time()
     import_corpora(con)
+    if a.score_timing:
+        for task in a.tasks.split(","):
+            score_timing(con, task)
+        return 0
     if a.recognizer:
         for task in a.tasks.split(","):
             recognizer_check(con, task, seeds, rec_options=a.recognizer_options)
