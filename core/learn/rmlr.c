@@ -189,6 +189,7 @@ void affect_rmlr_options_default(affect_rmlr_options *o)
 
 /* Samples per pass of the Hessian's accumulation (newton_factor); its code is written for 4. */
 #define HESS_BLOCK 4u
+_Static_assert(HESS_BLOCK == 4, "newton_factor accumulates four samples per pass");
 
 typedef struct fitter {
     size_t n, p; /* n: the rows loaded, at most the capacity allocated */
