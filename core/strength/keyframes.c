@@ -49,7 +49,7 @@ double affect_keyframes_error(const double *Y, uint32_t T, uint32_t D, const uin
  * bits of the scalar loop whatever the width. On x86-64 they are compiled three times, for
  * SSE2 (the build's baseline), AVX2 and AVX-512, and the widest the processor has is chosen at
  * run time; the results are the same bits on every processor. Other compilers get the scalar
- * loops. */
+ * loops, which tests compare with the lanes (AFFECT_KEYFRAMES_LEVEL_SCALAR). */
 #if defined(__GNUC__) || defined(__clang__)
 #define KEYFRAME_VECTOR 1
 #else
@@ -211,26 +211,13 @@ int affect_keyframes_level(void)
     if (__builtin_cpu_supports("avx2"))
         return AFFECT_KEYFRAMES_LEVEL_AVX2;
 #endif
-    return AFFECT_KEYFRAMES_LEVEL_BASE;
+    return KEYFRAME_VECTOR ? AFFECT_KEYFRAMES_LEVEL_BASE : AFFECT_KEYFRAMES_LEVEL_SCALAR;
 }
 
-/* The costs of the segments (a, b), b = lo .. hi − 1 (a + 2 ≤ lo, hi ≤ T), into cost[b] (see
- * ROW_COSTS), by the loops of p->level. */
-static void segment_costs(const kf_sums *p, uint32_t a, uint32_t lo, uint32_t hi, double *cost)
+/* The plain C loops, one end at a time (AFFECT_KEYFRAMES_LEVEL_SCALAR; compilers without the
+ * vector extension run only these): the same operations as the lanes of ROW_COSTS and RELAX. */
+static void costs_scalar(const kf_sums *p, uint32_t a, uint32_t lo, uint32_t hi, double *cost)
 {
-#if KEYFRAME_X86
-    if (p->level == AFFECT_KEYFRAMES_LEVEL_AVX512) {
-        costs_avx512(p, a, lo, hi, cost);
-        return;
-    }
-    if (p->level == AFFECT_KEYFRAMES_LEVEL_AVX2) {
-        costs_avx2(p, a, lo, hi, cost);
-        return;
-    }
-#endif
-#if KEYFRAME_VECTOR
-    row_costs2(p, a, lo, hi, cost, 4); /* 8 ends: the 16 SSE2 registers hold 16 sums */
-#else
     const double *ya = p->Y + (size_t)a * p->D;
     double fa = (double)a, na = p->nrm[a];
     for (uint32_t b = lo; b < hi; b++) {
@@ -250,7 +237,41 @@ static void segment_costs(const kf_sums *p, uint32_t a, uint32_t lo, uint32_t hi
         double e = p->sq[b] - p->sq[a + 1] + m * na - 2.0 * ysy - 2.0 * cross + dd * s2;
         cost[b] = e > 0 ? e : 0;
     }
+}
+
+static void relax_scalar(double *Ek, uint64_t *bk, const double *cost, double ep, uint32_t a,
+                         uint32_t lo, uint32_t hi)
+{
+    for (uint32_t b = lo; b < hi; b++) {
+        double v = ep + cost[b];
+        if (v < Ek[b]) {
+            Ek[b] = v;
+            bk[b] = a;
+        }
+    }
+}
+
+/* The costs of the segments (a, b), b = lo .. hi − 1 (a + 2 ≤ lo, hi ≤ T), into cost[b] (see
+ * ROW_COSTS), by the loops of p->level. */
+static void segment_costs(const kf_sums *p, uint32_t a, uint32_t lo, uint32_t hi, double *cost)
+{
+#if KEYFRAME_X86
+    if (p->level == AFFECT_KEYFRAMES_LEVEL_AVX512) {
+        costs_avx512(p, a, lo, hi, cost);
+        return;
+    }
+    if (p->level == AFFECT_KEYFRAMES_LEVEL_AVX2) {
+        costs_avx2(p, a, lo, hi, cost);
+        return;
+    }
 #endif
+#if KEYFRAME_VECTOR
+    if (p->level == AFFECT_KEYFRAMES_LEVEL_BASE) {
+        row_costs2(p, a, lo, hi, cost, 4); /* 8 ends: the 16 SSE2 registers hold 16 sums */
+        return;
+    }
+#endif
+    costs_scalar(p, a, lo, hi, cost);
 }
 
 /* The DP's relaxation of row a into E[k][b] (Ek) for b = lo .. hi − 1, ep = E[k − 1][a]: a
@@ -270,17 +291,12 @@ static void relax(const kf_sums *p, double *Ek, uint64_t *bk, const double *cost
     }
 #endif
 #if KEYFRAME_VECTOR
-    relax2(Ek, bk, cost, ep, a, lo, hi);
-#else
-    (void)p;
-    for (uint32_t b = lo; b < hi; b++) {
-        double v = ep + cost[b];
-        if (v < Ek[b]) {
-            Ek[b] = v;
-            bk[b] = a;
-        }
+    if (p->level == AFFECT_KEYFRAMES_LEVEL_BASE) {
+        relax2(Ek, bk, cost, ep, a, lo, hi);
+        return;
     }
 #endif
+    relax_scalar(Ek, bk, cost, ep, a, lo, hi);
 }
 
 /* The cost of the one segment (a, b), a < b (cost: scratch of T): the same bits as in a row. */
@@ -508,7 +524,8 @@ affect_status affect_keyframes_select_level(const double *Y, uint32_t T, uint32_
         }
     int level = affect_keyframes_level();
     if (max_level < level)
-        level = max_level < AFFECT_KEYFRAMES_LEVEL_BASE ? AFFECT_KEYFRAMES_LEVEL_BASE : max_level;
+        level =
+            max_level < AFFECT_KEYFRAMES_LEVEL_SCALAR ? AFFECT_KEYFRAMES_LEVEL_SCALAR : max_level;
     kf_sums p = {Y, T, D, T1, TP, T1P, sq, nrm, yt, syt, styt, pf, level};
     /* U: the error of evenly spaced keyframes, their costs summed in order from 0 as the DP
      * sums a path's (so the DP's optimum is at most U). (A local search that moved each

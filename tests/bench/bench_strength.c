@@ -30,7 +30,7 @@
  *                                (the standardized Laban vector, C by inner cross-validation).
  * Then, below the table, the keyframe selection alone (affect_keyframes_select_level, 13
  * keyframes of the scored motions' joint positions; median over the motions of the mean of 3
- * calls) at every instruction-set level this processor runs (SSE2, AVX2, AVX-512 on x86-64):
+ * calls) at every level this processor runs (plain C, then SSE2, AVX2, AVX-512 on x86-64):
  * what a processor without the wider ones gets.
  * Output: a table, then lines "BENCH strength_<what>_<data set> <seconds> s" for scripts.
  * Exit status 1 if a step fails.
@@ -158,11 +158,11 @@ static int score_time(const affect_strength *model, const dataset *d, double *ou
  * motion's joint positions (the mean of 3 calls), the median over the motions. */
 static int keyframe_levels(const dataset *d)
 {
-    static const char *const level_names[] = {"base", "avx2", "avx512"};
+    static const char *const level_names[] = {"scalar", "base", "avx2", "avx512"};
     double *per = malloc(sizeof(double) * d->n);
     if (!per)
         return 1;
-    for (int level = AFFECT_KEYFRAMES_LEVEL_BASE; level <= affect_keyframes_level(); level++) {
+    for (int level = AFFECT_KEYFRAMES_LEVEL_SCALAR; level <= affect_keyframes_level(); level++) {
         int ns = 0;
         for (uint32_t i = 0; i < d->n; i++) {
             if (d->train[i])
@@ -191,7 +191,7 @@ static int keyframe_levels(const dataset *d)
             per[ns++] = (cpu_now() - c0) / 3;
             free(Y);
         }
-        printf("BENCH strength_keyframes_%s_%s %.6f s\n", level_names[level], d->name,
+        printf("BENCH strength_keyframes_%s_%s %.6f s\n", level_names[level + 1], d->name,
                median(per, ns));
     }
     free(per);

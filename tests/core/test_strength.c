@@ -133,16 +133,16 @@ static void test_keyframes_pruned_optimal(void **state)
     }
 }
 
-/* The vector loops of every level the processor runs (SSE2, AVX2, AVX-512) give the same bits:
+/* The loops of every level the processor runs (plain C, SSE2, AVX2, AVX-512) give the same bits:
  * keyframes and error of random curves whose lengths leave partial blocks of ends, noisy, random
- * walks and integer steps (ties), compared with the base level's. */
+ * walks and integer steps (ties), compared with the plain C loops'. */
 static void test_keyframes_levels(void **state)
 {
     (void)state;
     affect_rng r;
     affect_rng_seed(&r, 23);
     int top = affect_keyframes_level();
-    assert_true(top >= AFFECT_KEYFRAMES_LEVEL_BASE && top <= AFFECT_KEYFRAMES_LEVEL_AVX512);
+    assert_true(top >= AFFECT_KEYFRAMES_LEVEL_SCALAR && top <= AFFECT_KEYFRAMES_LEVEL_AVX512);
     for (int trial = 0; trial < 30; trial++) {
         uint32_t T = 3 + (uint32_t)(affect_rng_uniform(&r) * 150); /* 3 .. 152 */
         uint32_t D = 1 + (uint32_t)(affect_rng_uniform(&r) * 10);
@@ -159,7 +159,7 @@ static void test_keyframes_levels(void **state)
         double sse0, sse;
         affect_error err;
         assert_int_equal(affect_keyframes_select_level(Y, T, D, q, fr0, &n0, &sse0,
-                                                       AFFECT_KEYFRAMES_LEVEL_BASE, NULL, &err),
+                                                       AFFECT_KEYFRAMES_LEVEL_SCALAR, NULL, &err),
                          AFFECT_OK);
         for (int level = AFFECT_KEYFRAMES_LEVEL_BASE; level <= AFFECT_KEYFRAMES_LEVEL_AVX512;
              level++) {

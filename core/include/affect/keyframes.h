@@ -59,8 +59,11 @@ affect_status affect_keyframes_select(const double *Y, uint32_t T, uint32_t D, u
                                       uint32_t *frames, uint32_t *n_out, double *sse,
                                       affect_monitor *mon, affect_error *err);
 
-/* The instruction sets of affect_keyframes_select's loops (exposed for tests). */
-#define AFFECT_KEYFRAMES_LEVEL_BASE 0   /* SSE2 on x86-64; other compilers and processors */
+/* The loops of affect_keyframes_select (exposed for tests). */
+#define AFFECT_KEYFRAMES_LEVEL_SCALAR                                                              \
+    (-1)                                /* plain C, one end at a time (compilers without           \
+                                           GCC's vector extension run only these) */
+#define AFFECT_KEYFRAMES_LEVEL_BASE 0   /* 2-lane vectors: SSE2 on x86-64 */
 #define AFFECT_KEYFRAMES_LEVEL_AVX2 1   /* x86-64 with AVX2 */
 #define AFFECT_KEYFRAMES_LEVEL_AVX512 2 /* x86-64 with AVX-512F */
 
