@@ -1,8 +1,9 @@
 /*
  * keyframes.c — exact keyframe selection by dynamic programming (affect/keyframes.h).
  *
- * Memory: the curve's coordinate-major copy and prefix sums ((T + 1)(3D + 2) doubles), one row
- * of segment costs (T), the DP table and its back-pointers (q T each); sizes overflow-checked.
+ * Memory: the curve's coordinate-major copy and prefix sums, padded by KEYFRAME_BLOCK, and a
+ * frame-major copy of the prefix sums (about (T + 17)(5D + 2) doubles), one row of segment
+ * costs (T), the DP table and its back-pointers (q T each); sizes overflow-checked.
  * The costs are computed at most once each (O(T² D)), row by row as the DP needs them, and the
  * rows are cut where a lower bound proves the rest cannot be on the optimal path (see
  * keyframes_dp); the DP is O(q T²) at most.
@@ -36,7 +37,7 @@ double affect_keyframes_error(const double *Y, uint32_t T, uint32_t D, const uin
 }
 
 /* Ends whose segment sums are held in registers at once, at most: the zero padding of the
- * coordinate-major copies past the last frame (see row_costs). */
+ * coordinate-major copies past the last frame (see ROW_COSTS). */
 #define KEYFRAME_BLOCK 16u
 /* The rounding of the prefix-sum costs and bounds is at most a few × eps × D × T³ × max|y|²
  * (the prefix sums of t·y_t are the largest terms); a bound prunes only when it clears the
@@ -489,7 +490,7 @@ affect_status affect_keyframes_select_level(const double *Y, uint32_t T, uint32_
     };
     void *block = affect_ws_alloc(parts, sizeof parts / sizeof parts[0]);
     if (!block)
-        return affect_nomem_of(err, (size_t)T * D, 3 * sizeof(double),
+        return affect_nomem_of(err, (size_t)T * D, 5 * sizeof(double),
                                "the %u x %u keyframe prefix sums", T, D);
     affect_status status = AFFECT_OK;
     /* prefix sums over frames 0 .. t − 1 at index t */
