@@ -1398,6 +1398,8 @@ static void scatter(const affect_hmm *h, const double *const *rows, const double
             double *restrict sum = s1;
             const double *restrict ctr = c;
             if (prune) {
+                if (rr == 0.0)
+                    continue; /* adds nothing anywhere; the row is never read */
                 double sq = sqrt(rr);
                 double *restrict dt = dbuf + t * m, *restrict ds = dsq;
                 for (uint32_t d = 0; d < m; d++) {
@@ -1436,6 +1438,8 @@ static void scatter(const affect_hmm *h, const double *const *rows, const double
             kept = 0;
             for (size_t t = 0; t < nb; t++) {
                 const double *dt = dbuf + t * m;
+                if (r[(t0 + t) * stride] == 0.0)
+                    continue;
                 if (rn) {
                     double e = rn[t0 + t] + dc;
                     if (r[(t0 + t) * stride] * e * e * smax * PRUNE_BOUND_SLACK <= 1.0)
