@@ -22,7 +22,8 @@
  * label, content, fraction (0 < f ≤ 1), similar (true), C (1), seed (0), progress; and for
  * strength_train keyframes (13), pca_dims (40; 0 = none), regression ("auto" | "kernel_ridge"
  * | "local_linear"), relative (false), standardize (true), features ("laban" | "keyframes" |
- * "both"); for rank_train clusters (1).
+ * "both" | "fisher"), descriptors (with "fisher": "none" | "kinematics" | "laban" | "all",
+ * default "kinematics"); for rank_train clusters (1).
  *
  * How the aggregates work: the state (one pointer in the aggregate context) keeps each row's
  * decoded motion (strength_train: every motion is checked against the first's skeleton and
@@ -118,10 +119,10 @@ static char *dup_text(const char *s, size_t n)
     return d;
 }
 
-static const char *const strength_keys[] = {"order",    "pairs",       "label",    "content",
-                                            "fraction", "similar",     "C",        "seed",
-                                            "progress", "keyframes",   "pca_dims", "regression",
-                                            "relative", "standardize", "features", NULL};
+static const char *const strength_keys[] = {
+    "order",    "pairs",       "label",    "content",     "fraction", "similar",
+    "C",        "seed",        "progress", "keyframes",   "pca_dims", "regression",
+    "relative", "standardize", "features", "descriptors", NULL};
 static const char *const rank_keys[] = {"order",    "pairs",    "label", "content",
                                         "fraction", "similar",  "C",     "seed",
                                         "progress", "clusters", NULL};
@@ -144,7 +145,9 @@ static ax_arg read_options(sqlite3_context *ctx, int argc, sqlite3_value **argv,
     int pairs = 0, reg = 0, feat = (int)ts->so.features;
     static const char *const pair_choices[] = {"all", "same_content", NULL};
     static const char *const reg_choices[] = {"auto", "kernel_ridge", "local_linear", NULL};
-    static const char *const feat_choices[] = {"keyframes", "laban", "both", NULL};
+    static const char *const feat_choices[] = {"keyframes", "laban", "both", "fisher", NULL};
+    static const char *const desc_choices[] = {"none", "kinematics", "laban", "all", NULL};
+    int desc = (int)ts->so.descriptors;
     if (ax_opt_enum(ctx, &opts, "pairs", pair_choices, &pairs) ||
         ax_opt_string(ctx, &opts, "label", &lk) || ax_opt_string(ctx, &opts, "content", &ck) ||
         ax_opt_number(ctx, &opts, "fraction", &ts->so.fraction) ||
@@ -157,9 +160,15 @@ static ax_arg read_options(sqlite3_context *ctx, int argc, sqlite3_value **argv,
                          ax_opt_enum(ctx, &opts, "regression", reg_choices, &reg) ||
                          ax_opt_bool(ctx, &opts, "relative", &ts->so.relative) ||
                          ax_opt_bool(ctx, &opts, "standardize", &ts->so.standardize) ||
-                         ax_opt_enum(ctx, &opts, "features", feat_choices, &feat)))
+                         ax_opt_enum(ctx, &opts, "features", feat_choices, &feat) ||
+                         ax_opt_enum(ctx, &opts, "descriptors", desc_choices, &desc)))
         goto done;
     ts->so.features = (affect_strength_feature_kind)feat;
+    ts->so.descriptors = (unsigned)desc; /* the list's order is the mask's */
+    if (ax_opt(&opts, "descriptors") && ts->so.features != AFFECT_STRENGTH_FEAT_FISHER) {
+        ax_errorf(ctx, "option \"descriptors\" needs \"features\": \"fisher\"");
+        goto done;
+    }
     if (!ts->vectors && ax_opt(&opts, "C"))
         ts->so.cv_C = false; /* a C given is used as it is */
     if (ts->vectors && ax_opt_u32(ctx, &opts, "clusters", &ts->clusters))
@@ -886,12 +895,14 @@ AX_FN(ax_strength_info)
         return;
     affect_strength *s = mv;
     static const char *const reg_names[] = {"auto", "kernel_ridge", "local_linear"};
-    static const char *const feat_names[] = {"keyframes", "laban", "both"};
+    static const char *const feat_names[] = {"keyframes", "laban", "both", "fisher"};
     affect_strbuf sb;
     affect_strbuf_init(&sb);
     affect_strbuf_printf(&sb, "{\"version\":%u,\"motions\":%u,\"joints\":%u,\"keyframes\":%u",
-                         s->features == AFFECT_STRENGTH_FEAT_KEYFRAMES ? 1u : 2u, s->n_train,
-                         s->n_joints, s->keyframes);
+                         s->features == AFFECT_STRENGTH_FEAT_KEYFRAMES ? 1u
+                         : s->features == AFFECT_STRENGTH_FEAT_FISHER  ? 3u
+                                                                       : 2u,
+                         s->n_train, s->n_joints, s->keyframes);
     json_num(&sb, "fps", s->fps, true);
     affect_strbuf_printf(&sb, ",\"features\":%u,\"pca\":", s->dim);
     if (s->pca) {
@@ -905,10 +916,17 @@ AX_FN(ax_strength_info)
                          feat_names[s->features], affect_strength_rank_dim(s));
     if (s->features == AFFECT_STRENGTH_FEAT_BOTH)
         json_num(&sb, "keyframe_weight", s->kf_weight, true);
+    if (s->fisher) {
+        static const char *const desc_names[] = {"none", "kinematics", "laban", "all"};
+        affect_strbuf_printf(&sb, ",\"descriptors\":\"%s\"",
+                             desc_names[affect_classifier_get_config(s->fisher)->descriptors & 3u]);
+    }
     json_num(&sb, "C", s->C, true);
-    affect_strbuf_printf(&sb, ",\"C_cross_validated\":%s,\"loss\":\"%s\"",
-                         s->cv_C ? "true" : "false",
-                         s->features == AFFECT_STRENGTH_FEAT_KEYFRAMES ? "sum" : "mean");
+    affect_strbuf_printf(
+        &sb, ",\"C_cross_validated\":%s,\"loss\":\"%s\"", s->cv_C ? "true" : "false",
+        s->features == AFFECT_STRENGTH_FEAT_KEYFRAMES || s->features == AFFECT_STRENGTH_FEAT_FISHER
+            ? "sum"
+            : "mean");
     affect_strbuf_printf(&sb, ",\"ordered_pairs\":%" PRIu64 ",\"similar_pairs\":%" PRIu64,
                          s->stats.ordered, s->stats.similar);
     json_num(&sb, "training_accuracy",

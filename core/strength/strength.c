@@ -22,8 +22,16 @@
  * the keyframe block's weight. Only the ranker changes: the keyframe features, PCA and the
  * regression are computed as without them.
  *
+ * Fisher features: fisher_train builds the observations and descriptors of the used motions as
+ * affect_train does (affect_classifier_features_default, affect_features_extract,
+ * affect_descriptors), trains the recognizer on them with the levels as classes, and evaluates
+ * each training motion's normalized Fisher representation (affect_classifier_eval); those
+ * n × D_F rows are the ranker's input, and a scored motion's vector comes from fisher_of (the
+ * same two calls). The model's BLOB keeps the recognizer's own BLOB (version 3).
+ *
  * Memory: the features (n × D), the PCA workspace (N² + N + 3N doubles, N = min(n, D)), the
- * model's arrays; every size overflow-checked.
+ * model's arrays, with Fisher features the recognizer's training (affect/classifier.h) and the
+ * n × D_F representations; every size overflow-checked.
  */
 #include "affect/strength.h"
 
@@ -49,6 +57,7 @@
 #define FLAG_LABAN 8u       /* version 2: the ranker sees the Laban vector */
 #define FLAG_BOTH 16u       /* version 2: … after the weighted keyframe coordinates */
 #define FLAG_CV_C 32u       /* version 2: C chosen by the inner cross-validation */
+#define FLAG_FISHER 64u     /* version 3: the ranker sees the recognizer's representation */
 #define CV_SEED 0x5c0ffee5u /* the inner folds' draw: opt->seed mixed with this */
 #define DT_CLAMP 10.0       /* durations kept within [mean / 10, mean × 10] */
 #define MAX_OUT_FRAMES 1000000u
@@ -63,7 +72,7 @@ static const double L_GRID[] = {1e-4, 1e-3, 1e-2, 1e-1};
 void affect_strength_options_default(affect_strength_options *opt)
 {
     memset(opt, 0, sizeof *opt);
-    opt->features = AFFECT_STRENGTH_FEAT_LABAN;
+    opt->features = AFFECT_STRENGTH_FEAT_FISHER;
     opt->keyframes = AFFECT_KEYFRAMES_DEFAULT;
     opt->pca_dims = 40;
     opt->C = 1.0;
@@ -71,6 +80,9 @@ void affect_strength_options_default(affect_strength_options *opt)
     opt->similar = true;
     opt->standardize = true;
     opt->cv_C = true;
+    affect_classifier_config cc;
+    affect_classifier_config_default(&cc);
+    opt->descriptors = cc.descriptors;
 }
 
 void affect_strength_free(affect_strength *s)
@@ -97,6 +109,7 @@ void affect_strength_free(affect_strength *s)
     affect_free(s->train_z);
     affect_free(s->alpha);
     affect_free(s->zbar);
+    affect_classifier_free(s->fisher);
     affect_free(s);
 }
 
@@ -107,6 +120,8 @@ uint32_t affect_strength_rank_dim(const affect_strength *s)
         return AFFECT_LABAN_N;
     case AFFECT_STRENGTH_FEAT_BOTH:
         return s->pdim + AFFECT_LABAN_N;
+    case AFFECT_STRENGTH_FEAT_FISHER: /* 1 until the recognizer is there (decoding) */
+        return s->fisher ? (uint32_t)affect_classifier_dim(s->fisher) : 1u;
     default:
         return s->pdim;
     }
@@ -328,6 +343,98 @@ static affect_status laban_raw(const affect_motion *m, double *v, affect_monitor
     return st;
 }
 
+/* The normalized Fisher representation of m under the recognizer c into u
+ * (affect_classifier_dim(c) doubles): its observations and descriptors, then its evaluation. */
+static affect_status fisher_of(const affect_classifier *c, const affect_motion *m, double *u,
+                               affect_monitor *mon, affect_error *err)
+{
+    double *x = NULL, *desc = NULL;
+    uint32_t T = 0;
+    affect_status st = affect_classifier_observe(c, m, &x, &T, &desc, mon, err);
+    if (st == AFFECT_OK) {
+        affect_classifier_out o = {0};
+        o.fisher = u;
+        st = affect_classifier_eval(c, x, T, desc, false, &o, mon, err);
+    }
+    affect_free(x);
+    affect_free(desc);
+    if (st != AFFECT_OK)
+        affect_prefix(err, "Fisher features");
+    return st;
+}
+
+/* The recognizer of Fisher features: affect_classifier_train with its defaults (and the
+ * observations that go with them) on the used motions (idx, n of them), their levels lv as
+ * classes named level_names; then each motion's representation into *F (n × its dimension). */
+static affect_status fisher_train(const affect_motion *const *motions, const uint32_t *idx,
+                                  const int32_t *lv, uint32_t n, const char *const *level_names,
+                                  uint32_t n_levels, unsigned descriptors, affect_monitor *mon,
+                                  affect_classifier **out, double **F, affect_error *err)
+{
+    *out = NULL;
+    *F = NULL;
+    affect_classifier_config cfg;
+    affect_classifier_config_default(&cfg);
+    cfg.descriptors = descriptors;
+    affect_features_options fo;
+    affect_classifier_features_default(&fo);
+    affect_features *feat = NULL;
+    affect_hmm_seq *seqs = affect_calloc(n, sizeof *seqs);
+    uint32_t *y = affect_malloc_array(n, sizeof *y);
+    uint32_t dd = cfg.descriptors ? affect_descriptors_dim(cfg.descriptors) : 0;
+    double *desc = dd ? affect_malloc_array((size_t)n * dd, sizeof(double)) : NULL;
+    affect_status st = AFFECT_OK;
+    if (!seqs || !y || (dd && !desc)) {
+        st = affect_nomem(err);
+        goto cleanup;
+    }
+    st = affect_features_create(&fo, motions[idx[0]], &feat, err);
+    for (uint32_t i = 0; st == AFFECT_OK && i < n; i++) {
+        const affect_motion *m = motions[idx[i]];
+        double *x = NULL;
+        st = affect_features_extract(feat, m, &x, &seqs[i].n_frames, mon, err);
+        seqs[i].x = x;
+        if (st == AFFECT_OK && dd)
+            st = affect_descriptors(cfg.descriptors, m, feat->up_axis, desc + (size_t)i * dd, mon,
+                                    err);
+        if (st != AFFECT_OK)
+            affect_prefix(err, "motion %u", idx[i]);
+        y[i] = (uint32_t)lv[i];
+    }
+    if (st == AFFECT_OK) {
+        cfg.hmm.dim = affect_features_dim(feat);
+        cfg.hmm.monitor = mon;
+        st = affect_classifier_train(&cfg, feat, seqs, desc, y, n, level_names, n_levels, out, err);
+    }
+    size_t D = st == AFFECT_OK ? affect_classifier_dim(*out) : 0;
+    if (st == AFFECT_OK && !(*F = affect_malloc_array((size_t)n, D * sizeof(double))))
+        st = affect_nomem_of(err, (size_t)n, D * sizeof(double), "the %u x %zu Fisher features", n,
+                             D);
+    for (uint32_t i = 0; st == AFFECT_OK && i < n; i++) {
+        affect_classifier_out o = {0};
+        o.fisher = *F + (size_t)i * D;
+        st = affect_classifier_eval(*out, seqs[i].x, seqs[i].n_frames,
+                                    dd ? desc + (size_t)i * dd : NULL, false, &o, mon, err);
+        if (st != AFFECT_OK)
+            affect_prefix(err, "motion %u", idx[i]);
+    }
+cleanup:
+    if (st != AFFECT_OK) {
+        affect_prefix(err, "Fisher features");
+        affect_classifier_free(*out);
+        *out = NULL;
+        affect_free(*F);
+        *F = NULL;
+    }
+    for (uint32_t i = 0; seqs && i < n; i++)
+        affect_free((void *)seqs[i].x);
+    affect_free(seqs);
+    affect_free(y);
+    affect_free(desc);
+    affect_features_free(feat);
+    return st;
+}
+
 /* The ranker's input u (affect_strength_rank_dim(s)) from the keyframe coordinates z (pdim;
  * unused with Laban features alone) and the raw Laban vector lab (unused with keyframes). */
 static void rank_input(const affect_strength *s, const double *z, const double *lab, double *u)
@@ -355,14 +462,18 @@ affect_status affect_strength_score(const affect_strength *s, const affect_motio
     affect_status st = AFFECT_OK;
     if (!x || !z || !u)
         st = affect_nomem(err);
-    else if (s->features != AFFECT_STRENGTH_FEAT_LABAN)
+    else if (s->features == AFFECT_STRENGTH_FEAT_KEYFRAMES ||
+             s->features == AFFECT_STRENGTH_FEAT_BOTH)
         st = affect_strength_features(s, m, x, z, NULL, mon, err);
     else
         st = check_skeleton(s->n_joints, s->names, m, err);
-    if (st == AFFECT_OK && s->features != AFFECT_STRENGTH_FEAT_KEYFRAMES)
+    if (st == AFFECT_OK && s->features == AFFECT_STRENGTH_FEAT_FISHER)
+        st = fisher_of(s->fisher, m, u, mon, err);
+    else if (st == AFFECT_OK && s->features != AFFECT_STRENGTH_FEAT_KEYFRAMES)
         st = laban_raw(m, lab, mon, err);
     if (st == AFFECT_OK) {
-        rank_input(s, z, lab, u);
+        if (s->features != AFFECT_STRENGTH_FEAT_FISHER)
+            rank_input(s, z, lab, u);
         *strength = dotp(s->w, u, rd);
     }
     affect_free(x);
@@ -872,8 +983,12 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
     if (!(opt->fraction > 0 && opt->fraction <= 1))
         return affect_fail(err, AFFECT_ERR_INVALID, "fraction must be in (0, 1] (got %g)",
                            opt->fraction);
-    if (opt->features > AFFECT_STRENGTH_FEAT_BOTH)
-        return affect_fail(err, AFFECT_ERR_INVALID, "features must be 0 to 2 (got %d)",
+    if (opt->descriptors > AFFECT_DESC_ALL)
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "descriptors must be a mask of 0 to %u (got %u)",
+                           (unsigned)AFFECT_DESC_ALL, opt->descriptors);
+    if (opt->features > AFFECT_STRENGTH_FEAT_FISHER)
+        return affect_fail(err, AFFECT_ERR_INVALID, "features must be 0 to 3 (got %d)",
                            (int)opt->features);
     if (n_levels < 2 || n_levels > AFFECT_STRENGTH_MAX_LEVELS)
         return affect_fail(err, AFFECT_ERR_INVALID, "the order must have 2 to %u labels (got %u)",
@@ -903,7 +1018,8 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
         return affect_nomem(err);
     affect_status st = AFFECT_OK;
     double *X = NULL, *Z = NULL, *work = NULL, *Lab = NULL, *U = NULL;
-    bool lab_on = opt->features != AFFECT_STRENGTH_FEAT_KEYFRAMES;
+    bool fisher = opt->features == AFFECT_STRENGTH_FEAT_FISHER;
+    bool lab_on = opt->features != AFFECT_STRENGTH_FEAT_KEYFRAMES && !fisher;
     uint32_t *kf = NULL, *idx = NULL, *grp = NULL;
     int32_t *lv = NULL;
     affect_rank_pair *pairs = NULL;
@@ -1035,10 +1151,20 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
     }
     for (uint32_t i = 0; i < used; i++)
         project(s, X + (size_t)i * D, s->train_z + (size_t)i * s->pdim, work);
-    /* the ranker's inputs: U = train_z (keyframes), else the standardized Laban vectors (after
-     * the weighted train_z with both) */
+    /* the ranker's inputs: U = train_z (keyframes), the standardized Laban vectors (after the
+     * weighted train_z with both), or the Fisher representations */
+    if (fisher) {
+        st = fisher_train(motions, idx, lv, used, level_names, n_levels, opt->descriptors,
+                          opt->monitor, &s->fisher, &U, err);
+        affect_free(s->w);
+        s->w = st == AFFECT_OK ? affect_calloc(affect_strength_rank_dim(s), sizeof(double)) : NULL;
+        if (st == AFFECT_OK && !s->w)
+            st = affect_nomem(err);
+        if (st != AFFECT_OK)
+            goto cleanup;
+    }
     uint32_t rd = affect_strength_rank_dim(s);
-    const double *rank_x = s->train_z;
+    const double *rank_x = fisher ? U : s->train_z;
     if (lab_on) {
         laban_stats(s, Lab, used);
         U = affect_malloc_array((size_t)used * rd, sizeof(double));
@@ -1433,17 +1559,21 @@ static affect_status hit_target(const affect_strength *s, const affect_motion *m
 }
 
 /* Synthesis and editing steer the keyframe features: a ranker of the Laban vector alone does not
- * follow them (docs/EVALUATION.md, "Laban features": Spearman 0.37 synthesized, 0.52 edited). */
+ * follow them (docs/EVALUATION.md, "Laban features": Spearman 0.37 synthesized, 0.52 edited),
+ * nor does one of the recognizer's representation, which they cannot steer at all. */
 static affect_status need_keyframes(const affect_strength *s, affect_motion **out,
                                     affect_error *err)
 {
     *out = NULL;
-    if (s->features != AFFECT_STRENGTH_FEAT_LABAN)
+    if (s->features == AFFECT_STRENGTH_FEAT_KEYFRAMES || s->features == AFFECT_STRENGTH_FEAT_BOTH)
         return AFFECT_OK;
     return affect_fail(err, AFFECT_ERR_INVALID,
-                       "the model ranks by the Laban vector alone, which synthesized and edited "
-                       "motions do not follow: train it with \"features\": \"keyframes\" (or "
-                       "\"both\") to synthesize or edit");
+                       "the model ranks by %s, which synthesized and edited motions do not "
+                       "follow: train it with \"features\": \"keyframes\" (or \"both\") to "
+                       "synthesize or edit",
+                       s->features == AFFECT_STRENGTH_FEAT_LABAN
+                           ? "the Laban vector alone"
+                           : "the recognizer's Fisher representation");
 }
 
 affect_status affect_strength_synthesize(const affect_strength *s, double strength, bool rigid,
@@ -1477,11 +1607,23 @@ affect_status affect_strength_encode(const affect_strength *s, unsigned char **o
     *size = 0;
     affect_bw w;
     affect_bw_init(&w);
-    bool lab = s->features != AFFECT_STRENGTH_FEAT_KEYFRAMES;
-    /* a keyframe model keeps version 1's layout, byte for byte */
-    affect_bw_header(&w, AFFECT_STRENGTH_MAGIC, lab ? 2u : 1u,
+    bool fisher = s->features == AFFECT_STRENGTH_FEAT_FISHER;
+    bool lab = s->features != AFFECT_STRENGTH_FEAT_KEYFRAMES && !fisher;
+    unsigned char *cls = NULL;
+    size_t cls_size = 0;
+    if (fisher) {
+        affect_status st = affect_classifier_encode(s->fisher, &cls, &cls_size, err);
+        if (st != AFFECT_OK)
+            return st;
+    }
+    /* a keyframe model keeps version 1's layout, byte for byte, a Laban model version 2's */
+    affect_bw_header(&w, AFFECT_STRENGTH_MAGIC,
+                     fisher ? 3u
+                     : lab  ? 2u
+                            : 1u,
                      (s->pca ? FLAG_PCA : 0u) | (s->relative ? FLAG_RELATIVE : 0u) |
                          (s->scale ? FLAG_STANDARDIZE : 0u) | (lab ? FLAG_LABAN : 0u) |
+                         (fisher ? FLAG_FISHER : 0u) |
                          (s->features == AFFECT_STRENGTH_FEAT_BOTH ? FLAG_BOTH : 0u) |
                          (s->cv_C ? FLAG_CV_C : 0u));
     affect_bw_u32(&w, s->n_joints);
@@ -1529,7 +1671,8 @@ affect_status affect_strength_encode(const affect_strength *s, unsigned char **o
         affect_bw_f64s(&w, s->comps, (size_t)s->pdim * s->dim);
     }
     affect_bw_f64s(&w, s->seg_dt, s->keyframes - 1);
-    affect_bw_f64s(&w, s->w, affect_strength_rank_dim(s));
+    if (!fisher) /* (a Fisher model's w follows its recognizer, whose dimension it has) */
+        affect_bw_f64s(&w, s->w, affect_strength_rank_dim(s));
     affect_bw_f64s(&w, s->train_r, s->n_train);
     affect_bw_f64s(&w, s->train_z, (size_t)s->n_train * s->pdim);
     affect_bw_f64s(&w, s->zbar, s->pdim);
@@ -1540,6 +1683,12 @@ affect_status affect_strength_encode(const affect_strength *s, unsigned char **o
         affect_bw_f64s(&w, s->lab_sd, AFFECT_LABAN_N);
         affect_bw_f64(&w, s->kf_weight);
     }
+    if (fisher) {
+        affect_bw_u64(&w, cls_size);
+        affect_bw_bytes(&w, cls, cls_size);
+        affect_bw_f64s(&w, s->w, affect_strength_rank_dim(s));
+    }
+    affect_free(cls);
     if (!w.failed)
         affect_bw_checksum(&w, 0);
     if (w.failed) {
@@ -1580,6 +1729,40 @@ static bool finite_all(const double *v, size_t n)
     return true;
 }
 
+/* A Fisher model's tail: the recognizer's BLOB (u64 length, bytes; decoded and checked by
+ * affect_classifier_decode), whose classes must be the levels in order, then w (its dimension,
+ * finite), ending the data. */
+static affect_status read_fisher(affect_br *r, affect_strength *s, affect_error *err)
+{
+    uint64_t len;
+    const unsigned char *p;
+    if (!affect_br_u64(r, &len) || len > r->size - r->off || !affect_br_bytes(r, &p, (size_t)len))
+        return affect_fail(err, AFFECT_ERR_FORMAT, "strength model truncated in its recognizer");
+    affect_status st = affect_classifier_decode(p, (size_t)len, &s->fisher, err);
+    if (st != AFFECT_OK) {
+        affect_prefix(err, "the strength model's recognizer");
+        return st;
+    }
+    bool same = affect_classifier_n_classes(s->fisher) == s->n_levels;
+    for (uint32_t l = 0; same && l < s->n_levels; l++)
+        same = strcmp(affect_classifier_label(s->fisher, l), s->level_names[l]) == 0;
+    if (!same)
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "the strength model's recognizer has other classes than its levels");
+    size_t D = affect_classifier_dim(s->fisher);
+    if (D == 0 || D > (r->size - r->off) / 8 || (r->size - r->off) != D * 8)
+        return affect_fail(err, AFFECT_ERR_FORMAT,
+                           "the strength model's weights do not match its recognizer's dimension "
+                           "%zu",
+                           D);
+    affect_free(s->w);
+    if (!(s->w = affect_malloc_array(D, sizeof(double))))
+        return affect_nomem(err);
+    if (!affect_br_f64s(r, s->w, D) || !finite_all(s->w, D))
+        return affect_fail(err, AFFECT_ERR_FORMAT, "non-finite value in the strength model");
+    return AFFECT_OK;
+}
+
 affect_status affect_strength_decode(const unsigned char *data, size_t size, affect_strength **out,
                                      affect_error *err)
 {
@@ -1610,11 +1793,14 @@ affect_status affect_strength_decode(const unsigned char *data, size_t size, aff
         return AFFECT_ERR_FORMAT;
     bool pca = (flags & FLAG_PCA) != 0, stdz = (flags & FLAG_STANDARDIZE) != 0;
     bool relative = (flags & FLAG_RELATIVE) != 0, lab = (flags & FLAG_LABAN) != 0;
+    bool fisher = (flags & FLAG_FISHER) != 0;
     uint32_t known = FLAG_PCA | FLAG_RELATIVE | FLAG_STANDARDIZE |
-                     (version >= 2 ? FLAG_LABAN | FLAG_BOTH | FLAG_CV_C : 0u);
-    if ((flags & ~known) != 0 || (version >= 2 && !lab) || ((flags & FLAG_BOTH) && !lab) ||
-        root >= J || (!relative && root != 0) || reg < AFFECT_STRENGTH_REG_KERNEL_RIDGE ||
-        reg > AFFECT_STRENGTH_REG_LOCAL_LINEAR)
+                     (version >= 2 ? FLAG_LABAN | FLAG_BOTH | FLAG_CV_C : 0u) |
+                     (version >= 3 ? FLAG_FISHER : 0u);
+    if ((flags & ~known) != 0 || (version == 2 && !lab) ||
+        (version >= 3 && (!fisher || lab || (flags & FLAG_CV_C))) ||
+        ((flags & FLAG_BOTH) && !lab) || root >= J || (!relative && root != 0) ||
+        reg < AFFECT_STRENGTH_REG_KERNEL_RIDGE || reg > AFFECT_STRENGTH_REG_LOCAL_LINEAR)
         return affect_fail(err, AFFECT_ERR_FORMAT, "reserved strength model fields are not valid");
     if (J < 1 || J > AFFECT_MOTION_MAX_JOINTS || q < 2 || q > AFFECT_KEYFRAMES_MAX ||
         (uint64_t)D != (uint64_t)6 * J * q || D > AFFECT_STRENGTH_MAX_DIM || p < 1 || p > D ||
@@ -1628,7 +1814,9 @@ affect_status affect_strength_decode(const unsigned char *data, size_t size, aff
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "strength model checksum mismatch: the BLOB is corrupt");
     /* the arrays must fit in what is left (before allocating them) */
-    uint64_t rd = lab ? ((flags & FLAG_BOTH) ? (uint64_t)p : 0) + AFFECT_LABAN_N : p;
+    uint64_t rd = fisher ? 0 /* after the recognizer */
+                  : lab  ? ((flags & FLAG_BOTH) ? (uint64_t)p : 0) + AFFECT_LABAN_N
+                         : p;
     uint64_t doubles = (uint64_t)(q - 1) + rd + n + (uint64_t)n * p + p +
                        (lab ? 2 * AFFECT_LABAN_N + 1 : 0) +
                        (reg == AFFECT_STRENGTH_REG_KERNEL_RIDGE ? (uint64_t)n * p : 0) +
@@ -1651,7 +1839,8 @@ affect_status affect_strength_decode(const unsigned char *data, size_t size, aff
     s->root = root;
     s->regression = (affect_strength_regression)reg;
     s->cv_C = (flags & FLAG_CV_C) != 0;
-    s->features = !lab                  ? AFFECT_STRENGTH_FEAT_KEYFRAMES
+    s->features = fisher                ? AFFECT_STRENGTH_FEAT_FISHER
+                  : !lab                ? AFFECT_STRENGTH_FEAT_KEYFRAMES
                   : (flags & FLAG_BOTH) ? AFFECT_STRENGTH_FEAT_BOTH
                                         : AFFECT_STRENGTH_FEAT_LABAN;
     if (stdz && !(s->scale = affect_malloc_array(D, sizeof(double)))) {
@@ -1738,6 +1927,11 @@ affect_status affect_strength_decode(const unsigned char *data, size_t size, aff
     if (ok && lab)
         ok = affect_br_f64s(&r, s->lab_mean, AFFECT_LABAN_N) &&
              affect_br_f64s(&r, s->lab_sd, AFFECT_LABAN_N) && affect_br_f64(&r, &s->kf_weight);
+    if (ok && fisher) {
+        st = read_fisher(&r, s, err);
+        if (st != AFFECT_OK)
+            goto cleanup;
+    }
     if (!ok || r.off != r.size) {
         st = affect_fail(err, AFFECT_ERR_FORMAT,
                          "strength model BLOB length %zu does not match its sizes", size);

@@ -27,7 +27,8 @@
  *   affect_strength              affect_strength_score per scored motion (normalization,
  *                                keyframe DP, features, projection), median over the motions;
  *   train default / affect_strength default   the same with strength_train's default options
- *                                (the standardized Laban vector, C by inner cross-validation).
+ *                                (the Fisher representation of a recognizer trained inside
+ *                                the model: its HMMs, Fisher scores and the ranker on them).
  * Then, below the table, the keyframe selection alone (affect_keyframes_select_level, 13
  * keyframes of the scored motions' joint positions; median over the motions of the mean of 3
  * calls) at every level this processor runs (plain C, then SSE2, AVX2, AVX-512 on x86-64):
@@ -218,7 +219,7 @@ static int bench_set(dataset *d)
         affect_strength_options_default(&so);
         so.pca_dims = v == 0 ? 40 : 0;
         so.features = AFFECT_STRENGTH_FEAT_KEYFRAMES; /* the keyframe path (the default ranks by
-                                                         the Laban vector) */
+                                                         the Fisher representation) */
         double runs[N_RUNS];
         for (int r = 0; r < N_RUNS; r++) {
             affect_strength_free(model[v]);
@@ -266,7 +267,7 @@ static int bench_set(dataset *d)
     t_reg = median(runs, N_RUNS);
     if (score_time(model[0], d, &t_score))
         return 1;
-    /* the default model (the standardized Laban vector): trained and scored likewise */
+    /* the default model (the Fisher representation): trained and scored likewise */
     affect_strength *def = NULL;
     double t_train_def, t_score_def;
     {

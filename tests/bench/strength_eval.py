@@ -39,13 +39,16 @@ correlation with it). --recognizer-options gives the recognizer other affect_tra
 (for example {"descriptors":"none"}: no kinematic summaries).
 
 The rows above rank by keyframe features ("features": "keyframes"). --features replaces them by
-the three inputs of the ranker, "keyframes", "laban" (the default of strength_train) and "both",
-with default options otherwise (about 1 minute; the "dims" column is then the keyframe PCA's).
---synthesis-features chooses the synthesis models' input (a "laban" model cannot synthesize).
+the inputs of the ranker, "keyframes", "laban", "both", "fisher" (the default of
+strength_train: the representation of a recognizer trained on the training motions) and
+"fisher" with "descriptors": "none" (no kinematic summaries, so no durations), with default
+options otherwise (about 2 minutes; the "dims" column is then the keyframe PCA's).
+--synthesis-features chooses the synthesis models' input (a "laban" or "fisher" model cannot
+synthesize).
 
 --score-timing (under a minute) only times affect_strength through SQL, one statement per
-motion with its decoding, for a default (Laban) and a PCA-40 keyframe model of each task
-trained on all its motions: process CPU per call over 5 passes after a warm-up pass.
+motion with its decoding, for a default (Fisher), a Laban and a PCA-40 keyframe model of each
+task trained on all its motions: process CPU per call over 5 passes after a warm-up pass.
 """
 import argparse
 import json
@@ -75,7 +78,8 @@ CONFIGS = [("PCA-40", dict(KF, pca_dims=40)), ("PCA-80", dict(KF, pca_dims=80)),
 # --features: what the ranker sees (docs/EVALUATION.md, "Laban features"), default options
 # otherwise (PCA-40 keyframes for the regression and for "both")
 FEATURE_CONFIGS = [("keyframes", {"features": "keyframes"}), ("laban", {"features": "laban"}),
-                   ("both", {"features": "both"})]
+                   ("both", {"features": "both"}), ("fisher", {"features": "fisher"}),
+                   ("fisher, no descriptors", {"features": "fisher", "descriptors": "none"})]
 
 
 def task_rows(con, task):
@@ -280,7 +284,7 @@ def recognizer_check(con, task, seeds, npoints=5, rec_options="{}"):
     lab = {"syn_t": [], "syn_w": [], "edit_t": [], "edit_w": []}
     for seed in seeds:
         tr, te = split_half(rows, seed)
-        # keyframe features: a Laban-only model (the default) cannot synthesize or edit
+        # keyframe features: the default (Fisher) model cannot synthesize or edit
         model, _, _ = train(con, task, tr, dict(KF, pca_dims=40, seed=seed))
         rec = con.execute("SELECT affect_train(motion, style, ?) FROM motions JOIN tr USING (id)",
                           (rec_options,)).fetchone()[0]
@@ -360,14 +364,15 @@ def recognizer_check(con, task, seeds, npoints=5, rec_options="{}"):
 
 def score_timing(con, task, passes=5):
     """affect_strength through SQL, one statement per motion, the motion's decoding included:
-    a model of each kind (the default Laban model, a PCA-40 keyframe model) trained on all the
-    task's motions; after one untimed pass (the model is decoded once per connection), the
+    a model of each kind (the default Fisher model, a Laban model, a PCA-40 keyframe model)
+    trained on all the task's motions; after one untimed pass (the model is decoded once per connection), the
     process CPU time of `passes` passes over the motions, per call."""
     rows = task_rows(con, task)
     print("\n#### affect_strength through SQL: %s, %d motions\n" % (task, len(rows)))
     print("| model | CPU per call (ms) |")
     print("|---|---:|")
-    for name, opts in (("default (Laban vector)", {}), ("keyframes, PCA-40", dict(KF, pca_dims=40))):
+    for name, opts in (("default (Fisher representation)", {}), ("Laban vector", {"features": "laban"}),
+                       ("keyframes, PCA-40", dict(KF, pca_dims=40))):
         model, _, _ = train(con, task, rows, opts)
         scores(con, model, rows)
         c0 = time.process_time()
@@ -385,11 +390,11 @@ def main():
                     help="one seed, 50 %% of the pairs, PCA-40 only (a smoke run)")
     ap.add_argument("--no-synthesis", action="store_true")
     ap.add_argument("--features", action="store_true",
-                    help="compare the ranker's features (keyframes, laban, both) instead of the "
+                    help="compare the ranker's features (keyframes, laban, both, fisher) instead of the "
                          "keyframe options")
     ap.add_argument("--synthesis-features", default="keyframes",
                     help="the synthesis table's models' \"features\": keyframes (default) or "
-                         "both (a laban model cannot synthesize)")
+                         "both (a laban or fisher model cannot synthesize)")
     ap.add_argument("--synthesis-only", action="store_true",
                     help="only the synthesis and editing table (exhausted)")
     ap.add_argument("--recognizer", action="store_true",

@@ -36,13 +36,14 @@ typedef struct fixture {
 } fixture;
 
 static const fixture FIXTURES[] = {
-    {"motion-v1.bin", "AFMO", NULL},        {"motion-v2.bin", "AFMO", NULL},
-    {"hmm-v1.bin", "AFHM", NULL},           {"classifier-v1.bin", "AFCL", ""},
-    {"classifier-v2.bin", "AFCL", NULL},    {"classifier-v3.bin", "AFCL", NULL},
-    {"fda-v1.bin", "AFFD", NULL},           {"strength-v1.bin", "AFST", NULL},
-    {"strength-v2.bin", "AFST", NULL},      {"ranker-v1.bin", "AFRK", NULL},
-    {"rmlr-v1.bin", "\x01", "rmlr-v2.bin"}, {"rmlr-v2.bin", "AFRL", NULL},
-    {"fda-v2.bin", "AFFD", NULL},           {"fda-v3.bin", "AFFD", NULL},
+    {"motion-v1.bin", "AFMO", NULL},     {"motion-v2.bin", "AFMO", NULL},
+    {"hmm-v1.bin", "AFHM", NULL},        {"classifier-v1.bin", "AFCL", ""},
+    {"classifier-v2.bin", "AFCL", NULL}, {"classifier-v3.bin", "AFCL", NULL},
+    {"fda-v1.bin", "AFFD", NULL},        {"strength-v1.bin", "AFST", NULL},
+    {"strength-v2.bin", "AFST", NULL},   {"strength-v3.bin", "AFST", NULL},
+    {"ranker-v1.bin", "AFRK", NULL},     {"rmlr-v1.bin", "\x01", "rmlr-v2.bin"},
+    {"rmlr-v2.bin", "AFRL", NULL},       {"fda-v2.bin", "AFFD", NULL},
+    {"fda-v3.bin", "AFFD", NULL},
 };
 #define N_FIXTURES (sizeof FIXTURES / sizeof FIXTURES[0])
 

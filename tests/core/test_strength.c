@@ -303,7 +303,8 @@ static double pair_accuracy(const affect_strength *s, const corpus *c, double *s
 }
 
 /* Training, ranking, determinism, the BLOB, then synthesis and editing (keyframes: both in the
- * order asked; both blocks: editing in order; the Laban vector alone: a clear error). */
+ * order asked; both blocks: editing in order; the Laban vector alone and the Fisher
+ * representation: a clear error). */
 static void check_model(affect_strength_feature_kind feat)
 {
     corpus tr, te;
@@ -321,9 +322,17 @@ static void check_model(affect_strength_feature_kind feat)
     assert_true(s->stats.converged);
     assert_true(s->pdim == 10);
     assert_int_equal(s->features, feat);
-    assert_int_equal(affect_strength_rank_dim(s), feat == AFFECT_STRENGTH_FEAT_KEYFRAMES ? 10u
-                                                  : feat == AFFECT_STRENGTH_FEAT_LABAN   ? 27u
-                                                                                         : 37u);
+    if (feat == AFFECT_STRENGTH_FEAT_FISHER) {
+        assert_non_null(s->fisher);
+        assert_int_equal(affect_strength_rank_dim(s), affect_classifier_dim(s->fisher));
+        assert_int_equal(affect_classifier_n_classes(s->fisher), N_INT);
+        assert_false(s->cv_C); /* the sum of the pair losses, C as given */
+    } else {
+        assert_null(s->fisher);
+        assert_int_equal(affect_strength_rank_dim(s), feat == AFFECT_STRENGTH_FEAT_KEYFRAMES ? 10u
+                                                      : feat == AFFECT_STRENGTH_FEAT_LABAN   ? 27u
+                                                                                             : 37u);
+    }
     assert_true(feat == AFFECT_STRENGTH_FEAT_BOTH ? s->kf_weight > 0 : s->kf_weight == 0);
     assert_true(s->pca_variance > 0.5 && s->pca_variance <= 1);
     double score[64];
@@ -367,12 +376,14 @@ static void check_model(affect_strength_feature_kind feat)
      * the mean of two actions is neither): strengths spread over the training range come out
      * in order */
     affect_strength *whole = s;
-    if (feat == AFFECT_STRENGTH_FEAT_LABAN) {
+    if (feat == AFFECT_STRENGTH_FEAT_LABAN || feat == AFFECT_STRENGTH_FEAT_FISHER) {
         affect_motion *m = NULL;
         assert_int_equal(affect_strength_synthesize(s, 0, true, &m, NULL, &err),
                          AFFECT_ERR_INVALID);
         assert_null(m);
-        assert_true(strstr(err.msg, "the Laban vector alone") != NULL);
+        assert_true(strstr(err.msg, feat == AFFECT_STRENGTH_FEAT_LABAN
+                                        ? "the Laban vector alone"
+                                        : "the recognizer's Fisher representation") != NULL);
         assert_int_equal(affect_strength_edit(s, te.m[0], 0, true, &m, NULL, &err),
                          AFFECT_ERR_INVALID);
         assert_null(m);
@@ -443,6 +454,52 @@ static void test_model_both(void **state)
     check_model(AFFECT_STRENGTH_FEAT_BOTH);
 }
 
+static void test_model_fisher(void **state)
+{
+    (void)state;
+    check_model(AFFECT_STRENGTH_FEAT_FISHER);
+}
+
+/* A Fisher model's recognizer is checked against the model: other class names than the levels
+ * are refused, and so is a level without motions (the recognizer needs every class). */
+static void test_fisher_checks(void **state)
+{
+    (void)state;
+    corpus tr;
+    make_corpus(&tr, 7, 2);
+    affect_strength_options opt;
+    affect_strength_options_default(&opt);
+    opt.features = AFFECT_STRENGTH_FEAT_FISHER;
+    affect_strength *s;
+    affect_error err;
+    assert_int_equal(affect_strength_train((const affect_motion *const *)tr.m, tr.level, NULL, tr.n,
+                                           LEVELS, N_INT, &opt, &s, &err),
+                     AFFECT_OK);
+    char *keep = s->level_names[1];
+    s->level_names[1] = affect_strndup("average", 7);
+    unsigned char *b;
+    size_t n;
+    assert_int_equal(affect_strength_encode(s, &b, &n, &err), AFFECT_OK);
+    affect_strength *bad;
+    assert_int_equal(affect_strength_decode(b, n, &bad, &err), AFFECT_ERR_FORMAT);
+    assert_string_equal(err.msg,
+                        "the strength model's recognizer has other classes than its levels");
+    affect_free(b);
+    affect_free(s->level_names[1]);
+    s->level_names[1] = keep;
+    affect_strength_free(s);
+    /* no "strong" motion: its class has no training motion */
+    int32_t lv[64];
+    for (uint32_t i = 0; i < tr.n; i++)
+        lv[i] = tr.level[i] == 2 ? -1 : tr.level[i];
+    assert_int_equal(affect_strength_train((const affect_motion *const *)tr.m, lv, NULL, tr.n,
+                                           LEVELS, N_INT, &opt, &s, &err),
+                     AFFECT_ERR_INVALID);
+    assert_true(strstr(err.msg, "Fisher features") != NULL);
+    assert_true(strstr(err.msg, "strong") != NULL);
+    free_corpus(&tr);
+}
+
 /* The Laban ranker's C multiplies the mean pair loss: doubling every pair (the same data twice)
  * leaves the model as it is, where the sum form (keyframes) would halve the regularization. */
 static void test_laban_mean_loss(void **state)
@@ -459,6 +516,7 @@ static void test_laban_mean_loss(void **state)
     two.n = 2 * tr.n;
     affect_strength_options opt;
     affect_strength_options_default(&opt);
+    opt.features = AFFECT_STRENGTH_FEAT_LABAN;
     opt.pca_dims = 3;
     opt.keyframes = 4;
     opt.similar = false; /* the copies would add similar pairs of identical motions */
@@ -493,6 +551,7 @@ static void test_cv_C(void **state)
     make_corpus(&tr, 1, 3);
     affect_strength_options opt;
     affect_strength_options_default(&opt);
+    opt.features = AFFECT_STRENGTH_FEAT_LABAN;
     opt.pca_dims = 3;
     opt.keyframes = 4;
     affect_strength *s;
@@ -608,6 +667,12 @@ static void test_errors(void **state)
                      AFFECT_ERR_INVALID);
     assert_string_equal(err.msg, "C must be finite and > 0 (got 0)");
     affect_strength_options_default(&opt);
+    opt.descriptors = 4;
+    assert_int_equal(affect_strength_train(ms, tr.level, NULL, tr.n, LEVELS, N_INT, &opt, &s, &err),
+                     AFFECT_ERR_INVALID);
+    assert_string_equal(err.msg, "descriptors must be a mask of 0 to 3 (got 4)");
+    affect_strength_options_default(&opt);
+    opt.features = AFFECT_STRENGTH_FEAT_KEYFRAMES; /* (Fisher features need every level) */
     int32_t one[6] = {0, 0, 0, -1, -1, -1};
     assert_int_equal(affect_strength_train(ms, one, NULL, tr.n, LEVELS, N_INT, &opt, &s, &err),
                      AFFECT_ERR_INVALID);
@@ -616,10 +681,10 @@ static void test_errors(void **state)
     assert_int_equal(affect_strength_train(ms, tr.level, NULL, tr.n, LEVELS, 1, &opt, &s, &err),
                      AFFECT_ERR_INVALID);
     assert_string_equal(err.msg, "the order must have 2 to 64 labels (got 1)");
-    opt.features = (affect_strength_feature_kind)3;
+    opt.features = (affect_strength_feature_kind)4;
     assert_int_equal(affect_strength_train(ms, tr.level, NULL, tr.n, LEVELS, N_INT, &opt, &s, &err),
                      AFFECT_ERR_INVALID);
-    assert_string_equal(err.msg, "features must be 0 to 2 (got 3)");
+    assert_string_equal(err.msg, "features must be 0 to 3 (got 4)");
     /* the Laban vector scores a motion shorter than the keyframes (it needs none) */
     opt.features = AFFECT_STRENGTH_FEAT_LABAN;
     opt.pca_dims = 3;
@@ -662,6 +727,8 @@ typedef struct oom_ctx {
     affect_strength *s;
     affect_motion *m;
     int what;
+    unsigned char *blob; /* what 4: a Fisher model's BLOB */
+    size_t size;
 } oom_ctx;
 
 static affect_status oom_op(void *ctx, affect_error *err)
@@ -677,14 +744,24 @@ static affect_status oom_op(void *ctx, affect_error *err)
                                      c->tr.n, LEVELS, N_INT, &opt, &c->s, err);
     if (c->what == 1)
         return affect_strength_synthesize(c->s, 0.5, true, &c->m, NULL, err);
-    return affect_strength_edit(c->s, c->tr.m[1], 0.5, true, &c->m, NULL, err);
+    if (c->what == 2)
+        return affect_strength_edit(c->s, c->tr.m[1], 0.5, true, &c->m, NULL, err);
+    if (c->what == 3) { /* Fisher features: the recognizer's training */
+        opt.features = AFFECT_STRENGTH_FEAT_FISHER;
+        return affect_strength_train((const affect_motion *const *)c->tr.m, c->tr.level, NULL,
+                                     c->tr.n, LEVELS, N_INT, &opt, &c->s, err);
+    }
+    /* a Fisher model decoded, then a motion scored */
+    double r;
+    affect_status st = affect_strength_decode(c->blob, c->size, &c->s, err);
+    return st != AFFECT_OK ? st : affect_strength_score(c->s, c->tr.m[2], &r, NULL, err);
 }
 
 static void oom_finish(void *ctx, affect_status st)
 {
     oom_ctx *c = ctx;
     (void)st;
-    if (c->what == 0) {
+    if (c->what == 0 || c->what >= 3) {
         affect_strength_free(c->s);
         c->s = NULL;
     } else {
@@ -716,6 +793,19 @@ static void test_out_of_memory(void **state)
     c.what = 2;
     assert_true(tu_oom_sweep(oom_op, &c, oom_finish, &absorbed) > 3);
     affect_strength_free(c.s);
+    c.s = NULL;
+    c.what = 3;
+    assert_true(tu_oom_sweep(oom_op, &c, oom_finish, &absorbed) > 10);
+    opt.features = AFFECT_STRENGTH_FEAT_FISHER;
+    assert_int_equal(affect_strength_train((const affect_motion *const *)c.tr.m, c.tr.level, NULL,
+                                           c.tr.n, LEVELS, N_INT, &opt, &c.s, &err),
+                     AFFECT_OK);
+    assert_int_equal(affect_strength_encode(c.s, &c.blob, &c.size, &err), AFFECT_OK);
+    affect_strength_free(c.s);
+    c.s = NULL;
+    c.what = 4;
+    assert_true(tu_oom_sweep(oom_op, &c, oom_finish, &absorbed) > 10);
+    affect_free(c.blob);
     free_corpus(&c.tr);
 }
 
@@ -761,16 +851,60 @@ static void test_fixture_v1(void **state)
     free(data);
 }
 
+/* A fixture's bytes (*n of them; free them) and its decoded model. */
+static char *decode_fixture(const char *path, size_t *n, affect_strength **s)
+{
+    char *data = tu_read_file(path, n);
+    assert_non_null(data);
+    affect_error err;
+    assert_int_equal(affect_strength_decode((const unsigned char *)data, *n, s, &err), AFFECT_OK);
+    return data;
+}
+
+/* The end of a fixture's test (frees s and data): today's encoder writes the fixture's bytes;
+ * the angry wave of seed 1 at intensity 1.4 (reduced to the joints keep, when given) scores the
+ * stored strength of its level (the third); and the fixture's flags under a header of version
+ * older are refused (checksum recomputed). */
+static void check_fixture_tail(affect_strength *s, char *data, size_t n, const char *const *keep,
+                               uint32_t n_keep, unsigned char older)
+{
+    affect_error err;
+    unsigned char *enc;
+    size_t ne;
+    assert_int_equal(affect_strength_encode(s, &enc, &ne, &err), AFFECT_OK);
+    assert_int_equal(ne, n);
+    assert_memory_equal(enc, data, n);
+    affect_synth_options so;
+    affect_synth_options_default(&so);
+    so.intensity = 1.4;
+    affect_motion *m, *sel = NULL;
+    assert_int_equal(affect_motion_synth("wave", "angry", 1, &so, &m, &err), AFFECT_OK);
+    if (keep)
+        assert_int_equal(affect_motion_select(m, keep, n_keep, &sel, &err), AFFECT_OK);
+    double r;
+    assert_int_equal(affect_strength_score(s, sel ? sel : m, &r, NULL, &err), AFFECT_OK);
+    tu_assert_near(r, s->level_strength[2], 1e-9);
+    enc[4] = older;
+    uint64_t h = affect_fnv1a64(enc, ne - 8);
+    for (int k = 0; k < 8; k++)
+        enc[ne - 8 + (size_t)k] = (unsigned char)(h >> (8 * k));
+    affect_strength *bad;
+    assert_int_equal(affect_strength_decode(enc, ne, &bad, &err), AFFECT_ERR_FORMAT);
+    assert_string_equal(err.msg, "reserved strength model fields are not valid");
+    affect_motion_free(sel);
+    affect_motion_free(m);
+    affect_free(enc);
+    affect_strength_free(s);
+    free(data);
+}
+
 /* Version 2: both feature blocks (flags 61: PCA, standardized, Laban, both, C cross-validated). */
 static void test_fixture_v2(void **state)
 {
     (void)state;
     size_t n;
-    char *data = tu_read_file(AFFECT_FIXTURES_DIR "/strength-v2.bin", &n);
-    assert_non_null(data);
     affect_strength *s;
-    affect_error err;
-    assert_int_equal(affect_strength_decode((const unsigned char *)data, n, &s, &err), AFFECT_OK);
+    char *data = decode_fixture(AFFECT_FIXTURES_DIR "/strength-v2.bin", &n, &s);
     assert_int_equal(s->features, AFFECT_STRENGTH_FEAT_BOTH);
     assert_int_equal(s->pdim, 2);
     assert_int_equal(affect_strength_rank_dim(s), 2 + AFFECT_LABAN_N);
@@ -780,32 +914,32 @@ static void test_fixture_v2(void **state)
     assert_int_equal(s->stats.correct, 3);
     for (uint32_t k = 0; k < AFFECT_LABAN_N; k++)
         assert_true(s->lab_sd[k] > 0);
-    unsigned char *enc;
-    size_t ne;
-    assert_int_equal(affect_strength_encode(s, &enc, &ne, &err), AFFECT_OK);
-    assert_int_equal(ne, n);
-    assert_memory_equal(enc, data, n);
-    /* the wave of intensity 1.4 scores its level's stored strength */
-    affect_synth_options so;
-    affect_synth_options_default(&so);
-    so.intensity = 1.4;
-    affect_motion *m;
-    assert_int_equal(affect_motion_synth("wave", "angry", 1, &so, &m, &err), AFFECT_OK);
-    double r;
-    assert_int_equal(affect_strength_score(s, m, &r, NULL, &err), AFFECT_OK);
-    tu_assert_near(r, s->level_strength[2], 1e-9);
-    /* a flag of version 2 in a version-1 header is rejected (checksum recomputed) */
-    enc[4] = 1;
-    uint64_t h = affect_fnv1a64(enc, ne - 8);
-    for (int k = 0; k < 8; k++)
-        enc[ne - 8 + (size_t)k] = (unsigned char)(h >> (8 * k));
-    affect_strength *bad;
-    assert_int_equal(affect_strength_decode(enc, ne, &bad, &err), AFFECT_ERR_FORMAT);
-    assert_string_equal(err.msg, "reserved strength model fields are not valid");
-    affect_motion_free(m);
-    affect_free(enc);
-    affect_strength_free(s);
-    free(data);
+    /* the wave of intensity 1.4 scores its level's stored strength; a flag of version 2 in a
+     * version-1 header is rejected */
+    check_fixture_tail(s, data, n, NULL, 0, 1);
+}
+
+/* Version 3: Fisher features (flags 69: PCA, standardized, Fisher), the recognizer without
+ * descriptors, nine joints of the synthetic skeleton. */
+static void test_fixture_v3(void **state)
+{
+    (void)state;
+    size_t n;
+    affect_strength *s;
+    char *data = decode_fixture(AFFECT_FIXTURES_DIR "/strength-v3.bin", &n, &s);
+    assert_int_equal(s->features, AFFECT_STRENGTH_FEAT_FISHER);
+    assert_non_null(s->fisher);
+    assert_int_equal(affect_classifier_get_config(s->fisher)->descriptors, 0);
+    assert_int_equal(affect_strength_rank_dim(s), 900);
+    assert_true(s->scale != NULL && s->pca && !s->cv_C);
+    assert_int_equal(s->n_joints, 9);
+    assert_int_equal(s->n_train, 3);
+    assert_int_equal(s->stats.correct, 3);
+    /* the wave of intensity 1.4 (the same nine joints) scores its level's stored strength; the
+     * Fisher flag in a version-2 header is rejected */
+    static const char *const keep[] = {"Hips",       "Chest",  "Head",       "Shoulder_L", "Hand_L",
+                                       "Shoulder_R", "Hand_R", "UpperLeg_L", "UpperLeg_R"};
+    check_fixture_tail(s, data, n, keep, 9, 2);
 }
 
 int main(void)
@@ -823,8 +957,11 @@ int main(void)
         cmocka_unit_test(test_fixture_v1),
         cmocka_unit_test(test_model_laban),
         cmocka_unit_test(test_model_both),
+        cmocka_unit_test(test_model_fisher),
+        cmocka_unit_test(test_fisher_checks),
         cmocka_unit_test(test_laban_mean_loss),
         cmocka_unit_test(test_fixture_v2),
+        cmocka_unit_test(test_fixture_v3),
         cmocka_unit_test(test_cv_C),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -17,7 +17,8 @@
  *     for a strength, and a ranker scores the zero vector (0 for one ranker) and puts it in one
  *     of its clusters.
  * Seeds (tests/fuzz/corpus/fuzz_strength_blob): copies of tests/fixtures/strength-v1.bin,
- * strength-v2.bin (Laban features) and ranker-v1.bin. A broken invariant aborts.
+ * strength-v2.bin (Laban features), strength-v3.bin (Fisher features: a recognizer BLOB inside,
+ * decoded by affect_classifier_decode) and ranker-v1.bin. A broken invariant aborts.
  */
 #include "affect/hmm_blob.h" /* affect_fnv1a64 */
 #include "affect/rank.h"

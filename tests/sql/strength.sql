@@ -25,10 +25,13 @@ SELECT 'the strength functions are deterministic and innocuous', count(*) = 13 F
    AND (flags & 0x000000800) <> 0 AND (flags & 0x000200000) <> 0;
 
 -- ---- models: seeds 1–4 train, 5–6 are held out ----
--- ('both': both actions, the default features, the Laban vector; 'kf' the same motions ranked
--- by keyframe features, which synthesis and editing need; 'blocks': both feature blocks)
+-- ('both': both actions, the default features, the recognizer's Fisher representation; 'lab'
+-- the same motions ranked by the Laban vector; 'kf' by keyframe features, which synthesis and
+-- editing need; 'blocks': both the keyframe and the Laban block)
 CREATE TABLE models AS
 SELECT 'both' AS name, strength_train(m, lvl, '{"pca_dims":10}') AS r FROM s WHERE seed <= 4
+UNION ALL
+SELECT 'lab', strength_train(m, lvl, '{"pca_dims":10,"features":"laban"}') FROM s WHERE seed <= 4
 UNION ALL
 SELECT 'kf', strength_train(m, lvl, '{"pca_dims":10,"features":"keyframes"}') FROM s WHERE seed <= 4
 UNION ALL
@@ -42,11 +45,13 @@ SELECT 'content', strength_train(m, json_object('label', CASE lvl WHEN 0.2 THEN 
 UNION ALL
 SELECT 'small', strength_train(m, lvl, '{"pca_dims":3,"keyframes":4,"fraction":0.5,"seed":2,"C":0.5,"features":"keyframes"}') FROM s WHERE seed <= 2 AND action = 'wave'
 UNION ALL
-SELECT 'small_laban', strength_train(m, lvl, '{"pca_dims":3,"keyframes":4}') FROM s WHERE seed <= 2 AND action = 'wave'
+SELECT 'small_laban', strength_train(m, lvl, '{"pca_dims":3,"keyframes":4,"features":"laban"}') FROM s WHERE seed <= 2 AND action = 'wave'
+UNION ALL
+SELECT 'small_fisher', strength_train(m, lvl, '{"pca_dims":3,"keyframes":4,"descriptors":"none"}') FROM s WHERE seed <= 2 AND action = 'wave'
 UNION ALL
 SELECT 'small_both', strength_train(m, lvl, '{"pca_dims":3,"keyframes":4,"features":"both"}') FROM s WHERE seed <= 2 AND action = 'wave';
 
-SELECT 'every model trained', count(*) = 8 AND min(length(r)) > 100 FROM models;
+SELECT 'every model trained', count(*) = 10 AND min(length(r)) > 100 FROM models;
 
 -- affect_strength keeps its last model per connection: calls that alternate two models (one
 -- function, so one cache) score as each model alone
@@ -60,7 +65,8 @@ SELECT 'alternating models score as each alone', count(*) = 8 AND sum(alt = own)
                (SELECT r AS c FROM models WHERE name = 'small'));
 -- oom: skip
 
--- ranking accuracy on the held-out motions' pairs of one action (the default: the Laban vector)
+-- ranking accuracy on the held-out motions' pairs of one action (the default: the Fisher
+-- representation)
 SELECT 'held-out pair accuracy ' || avg(a.sc > b.sc), avg(a.sc > b.sc) >= 0.9
   FROM (SELECT action, lvl, affect_strength((SELECT r FROM models WHERE name = 'both'), m) AS sc FROM s WHERE seed > 4) AS a
   JOIN (SELECT action, lvl, affect_strength((SELECT r FROM models WHERE name = 'both'), m) AS sc FROM s WHERE seed > 4) AS b
@@ -100,12 +106,19 @@ SELECT json_extract(strength_info(r), '$.motions') || ' ' || json_extract(streng
 SELECT group_concat(name || ' ' || json_extract(i, '$.version') || ' ' || json_extract(i, '$.ranker.features') || ' ' ||
        json_extract(i, '$.ranker.dims') || ' ' || json_extract(i, '$.ranker.loss') || ' ' ||
        coalesce(json_extract(i, '$.ranker.keyframe_weight') > 0, '-'), '; ')
-  FROM (SELECT name, strength_info(r) AS i FROM models WHERE name IN ('both', 'kf', 'blocks') ORDER BY name);
--- expect: blocks 2 both 37 mean 1; both 2 laban 27 mean -; kf 1 keyframes 10 sum -
+  FROM (SELECT name, strength_info(r) AS i FROM models WHERE name IN ('both', 'kf', 'blocks', 'lab') ORDER BY name);
+-- expect: blocks 2 both 37 mean 1; both 3 fisher 2451 sum -; kf 1 keyframes 10 sum -; lab 2 laban 27 mean -
+
+-- Fisher features: the recognizer's descriptors (the kinematic summaries by default, or none:
+-- the Fisher scores alone, 3 classes × 810 here), and the C given, not cross-validated
+SELECT group_concat(name || ' ' || json_extract(i, '$.ranker.descriptors') || ' ' || json_extract(i, '$.ranker.dims') || ' '
+                    || json_extract(i, '$.ranker.C_cross_validated'), '; ')
+  FROM (SELECT name, strength_info(r) AS i FROM models WHERE name IN ('both', 'small_fisher') ORDER BY name);
+-- expect: both kinematics 2451 0; small_fisher none 2430 0
 
 -- C: chosen by the inner cross-validation with Laban features unless given; keyframes: as given
 SELECT json_extract(strength_info(r), '$.ranker.C_cross_validated') AND json_extract(strength_info(r), '$.ranker.C') IN (0.01, 0.1, 1, 10, 100)
-  FROM models WHERE name = 'both';
+  FROM models WHERE name = 'lab';
 -- expect: 1
 
 SELECT group_concat(json_extract(strength_info(r), '$.ranker.C_cross_validated') || ' ' || json_extract(strength_info(r), '$.ranker.C'), '; ')
@@ -187,9 +200,12 @@ SELECT motion_joints(strength_edit(r, (SELECT m FROM s WHERE seed = 6 AND action
 SELECT json_extract(strength_info(r), '$.keyframes') FROM models WHERE name = 'small';
 -- expect: 4
 
--- the Laban vector (the default) and both blocks under fault injection (their editing: the
--- unit test's sweep, tests/core/test_strength.c)
+-- the Fisher representation (the default), the Laban vector and both blocks under fault
+-- injection (their editing: the unit test's sweep, tests/core/test_strength.c)
 SELECT typeof(affect_strength(r, (SELECT m FROM s WHERE seed = 5 AND action = 'wave' AND lvl = 1.4))) FROM models WHERE name = 'small_laban';
+-- expect: real
+
+SELECT typeof(affect_strength(r, (SELECT m FROM s WHERE seed = 5 AND action = 'wave' AND lvl = 0.8))) FROM models WHERE name = 'small_fisher';
 -- expect: real
 
 SELECT typeof(affect_strength(r, (SELECT m FROM s WHERE seed = 6 AND action = 'wave' AND lvl = 0.2))) FROM models WHERE name = 'small_both';
@@ -260,13 +276,23 @@ SELECT strength_train(m, lvl, '{"order":["a","a"]}') FROM s;
 -- error: strength_train: option "order" must be an array of 2 to 64 distinct non-empty labels
 
 SELECT strength_train(m, lvl, '{"clusters":2}') FROM s;
--- error: strength_train: unknown option "clusters" (expected order, pairs, label, content, fraction, similar, C, seed, progress, keyframes, pca_dims, regression, relative, standardize, features)
+-- error: strength_train: unknown option "clusters" (expected order, pairs, label, content, fraction, similar, C, seed, progress, keyframes, pca_dims, regression, relative, standardize, features, descriptors)
 
 SELECT strength_train(m, lvl, '{"features":"pose"}') FROM s;
--- error: strength_train: option "features" must be one of "keyframes", "laban", "both", got "pose"
+-- error: strength_train: option "features" must be one of "keyframes", "laban", "both", "fisher", got "pose"
 
 SELECT strength_train(m, lvl, '{"features":1}') FROM s;
--- error: strength_train: option "features" must be one of "keyframes", "laban", "both", got number
+-- error: strength_train: option "features" must be one of "keyframes", "laban", "both", "fisher", got number
+
+SELECT strength_train(m, lvl, '{"descriptors":"pose"}') FROM s;
+-- error: strength_train: option "descriptors" must be one of "none", "kinematics", "laban", "all", got "pose"
+
+SELECT strength_train(m, lvl, '{"features":"laban","descriptors":"none"}') FROM s;
+-- error: strength_train: option "descriptors" needs "features": "fisher"
+
+-- the recognizer of Fisher features needs a motion of every level of the order
+SELECT strength_train(m, CASE lvl WHEN 0.2 THEN 'mild' ELSE 'strong' END, '{"order":["mild","medium","strong"]}') FROM s WHERE seed <= 2;
+-- error: strength_train: Fisher features: class "medium" has no training motion
 
 SELECT strength_train(m, lvl, '{"regression":"mlp"}') FROM s;
 -- error: strength_train: option "regression" must be one of "auto", "kernel_ridge", "local_linear", got "mlp"
@@ -327,6 +353,9 @@ SELECT strength_synthesize(r, 0) FROM models WHERE name = 'small_laban';
 
 SELECT strength_edit(r, m, 0) FROM models, s WHERE name = 'small_laban' LIMIT 1;
 -- error: strength_edit: the model ranks by the Laban vector alone, which synthesized and edited motions do not follow: train it with "features": "keyframes" (or "both") to synthesize or edit
+
+SELECT strength_synthesize(r, 0) FROM models WHERE name = 'small_fisher';
+-- error: strength_synthesize: the model ranks by the recognizer's Fisher representation, which synthesized and edited motions do not follow: train it with "features": "keyframes" (or "both") to synthesize or edit
 
 SELECT affect_strength(r, motion_select(m, '["Hips","Spine"]')) FROM models, s WHERE name = 'small_laban' LIMIT 1;
 -- error: affect_strength: 2 joints, the model has 26

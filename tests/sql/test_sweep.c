@@ -950,6 +950,7 @@ static void build_pool(const char *fixtures)
     add_fixture(fixtures, "classifier-v1.bin");
     add_fixture(fixtures, "strength-v1.bin");
     add_fixture(fixtures, "strength-v2.bin");
+    add_fixture(fixtures, "strength-v3.bin");
     add_fixture(fixtures, "ranker-v1.bin");
     add_fixture(fixtures, "fda-v1.bin");
 

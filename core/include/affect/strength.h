@@ -10,7 +10,7 @@
  *     affect_error err;
  *     affect_strength_options opt;
  *     affect_strength_options_default(&opt);
- *     opt.features = AFFECT_STRENGTH_FEAT_KEYFRAMES;   // to edit (the default ranks by Laban)
+ *     opt.features = AFFECT_STRENGTH_FEAT_KEYFRAMES;   // to edit (the default ranks by Fisher)
  *     affect_strength *s = NULL;
  *     affect_motion *stronger = NULL;  double r = 0;
  *     if (affect_strength_train(motions, level, NULL, n, names, 3, &opt, &s, &err) != AFFECT_OK
@@ -33,15 +33,19 @@
  *      joint (its own position kept), default off (the paper's first-frame-normalized poses);
  *   5. the ranker (affect/rank.h) on pairs from the levels (all pairs, or within the same
  *      content group; a seeded fraction); r(x) = wᵀ u is the strength, where the ranker's
- *      input u is (option features) the motion's Laban vector L (affect/laban.h, default
- *      options, on the motion as given) standardized by the training motions' means and
- *      population deviations, (L − mean)/sd, a missing component counting as 0 (LABAN, the
- *      default); or z (KEYFRAMES); or both, (a z, (L − mean)/sd) with a making the two blocks'
+ *      input u is (option features) the motion's normalized Fisher representation under a
+ *      recognizer (affect/classifier.h with its defaults and the observations that go with
+ *      them; option descriptors) trained on the training motions with the levels as its
+ *      classes (FISHER, the default: the best of the four on all three tasks of
+ *      docs/EVALUATION.md; every level needs a training motion); or the motion's Laban vector L
+ *      (affect/laban.h, default options, on the motion as given) standardized by the training
+ *      motions' means and population deviations, (L − mean)/sd, a missing component counting as
+ *      0 (LABAN); or z (KEYFRAMES); or both, (a z, (L − mean)/sd) with a making the two blocks'
  *      total training variances equal (BOTH). With Laban features the ranker's C multiplies
  *      the mean pair loss (it gets C / the number of pairs) and, with cv_C (the default), is
  *      chosen among 0.01 … 100 by 5-fold cross-validation over the training motions
  *      (stratified by level; the C whose rankers order the held-out motions' pairs best);
- *      with keyframes C multiplies the sum;
+ *      with keyframes and Fisher features C multiplies the sum;
  *   6. the regression z = f(s) from strength back to the (PCA) features, chosen by 5-fold
  *      cross-validated reconstruction error among kernel ridge regression (Gaussian kernel,
  *      bandwidth and ridge on a grid) and local linear regression (Gaussian weights, bandwidth
@@ -63,8 +67,8 @@
  * back where the original stood (the inverse of step 1) and made rigid.
  *
  * With BOTH, editing moves z by the regression's f(s) − f(r(x)) instead (the ranker does not act
- * on z alone). A LABAN model refuses synthesis and editing (AFFECT_ERR_INVALID): the motions they
- * make do not follow the Laban ranker (docs/EVALUATION.md, "Laban features").
+ * on z alone). LABAN and FISHER models refuse synthesis and editing (AFFECT_ERR_INVALID): the
+ * motions they make do not follow those rankers (docs/EVALUATION.md, "Laban features").
  *
  * Both then measure the strength of what they made (keyframes chosen again, the rigid
  * projection and the interpolation move it off the target) and correct the target by the miss,
@@ -78,6 +82,7 @@
 #define AFFECT_STRENGTH_H
 
 #include "affect/base.h"
+#include "affect/classifier.h"
 #include "affect/laban.h"
 #include "affect/monitor.h"
 #include "affect/motion.h"
@@ -88,7 +93,9 @@ extern "C" {
 #endif
 
 #define AFFECT_STRENGTH_MAGIC "AFST"
-#define AFFECT_STRENGTH_VERSION 2u /* 2: Laban features (keyframe-only models still write 1) */
+#define AFFECT_STRENGTH_VERSION                                                                    \
+    3u /* 3: Fisher features, 2: Laban (keyframe-only models write 1)                              \
+        */
 #define AFFECT_STRENGTH_MAX_LEVELS 64u
 #define AFFECT_STRENGTH_MAX_PCA 4096u
 #define AFFECT_STRENGTH_MAX_DIM 16777216u /* D = 6 J q */
@@ -108,28 +115,32 @@ typedef enum affect_strength_regression {
 /* What the ranker sees (the regression and synthesis always use the keyframe features). */
 typedef enum affect_strength_feature_kind {
     AFFECT_STRENGTH_FEAT_KEYFRAMES, /* the (PCA) keyframe features z */
-    AFFECT_STRENGTH_FEAT_LABAN,     /* the standardized Laban vector (default) */
-    AFFECT_STRENGTH_FEAT_BOTH       /* both blocks, weighted to equal total training variance */
+    AFFECT_STRENGTH_FEAT_LABAN,     /* the standardized Laban vector */
+    AFFECT_STRENGTH_FEAT_BOTH,      /* both blocks, weighted to equal total training variance */
+    AFFECT_STRENGTH_FEAT_FISHER     /* the recognizer's representation (below; default) */
 } affect_strength_feature_kind;
 
 typedef struct affect_strength_options {
-    affect_strength_feature_kind features; /* default AFFECT_STRENGTH_FEAT_LABAN */
+    affect_strength_feature_kind features; /* default AFFECT_STRENGTH_FEAT_FISHER */
     uint32_t keyframes;                    /* default 13 */
     uint32_t pca_dims;                     /* default 40; 0 = no PCA */
-    double C;         /* ranker C (default 1); with Laban features it multiplies the MEAN
-                         pair loss (the ranker gets C / number of pairs) */
-    bool cv_C;        /* Laban features: choose C among {0.01, 0.1, 1, 10, 100} by 5-fold
-                         cross-validation over the training motions (default true; C is then
-                         the fallback when no fold can be scored) */
-    double fraction;  /* of the pairs kept, (0, 1] (default 1) */
-    bool similar;     /* use similar pairs (same label) too (default true) */
-    bool relative;    /* poses relative to the root joint (the pelvis role, else joint 0),
-                         the root's own position kept (default false: the paper's
-                         first-frame-normalized poses) */
-    bool standardize; /* divide each feature by its training standard deviation before
-                         PCA and the ranker (default true: +5 to +19 points of held-out
-                         pair accuracy on all three tasks of docs/EVALUATION.md) */
-    uint64_t seed;    /* the pair sample */
+    double C;             /* ranker C (default 1); with Laban features it multiplies the MEAN
+                             pair loss (the ranker gets C / number of pairs) */
+    bool cv_C;            /* Laban features: choose C among {0.01, 0.1, 1, 10, 100} by 5-fold
+                             cross-validation over the training motions (default true; C is then
+                             the fallback when no fold can be scored) */
+    double fraction;      /* of the pairs kept, (0, 1] (default 1) */
+    bool similar;         /* use similar pairs (same label) too (default true) */
+    bool relative;        /* poses relative to the root joint (the pelvis role, else joint 0),
+                             the root's own position kept (default false: the paper's
+                             first-frame-normalized poses) */
+    bool standardize;     /* divide each feature by its training standard deviation before
+                             PCA and the ranker (default true: +5 to +19 points of held-out
+                             pair accuracy on all three tasks of docs/EVALUATION.md) */
+    uint64_t seed;        /* the pair sample */
+    unsigned descriptors; /* Fisher features: the descriptors the recognizer appends
+                             (affect/summary.h mask; default its default, the kinematic
+                             summaries; 0 = none, the Fisher scores alone) */
     affect_strength_regression regression;
     affect_monitor *monitor; /* may be NULL */
 } affect_strength_options;
@@ -161,10 +172,16 @@ typedef struct affect_strength {
     affect_strength_feature_kind features;
     double lab_mean[AFFECT_LABAN_N], lab_sd[AFFECT_LABAN_N];
     double kf_weight; /* BOTH: the keyframe block's weight (else 0) */
-    bool cv_C;        /* C (below) was chosen by the inner cross-validation */
+    /* Fisher features (FISHER): a recognizer (affect/classifier.h, its defaults) trained on the
+     * training motions with the levels as classes; the ranker's vector is a motion's normalized
+     * Fisher representation under it (affect_classifier_eval's fisher, with its descriptors),
+     * of dimension affect_classifier_dim(fisher) */
+    affect_classifier *fisher;
+    bool cv_C; /* C (below) was chosen by the inner cross-validation */
     /* ranker */
     double C;
-    double *w; /* affect_strength_rank_dim(s): pdim (keyframes), 27 (laban), pdim + 27 (both) */
+    double *w; /* affect_strength_rank_dim(s): pdim (keyframes), 27 (laban), pdim + 27 (both),
+                  the representation's dimension (fisher) */
     affect_rank_stats stats;
     /* levels */
     uint32_t n_levels;
