@@ -104,6 +104,12 @@ static const ir_case IR_CASES[] = {
     {"strength_edit, 6158 frames",
      "SELECT strength_edit(r, motion, 0.5) FROM strength, long WHERE long.id = 1", "strength_edit",
      NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
+    /* the default (Fisher) features: the recognizer's class HMMs and Fisher scores of six
+     * 6,158-frame walks (2 keyframes, so that the keyframe selection takes no time; 1 s) */
+    {"strength_train, Fisher features",
+     "SELECT strength_train(motion, emotion, '{\"order\":[\"sad\",\"neutral\",\"happy\"],"
+     "\"keyframes\":2}') FROM long",
+     "strength_train", NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
     {"affect_generate hmm_nn (HMM training)",
      "SELECT affect_generate('motion_laban', motion, 'angry', '{\"method\":\"hmm_nn\","
      "\"components\":[\"WeightAll\",\"TimeAll\"],\"k\":20,\"min_neighbours\":20,"
