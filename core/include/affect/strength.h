@@ -93,9 +93,8 @@ extern "C" {
 #endif
 
 #define AFFECT_STRENGTH_MAGIC "AFST"
-#define AFFECT_STRENGTH_VERSION                                                                    \
-    3u /* 3: Fisher features, 2: Laban (keyframe-only models write 1)                              \
-        */
+/* 3: Fisher features; 2: Laban features (keyframe-only models still write 1) */
+#define AFFECT_STRENGTH_VERSION 3u
 #define AFFECT_STRENGTH_MAX_LEVELS 64u
 #define AFFECT_STRENGTH_MAX_PCA 4096u
 #define AFFECT_STRENGTH_MAX_DIM 16777216u /* D = 6 J q */
