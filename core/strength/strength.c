@@ -365,7 +365,9 @@ static affect_status fisher_of(const affect_classifier *c, const affect_motion *
 
 /* The recognizer of Fisher features: affect_classifier_train with its defaults (and the
  * observations that go with them) on the used motions (idx, n of them), their levels lv as
- * classes named level_names; then each motion's representation into *F (n × its dimension). */
+ * classes: the levels that have a motion, in level order, named as in level_names (a level of
+ * the order without a training motion is no class); then each motion's representation into *F
+ * (n × its dimension). */
 static affect_status fisher_train(const affect_motion *const *motions, const uint32_t *idx,
                                   const int32_t *lv, uint32_t n, const char *const *level_names,
                                   uint32_t n_levels, unsigned descriptors, affect_monitor *mon,
@@ -383,6 +385,17 @@ static affect_status fisher_train(const affect_motion *const *motions, const uin
     uint32_t *y = affect_malloc_array(n, sizeof *y);
     uint32_t dd = cfg.descriptors ? affect_descriptors_dim(cfg.descriptors) : 0;
     double *desc = dd ? affect_malloc_array((size_t)n * dd, sizeof(double)) : NULL;
+    /* the classes: the levels present, in order (cls[l] = the class of level l) */
+    uint32_t cls[AFFECT_STRENGTH_MAX_LEVELS], n_cls = 0;
+    const char *names[AFFECT_STRENGTH_MAX_LEVELS];
+    for (uint32_t l = 0; l < n_levels; l++) {
+        bool has = false;
+        for (uint32_t i = 0; i < n && !has; i++)
+            has = lv[i] == (int32_t)l;
+        cls[l] = n_cls;
+        if (has)
+            names[n_cls++] = level_names[l];
+    }
     affect_status st = AFFECT_OK;
     if (!seqs || !y || (dd && !desc)) {
         st = affect_nomem(err);
@@ -399,12 +412,12 @@ static affect_status fisher_train(const affect_motion *const *motions, const uin
                                     err);
         if (st != AFFECT_OK)
             affect_prefix(err, "motion %u", idx[i]);
-        y[i] = (uint32_t)lv[i];
+        y[i] = cls[lv[i]];
     }
     if (st == AFFECT_OK) {
         cfg.hmm.dim = affect_features_dim(feat);
         cfg.hmm.monitor = mon;
-        st = affect_classifier_train(&cfg, feat, seqs, desc, y, n, level_names, n_levels, out, err);
+        st = affect_classifier_train(&cfg, feat, seqs, desc, y, n, names, n_cls, out, err);
     }
     size_t D = st == AFFECT_OK ? affect_classifier_dim(*out) : 0;
     if (st == AFFECT_OK && !(*F = affect_malloc_array((size_t)n, D * sizeof(double))))
@@ -1151,6 +1164,20 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
     }
     for (uint32_t i = 0; i < used; i++)
         project(s, X + (size_t)i * D, s->train_z + (size_t)i * s->pdim, work);
+    /* the pairs */
+    st = affect_rank_pairs(lv, grp, used, opt->similar, opt->fraction, opt->seed, &pairs, &n_pairs,
+                           err);
+    if (st != AFFECT_OK)
+        goto cleanup;
+    size_t n_ordered = 0;
+    for (size_t p = 0; p < n_pairs; p++)
+        n_ordered += !pairs[p].similar;
+    if (n_ordered == 0) {
+        st = affect_fail(err, AFFECT_ERR_INVALID,
+                         "no ordered pairs: the motions need at least two different labels%s",
+                         group ? " within one content" : "");
+        goto cleanup;
+    }
     /* the ranker's inputs: U = train_z (keyframes), the standardized Laban vectors (after the
      * weighted train_z with both), or the Fisher representations */
     if (fisher) {
@@ -1177,20 +1204,7 @@ affect_status affect_strength_train(const affect_motion *const *motions, const i
                        U + (size_t)i * rd);
         rank_x = U;
     }
-    /* pairs and the ranker */
-    st = affect_rank_pairs(lv, grp, used, opt->similar, opt->fraction, opt->seed, &pairs, &n_pairs,
-                           err);
-    if (st != AFFECT_OK)
-        goto cleanup;
-    size_t n_ordered = 0;
-    for (size_t p = 0; p < n_pairs; p++)
-        n_ordered += !pairs[p].similar;
-    if (n_ordered == 0) {
-        st = affect_fail(err, AFFECT_ERR_INVALID,
-                         "no ordered pairs: the motions need at least two different labels%s",
-                         group ? " within one content" : "");
-        goto cleanup;
-    }
+    /* the ranker */
     affect_rank_options ro;
     affect_rank_options_default(&ro);
     /* Laban features: C multiplies the mean pair loss (the right C of the sum scales like one
@@ -1730,8 +1744,8 @@ static bool finite_all(const double *v, size_t n)
 }
 
 /* A Fisher model's tail: the recognizer's BLOB (u64 length, bytes; decoded and checked by
- * affect_classifier_decode), whose classes must be the levels in order, then w (its dimension,
- * finite), ending the data. */
+ * affect_classifier_decode), whose classes must be levels, in level order (those that had
+ * training motions), then w (its dimension, finite), ending the data. */
 static affect_status read_fisher(affect_br *r, affect_strength *s, affect_error *err)
 {
     uint64_t len;
@@ -1743,9 +1757,13 @@ static affect_status read_fisher(affect_br *r, affect_strength *s, affect_error 
         affect_prefix(err, "the strength model's recognizer");
         return st;
     }
-    bool same = affect_classifier_n_classes(s->fisher) == s->n_levels;
-    for (uint32_t l = 0; same && l < s->n_levels; l++)
-        same = strcmp(affect_classifier_label(s->fisher, l), s->level_names[l]) == 0;
+    uint32_t C = affect_classifier_n_classes(s->fisher), l = 0;
+    bool same = C >= 2 && C <= s->n_levels;
+    for (uint32_t k = 0; same && k < C; k++, l++) {
+        while (l < s->n_levels && strcmp(affect_classifier_label(s->fisher, k), s->level_names[l]))
+            l++;
+        same = l < s->n_levels;
+    }
     if (!same)
         return affect_fail(err, AFFECT_ERR_FORMAT,
                            "the strength model's recognizer has other classes than its levels");

@@ -37,7 +37,7 @@
  *      recognizer (affect/classifier.h with its defaults and the observations that go with
  *      them; option descriptors) trained on the training motions with the levels as its
  *      classes (FISHER, the default: the best of the four on all three tasks of
- *      docs/EVALUATION.md; every level needs a training motion); or the motion's Laban vector L
+ *      docs/EVALUATION.md; a level without training motions is no class); or the Laban vector L
  *      (affect/laban.h, default options, on the motion as given) standardized by the training
  *      motions' means and population deviations, (L − mean)/sd, a missing component counting as
  *      0 (LABAN); or z (KEYFRAMES); or both, (a z, (L − mean)/sd) with a making the two blocks'
