@@ -281,13 +281,22 @@ static void velocities(const affect_features *f, const affect_motion *m, uint32_
     }
 }
 
-affect_status affect_features_extract(const affect_features *f, const affect_motion *m, double **x,
-                                      uint32_t *n_frames, affect_monitor *mon, affect_error *err)
+/* What the positions' transform of m needs: each entry's joint (idx, J), the root, each frame's
+ * heading (ang, T; body frame) and the first frame's transform (tf; identity when neither
+ * normalization nor scaling is asked). Free idx and ang with affect_free, also on failure. */
+typedef struct frames_ctx {
+    uint32_t *idx;
+    double *ang;
+    affect_normalize_transform tf;
+    uint32_t root;
+} frames_ctx;
+
+static affect_status frames_setup(const affect_features *f, const affect_motion *m, frames_ctx *c,
+                                  affect_monitor *mon, affect_error *err)
 {
-    uint32_t J = f->n_joints, T = m->n_frames, dim = affect_features_dim(f);
-    size_t n_vals;
-    if (!affect_mul_size(T, dim, &n_vals))
-        return affect_fail(err, AFFECT_ERR_RANGE, "too many observations");
+    uint32_t J = f->n_joints, T = m->n_frames;
+    c->idx = NULL;
+    c->ang = NULL;
     /* observations not scaled by the arm are in the motions' unit: one of another unit would
      * be 100 times off (cm against m) without a word */
     if (!f->scale_arm && f->unit[0] && m->unit[0] && strcmp(f->unit, m->unit) != 0)
@@ -299,60 +308,65 @@ affect_status affect_features_extract(const affect_features *f, const affect_mot
     bool body = f->frame == AFFECT_FEATURES_FRAME_BODY;
     affect_roles roles;
     affect_roles_resolve(m, &roles);
-    uint32_t *idx = affect_malloc_array(J, sizeof *idx);
-    double *obs = NULL, *ang = NULL;
-    affect_status st = AFFECT_OK;
-    if (!idx || (body && !(ang = affect_malloc_array(T ? T : 1, sizeof *ang)))) {
-        st = affect_nomem(err);
-        goto fail;
-    }
+    c->idx = affect_malloc_array(J, sizeof *c->idx);
+    if (!c->idx || (body && !(c->ang = affect_malloc_array(T ? T : 1, sizeof *c->ang))))
+        return affect_nomem(err);
+    affect_status st;
     for (uint32_t e = 0; e < J; e++)
-        if ((st = resolve_entry(f->joints[e], m, &roles, &idx[e], err)) != AFFECT_OK)
-            goto fail;
-    affect_normalize_transform tf;
-    memset(&tf, 0, sizeof tf);
-    tf.rot[0] = tf.rot[4] = tf.rot[8] = 1;
-    tf.scale = 1;
-    if (body && !affect_normalize_headings(m, &roles, f->up_axis, ang)) {
-        st = affect_fail(err, AFFECT_ERR_MISSING,
-                         "cannot find the body frame: no left/right hip or shoulder roles "
-                         "resolve in the motion (train with {\"frame\": \"first\", "
-                         "\"normalize\": false})");
-        goto fail;
-    }
+        if ((st = resolve_entry(f->joints[e], m, &roles, &c->idx[e], err)) != AFFECT_OK)
+            return st;
+    memset(&c->tf, 0, sizeof c->tf);
+    c->tf.rot[0] = c->tf.rot[4] = c->tf.rot[8] = 1;
+    c->tf.scale = 1;
+    if (body && !affect_normalize_headings(m, &roles, f->up_axis, c->ang))
+        return affect_fail(err, AFFECT_ERR_MISSING,
+                           "cannot find the body frame: no left/right hip or shoulder roles "
+                           "resolve in the motion (train with {\"frame\": \"first\", "
+                           "\"normalize\": false})");
     if ((st = affect_monitor_check(mon, err)) != AFFECT_OK) /* between the passes */
-        goto fail;
+        return st;
     if (f->normalize || f->scale_arm) {
         double lat[3];
-        if (f->normalize && !affect_roles_lateral(m, &roles, 0, lat)) {
-            st = affect_fail(err, AFFECT_ERR_MISSING,
-                             "cannot remove the heading: no left/right hip or shoulder roles "
-                             "resolve in the motion (train with {\"normalize\": false})");
-            goto fail;
-        }
-        if (f->scale_arm && !arm_resolves(&roles)) {
-            st = affect_fail(err, AFFECT_ERR_MISSING,
-                             "cannot scale by the arm: the right_shoulder and right_hand roles "
-                             "do not both resolve in the motion (train with {\"scale\": "
-                             "\"none\"})");
-            goto fail;
-        }
+        if (f->normalize && !affect_roles_lateral(m, &roles, 0, lat))
+            return affect_fail(err, AFFECT_ERR_MISSING,
+                               "cannot remove the heading: no left/right hip or shoulder roles "
+                               "resolve in the motion (train with {\"normalize\": false})");
+        if (f->scale_arm && !arm_resolves(&roles))
+            return affect_fail(err, AFFECT_ERR_MISSING,
+                               "cannot scale by the arm: the right_shoulder and right_hand roles "
+                               "do not both resolve in the motion (train with {\"scale\": "
+                               "\"none\"})");
         affect_normalize_options no;
         affect_normalize_options_default(&no);
         no.up_axis = f->up_axis;
         no.translation = no.heading = f->normalize;
         no.scale_arm = f->scale_arm;
-        if ((st = affect_normalize_transform_compute(m, &roles, &no, &tf, err)) != AFFECT_OK)
-            goto fail;
+        if ((st = affect_normalize_transform_compute(m, &roles, &no, &c->tf, err)) != AFFECT_OK)
+            return st;
     }
+    int32_t root = roles.joint[AFFECT_ROLE_PELVIS];
+    c->root = root < 0 || (uint32_t)root >= m->n_joints ? 0 : (uint32_t)root;
+    return AFFECT_OK;
+}
+
+affect_status affect_features_extract(const affect_features *f, const affect_motion *m, double **x,
+                                      uint32_t *n_frames, affect_monitor *mon, affect_error *err)
+{
+    uint32_t T = m->n_frames, dim = affect_features_dim(f);
+    size_t n_vals;
+    if (!affect_mul_size(T, dim, &n_vals))
+        return affect_fail(err, AFFECT_ERR_RANGE, "too many observations");
+    bool body = f->frame == AFFECT_FEATURES_FRAME_BODY;
+    frames_ctx c;
+    double *obs = NULL;
+    affect_status st = frames_setup(f, m, &c, mon, err);
+    if (st != AFFECT_OK)
+        goto fail;
     obs = affect_malloc_array(n_vals, sizeof *obs);
     if (!obs) {
         st = affect_nomem(err);
         goto fail;
     }
-    int32_t root = roles.joint[AFFECT_ROLE_PELVIS];
-    if (root < 0 || (uint32_t)root >= m->n_joints)
-        root = 0;
     /* the positions, then the velocities (which read the neighbours' positions), in slices of
      * FEATURES_POLL_FRAMES between polls */
     for (uint32_t t0 = 0; t0 < T; t0 += FEATURES_POLL_FRAMES) {
@@ -360,9 +374,9 @@ affect_status affect_features_extract(const affect_features *f, const affect_mot
         if ((st = affect_monitor_check(mon, err)) != AFFECT_OK)
             goto fail;
         if (body)
-            body_positions(f, m, idx, (uint32_t)root, ang, tf.scale, t0, t1, obs);
+            body_positions(f, m, c.idx, c.root, c.ang, c.tf.scale, t0, t1, obs);
         else
-            first_positions(f, m, idx, &tf, t0, t1, obs);
+            first_positions(f, m, c.idx, &c.tf, t0, t1, obs);
     }
     for (uint32_t t0 = 0; f->velocity && t0 < T; t0 += FEATURES_POLL_FRAMES) {
         uint32_t t1 = T - t0 < FEATURES_POLL_FRAMES ? T : t0 + FEATURES_POLL_FRAMES;
@@ -372,15 +386,55 @@ affect_status affect_features_extract(const affect_features *f, const affect_mot
     }
     if ((st = affect_monitor_check(mon, err)) != AFFECT_OK)
         goto fail;
-    affect_free(idx);
-    affect_free(ang);
+    affect_free(c.idx);
+    affect_free(c.ang);
     *x = obs;
     *n_frames = T;
     return AFFECT_OK;
 fail:
-    affect_free(idx);
-    affect_free(ang);
+    affect_free(c.idx);
+    affect_free(c.ang);
     affect_free(obs);
+    return st;
+}
+
+affect_status affect_features_position_gradient(const affect_features *f, const affect_motion *m,
+                                                const double *g, double *out, affect_monitor *mon,
+                                                affect_error *err)
+{
+    if (f->velocity || f->root)
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "the observations have velocity or root columns: only positions map "
+                           "back to the joints");
+    uint32_t J = f->n_joints, T = m->n_frames, dim = affect_features_dim(f);
+    frames_ctx c;
+    affect_status st = frames_setup(f, m, &c, mon, err);
+    if (st == AFFECT_OK) {
+        bool body = f->frame == AFFECT_FEATURES_FRAME_BODY;
+        memset(out, 0, (size_t)T * m->n_joints * 3 * sizeof *out);
+        double inv = 1.0 / c.tf.scale, r[9];
+        memcpy(r, c.tf.rot, sizeof r);
+        for (uint32_t t = 0; t < T; t++) {
+            if (t % FEATURES_POLL_FRAMES == 0 && (st = affect_monitor_check(mon, err)) != AFFECT_OK)
+                break;
+            if (body)
+                affect_normalize_axis_rotation(f->up_axis, c.ang[t], r);
+            const double *row = g + (size_t)t * dim;
+            double *o = out + (size_t)t * m->n_joints * 3, *root = o + (size_t)c.root * 3;
+            for (uint32_t e = 0; e < J; e++) { /* the transpose of p ↦ r p / scale */
+                const double *ge = row + (size_t)e * 3;
+                double *oe = o + (size_t)c.idx[e] * 3;
+                for (int k = 0; k < 3; k++) {
+                    double v = (r[k] * ge[0] + r[3 + k] * ge[1] + r[6 + k] * ge[2]) * inv;
+                    oe[k] += v;
+                    if (body)
+                        root[k] -= v; /* positions relative to the root */
+                }
+            }
+        }
+    }
+    affect_free(c.idx);
+    affect_free(c.ang);
     return st;
 }
 

@@ -1572,6 +1572,189 @@ static affect_status hit_target(const affect_strength *s, const affect_motion *m
     return st;
 }
 
+/* ---- editing by the Fisher representation ---- */
+
+/* The gradient of r = wᵀu with respect to the observations x (T × dim) into g (T × dim), u the
+ * motion's normalized representation under s->fisher: through the means and (diagonal)
+ * covariance scores of every class HMM, d/dx_td of Σ_t γ_tk (x_td − μ_kd)/σ²_kd is
+ * γ_tk/σ²_kd and of ½ Σ_t γ_tk ((x_td − μ_kd)² − σ²_kd)/σ⁴_kd is γ_tk (x_td − μ_kd)/σ⁴_kd,
+ * each times w/scale for its entry (0 where the z-score is at its limit), the posteriors γ
+ * held fixed; the probability groups and the descriptors (functions of γ and of the motion
+ * as a whole) add nothing. Needs diagonal class HMMs. */
+static affect_status fisher_gradient(const affect_strength *s, const double *x, uint32_t T,
+                                     const double *u, double *g, affect_monitor *mon,
+                                     affect_error *err)
+{
+    const affect_classifier *c = s->fisher;
+    const affect_classifier_config *cc = affect_classifier_get_config(c);
+    const double *scale = cc->zscore ? affect_classifier_norm_scale(c) : NULL;
+    uint32_t C = affect_classifier_n_classes(c);
+    size_t part = affect_classifier_part_dim(c), m = cc->hmm.dim;
+    if (cc->hmm.cov != AFFECT_HMM_DIAG)
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "editing by the Fisher representation needs diagonal class HMMs");
+    size_t K = (size_t)cc->hmm.n_states * cc->hmm.n_mix;
+    double *gamma = affect_malloc_array((size_t)T * K, sizeof(double));
+    double *A = affect_calloc(2 * K * m, sizeof(double)); /* means' and covariances' weights */
+    affect_status st = AFFECT_OK;
+    if (!gamma || !A) {
+        st = affect_nomem(err);
+        goto done;
+    }
+    memset(g, 0, (size_t)T * m * sizeof *g);
+    for (uint32_t k = 0; k < C && st == AFFECT_OK; k++) {
+        const affect_hmm *h = affect_classifier_hmm(c, k);
+        const affect_hmm_config *hc = affect_hmm_get_config(h);
+        memset(A, 0, 2 * K * m * sizeof *A);
+        for (size_t i = 0; i < part && st == AFFECT_OK; i++) {
+            size_t e = (size_t)k * part + i;
+            if (cc->score_clip > 0 && fabs(u[e]) >= cc->score_clip)
+                continue;
+            affect_fisher_entry fe;
+            st = affect_fisher_describe(hc, cc->groups, i, &fe, err);
+            double a = s->w[e] / (scale ? scale[e] : 1.0);
+            size_t comp = (size_t)fe.state * hc->n_mix + fe.other;
+            if (fe.group == AFFECT_FISHER_MEANS)
+                A[comp * m + fe.r] += a;
+            else if (fe.group == AFFECT_FISHER_COVS)
+                A[(K + comp) * m + fe.r] += a;
+        }
+        double ll;
+        if (st == AFFECT_OK)
+            st = affect_hmm_posteriors(h, x, T, gamma, NULL, &ll, mon, err);
+        const double *mu = affect_hmm_means(h), *var = affect_hmm_covariances(h);
+        for (uint32_t t = 0; t < T && st == AFFECT_OK; t++) {
+            const double *xt = x + (size_t)t * m;
+            double *gt = g + (size_t)t * m;
+            for (size_t q = 0; q < K; q++) {
+                double y = gamma[(size_t)t * K + q];
+                if (y == 0)
+                    continue;
+                const double *am = A + q * m, *ac = A + (K + q) * m;
+                const double *mq = mu + q * m, *vq = var + q * m;
+                for (size_t d = 0; d < m; d++)
+                    gt[d] += y * (am[d] + ac[d] * (xt[d] - mq[d]) / vq[d]) / vq[d];
+            }
+        }
+    }
+done:
+    affect_free(gamma);
+    affect_free(A);
+    return st;
+}
+
+/* A Fisher model's edit of m toward strength target (an "once" for hit_target): steps along
+ * the gradient of r with respect to the joint positions (fisher_gradient, taken back to the
+ * joints by affect_features_position_gradient), each the Newton step of the linearized r,
+ * (target − r) ∇r / ‖∇r‖², halved while it does not bring r closer (at most FISHER_HALVINGS
+ * times), FISHER_STEPS steps at most; then the nearest rigid motion with m's bone lengths. The
+ * timing, the path and every frame count stay m's. */
+#define FISHER_STEPS 12u
+#define FISHER_HALVINGS 4u
+static affect_status fisher_edit_once(const affect_strength *s, const affect_motion *m,
+                                      double target, bool rigid, affect_motion **out,
+                                      affect_monitor *mon, affect_error *err)
+{
+    *out = NULL;
+    const affect_classifier *c = s->fisher;
+    const affect_features *feat = affect_classifier_features(c);
+    uint32_t T = m->n_frames, J = m->n_joints;
+    size_t D = affect_classifier_dim(c), np = (size_t)T * J * 3;
+    double *u = affect_malloc_array(D, sizeof(double));
+    double *P = affect_malloc_array(np, sizeof(double));
+    double *x = NULL, *desc = NULL, *g = NULL;
+    affect_motion *cur = NULL, *trial = NULL;
+    affect_status st = AFFECT_OK;
+    if (!u || !P) {
+        st = affect_nomem(err);
+        goto done;
+    }
+    st = new_motion(s, T, m->fps, &cur, err); /* positions only: the rotations would go stale */
+    if (st == AFFECT_OK)
+        memcpy(cur->pos, m->pos, np * sizeof *cur->pos);
+    double r = NAN;
+    for (uint32_t step = 0; st == AFFECT_OK && step <= FISHER_STEPS; step++) {
+        affect_free(x);
+        affect_free(desc);
+        x = desc = NULL;
+        uint32_t n;
+        st = affect_classifier_observe(c, cur, &x, &n, &desc, mon, err);
+        if (st == AFFECT_OK) {
+            affect_classifier_out o = {0};
+            o.fisher = u;
+            st = affect_classifier_eval(c, x, n, desc, false, &o, mon, err);
+        }
+        if (st != AFFECT_OK)
+            break;
+        r = dotp(s->w, u, D);
+        if (step == FISHER_STEPS || fabs(target - r) <= AFFECT_STRENGTH_TOL)
+            break;
+        if (!g &&
+            !(g = affect_malloc_array((size_t)n, affect_features_dim(feat) * sizeof(double)))) {
+            st = affect_nomem(err);
+            break;
+        }
+        st = fisher_gradient(s, x, n, u, g, mon, err);
+        if (st == AFFECT_OK)
+            st = affect_features_position_gradient(feat, cur, g, P, mon, err);
+        if (st != AFFECT_OK)
+            break;
+        double nn = dotp(P, P, np);
+        if (!(nn > 0) || !isfinite(nn))
+            break;
+        double eta = (target - r) / nn, best = fabs(target - r);
+        bool moved = false;
+        for (uint32_t h = 0; h <= FISHER_HALVINGS && st == AFFECT_OK; h++, eta /= 2) {
+            affect_motion_free(trial);
+            trial = NULL;
+            st = affect_motion_clone(cur, &trial, err);
+            if (st != AFFECT_OK)
+                break;
+            for (size_t i = 0; i < np; i++)
+                trial->pos[i] = (float)((double)trial->pos[i] + eta * P[i]);
+            if (rigid) { /* measured as it will come out: rigid, back to positions only */
+                affect_motion *rg = NULL;
+                st = make_rigid(trial, true, m, &rg, mon, err);
+                trial = NULL;
+                if (st == AFFECT_OK)
+                    st = new_motion(s, T, m->fps, &trial, err);
+                if (st == AFFECT_OK)
+                    memcpy(trial->pos, rg->pos, np * sizeof *trial->pos);
+                affect_motion_free(rg);
+                if (st != AFFECT_OK)
+                    break;
+            }
+            double rt;
+            st = fisher_of(c, trial, u, mon, err);
+            if (st != AFFECT_OK)
+                break;
+            rt = dotp(s->w, u, D);
+            if (fabs(target - rt) < best) {
+                affect_motion_free(cur);
+                cur = trial;
+                trial = NULL;
+                moved = true;
+                break;
+            }
+        }
+        if (!moved)
+            break;
+    }
+    if (st == AFFECT_OK) {
+        st = make_rigid(cur, rigid, m, out, mon, err);
+        cur = NULL;
+    }
+done:
+    affect_motion_free(cur);
+    affect_motion_free(trial);
+    affect_free(u);
+    affect_free(P);
+    affect_free(x);
+    affect_free(desc);
+    affect_free(g);
+    return st;
+}
+
 /* Synthesis and editing steer the keyframe features: a ranker of the Laban vector alone does not
  * follow them (docs/EVALUATION.md, "Laban features": Spearman 0.37 synthesized, 0.52 edited),
  * nor does one of the recognizer's representation, which they cannot steer at all. */
@@ -1581,13 +1764,15 @@ static affect_status need_keyframes(const affect_strength *s, affect_motion **ou
     *out = NULL;
     if (s->features == AFFECT_STRENGTH_FEAT_KEYFRAMES || s->features == AFFECT_STRENGTH_FEAT_BOTH)
         return AFFECT_OK;
+    if (s->features == AFFECT_STRENGTH_FEAT_FISHER)
+        return affect_fail(err, AFFECT_ERR_INVALID,
+                           "the model ranks by the recognizer's Fisher representation, which "
+                           "edits a motion but has none to synthesize from: train it with "
+                           "\"features\": \"keyframes\" (or \"both\") to synthesize");
     return affect_fail(err, AFFECT_ERR_INVALID,
-                       "the model ranks by %s, which synthesized and edited motions do not "
-                       "follow: train it with \"features\": \"keyframes\" (or \"both\") to "
-                       "synthesize or edit",
-                       s->features == AFFECT_STRENGTH_FEAT_LABAN
-                           ? "the Laban vector alone"
-                           : "the recognizer's Fisher representation");
+                       "the model ranks by the Laban vector alone, which synthesized and edited "
+                       "motions do not follow: train it with \"features\": \"keyframes\" (or "
+                       "\"both\") to synthesize or edit");
 }
 
 affect_status affect_strength_synthesize(const affect_strength *s, double strength, bool rigid,
@@ -1604,12 +1789,13 @@ affect_status affect_strength_edit(const affect_strength *s, const affect_motion
                                    double strength, bool rigid, affect_motion **out,
                                    affect_monitor *mon, affect_error *err)
 {
-    affect_status st = need_keyframes(s, out, err);
+    bool fisher = s->features == AFFECT_STRENGTH_FEAT_FISHER;
+    affect_status st = fisher ? AFFECT_OK : need_keyframes(s, out, err);
     if (st == AFFECT_OK)
         st = check_skeleton(s->n_joints, s->names, m, err);
     if (st != AFFECT_OK)
         return st;
-    return hit_target(s, m, strength, rigid, edit_once, out, mon, err);
+    return hit_target(s, m, strength, rigid, fisher ? fisher_edit_once : edit_once, out, mon, err);
 }
 
 /* ---- the BLOB ---- */

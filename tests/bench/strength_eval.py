@@ -36,7 +36,9 @@ strength_edit of every test motion to each; per result affect_strength (the Spea
 correlation with the strength asked), affect_classify (recognized as the label whose training
 mean strength is nearest the strength asked?), laban_time and laban_weight (their Pearson
 correlation with it). --recognizer-options gives the recognizer other affect_train options
-(for example {"descriptors":"none"}: no kinematic summaries).
+(for example {"descriptors":"none"}: no kinematic summaries). --edit-features fisher edits with
+the default (Fisher) model instead of a PCA-40 keyframe model (its edits move the joint
+positions along the gradient of its ranker; it does not synthesize, so that column is empty).
 
 The rows above rank by keyframe features ("features": "keyframes"). --features replaces them by
 the inputs of the ranker, "keyframes", "laban", "both", "fisher" (the default of
@@ -267,7 +269,7 @@ def nearest_level(levels, s):
     return d[0][1]
 
 
-def recognizer_check(con, task, seeds, npoints=5, rec_options="{}"):
+def recognizer_check(con, task, seeds, npoints=5, rec_options="{}", edit_features="keyframes"):
     """Synthesized and edited motions checked by the ranker, affect_train's recognizer and Laban.
 
     Per seed: the half split of protocol(); a PCA-40 strength model and affect_train's recognizer
@@ -284,8 +286,10 @@ def recognizer_check(con, task, seeds, npoints=5, rec_options="{}"):
     lab = {"syn_t": [], "syn_w": [], "edit_t": [], "edit_w": []}
     for seed in seeds:
         tr, te = split_half(rows, seed)
-        # keyframe features: the default (Fisher) model cannot synthesize or edit
-        model, _, _ = train(con, task, tr, dict(KF, pca_dims=40, seed=seed))
+        # keyframe features (the default), or the default model (Fisher: edits only, by the
+        # gradient of its ranker; it cannot synthesize)
+        opts = dict(KF, pca_dims=40, seed=seed) if edit_features == "keyframes" else {"seed": seed}
+        model, _, _ = train(con, task, tr, opts)
         rec = con.execute("SELECT affect_train(motion, style, ?) FROM motions JOIN tr USING (id)",
                           (rec_options,)).fetchone()[0]
         info = json.loads(con.execute("SELECT strength_info(?)", (model,)).fetchone()[0])
@@ -313,12 +317,13 @@ def recognizer_check(con, task, seeds, npoints=5, rec_options="{}"):
                     acc[kind + "_ends"][1] += 1
             return s, lt, lw, label
 
-        res = [measure("syn", con.execute("SELECT strength_synthesize(?, ?)",
-                                          (model, t)).fetchone()[0], k)
-               for k, t in enumerate(targets)]
-        rho["syn"].append(spearman(targets, [x[0] for x in res]))
-        lab["syn_t"].append(pearson(targets, [x[1] for x in res]))
-        lab["syn_w"].append(pearson(targets, [x[2] for x in res]))
+        if edit_features == "keyframes":
+            res = [measure("syn", con.execute("SELECT strength_synthesize(?, ?)",
+                                              (model, t)).fetchone()[0], k)
+                   for k, t in enumerate(targets)]
+            rho["syn"].append(spearman(targets, [x[0] for x in res]))
+            lab["syn_t"].append(pearson(targets, [x[1] for x in res]))
+            lab["syn_w"].append(pearson(targets, [x[2] for x in res]))
         for r in te:
             res = []
             for k, t in enumerate(targets):
@@ -403,6 +408,9 @@ def main():
     ap.add_argument("--score-timing", action="store_true",
                     help="only the CPU time of affect_strength through SQL per motion, for the "
                          "default and a keyframe model of each task")
+    ap.add_argument("--edit-features", default="keyframes", choices=["keyframes", "fisher"],
+                    help="--recognizer: edit with a PCA-40 keyframe model (and synthesize), or "
+                         "with the default Fisher model (edits only)")
     ap.add_argument("--recognizer-options", default="{}",
                     help='affect_train options of the recognizer check, e.g. '
                          '{"descriptors":"none"}')
@@ -423,7 +431,8 @@ def main():
         return 0
     if a.recognizer:
         for task in a.tasks.split(","):
-            recognizer_check(con, task, seeds, rec_options=a.recognizer_options)
+            recognizer_check(con, task, seeds, rec_options=a.recognizer_options,
+                             edit_features=a.edit_features)
         print("\n(total: %.0f s wall, %.0f s CPU)" % (time.perf_counter() - t0,
                                                       time.process_time() - c0))
         return 0

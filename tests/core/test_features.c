@@ -10,6 +10,7 @@
 
 #include "affect/features.h"
 #include "affect/synth.h"
+#include "util/rng.h"
 
 /* A 7-joint skeleton, 4 frames at 10 fps, facing +z with the lateral vector along +x, right
  * arm 0.3 + 0.2 = 0.5 long; the hips move along x by 0, 1, 3, 6. Then every position is
@@ -647,6 +648,76 @@ static void oom_finish_extract(void *ctx, affect_status st)
     c->posture = NULL;
 }
 
+/* affect_features_position_gradient is the transpose of the positions' map: for a weight g on
+ * the observations and a displacement δ of joints that move neither the heading (hips,
+ * shoulders) nor the arm's scale (the right arm), g · (x(p + δ) − x(p)) = out · δ, in the body
+ * frame (the root among them: every entry is relative to it) and the first frame (not its
+ * first frame's root: the transform's origin); velocity columns are refused. */
+static void test_position_gradient(void **state)
+{
+    (void)state;
+    affect_motion *m, *moved;
+    affect_error err;
+    assert_int_equal(affect_motion_synth("wave", "happy", 1, NULL, &m, &err), AFFECT_OK);
+    static const char *const free_joints[] = {"Hips", "Head", "Hand_L", "LowerArm_L", "Foot_R"};
+    for (int body = 0; body < 2; body++) {
+        affect_features_options opt;
+        affect_features_options_default(&opt);
+        opt.frame = body ? AFFECT_FEATURES_FRAME_BODY : AFFECT_FEATURES_FRAME_FIRST;
+        affect_features *f = create(&opt, m);
+        uint32_t T, dim = affect_features_dim(f), J = m->n_joints;
+        double *x0 = extract(f, m, &T);
+        double *g = test_malloc(sizeof(double) * T * dim),
+               *out = test_malloc(sizeof(double) * T * J * 3);
+        affect_rng rng;
+        affect_rng_seed(&rng, 7);
+        for (size_t i = 0; i < (size_t)T * dim; i++)
+            g[i] = affect_rng_uniform(&rng) - 0.5;
+        assert_int_equal(affect_features_position_gradient(f, m, g, out, NULL, &err), AFFECT_OK);
+        assert_int_equal(affect_motion_clone(m, &moved, &err), AFFECT_OK);
+        double lin = 0;
+        for (uint32_t t = 0; t < T; t++)
+            for (size_t k = 0; k < sizeof free_joints / sizeof *free_joints; k++) {
+                int32_t j = affect_motion_find_joint(m, free_joints[k]);
+                assert_true(j >= 0);
+                if (!body && t == 0 && k == 0)
+                    continue; /* the first frame's root is the first-frame transform's origin */
+                float *p = affect_motion_at(moved, t, (uint32_t)j);
+                const float *q = affect_motion_at(m, t, (uint32_t)j);
+                for (int c = 0; c < 3; c++) {
+                    p[c] = q[c] + (float)((affect_rng_uniform(&rng) - 0.5) / 32);
+                    lin += out[((size_t)t * J + (uint32_t)j) * 3 + c] * ((double)p[c] - q[c]);
+                }
+            }
+        double *x1 = extract(f, moved, &T), dx = 0, scale = 0;
+        for (size_t i = 0; i < (size_t)T * dim; i++) {
+            dx += g[i] * (x1[i] - x0[i]);
+            scale += fabs(g[i] * (x1[i] - x0[i]));
+        }
+        if (!(fabs(dx - lin) <= 1e-9 * scale + 1e-12))
+            fail_msg("%s frame: g . dx = %.17g, out . delta = %.17g", body ? "body" : "first", dx,
+                     lin);
+        assert_true(scale > 0);
+        affect_free(x0);
+        affect_free(x1);
+        test_free(g);
+        test_free(out);
+        affect_motion_free(moved);
+        affect_features_free(f);
+    }
+    affect_features_options opt;
+    affect_features_options_default(&opt);
+    opt.velocity = true;
+    affect_features *f = create(&opt, m);
+    double g[1] = {0}, out[1];
+    assert_int_equal(affect_features_position_gradient(f, m, g, out, NULL, &err),
+                     AFFECT_ERR_INVALID);
+    assert_string_equal(err.msg, "the observations have velocity or root columns: only positions "
+                                 "map back to the joints");
+    affect_features_free(f);
+    affect_motion_free(m);
+}
+
 static void test_out_of_memory(void **state)
 {
     affect_motion *m = make_motion(0, 0, 0);
@@ -679,6 +750,7 @@ int main(void)
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_binary_form),
         cmocka_unit_test(test_posture_motion),
+        cmocka_unit_test(test_position_gradient),
         cmocka_unit_test(test_out_of_memory),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

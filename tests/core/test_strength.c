@@ -376,14 +376,19 @@ static void check_model(affect_strength_feature_kind feat)
      * the mean of two actions is neither): strengths spread over the training range come out
      * in order */
     affect_strength *whole = s;
-    if (feat == AFFECT_STRENGTH_FEAT_LABAN || feat == AFFECT_STRENGTH_FEAT_FISHER) {
+    if (feat == AFFECT_STRENGTH_FEAT_FISHER) { /* it edits, but cannot synthesize */
         affect_motion *m = NULL;
         assert_int_equal(affect_strength_synthesize(s, 0, true, &m, NULL, &err),
                          AFFECT_ERR_INVALID);
         assert_null(m);
-        assert_true(strstr(err.msg, feat == AFFECT_STRENGTH_FEAT_LABAN
-                                        ? "the Laban vector alone"
-                                        : "the recognizer's Fisher representation") != NULL);
+        assert_true(strstr(err.msg, "the recognizer's Fisher representation") != NULL);
+    }
+    if (feat == AFFECT_STRENGTH_FEAT_LABAN) {
+        affect_motion *m = NULL;
+        assert_int_equal(affect_strength_synthesize(s, 0, true, &m, NULL, &err),
+                         AFFECT_ERR_INVALID);
+        assert_null(m);
+        assert_true(strstr(err.msg, "the Laban vector alone") != NULL);
         assert_int_equal(affect_strength_edit(s, te.m[0], 0, true, &m, NULL, &err),
                          AFFECT_ERR_INVALID);
         assert_null(m);
@@ -400,6 +405,19 @@ static void check_model(affect_strength_feature_kind feat)
                                            LEVELS, N_INT, &opt, &s, &err),
                      AFFECT_OK);
     double lo = s->level_strength[0], hi = s->level_strength[2], prev = -INFINITY;
+    if (feat == AFFECT_STRENGTH_FEAT_FISHER) { /* edits keep the motion's frames and joints */
+        affect_motion *m;
+        double got;
+        assert_int_equal(affect_strength_edit(s, te.m[0], hi, true, &m, NULL, &err), AFFECT_OK);
+        assert_int_equal(m->n_frames, te.m[0]->n_frames);
+        assert_int_equal(m->n_joints, te.m[0]->n_joints);
+        assert_int_equal(affect_strength_score(s, m, &got, NULL, &err), AFFECT_OK);
+        double before;
+        assert_int_equal(affect_strength_score(s, te.m[0], &before, NULL, &err), AFFECT_OK);
+        if (!(fabs(got - hi) < fabs(before - hi)))
+            fail_msg("edited toward %g: strength %g, %g before", hi, got, before);
+        affect_motion_free(m);
+    }
     for (int k = 0; feat == AFFECT_STRENGTH_FEAT_KEYFRAMES && k < 5; k++) {
         double target = lo + (hi - lo) * k / 4.0, got;
         affect_motion *m;
@@ -740,6 +758,7 @@ typedef struct oom_ctx {
     int what;
     unsigned char *blob; /* what 4: a Fisher model's BLOB */
     size_t size;
+    affect_motion *m0; /* what 5: the motion edited */
 } oom_ctx;
 
 static affect_status oom_op(void *ctx, affect_error *err)
@@ -762,6 +781,8 @@ static affect_status oom_op(void *ctx, affect_error *err)
         return affect_strength_train((const affect_motion *const *)c->tr.m, c->tr.level, NULL,
                                      c->tr.n, LEVELS, N_INT, &opt, &c->s, err);
     }
+    if (c->what == 5) /* a Fisher model's edit (of a short slice: each step reads it again) */
+        return affect_strength_edit(c->s, c->m0, c->s->level_strength[2], true, &c->m, NULL, err);
     /* a Fisher model decoded, then a motion scored */
     double r;
     affect_status st = affect_strength_decode(c->blob, c->size, &c->s, err);
@@ -772,7 +793,7 @@ static void oom_finish(void *ctx, affect_status st)
 {
     oom_ctx *c = ctx;
     (void)st;
-    if (c->what == 0 || c->what >= 3) {
+    if (c->what == 0 || c->what == 3 || c->what == 4) {
         affect_strength_free(c->s);
         c->s = NULL;
     } else {
@@ -816,6 +837,12 @@ static void test_out_of_memory(void **state)
     c.s = NULL;
     c.what = 4;
     assert_true(tu_oom_sweep(oom_op, &c, oom_finish, &absorbed) > 10);
+    assert_int_equal(affect_strength_decode(c.blob, c.size, &c.s, &err), AFFECT_OK);
+    assert_int_equal(affect_motion_slice(c.tr.m[0], 0, 12, &c.m0, &err), AFFECT_OK);
+    c.what = 5;
+    assert_true(tu_oom_sweep(oom_op, &c, oom_finish, &absorbed) > 10);
+    affect_motion_free(c.m0);
+    affect_strength_free(c.s);
     affect_free(c.blob);
     free_corpus(&c.tr);
 }

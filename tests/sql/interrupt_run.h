@@ -104,6 +104,11 @@ static const ir_case IR_CASES[] = {
     {"strength_edit, 6158 frames",
      "SELECT strength_edit(r, motion, 0.5) FROM strength, long WHERE long.id = 1", "strength_edit",
      NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
+    /* a Fisher model's edit: gradient steps, each with the recognizer's posteriors and a rigid
+     * projection of the 6,158 frames */
+    {"strength_edit (Fisher model), 6158 frames",
+     "SELECT strength_edit(r, motion, 0.5) FROM strength_fisher, long WHERE long.id = 1",
+     "strength_edit", NULL, IR_THREAD, IR_INTERRUPT_AFTER, NULL},
     /* the default (Fisher) features: the recognizer's class HMMs and Fisher scores of six
      * 6,158-frame walks (2 keyframes, so that the keyframe selection takes no time; 1 s) */
     {"strength_train, Fisher features",
@@ -214,6 +219,10 @@ static const char IR_CORPUS[] =
     "                                              label=emotion);"
     "CREATE TABLE strength AS SELECT strength_train(motion, emotion,"
     "  '{\"order\":[\"sad\",\"neutral\",\"happy\"],\"features\":\"keyframes\"}') AS r"
+    "  FROM motions"
+    " WHERE emotion IN ('sad', 'neutral', 'happy');"
+    "CREATE TABLE strength_fisher AS SELECT strength_train(motion, emotion,"
+    "  '{\"order\":[\"sad\",\"neutral\",\"happy\"]}') AS r"
     "  FROM motions"
     " WHERE emotion IN ('sad', 'neutral', 'happy');"
     "CREATE TABLE long(id INTEGER PRIMARY KEY, emotion TEXT, motion BLOB);"

@@ -208,6 +208,19 @@ SELECT typeof(affect_strength(r, (SELECT m FROM s WHERE seed = 5 AND action = 'w
 SELECT typeof(affect_strength(r, (SELECT m FROM s WHERE seed = 5 AND action = 'wave' AND lvl = 0.8))) FROM models WHERE name = 'small_fisher';
 -- expect: real
 
+-- a Fisher model edits by the gradient of its ranker: the motion keeps its frames and joints,
+-- stays rigid, and its strength moves to the level asked from either side
+SELECT 'fisher edits toward the level asked', count(*) = 2
+       AND sum(motion_frames(e) = motion_frames(m) AND motion_joints(e) = motion_joints(m)) = 2
+       AND sum(abs(affect_strength(r, e) - lvl_s) < abs(affect_strength(r, m) - lvl_s)) = 2
+       AND max(json_extract(motion_info(e), '$.bone_variation')) < 1e-4
+  FROM (SELECT r, m, lvl_s, strength_edit(r, m, lvl_s) AS e
+          FROM (SELECT r, m, json_extract(strength_info(r), '$.levels[' || CASE lvl WHEN 0.2 THEN 2 ELSE 0 END
+                                                           || '].strength') AS lvl_s
+                  FROM models, s
+                 WHERE name = 'small_fisher' AND seed = 5 AND action = 'wave' AND lvl IN (0.2, 1.4)));
+-- oom: skip
+
 -- a level of the order without training motions is no class of the recognizer; the others rank
 SELECT json_extract(i, '$.levels[1].motions') || ' ' || (json_extract(i, '$.levels[0].strength') < json_extract(i, '$.levels[2].strength'))
   FROM (SELECT strength_info(strength_train(m, CASE lvl WHEN 0.2 THEN 'mild' ELSE 'strong' END,
@@ -359,7 +372,7 @@ SELECT strength_edit(r, m, 0) FROM models, s WHERE name = 'small_laban' LIMIT 1;
 -- error: strength_edit: the model ranks by the Laban vector alone, which synthesized and edited motions do not follow: train it with "features": "keyframes" (or "both") to synthesize or edit
 
 SELECT strength_synthesize(r, 0) FROM models WHERE name = 'small_fisher';
--- error: strength_synthesize: the model ranks by the recognizer's Fisher representation, which synthesized and edited motions do not follow: train it with "features": "keyframes" (or "both") to synthesize or edit
+-- error: strength_synthesize: the model ranks by the recognizer's Fisher representation, which edits a motion but has none to synthesize from: train it with "features": "keyframes" (or "both") to synthesize
 
 SELECT affect_strength(r, motion_select(m, '["Hips","Spine"]')) FROM models, s WHERE name = 'small_laban' LIMIT 1;
 -- error: affect_strength: 2 joints, the model has 26

@@ -113,6 +113,18 @@ uint32_t affect_features_dim(const affect_features *f);
 affect_status affect_features_extract(const affect_features *f, const affect_motion *m, double **x,
                                       uint32_t *n_frames, affect_monitor *mon, affect_error *err);
 
+/* The gradient with respect to m's joint positions of a function of m's observations whose
+ * gradient with respect to the observations is g (n_frames × dim): out (n_frames × m's joints
+ * × 3, world coordinates, overwritten) is the transpose of the positions' linear map applied
+ * to g — each entry's rotation and scale (body frame: that frame's heading, relative to the
+ * root, so the root gains minus the others' share; first frame: the first frame's transform),
+ * the headings and the scale held fixed. Positions only: "the observations have velocity or
+ * root columns: only positions map back to the joints" (AFFECT_ERR_INVALID) otherwise; the
+ * extraction's errors. */
+affect_status affect_features_position_gradient(const affect_features *f, const affect_motion *m,
+                                                const double *g, double *out, affect_monitor *mon,
+                                                affect_error *err);
+
 /* ---- mirror images (training-set augmentation, affect/classifier.h) ----
  * The mirror image of a motion swaps its left and right: each entry's partner is the entry
  * whose skeleton name is its own with Left ↔ Right (any case: "LeftHand" ↔ "RightHand") and the

@@ -67,8 +67,14 @@
  * back where the original stood (the inverse of step 1) and made rigid.
  *
  * With BOTH, editing moves z by the regression's f(s) − f(r(x)) instead (the ranker does not act
- * on z alone). LABAN and FISHER models refuse synthesis and editing (AFFECT_ERR_INVALID): the
- * motions they make do not follow those rankers (docs/EVALUATION.md, "Laban features").
+ * on z alone). A FISHER model edits the motion itself: steps along the gradient of r = wᵀu with
+ * respect to its joint positions — through the means and diagonal covariance scores of the
+ * recognizer's class HMMs (posteriors held fixed), the z-scores (0 where clipped), and the
+ * observations' transform (affect_features_position_gradient) — each the Newton step of the
+ * linearized r, halved until the rigid result comes closer, up to 12 steps; the frames, timing
+ * and path stay the motion's. LABAN models refuse synthesis and editing, FISHER models
+ * synthesis (AFFECT_ERR_INVALID): the motions they would make do not follow those rankers
+ * (docs/EVALUATION.md, "Laban features"), and a Fisher ranker has no features to synthesize.
  *
  * Both then measure the strength of what they made (keyframes chosen again, the rigid
  * projection and the interpolation move it off the target) and correct the target by the miss,
